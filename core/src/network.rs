@@ -1,0 +1,95 @@
+//! Networks stored in a `.sinew` file: how an [`Mlp`] is laid out as sections, and its loader.
+//!
+//! An MLP under prefix `p` with `L` layers is stored as
+//! - `p.act`: `u32 [L]`, the activation code of each layer ([`Activation::code`]);
+//! - `p.par`: `f32 [L]`, the activation parameter of each layer (ω0 for sine, α for ELU, else 0);
+//! - `p.<i>.w`: `f32 [out, in]`, layer `i`'s weight, row-major (one row per output);
+//! - `p.<i>.b`: `f32 [out]`, layer `i`'s bias.
+
+use crate::error::FormatError;
+use crate::format::SinewFile;
+use crate::nn::{Activation, Dense, MAX_LAYERS, Mlp};
+
+/// Longest MLP prefix, so that `prefix.<i>.w` fits the format's section-name field.
+pub const MAX_PREFIX_LEN: usize = crate::format::NAME_LEN - 5;
+
+fn name(
+    prefix: &str,
+    layer: usize,
+    suffix: &str,
+) -> Result<heapless::String<{ crate::format::NAME_LEN }>, FormatError> {
+    let mut s = heapless::String::new();
+    let mut digits = [0u8; 2];
+    let digit_str = match layer {
+        0..=9 => {
+            digits[0] = b'0' + layer as u8;
+            core::str::from_utf8(digits.get(..1).unwrap_or(&[])).unwrap_or("")
+        }
+        10..=99 => {
+            digits = [b'0' + (layer / 10) as u8, b'0' + (layer % 10) as u8];
+            core::str::from_utf8(&digits).unwrap_or("")
+        }
+        _ => return Err(FormatError::LimitExceeded),
+    };
+    for part in [prefix, ".", digit_str, suffix] {
+        s.push_str(part).map_err(|()| FormatError::LimitExceeded)?;
+    }
+    Ok(s)
+}
+
+fn simple_name(
+    prefix: &str,
+    suffix: &str,
+) -> Result<heapless::String<{ crate::format::NAME_LEN }>, FormatError> {
+    let mut s = heapless::String::new();
+    s.push_str(prefix)
+        .map_err(|()| FormatError::LimitExceeded)?;
+    s.push_str(suffix)
+        .map_err(|()| FormatError::LimitExceeded)?;
+    Ok(s)
+}
+
+/// Loads the MLP stored under `prefix` (see the module documentation), validating every shape.
+pub fn load_mlp<'a>(file: &SinewFile<'a>, prefix: &str) -> Result<Mlp<'a>, FormatError> {
+    if prefix.len() > MAX_PREFIX_LEN {
+        return Err(FormatError::LimitExceeded);
+    }
+    let acts_section = file
+        .section(&simple_name(prefix, ".act")?)
+        .ok_or(FormatError::MissingSection)?;
+    let acts = acts_section.u32s().ok_or(FormatError::WrongDtype)?;
+    let layers = acts.len();
+    if layers == 0 || layers > MAX_LAYERS || acts_section.dims().len() != 1 {
+        return Err(FormatError::LimitExceeded);
+    }
+    let params = file.f32_tensor(&simple_name(prefix, ".par")?, &[layers as u32])?;
+    let mut dense: heapless::Vec<Dense<'a>, MAX_LAYERS> = heapless::Vec::new();
+    for i in 0..layers {
+        let w_name = name(prefix, i, ".w")?;
+        let (shape, rank) = file.dims_of(&w_name)?;
+        let [outputs, inputs, ..] = shape;
+        if rank != 2 {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        let weight = file.f32_tensor(&w_name, &[outputs, inputs])?;
+        let bias = file.f32_tensor(&name(prefix, i, ".b")?, &[outputs])?;
+        let act = Activation::from_code(acts.at(i), params.at(i))?;
+        let layer = Dense::new(weight, bias, inputs as usize, outputs as usize, act)?;
+        dense.push(layer).map_err(|_| FormatError::LimitExceeded)?;
+    }
+    Mlp::new(&dense)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn section_names() {
+        assert_eq!(name("b", 0, ".w").unwrap().as_str(), "b.0.w");
+        assert_eq!(name("net", 12, ".b").unwrap().as_str(), "net.12.b");
+        assert!(name("x", 100, ".w").is_err());
+        assert!(name(&"p".repeat(MAX_PREFIX_LEN), 99, ".w").is_ok());
+        assert!(name(&"p".repeat(MAX_PREFIX_LEN + 1), 99, ".w").is_err());
+    }
+}

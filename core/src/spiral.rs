@@ -1,0 +1,354 @@
+//! Spiral convolution (Bouritsas et al. 2019, Neural3DMM; used by the S2D decoder).
+//!
+//! For each output vertex the features of the vertices on its spiral are concatenated
+//! spiral-position-major (position 0's `in_f` features, then position 1's, …) and passed through
+//! one linear layer. See `shared/notes/s2d-reference.md` for the reference configuration,
+//! including the dummy vertex whose row is zeroed after each stage ([`zero_row`]).
+
+use crate::error::{BufferError, FormatError};
+use crate::nn::{Activation, all_finite};
+use crate::tensor::{F32s, U32s};
+
+/// Validated spiral indices: one spiral of `len` source-vertex indices per output vertex.
+///
+/// # Shapes
+/// `indices`: `[n_vertices, len]` row-major, every value `< n_source_vertices`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Spirals<'a> {
+    indices: U32s<'a>,
+    n_vertices: usize,
+    len: usize,
+    n_source_vertices: usize,
+}
+
+impl<'a> Spirals<'a> {
+    /// Checks and wraps spiral indices.
+    ///
+    /// # Errors
+    /// [`FormatError::IncompatibleShapes`] if `len` is zero or `indices` does not hold
+    /// `n_vertices × len` values; [`FormatError::IndexOutOfRange`] if an index is
+    /// `>= n_source_vertices`.
+    pub fn new(
+        indices: U32s<'a>,
+        n_vertices: usize,
+        len: usize,
+        n_source_vertices: usize,
+    ) -> Result<Self, FormatError> {
+        if len == 0 || Some(indices.len()) != n_vertices.checked_mul(len) {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        if indices.iter().any(|i| i as usize >= n_source_vertices) {
+            return Err(FormatError::IndexOutOfRange);
+        }
+        Ok(Self {
+            indices,
+            n_vertices,
+            len,
+            n_source_vertices,
+        })
+    }
+
+    /// Number of spirals (output vertices).
+    pub fn n_vertices(&self) -> usize {
+        self.n_vertices
+    }
+
+    /// Number of indices per spiral.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether there are no spirals.
+    pub fn is_empty(&self) -> bool {
+        self.n_vertices == 0
+    }
+
+    /// Number of source vertices the indices refer to.
+    pub fn n_source_vertices(&self) -> usize {
+        self.n_source_vertices
+    }
+
+    /// The spiral of output vertex `v` (empty past the end).
+    pub fn spiral(&self, v: usize) -> U32s<'a> {
+        self.indices.slice(v.saturating_mul(self.len), self.len)
+    }
+}
+
+/// A spiral convolution layer: gather along each spiral, then one dense layer and an activation.
+///
+/// # Shapes
+/// `weight`: `[out_f, len · in_f]` row-major, column `j = p · in_f + c` multiplying feature `c`
+/// of spiral position `p`; `bias`: `[out_f]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpiralConv<'a> {
+    spirals: Spirals<'a>,
+    weight: F32s<'a>,
+    bias: F32s<'a>,
+    in_f: usize,
+    out_f: usize,
+    activation: Activation,
+}
+
+impl<'a> SpiralConv<'a> {
+    /// Checks and wraps a spiral convolution.
+    ///
+    /// # Errors
+    /// [`FormatError::IncompatibleShapes`] if `in_f` or `out_f` is zero, or `weight`/`bias` do not
+    /// hold `out_f × len × in_f` / `out_f` values; [`FormatError::NonFinite`] if a weight, a bias
+    /// or the activation parameter is NaN or infinite.
+    pub fn new(
+        spirals: Spirals<'a>,
+        weight: F32s<'a>,
+        bias: F32s<'a>,
+        in_f: usize,
+        out_f: usize,
+        activation: Activation,
+    ) -> Result<Self, FormatError> {
+        if in_f == 0 || out_f == 0 {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        let width = spirals.len.checked_mul(in_f);
+        if Some(weight.len()) != width.and_then(|w| w.checked_mul(out_f)) || bias.len() != out_f {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        if !all_finite(weight) || !all_finite(bias) || !activation.param().is_finite() {
+            return Err(FormatError::NonFinite);
+        }
+        Ok(Self {
+            spirals,
+            weight,
+            bias,
+            in_f,
+            out_f,
+            activation,
+        })
+    }
+
+    /// The spirals.
+    pub fn spirals(&self) -> Spirals<'a> {
+        self.spirals
+    }
+
+    /// Input features per source vertex.
+    pub fn in_features(&self) -> usize {
+        self.in_f
+    }
+
+    /// Output features per vertex.
+    pub fn out_features(&self) -> usize {
+        self.out_f
+    }
+
+    /// The activation.
+    pub fn activation(&self) -> Activation {
+        self.activation
+    }
+
+    /// `out[v, o] = act(Σ_j W[o, j] · g_v[j] + b[o])`, where `g_v` is the spiral-position-major
+    /// concatenation of `x[s(v, p), 0..in_f]` for `p = 0..len`.
+    ///
+    /// The sum runs over `j = 0..len · in_f` in order from `0.0` with separate multiply and add,
+    /// then the bias is added: the same bits as [`crate::nn::Dense`] applied to the gathered
+    /// vector, without materialising it. `out` itself is the accumulator.
+    ///
+    /// # Shapes
+    /// `x`: `[n_source_vertices, in_f]` row-major; `out`: `[n_vertices, out_f]` row-major.
+    ///
+    /// # Errors
+    /// [`BufferError::Input`] if `x.len() != n_source_vertices × in_f`;
+    /// [`BufferError::Output`] if `out.len() != n_vertices × out_f`.
+    pub fn forward(&self, x: &[f32], out: &mut [f32]) -> Result<(), BufferError> {
+        if Some(x.len()) != self.spirals.n_source_vertices.checked_mul(self.in_f) {
+            return Err(BufferError::Input);
+        }
+        if Some(out.len()) != self.spirals.n_vertices.checked_mul(self.out_f) {
+            return Err(BufferError::Output);
+        }
+        let in_f = self.in_f;
+        let width = self.spirals.len * in_f;
+        for (v, out_row) in out.chunks_exact_mut(self.out_f).enumerate() {
+            out_row.fill(0.0);
+            // Positions in order, and within a position features in order: for each output the
+            // accumulation visits j = p · in_f + c in increasing order.
+            for (p, s) in self.spirals.spiral(v).iter().enumerate() {
+                let s = s as usize;
+                // s < n_source_vertices (validated), so the row lies inside x.
+                let xs = x.get(s * in_f..s * in_f + in_f).unwrap_or(&[]);
+                for (o, acc) in out_row.iter_mut().enumerate() {
+                    let w = self.weight.slice(o * width + p * in_f, in_f);
+                    for (wj, xj) in w.iter().zip(xs) {
+                        *acc += wj * *xj;
+                    }
+                }
+            }
+            for (acc, b) in out_row.iter_mut().zip(self.bias.iter()) {
+                *acc = self.activation.apply(*acc + b);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Sets row `row` of a row-major `[_, width]` array to zero: the S2D reference zeroes the dummy
+/// vertex's row (the last one) after every spiral stage, so that it pads short spirals with zeros.
+///
+/// # Errors
+/// [`BufferError::Output`] if the row lies outside `out`; nothing is written then.
+pub fn zero_row(out: &mut [f32], row: usize, width: usize) -> Result<(), BufferError> {
+    let start = row.checked_mul(width).ok_or(BufferError::Output)?;
+    let end = start.checked_add(width).ok_or(BufferError::Output)?;
+    out.get_mut(start..end)
+        .ok_or(BufferError::Output)?
+        .fill(0.0);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::nn::Dense;
+    use std::vec::Vec;
+
+    fn fb(v: &[f32]) -> Vec<u8> {
+        v.iter().flat_map(|x| x.to_le_bytes()).collect()
+    }
+
+    fn ub(v: &[u32]) -> Vec<u8> {
+        v.iter().flat_map(|x| x.to_le_bytes()).collect()
+    }
+
+    #[test]
+    fn spirals_validation() {
+        let b = ub(&[0, 1, 2, 2, 0, 1]);
+        let idx = U32s::new(&b).unwrap();
+        let s = Spirals::new(idx, 2, 3, 3).unwrap();
+        assert_eq!(
+            (s.n_vertices(), s.len(), s.n_source_vertices(), s.is_empty()),
+            (2, 3, 3, false)
+        );
+        assert_eq!(s.spiral(1).iter().collect::<Vec<_>>(), [2, 0, 1]);
+        assert_eq!(
+            Spirals::new(idx, 2, 3, 2),
+            Err(FormatError::IndexOutOfRange)
+        );
+        assert_eq!(
+            Spirals::new(idx, 3, 3, 3),
+            Err(FormatError::IncompatibleShapes)
+        );
+        assert_eq!(
+            Spirals::new(U32s::empty(), 2, 0, 3),
+            Err(FormatError::IncompatibleShapes)
+        );
+    }
+
+    #[test]
+    fn forward_hand_computed() {
+        // 3 source vertices with in_f = 2: x = [[1, 2], [3, 4], [5, 6]].
+        // 2 spirals of length 2: v0 = (0, 2), v1 = (1, 1).
+        // out_f = 2, W = [[1, 0, 0, 1],     (x[s0][0] + x[s1][1])
+        //                 [0.5, 0.5, −1, 0]] (0.5 (x[s0][0] + x[s0][1]) − x[s1][0]), b = [0, 10]
+        // v0: gathered [1, 2, 5, 6] → [1 + 6, 0.5 + 1 − 5 + 10] = [7, 6.5]
+        // v1: gathered [3, 4, 3, 4] → [3 + 4, 1.5 + 2 − 3 + 10] = [7, 10.5]
+        let sb = ub(&[0, 2, 1, 1]);
+        let spirals = Spirals::new(U32s::new(&sb).unwrap(), 2, 2, 3).unwrap();
+        let wb = fb(&[1.0, 0.0, 0.0, 1.0, 0.5, 0.5, -1.0, 0.0]);
+        let bb = fb(&[0.0, 10.0]);
+        let w = F32s::new(&wb).unwrap();
+        let b = F32s::new(&bb).unwrap();
+        let conv = SpiralConv::new(spirals, w, b, 2, 2, Activation::Identity).unwrap();
+        let x = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+        let mut out = [f32::NAN; 4];
+        conv.forward(&x, &mut out).unwrap();
+        assert_eq!(out, [7.0, 6.5, 7.0, 10.5]);
+
+        // ELU(α = 1) with b = [0, −10]: output 1 becomes −3.5 − 10 = −13.5 (v0) and 0.5 − 10 = −9.5 (v1).
+        let bb = fb(&[0.0, -10.0]);
+        let conv = SpiralConv::new(
+            spirals,
+            w,
+            F32s::new(&bb).unwrap(),
+            2,
+            2,
+            Activation::Elu { alpha: 1.0 },
+        )
+        .unwrap();
+        conv.forward(&x, &mut out).unwrap();
+        assert_eq!(out, [7.0, libm::expm1f(-13.5), 7.0, libm::expm1f(-9.5)]);
+
+        assert_eq!(conv.forward(&x[..5], &mut out), Err(BufferError::Input));
+        assert_eq!(conv.forward(&x, &mut out[..3]), Err(BufferError::Output));
+    }
+
+    #[test]
+    fn same_bits_as_dense_on_the_gathered_vector() {
+        // Values chosen so that the order of the sum matters: any other order of the 6 products
+        // changes the rounding.
+        let xs = [1e8f32, 3.0, -1e8, 0.1, 7.25, 1e-3];
+        let sb = ub(&[2, 0, 1, 1, 2, 0]);
+        let spirals = Spirals::new(U32s::new(&sb).unwrap(), 2, 3, 3).unwrap();
+        let wv = [1.0, 0.3, 1.0, -0.7, 1.0, 2.5, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
+        let wb = fb(&wv);
+        let bb = fb(&[0.125, -3.0]);
+        let (w, b) = (F32s::new(&wb).unwrap(), F32s::new(&bb).unwrap());
+        let act = Activation::Sine { omega0: 30.0 };
+        let conv = SpiralConv::new(spirals, w, b, 2, 2, act).unwrap();
+        let x = [xs[0], xs[1], xs[2], xs[3], xs[4], xs[5]];
+        let mut out = [0.0; 4];
+        conv.forward(&x, &mut out).unwrap();
+
+        let dense = Dense::new(w, b, 6, 2, act).unwrap();
+        for v in 0..2 {
+            let mut gathered = Vec::new();
+            for s in spirals.spiral(v).iter() {
+                gathered.extend_from_slice(&x[s as usize * 2..s as usize * 2 + 2]);
+            }
+            let mut y = [0.0; 2];
+            dense.forward(&gathered, &mut y).unwrap();
+            assert_eq!(y[0].to_bits(), out[v * 2].to_bits());
+            assert_eq!(y[1].to_bits(), out[v * 2 + 1].to_bits());
+        }
+    }
+
+    #[test]
+    fn conv_validation() {
+        let sb = ub(&[0, 1]);
+        let spirals = Spirals::new(U32s::new(&sb).unwrap(), 1, 2, 2).unwrap();
+        let wb = fb(&[1.0; 4]);
+        let bb = fb(&[0.0]);
+        let (w, b) = (F32s::new(&wb).unwrap(), F32s::new(&bb).unwrap());
+        let id = Activation::Identity;
+        assert!(SpiralConv::new(spirals, w, b, 2, 1, id).is_ok());
+        assert_eq!(
+            SpiralConv::new(spirals, w, b, 1, 1, id),
+            Err(FormatError::IncompatibleShapes)
+        );
+        assert_eq!(
+            SpiralConv::new(spirals, w, b, 0, 1, id),
+            Err(FormatError::IncompatibleShapes)
+        );
+        assert_eq!(
+            SpiralConv::new(spirals, w, F32s::empty(), 2, 1, id),
+            Err(FormatError::IncompatibleShapes)
+        );
+        let nb = fb(&[1.0, 1.0, f32::INFINITY, 1.0]);
+        assert_eq!(
+            SpiralConv::new(spirals, F32s::new(&nb).unwrap(), b, 2, 1, id),
+            Err(FormatError::NonFinite)
+        );
+        let elu = Activation::Elu { alpha: f32::NAN };
+        assert_eq!(
+            SpiralConv::new(spirals, w, b, 2, 1, elu),
+            Err(FormatError::NonFinite)
+        );
+    }
+
+    #[test]
+    fn zero_row_zeroes_one_row() {
+        let mut a = [1.0f32; 6];
+        zero_row(&mut a, 2, 2).unwrap();
+        assert_eq!(a, [1.0, 1.0, 1.0, 1.0, 0.0, 0.0]);
+        assert_eq!(zero_row(&mut a, 3, 2), Err(BufferError::Output));
+        assert_eq!(zero_row(&mut a, usize::MAX, 2), Err(BufferError::Output));
+        assert_eq!(zero_row(&mut a, 0, 0), Ok(()));
+    }
+}

@@ -1,0 +1,225 @@
+//! The `.sinew` writer. The reader and every constant live in `sinew_core::format`; this module
+//! only lays bytes out as `docs/FORMAT.md` specifies, so the two cannot drift apart.
+
+use std::path::Path;
+
+use anyhow::{Result, bail};
+use sinew_core::format::{
+    ArtifactKind, CRC32, Dtype, HEADER_CRC_OFFSET, HEADER_LEN, MAGIC, MAX_RANK, MAX_SECTIONS, NAME_LEN,
+    SECTION_ALIGN, SECTION_ENTRY_LEN, SectionKind, VERSION_MAJOR, VERSION_MINOR, data_start,
+};
+
+/// One section waiting to be written.
+#[derive(Clone, Debug)]
+struct PendingSection {
+    kind: SectionKind,
+    name: String,
+    dtype: Dtype,
+    dims: Vec<u32>,
+    data: Vec<u8>,
+}
+
+/// Builds a `.sinew` artefact in memory.
+#[derive(Clone, Debug)]
+pub struct SinewWriter {
+    kind: ArtifactKind,
+    flags: u32,
+    metadata: Vec<(String, String)>,
+    sections: Vec<PendingSection>,
+}
+
+impl SinewWriter {
+    /// An empty artefact of `kind`.
+    pub fn new(kind: ArtifactKind) -> Self {
+        Self { kind, flags: 0, metadata: Vec::new(), sections: Vec::new() }
+    }
+
+    /// Sets header flags (`sinew_core::format::FLAG_*`).
+    pub fn flags(&mut self, flags: u32) -> &mut Self {
+        self.flags = flags;
+        self
+    }
+
+    /// Adds a metadata entry. Keys hold no `=` or newline; values no newline.
+    pub fn meta(&mut self, key: &str, value: impl ToString) -> &mut Self {
+        self.metadata.push((key.to_owned(), value.to_string()));
+        self
+    }
+
+    fn push(&mut self, name: &str, dtype: Dtype, dims: &[usize], data: Vec<u8>) -> Result<&mut Self> {
+        if name.is_empty() || name.len() > NAME_LEN || !name.bytes().all(|c| c.is_ascii_graphic()) {
+            bail!("section name {name:?} must be 1..={NAME_LEN} printable ASCII characters");
+        }
+        if name == "meta" || self.sections.iter().any(|s| s.name == name) {
+            bail!("section name {name:?} is used twice");
+        }
+        if dims.len() > MAX_RANK {
+            bail!("section {name}: rank {} exceeds {MAX_RANK}", dims.len());
+        }
+        let dims: Vec<u32> = dims
+            .iter()
+            .map(|&d| u32::try_from(d).map_err(|_| anyhow::anyhow!("section {name}: dimension {d} too large")))
+            .collect::<Result<_>>()?;
+        let elements: usize = dims.iter().map(|&d| d as usize).product();
+        if elements * dtype.size() != data.len() {
+            bail!("section {name}: shape {dims:?} does not match {} bytes of {}", data.len(), dtype.name());
+        }
+        self.sections.push(PendingSection { kind: SectionKind::Tensor, name: name.to_owned(), dtype, dims, data });
+        Ok(self)
+    }
+
+    /// Adds an `f32` tensor; every value must be finite.
+    pub fn f32s(&mut self, name: &str, dims: &[usize], values: &[f32]) -> Result<&mut Self> {
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            bail!("section {name}: value {i} is {} (weights must be finite)", values[i]);
+        }
+        self.push(name, Dtype::F32, dims, values.iter().flat_map(|v| v.to_le_bytes()).collect())
+    }
+
+    /// Adds a `u32` tensor.
+    pub fn u32s(&mut self, name: &str, dims: &[usize], values: &[u32]) -> Result<&mut Self> {
+        self.push(name, Dtype::U32, dims, values.iter().flat_map(|v| v.to_le_bytes()).collect())
+    }
+
+    /// Adds a Q16.16 tensor.
+    pub fn q16s(&mut self, name: &str, dims: &[usize], values: &[i32]) -> Result<&mut Self> {
+        self.push(name, Dtype::Q16, dims, values.iter().flat_map(|v| v.to_le_bytes()).collect())
+    }
+
+    /// Adds a section of a kind this version may not know (for forward-compatibility tests).
+    pub fn raw(&mut self, kind: SectionKind, name: &str, data: Vec<u8>) -> Result<&mut Self> {
+        let len = data.len();
+        self.push(name, Dtype::U8, &[len], data)?;
+        if let Some(last) = self.sections.last_mut() {
+            last.kind = kind;
+        }
+        Ok(self)
+    }
+
+    /// Serialises the artefact.
+    pub fn to_bytes(&self) -> Result<Vec<u8>> {
+        let mut sections = Vec::with_capacity(self.sections.len() + 1);
+        if !self.metadata.is_empty() {
+            let mut text = String::new();
+            for (k, v) in &self.metadata {
+                if k.is_empty() || k.contains(['=', '\n', '\r']) || v.contains(['\n', '\r']) {
+                    bail!("metadata entry {k:?} = {v:?} holds a forbidden character");
+                }
+                text.push_str(k);
+                text.push('=');
+                text.push_str(v);
+                text.push('\n');
+            }
+            let data = text.into_bytes();
+            let dims = vec![u32::try_from(data.len())?];
+            sections.push(PendingSection { kind: SectionKind::Metadata, name: "meta".into(), dtype: Dtype::U8, dims, data });
+        }
+        sections.extend(self.sections.iter().cloned());
+        if sections.len() > MAX_SECTIONS {
+            bail!("{} sections exceed the format's limit of {MAX_SECTIONS}", sections.len());
+        }
+
+        let mut offsets = Vec::with_capacity(sections.len());
+        let mut cursor = data_start(sections.len());
+        for s in &sections {
+            offsets.push(cursor);
+            cursor = (cursor + s.data.len()).div_ceil(SECTION_ALIGN) * SECTION_ALIGN;
+        }
+        let file_len = offsets.last().zip(sections.last()).map_or(HEADER_LEN, |(o, s)| o + s.data.len());
+        let file_len_u32 = u32::try_from(file_len).map_err(|_| anyhow::anyhow!("artefact of {file_len} bytes exceeds 4 GiB"))?;
+
+        let mut out = vec![0u8; file_len];
+        out[..8].copy_from_slice(&MAGIC);
+        out[8..10].copy_from_slice(&VERSION_MAJOR.to_le_bytes());
+        out[10..12].copy_from_slice(&VERSION_MINOR.to_le_bytes());
+        out[12..16].copy_from_slice(&self.flags.to_le_bytes());
+        out[16..18].copy_from_slice(&self.kind.code().to_le_bytes());
+        out[20..24].copy_from_slice(&(sections.len() as u32).to_le_bytes());
+        out[24..28].copy_from_slice(&file_len_u32.to_le_bytes());
+        for (i, (s, &offset)) in sections.iter().zip(&offsets).enumerate() {
+            let e = &mut out[HEADER_LEN + i * SECTION_ENTRY_LEN..][..SECTION_ENTRY_LEN];
+            e[0..2].copy_from_slice(&s.kind.code().to_le_bytes());
+            e[2] = s.dtype.code();
+            e[3] = s.dims.len() as u8;
+            e[4..4 + s.name.len()].copy_from_slice(s.name.as_bytes());
+            for (d, &dim) in s.dims.iter().enumerate() {
+                e[36 + 4 * d..40 + 4 * d].copy_from_slice(&dim.to_le_bytes());
+            }
+            e[52..56].copy_from_slice(&(offset as u32).to_le_bytes());
+            e[56..60].copy_from_slice(&(s.data.len() as u32).to_le_bytes());
+            e[60..64].copy_from_slice(&CRC32.checksum(&s.data).to_le_bytes());
+            out[offset..offset + s.data.len()].copy_from_slice(&s.data);
+        }
+        let table_end = HEADER_LEN + sections.len() * SECTION_ENTRY_LEN;
+        let mut digest = CRC32.digest();
+        digest.update(&out[..HEADER_CRC_OFFSET]);
+        digest.update(&out[HEADER_LEN..table_end]);
+        let crc = digest.finalize();
+        out[HEADER_CRC_OFFSET..HEADER_LEN].copy_from_slice(&crc.to_le_bytes());
+        Ok(out)
+    }
+
+    /// Serialises and writes the artefact atomically.
+    pub fn write(&self, path: &Path) -> Result<()> {
+        crate::atomic::write(path, &self.to_bytes()?)
+    }
+}
+
+/// Reads and validates a `.sinew` file, naming the file in any error.
+pub fn read(path: &Path) -> Result<Vec<u8>> {
+    let bytes = std::fs::read(path).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
+    sinew_core::SinewFile::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sinew_core::SinewFile;
+
+    #[test]
+    fn round_trips_bit_exactly() {
+        let weights = [1.5f32, -0.0, f32::MIN_POSITIVE / 2.0, 3.25e-7, -1.0e30, 7.0];
+        let mut w = SinewWriter::new(ArtifactKind::Network);
+        w.meta("units", "cm").meta("seed", 7);
+        w.f32s("w", &[2, 3], &weights).unwrap();
+        w.u32s("idx", &[3], &[0, 5, u32::MAX]).unwrap();
+        w.q16s("q", &[1], &[-65536]).unwrap();
+        let bytes = w.to_bytes().unwrap();
+        let f = SinewFile::from_bytes(&bytes).unwrap();
+        assert_eq!(f.kind, ArtifactKind::Network);
+        assert_eq!(f.metadata().get("units"), Some("cm"));
+        assert_eq!(f.metadata().get("seed"), Some("7"));
+        let back: Vec<u32> = f.f32_tensor("w", &[2, 3]).unwrap().iter().map(f32::to_bits).collect();
+        assert_eq!(back, weights.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+        assert_eq!(f.u32_tensor("idx", &[3]).unwrap().at(2), u32::MAX);
+        assert_eq!(f.section("q").unwrap().q16s().unwrap().at(0), -65536);
+        // Every section starts aligned, whatever the lengths before it.
+        assert!(f.sections().all(|s| s.offset as usize % SECTION_ALIGN == 0));
+        // Loading from an odd address works as well: the core never assumes alignment.
+        let mut shifted = vec![0u8];
+        shifted.extend_from_slice(&bytes);
+        assert!(SinewFile::from_bytes(&shifted[1..]).is_ok());
+    }
+
+    #[test]
+    fn rejects_bad_sections_before_writing() {
+        let mut w = SinewWriter::new(ArtifactKind::Network);
+        assert!(w.f32s("x", &[2], &[1.0, f32::NAN]).is_err());
+        assert!(w.f32s("x", &[3], &[1.0]).is_err());
+        assert!(w.f32s("a name that is much too long for the table", &[1], &[1.0]).is_err());
+        w.f32s("x", &[1], &[1.0]).unwrap();
+        assert!(w.u32s("x", &[1], &[1]).is_err());
+    }
+
+    #[test]
+    fn unknown_section_kinds_are_skipped() {
+        let mut w = SinewWriter::new(ArtifactKind::Network);
+        w.raw(SectionKind::Other(999), "future", vec![1, 2, 3]).unwrap();
+        w.f32s("w", &[1], &[2.0]).unwrap();
+        let bytes = w.to_bytes().unwrap();
+        let f = SinewFile::from_bytes(&bytes).unwrap();
+        assert_eq!(f.section("future").unwrap().kind, SectionKind::Other(999));
+        assert_eq!(f.f32_tensor("w", &[1]).unwrap().at(0), 2.0);
+    }
+}

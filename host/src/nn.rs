@@ -1,0 +1,203 @@
+//! burn twins of the core's layers: an MLP with per-layer activations (SIREN when the activation
+//! is a sine) and the spiral convolution. Each can export itself into the sections that
+//! `sinew_core::network::load_mlp` and `sinew_core::spiral` read, so the host trains and the core
+//! plays back the same weights.
+
+use anyhow::{Result, ensure};
+use burn::module::{Module, Param};
+use burn::nn::{Linear, LinearConfig};
+use burn::tensor::activation::{elu, gelu, relu};
+use burn::tensor::{Device, Distribution, Int, Tensor, TensorData};
+use sinew_core::nn::Activation;
+
+use crate::container::SinewWriter;
+
+/// Reads a float tensor back as a `Vec<f32>`.
+pub fn to_vec<const D: usize>(t: Tensor<D>) -> Vec<f32> {
+    t.into_data().convert::<f32>().try_to_vec::<f32>().unwrap_or_default()
+}
+
+/// Makes a float tensor from row-major values.
+pub fn tensor<const D: usize>(values: Vec<f32>, shape: [usize; D], device: &Device) -> Tensor<D> {
+    Tensor::from_data(TensorData::new(values, shape), device)
+}
+
+/// Applies `act` as the core does (same formula; rounding differs, see `tolerance`).
+pub fn activate<const D: usize>(x: Tensor<D>, act: Activation) -> Tensor<D> {
+    match act {
+        Activation::Identity => x,
+        Activation::Sine { omega0 } => x.mul_scalar(omega0).sin(),
+        Activation::Gelu => gelu(x),
+        Activation::Elu { alpha } => elu(x, f64::from(alpha)),
+        Activation::Relu => relu(x),
+    }
+}
+
+/// A multi-layer perceptron with one activation per layer.
+#[derive(Module, Debug)]
+pub struct Mlp {
+    /// The affine layers, first to last.
+    pub layers: Vec<Linear>,
+    /// The activation after each layer.
+    #[module(skip)]
+    pub activations: Vec<Activation>,
+}
+
+impl Mlp {
+    /// A SIREN (Sitzmann et al. 2020): `widths[0]` inputs, sine layers of `omega0` in between and
+    /// a linear last layer, with SIREN's initialisation (first layer U(−1/in, 1/in), later layers
+    /// U(−√(6/in)/ω0, √(6/in)/ω0)). Seed the device first for reproducible weights.
+    pub fn siren(widths: &[usize], omega0: f32, device: &Device) -> Self {
+        let n = widths.len().saturating_sub(1);
+        let acts = (0..n)
+            .map(|i| if i + 1 == n { Activation::Identity } else { Activation::Sine { omega0 } })
+            .collect::<Vec<_>>();
+        let layers = widths
+            .windows(2)
+            .enumerate()
+            .map(|(i, w)| {
+                let fan_in = w[0] as f64;
+                let bound = if i == 0 { 1.0 / fan_in } else { (6.0 / fan_in).sqrt() / f64::from(omega0) };
+                uniform_linear(w[0], w[1], bound, 1.0 / fan_in.sqrt(), device)
+            })
+            .collect();
+        Self { layers, activations: acts }
+    }
+
+    /// A generic MLP with the given widths and activations (uniform ±1/√in initialisation).
+    pub fn new(widths: &[usize], activations: &[Activation], device: &Device) -> Self {
+        let layers = widths
+            .windows(2)
+            .map(|w| {
+                let b = 1.0 / (w[0] as f64).sqrt();
+                uniform_linear(w[0], w[1], b, b, device)
+            })
+            .collect();
+        Self { layers, activations: activations.to_vec() }
+    }
+
+    /// # Shapes
+    /// - input: `[n, inputs]`
+    /// - output: `[n, outputs]`
+    pub fn forward(&self, x: Tensor<2>) -> Tensor<2> {
+        self.layers.iter().zip(&self.activations).fold(x, |x, (layer, &act)| activate(layer.forward(x), act))
+    }
+
+    /// The weights in the core's layout.
+    pub fn weights(&self) -> Vec<LayerWeights> {
+        self.layers
+            .iter()
+            .zip(&self.activations)
+            .map(|(layer, &activation)| {
+                // burn stores [in, out]; the core reads one row per output: transpose.
+                let weight = layer.weight.val().transpose();
+                let [outputs, inputs] = weight.dims();
+                let bias = layer.bias.as_ref().map_or_else(|| vec![0.0; outputs], |b| to_vec(b.val()));
+                LayerWeights { weight: to_vec(weight), bias, inputs, outputs, activation }
+            })
+            .collect()
+    }
+
+    /// Writes the weights as the core's MLP sections under `prefix`.
+    pub fn export(&self, w: &mut SinewWriter, prefix: &str) -> Result<()> {
+        write_mlp(w, prefix, &self.weights())
+    }
+}
+
+/// One layer's weights in the core's layout: `weight` is row-major `[outputs, inputs]`.
+#[derive(Clone, Debug)]
+pub struct LayerWeights {
+    /// Row-major `[outputs, inputs]`.
+    pub weight: Vec<f32>,
+    /// `[outputs]`.
+    pub bias: Vec<f32>,
+    /// Input width.
+    pub inputs: usize,
+    /// Output width.
+    pub outputs: usize,
+    /// Activation after the affine map.
+    pub activation: Activation,
+}
+
+/// Writes an MLP as the sections `sinew_core::network::load_mlp` reads (see docs/FORMAT.md).
+pub fn write_mlp(w: &mut SinewWriter, prefix: &str, layers: &[LayerWeights]) -> Result<()> {
+    let codes: Vec<u32> = layers.iter().map(|l| l.activation.code()).collect();
+    let params: Vec<f32> = layers.iter().map(|l| l.activation.param()).collect();
+    w.u32s(&format!("{prefix}.act"), &[codes.len()], &codes)?;
+    w.f32s(&format!("{prefix}.par"), &[params.len()], &params)?;
+    for (i, l) in layers.iter().enumerate() {
+        ensure!(l.weight.len() == l.inputs * l.outputs && l.bias.len() == l.outputs, "MLP {prefix}: layer {i} has inconsistent shapes");
+        w.f32s(&format!("{prefix}.{i}.w"), &[l.outputs, l.inputs], &l.weight)?;
+        w.f32s(&format!("{prefix}.{i}.b"), &[l.outputs], &l.bias)?;
+    }
+    Ok(())
+}
+
+fn uniform_linear(inputs: usize, outputs: usize, w_bound: f64, b_bound: f64, device: &Device) -> Linear {
+    let mut layer = LinearConfig::new(inputs, outputs).init(device);
+    layer.weight = Param::from_tensor(Tensor::random([inputs, outputs], Distribution::Uniform(-w_bound, w_bound), device));
+    layer.bias = Some(Param::from_tensor(Tensor::random([outputs], Distribution::Uniform(-b_bound, b_bound), device)));
+    layer
+}
+
+/// The spiral convolution (Gong et al. 2019, as S2D's reference uses it): gather each vertex's
+/// spiral of neighbours' features, position-major, then one linear layer.
+#[derive(Module, Debug)]
+pub struct SpiralConv {
+    /// The linear layer over the concatenated spiral, `[len·in, out]` in burn's layout.
+    pub linear: Linear,
+    /// Spiral indices, flattened `[vertices·len]`.
+    pub spirals: Tensor<1, Int>,
+    /// Spiral length.
+    #[module(skip)]
+    pub len: usize,
+    /// Activation after the linear layer.
+    #[module(skip)]
+    pub activation: Activation,
+}
+
+impl SpiralConv {
+    /// A spiral convolution over `spirals` (row-major `[vertices, len]`).
+    pub fn new(spirals: &[u32], len: usize, inputs: usize, outputs: usize, activation: Activation, device: &Device) -> Self {
+        let b = 1.0 / ((inputs * len) as f64).sqrt();
+        let idx: Vec<i64> = spirals.iter().map(|&i| i64::from(i)).collect();
+        Self {
+            linear: uniform_linear(inputs * len, outputs, b, b, device),
+            spirals: Tensor::from_data(TensorData::new(idx, [spirals.len()]), device),
+            len,
+            activation,
+        }
+    }
+
+    /// # Shapes
+    /// - input: `[batch, source_vertices, in]`
+    /// - output: `[batch, vertices, out]`
+    pub fn forward(&self, x: Tensor<3>) -> Tensor<3> {
+        let [batch, _, features] = x.dims();
+        let vertices = self.spirals.dims()[0] / self.len;
+        let gathered = x.select(1, self.spirals.clone()).reshape([batch, vertices, self.len * features]);
+        activate(self.linear.forward(gathered), self.activation)
+    }
+
+    /// Writes the layer as sections `prefix.idx` (`u32 [vertices, len]`), `prefix.w`
+    /// (`f32 [out, len·in]`) and `prefix.b` (`f32 [out]`).
+    pub fn export(&self, w: &mut SinewWriter, prefix: &str) -> Result<()> {
+        let idx: Vec<u32> = self
+            .spirals
+            .clone()
+            .into_data()
+            .convert::<i64>()
+            .try_to_vec::<i64>()
+            .unwrap_or_default()
+            .into_iter()
+            .map(|i| i as u32)
+            .collect();
+        w.u32s(&format!("{prefix}.idx"), &[idx.len() / self.len, self.len], &idx)?;
+        let weight = self.linear.weight.val().transpose();
+        let [outputs, inputs] = weight.dims();
+        w.f32s(&format!("{prefix}.w"), &[outputs, inputs], &to_vec(weight))?;
+        let bias = self.linear.bias.as_ref().map_or_else(|| vec![0.0; outputs], |b| to_vec(b.val()));
+        w.f32s(&format!("{prefix}.b"), &[outputs], &bias)?;
+        Ok(())
+    }
+}

@@ -1,0 +1,63 @@
+//! The one table of allowed differences between the core's deterministic kernels and burn running
+//! the same maths on the same weights. Bits are compared only where determinism is promised (the
+//! core against itself across targets); here two implementations of the same formula meet, and
+//! each entry says why they may differ and by how much.
+
+/// One comparison's allowance: `|core − burn| ≤ abs + rel·|burn|` for every output value.
+#[derive(Clone, Copy, Debug)]
+pub struct Tolerance {
+    /// What is compared.
+    pub what: &'static str,
+    /// Absolute allowance.
+    pub abs: f32,
+    /// Relative allowance.
+    pub rel: f32,
+    /// Why the two may differ at all.
+    pub reason: &'static str,
+}
+
+impl Tolerance {
+    /// Whether `core` is within this allowance of `reference`.
+    pub fn accepts(&self, core: f32, reference: f32) -> bool {
+        (core - reference).abs() <= self.abs + self.rel * reference.abs()
+    }
+
+    /// The first index where `core` and `reference` differ beyond the allowance, with both values.
+    pub fn first_violation(&self, core: &[f32], reference: &[f32]) -> Option<(usize, f32, f32)> {
+        if core.len() != reference.len() {
+            return Some((core.len().min(reference.len()), f32::NAN, f32::NAN));
+        }
+        core.iter().zip(reference).position(|(&c, &r)| !self.accepts(c, r)).map(|i| (i, core[i], reference[i]))
+    }
+}
+
+/// Dense/GELU/ELU MLP against burn.
+pub const MLP: Tolerance = Tolerance {
+    what: "MLP (dense + GELU/ELU/ReLU)",
+    abs: 1e-5,
+    rel: 1e-5,
+    reason: "burn's matmul blocks and vectorises the dot products (a different summation order, \
+             possibly fused multiply-adds); the core sums in index order without FMA. Each output \
+             is a sum of ≤ 256 products of O(1) terms: a few ulps of 1.",
+};
+
+/// SIREN against burn.
+pub const SIREN: Tolerance = Tolerance {
+    what: "SIREN (sin(ω0·(Wx+b)), ω0 = 30)",
+    abs: 2e-4,
+    rel: 1e-4,
+    reason: "as for the MLP, and the sine multiplies each pre-activation's rounding error by ω0 = 30 \
+             before the next layer sums 256 of them; burn's sin and libm's sinf may also differ by \
+             an ulp.",
+};
+
+/// Spiral convolution against burn.
+pub const SPIRAL_CONV: Tolerance = Tolerance {
+    what: "spiral convolution (gather + linear + ELU)",
+    abs: 1e-5,
+    rel: 1e-5,
+    reason: "one dot product of len·in terms per output, summed in a different order by burn's matmul.",
+};
+
+/// Every entry, for documentation and the report.
+pub const TABLE: [Tolerance; 3] = [MLP, SIREN, SPIRAL_CONV];

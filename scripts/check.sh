@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Sinew's whole test command: formatting, lints, the test suite and the no_std proof build.
+# Safe to run on a fresh machine: it adds the Rust components and targets it needs.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+rustup component add rustfmt clippy >/dev/null 2>&1 || true
+rustup target add thumbv7em-none-eabihf >/dev/null
+
+echo "== fmt"
+cargo fmt --all --check
+(cd core/fuzz && cargo fmt --check)
+
+echo "== clippy"
+cargo clippy --workspace --all-targets --locked -- -D warnings
+
+echo "== no_std core for thumbv7em-none-eabihf"
+cargo build -p sinew-core --target thumbv7em-none-eabihf --locked
+
+echo "== tests"
+cargo test --workspace --locked

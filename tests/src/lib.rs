@@ -1,0 +1,79 @@
+//! Shared helpers for Sinew's cross-crate tests: golden files and the real-data location.
+//!
+//! Golden files live under `tests/data/`. Only `UPDATE_EXPECT=1` writes or rewrites them; a
+//! missing golden file fails the test, so CI can never pass by writing its own expectations.
+
+use std::path::{Path, PathBuf};
+
+/// The folder of golden files.
+pub fn golden_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("data")
+}
+
+/// Compares `actual` with the golden file `name` under `tests/data/`.
+///
+/// With `UPDATE_EXPECT=1` the file is (re)written instead. Panics (failing the test) with a
+/// readable message on a mismatch or a missing file.
+pub fn check(name: &str, actual: &str) {
+    let path = golden_dir().join(name);
+    if std::env::var_os("UPDATE_EXPECT").is_some_and(|v| v == "1") {
+        std::fs::create_dir_all(golden_dir()).expect("create tests/data");
+        std::fs::write(&path, actual).unwrap_or_else(|e| panic!("{}: cannot write golden file: {e}", path.display()));
+        return;
+    }
+    let expected = std::fs::read_to_string(&path).unwrap_or_else(|e| {
+        panic!("{}: golden file missing or unreadable ({e}); run with UPDATE_EXPECT=1 to create it, and commit it", path.display())
+    });
+    if expected != actual {
+        let first = expected.lines().zip(actual.lines()).position(|(a, b)| a != b);
+        panic!(
+            "{}: output differs from the golden file (first differing line: {:?}).\n--- expected\n{expected}\n--- actual\n{actual}\n\
+             If the change is deliberate, rerun with UPDATE_EXPECT=1 and explain it in the commit.",
+            path.display(),
+            first.map(|i| i + 1)
+        );
+    }
+}
+
+/// Where the real face data lives: `$SINEW_DATA`, else `../shared/data` beside the repository.
+///
+/// Returns `None` (after saying so on stderr) when it is absent, so a data test can skip; with
+/// `SINEW_REQUIRE_DATA=1` (set by `.ci/run`) a missing data set fails instead.
+pub fn data_dir(subfolder: &str) -> Option<PathBuf> {
+    let root = std::env::var_os("SINEW_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
+    let dir = root.join(subfolder);
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    if std::env::var_os("SINEW_REQUIRE_DATA").is_some_and(|v| v == "1") {
+        panic!("{}: data set missing and SINEW_REQUIRE_DATA=1", dir.display());
+    }
+    eprintln!("skipping: data set {} not found (set SINEW_DATA)", dir.display());
+    None
+}
+
+/// A small deterministic generator for test inputs and weights (PCG32 via `rand_pcg`), so goldens
+/// never depend on a framework's random numbers.
+#[derive(Debug)]
+pub struct Rng(rand_pcg::Pcg32);
+
+impl Rng {
+    /// A generator from `seed`.
+    pub fn new(seed: u64) -> Self {
+        Self(rand_pcg::Pcg32::new(seed, 0xa02b_dbf7_bb3c_0a7))
+    }
+
+    /// Uniform in `[lo, hi)`.
+    pub fn uniform(&mut self, lo: f32, hi: f32) -> f32 {
+        use rand_core::RngCore;
+        let u = (self.0.next_u32() >> 8) as f32 / (1u32 << 24) as f32;
+        lo + (hi - lo) * u
+    }
+
+    /// `n` values uniform in `[lo, hi)`.
+    pub fn vec(&mut self, n: usize, lo: f32, hi: f32) -> Vec<f32> {
+        (0..n).map(|_| self.uniform(lo, hi)).collect()
+    }
+}

@@ -1,0 +1,81 @@
+//! Every truncation and every single-bit flip of the header and section table of a small valid
+//! file of each artefact kind gives an error, never a panic and never a silent load.
+
+use sinew_core::format::{HEADER_LEN, SECTION_ENTRY_LEN, SinewFile};
+use sinew_core::network::load_mlp;
+use sinew_core::nn::Activation;
+use sinew_host::SinewWriter;
+use sinew_host::nn::{LayerWeights, write_mlp};
+use sinew_tests::Rng;
+
+/// A network artefact: metadata and a 3→4→2 MLP with a sine and a GELU layer.
+fn small_network() -> Vec<u8> {
+    let mut rng = Rng::new(1);
+    let mut w = SinewWriter::new(sinew_core::ArtifactKind::Network);
+    w.meta("units", "cm").meta("tool", "sinew-tests");
+    let layers = [
+        LayerWeights { weight: rng.vec(12, -1.0, 1.0), bias: rng.vec(4, -1.0, 1.0), inputs: 3, outputs: 4, activation: Activation::Sine { omega0: 30.0 } },
+        LayerWeights { weight: rng.vec(8, -1.0, 1.0), bias: rng.vec(2, -1.0, 1.0), inputs: 4, outputs: 2, activation: Activation::Gelu },
+    ];
+    write_mlp(&mut w, "mlp", &layers).unwrap();
+    w.to_bytes().unwrap()
+}
+
+/// Loads as far as a user would: container, then the typed network.
+fn load(bytes: &[u8]) -> Result<(), sinew_core::FormatError> {
+    let file = SinewFile::from_bytes(bytes)?;
+    load_mlp(&file, "mlp").map(|_| ())
+}
+
+fn artefacts() -> Vec<(&'static str, Vec<u8>)> {
+    vec![("network", small_network())]
+}
+
+#[test]
+fn valid_files_load() {
+    for (kind, bytes) in artefacts() {
+        assert!(load(&bytes).is_ok(), "{kind}: the uncorrupted file must load");
+    }
+}
+
+#[test]
+fn every_truncation_is_an_error() {
+    for (kind, bytes) in artefacts() {
+        for len in 0..bytes.len() {
+            assert!(load(&bytes[..len]).is_err(), "{kind}: truncation to {len} bytes loaded");
+        }
+        let mut longer = bytes.clone();
+        longer.push(0);
+        assert!(load(&longer).is_err(), "{kind}: a trailing byte loaded");
+    }
+}
+
+#[test]
+fn every_bit_flip_in_header_and_table_is_an_error() {
+    for (kind, bytes) in artefacts() {
+        let count = SinewFile::from_bytes(&bytes).unwrap().section_count();
+        let table_end = HEADER_LEN + count * SECTION_ENTRY_LEN;
+        for byte in 0..table_end {
+            for bit in 0..8 {
+                let mut bad = bytes.clone();
+                bad[byte] ^= 1 << bit;
+                assert!(load(&bad).is_err(), "{kind}: flipping bit {bit} of byte {byte} loaded silently");
+            }
+        }
+    }
+}
+
+#[test]
+fn every_bit_flip_in_data_is_an_error() {
+    // The section CRCs cover the data; the zero-padding rule covers the gaps.
+    for (kind, bytes) in artefacts() {
+        let count = SinewFile::from_bytes(&bytes).unwrap().section_count();
+        for byte in HEADER_LEN + count * SECTION_ENTRY_LEN..bytes.len() {
+            for bit in 0..8 {
+                let mut bad = bytes.clone();
+                bad[byte] ^= 1 << bit;
+                assert!(load(&bad).is_err(), "{kind}: flipping bit {bit} of data byte {byte} loaded silently");
+            }
+        }
+    }
+}
