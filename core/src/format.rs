@@ -421,7 +421,7 @@ impl<'a> SinewFile<'a> {
             let end = start
                 .checked_add(e.length as usize)
                 .ok_or(FormatError::TruncatedSection { section })?;
-            if start % SECTION_ALIGN != 0 || start < cursor {
+            if !start.is_multiple_of(SECTION_ALIGN) || start < cursor {
                 return Err(FormatError::BadLayout { section });
             }
             if end > bytes.len() {

@@ -5,6 +5,7 @@
 //! is used only for conversions at the API boundary: its generic kernels make no promise about the
 //! order of their sums.
 
+use core::ops::{Add, Mul, Neg, Sub};
 use nalgebra::{ArrayStorage, Matrix3, Vector3};
 
 /// A 3-vector of `f32`.
@@ -42,18 +43,6 @@ impl Vec3 {
     pub const fn from_array(a: [f32; 3]) -> Self {
         let [x, y, z] = a;
         Self { x, y, z }
-    }
-
-    /// Component-wise sum `self + o`.
-    #[inline]
-    pub fn add(self, o: Self) -> Self {
-        Self::new(self.x + o.x, self.y + o.y, self.z + o.z)
-    }
-
-    /// Component-wise difference `self − o`.
-    #[inline]
-    pub fn sub(self, o: Self) -> Self {
-        Self::new(self.x - o.x, self.y - o.y, self.z - o.z)
     }
 
     /// Scalar multiple `s · self`, one multiply per component.
@@ -101,6 +90,46 @@ impl Vec3 {
     }
 }
 
+impl Add for Vec3 {
+    type Output = Self;
+
+    /// Component-wise sum.
+    #[inline]
+    fn add(self, o: Self) -> Self {
+        Self::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+
+impl Sub for Vec3 {
+    type Output = Self;
+
+    /// Component-wise difference.
+    #[inline]
+    fn sub(self, o: Self) -> Self {
+        Self::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+
+impl Neg for Vec3 {
+    type Output = Self;
+
+    /// Component-wise negation (exact).
+    #[inline]
+    fn neg(self) -> Self {
+        Self::new(-self.x, -self.y, -self.z)
+    }
+}
+
+impl Mul<f32> for Vec3 {
+    type Output = Self;
+
+    /// Same as [`Vec3::scale`].
+    #[inline]
+    fn mul(self, s: f32) -> Self {
+        self.scale(s)
+    }
+}
+
 /// A 3×3 `f32` matrix stored by columns.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Mat3 {
@@ -136,7 +165,7 @@ impl Mat3 {
     #[inline]
     pub fn mul_vec(&self, v: Vec3) -> Vec3 {
         let [c0, c1, c2] = self.cols;
-        c0.scale(v.x).add(c1.scale(v.y)).add(c2.scale(v.z))
+        c0.scale(v.x) + c1.scale(v.y) + c2.scale(v.z)
     }
 
     /// Matrix product `self · b`: column `j` is `self.mul_vec(b.cols[j])`.
@@ -178,7 +207,7 @@ impl Rigid {
     /// `R p + t`, with `R p` as in [`Mat3::mul_vec`] and `t` added last.
     #[inline]
     pub fn apply(&self, p: Vec3) -> Vec3 {
-        self.rot.mul_vec(p).add(self.trans)
+        self.rot.mul_vec(p) + self.trans
     }
 
     /// The transform `self ∘ inner`, i.e. `x ↦ self.apply(inner.apply(x))`:
@@ -251,8 +280,10 @@ mod tests {
     fn vector_arithmetic() {
         let a = v(1.0, 2.0, 3.0);
         let b = v(4.0, -5.0, 6.0);
-        assert_eq!(a.add(b), v(5.0, -3.0, 9.0));
-        assert_eq!(a.sub(b), v(-3.0, 7.0, -3.0));
+        assert_eq!(a + b, v(5.0, -3.0, 9.0));
+        assert_eq!(a - b, v(-3.0, 7.0, -3.0));
+        assert_eq!(-a, v(-1.0, -2.0, -3.0));
+        assert_eq!(a * 0.5, v(0.5, 1.0, 1.5));
         assert_eq!(a.scale(2.0), v(2.0, 4.0, 6.0));
         // 1·4 + 2·(−5) + 3·6 = 4 − 10 + 18 = 12
         assert_eq!(a.dot(b), 12.0);

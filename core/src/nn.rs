@@ -314,7 +314,7 @@ impl<'a> Mlp<'a> {
     ) -> Result<(), BufferError> {
         let (ni, no) = (self.inputs(), self.outputs());
         // `new` rejects empty MLPs and zero-width layers, so `ni` and `no` are positive.
-        if ni == 0 || no == 0 || input.len() % ni != 0 {
+        if ni == 0 || no == 0 || !input.len().is_multiple_of(ni) {
             return Err(BufferError::Input);
         }
         if Some(output.len()) != (input.len() / ni).checked_mul(no) {

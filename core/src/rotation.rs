@@ -53,7 +53,7 @@ pub fn from_6d(r: &[f32; 6]) -> Mat3 {
         b1 = Vec3::X;
     }
 
-    let resid = a2.sub(b1.scale(b1.dot(a2)));
+    let resid = a2 - b1.scale(b1.dot(a2));
     let rn = resid.norm();
     let b2 = if rn.is_finite() && rn > PARALLEL_TOLERANCE * a2.norm() {
         resid.normalize()
@@ -84,7 +84,7 @@ fn fallback_second(b1: Vec3) -> Vec3 {
         Vec3::Z
     };
     // |b1ᵢ| ≤ 1/√3 for the chosen axis, so the residual has length ≥ √(2/3): never degenerate.
-    axis.sub(b1.scale(b1.dot(axis))).normalize()
+    (axis - b1.scale(b1.dot(axis))).normalize()
 }
 
 fn abs(x: f32) -> f32 {
@@ -97,8 +97,8 @@ pub fn to_6d(m: &Mat3) -> [f32; 6] {
     [c0.x, c0.y, c0.z, c1.x, c1.y, c1.z]
 }
 
-/// A rigid transform from 9 parameters `[6D rotation (see [`from_6d`]), tx, ty, tz]`, the layout
-/// of AIM's `T ∈ R⁹` in this crate.
+/// A rigid transform from 9 parameters `[r0, r1, r2, r3, r4, r5, tx, ty, tz]`: a 6D rotation
+/// (see [`from_6d`]) then the translation. This is the layout of AIM's `T ∈ R⁹` in this crate.
 pub fn rigid_from_9d(p: &[f32; 9]) -> Rigid {
     let [r0, r1, r2, r3, r4, r5, tx, ty, tz] = *p;
     Rigid::new(from_6d(&[r0, r1, r2, r3, r4, r5]), Vec3::new(tx, ty, tz))
@@ -166,7 +166,7 @@ mod tests {
         // to rounding.
         let back = from_6d(&to_6d(&m));
         for (a, b) in back.cols.iter().zip(m.cols.iter()) {
-            assert!(a.sub(*b).norm() < 1e-6);
+            assert!((*a - *b).norm() < 1e-6);
         }
     }
 

@@ -48,11 +48,7 @@ impl BoneTransform {
     /// `T_b(x) = R (x − p) + p + t`, evaluated as `((R (x − p)) + p) + t`.
     #[inline]
     pub fn apply(&self, x: Vec3) -> Vec3 {
-        self.rigid
-            .rot
-            .mul_vec(x.sub(self.pivot))
-            .add(self.pivot)
-            .add(self.rigid.trans)
+        self.rigid.rot.mul_vec(x - self.pivot) + self.pivot + self.rigid.trans
     }
 }
 
@@ -80,7 +76,7 @@ impl Pose {
 #[inline]
 pub fn neutral_point(b0: Vec3, d0: f32, n0: Vec3) -> Vec3 {
     // AIM eq. 6: s_0 = b_0 + d_0 n_0
-    b0.add(n0.scale(d0))
+    b0 + n0.scale(d0)
 }
 
 /// Linear blend skinning with one bone: `LBS(x, T_b, k) = k · T_b(x) + (1 − k) · x`.
@@ -109,7 +105,7 @@ pub fn skin_vertex(s0: Vec3, k: f32, correctives: F32s<'_>, weights: &[f32], pos
     // AIM eq. 17: s* = T_g( LBS(s_0, T_b, k) + Σ_{N−1} w B_e )
     let skinned = lbs(s0, &pose.jaw, k);
     let e = corrective_sum(correctives, weights);
-    pose.head.apply(skinned.add(e))
+    pose.head.apply(skinned + e)
 }
 
 /// `Σ_j w_j e_j` accumulated per component from zero in `j` order.
@@ -152,7 +148,10 @@ pub fn skin(
     let n = rest.len() / 3;
     let m = weights.len();
     let block = m.checked_mul(3).ok_or(BufferError::Input)?;
-    if rest.len() % 3 != 0 || k.len() != n || Some(correctives.len()) != n.checked_mul(block) {
+    if !rest.len().is_multiple_of(3)
+        || k.len() != n
+        || Some(correctives.len()) != n.checked_mul(block)
+    {
         return Err(BufferError::Input);
     }
     if out.len() != rest.len() {
@@ -181,7 +180,7 @@ impl<'a> Triangles<'a> {
     /// [`FormatError::IncompatibleShapes`] if the number of indices is not a multiple of 3;
     /// [`FormatError::IndexOutOfRange`] if an index is `>= n_vertices`.
     pub fn new(indices: U32s<'a>, n_vertices: usize) -> Result<Self, FormatError> {
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(FormatError::IncompatibleShapes);
         }
         if indices.iter().any(|i| i as usize >= n_vertices) {
@@ -247,12 +246,10 @@ pub fn vertex_normals(
     while let (Some(a), Some(b), Some(c)) = (idx.next(), idx.next(), idx.next()) {
         let (a, b, c) = (a as usize, b as usize, c as usize);
         let pa = vertex(positions, a);
-        let n = vertex(positions, b)
-            .sub(pa)
-            .cross(vertex(positions, c).sub(pa));
+        let n = (vertex(positions, b) - pa).cross(vertex(positions, c) - pa);
         for v in [a, b, c] {
             if let Some(o) = out.get_mut(v * 3..v * 3 + 3) {
-                write3(o, read3(o).add(n));
+                write3(o, read3(o) + n);
             }
         }
     }

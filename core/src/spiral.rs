@@ -164,6 +164,7 @@ impl<'a> SpiralConv<'a> {
         if Some(out.len()) != self.spirals.n_vertices.checked_mul(self.out_f) {
             return Err(BufferError::Output);
         }
+        // Neural3DMM spiral conv (S2D-Dec): out_v = act(W · ‖_p x[s(v, p)] + b)
         let in_f = self.in_f;
         let width = self.spirals.len * in_f;
         for (v, out_row) in out.chunks_exact_mut(self.out_f).enumerate() {

@@ -5,8 +5,9 @@ use std::path::Path;
 
 use anyhow::{Result, bail};
 use sinew_core::format::{
-    ArtifactKind, CRC32, Dtype, HEADER_CRC_OFFSET, HEADER_LEN, MAGIC, MAX_RANK, MAX_SECTIONS, NAME_LEN,
-    SECTION_ALIGN, SECTION_ENTRY_LEN, SectionKind, VERSION_MAJOR, VERSION_MINOR, data_start,
+    ArtifactKind, CRC32, Dtype, HEADER_CRC_OFFSET, HEADER_LEN, MAGIC, MAX_RANK, MAX_SECTIONS,
+    NAME_LEN, SECTION_ALIGN, SECTION_ENTRY_LEN, SectionKind, VERSION_MAJOR, VERSION_MINOR,
+    data_start,
 };
 
 /// One section waiting to be written.
@@ -31,7 +32,12 @@ pub struct SinewWriter {
 impl SinewWriter {
     /// An empty artefact of `kind`.
     pub fn new(kind: ArtifactKind) -> Self {
-        Self { kind, flags: 0, metadata: Vec::new(), sections: Vec::new() }
+        Self {
+            kind,
+            flags: 0,
+            metadata: Vec::new(),
+            sections: Vec::new(),
+        }
     }
 
     /// Sets header flags (`sinew_core::format::FLAG_*`).
@@ -46,7 +52,13 @@ impl SinewWriter {
         self
     }
 
-    fn push(&mut self, name: &str, dtype: Dtype, dims: &[usize], data: Vec<u8>) -> Result<&mut Self> {
+    fn push(
+        &mut self,
+        name: &str,
+        dtype: Dtype,
+        dims: &[usize],
+        data: Vec<u8>,
+    ) -> Result<&mut Self> {
         if name.is_empty() || name.len() > NAME_LEN || !name.bytes().all(|c| c.is_ascii_graphic()) {
             bail!("section name {name:?} must be 1..={NAME_LEN} printable ASCII characters");
         }
@@ -58,32 +70,63 @@ impl SinewWriter {
         }
         let dims: Vec<u32> = dims
             .iter()
-            .map(|&d| u32::try_from(d).map_err(|_| anyhow::anyhow!("section {name}: dimension {d} too large")))
+            .map(|&d| {
+                u32::try_from(d)
+                    .map_err(|_| anyhow::anyhow!("section {name}: dimension {d} too large"))
+            })
             .collect::<Result<_>>()?;
         let elements: usize = dims.iter().map(|&d| d as usize).product();
         if elements * dtype.size() != data.len() {
-            bail!("section {name}: shape {dims:?} does not match {} bytes of {}", data.len(), dtype.name());
+            bail!(
+                "section {name}: shape {dims:?} does not match {} bytes of {}",
+                data.len(),
+                dtype.name()
+            );
         }
-        self.sections.push(PendingSection { kind: SectionKind::Tensor, name: name.to_owned(), dtype, dims, data });
+        self.sections.push(PendingSection {
+            kind: SectionKind::Tensor,
+            name: name.to_owned(),
+            dtype,
+            dims,
+            data,
+        });
         Ok(self)
     }
 
     /// Adds an `f32` tensor; every value must be finite.
     pub fn f32s(&mut self, name: &str, dims: &[usize], values: &[f32]) -> Result<&mut Self> {
         if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            bail!("section {name}: value {i} is {} (weights must be finite)", values[i]);
+            bail!(
+                "section {name}: value {i} is {} (weights must be finite)",
+                values[i]
+            );
         }
-        self.push(name, Dtype::F32, dims, values.iter().flat_map(|v| v.to_le_bytes()).collect())
+        self.push(
+            name,
+            Dtype::F32,
+            dims,
+            values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+        )
     }
 
     /// Adds a `u32` tensor.
     pub fn u32s(&mut self, name: &str, dims: &[usize], values: &[u32]) -> Result<&mut Self> {
-        self.push(name, Dtype::U32, dims, values.iter().flat_map(|v| v.to_le_bytes()).collect())
+        self.push(
+            name,
+            Dtype::U32,
+            dims,
+            values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+        )
     }
 
     /// Adds a Q16.16 tensor.
     pub fn q16s(&mut self, name: &str, dims: &[usize], values: &[i32]) -> Result<&mut Self> {
-        self.push(name, Dtype::Q16, dims, values.iter().flat_map(|v| v.to_le_bytes()).collect())
+        self.push(
+            name,
+            Dtype::Q16,
+            dims,
+            values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+        )
     }
 
     /// Adds a section of a kind this version may not know (for forward-compatibility tests).
@@ -112,11 +155,20 @@ impl SinewWriter {
             }
             let data = text.into_bytes();
             let dims = vec![u32::try_from(data.len())?];
-            sections.push(PendingSection { kind: SectionKind::Metadata, name: "meta".into(), dtype: Dtype::U8, dims, data });
+            sections.push(PendingSection {
+                kind: SectionKind::Metadata,
+                name: "meta".into(),
+                dtype: Dtype::U8,
+                dims,
+                data,
+            });
         }
         sections.extend(self.sections.iter().cloned());
         if sections.len() > MAX_SECTIONS {
-            bail!("{} sections exceed the format's limit of {MAX_SECTIONS}", sections.len());
+            bail!(
+                "{} sections exceed the format's limit of {MAX_SECTIONS}",
+                sections.len()
+            );
         }
 
         let mut offsets = Vec::with_capacity(sections.len());
@@ -125,8 +177,12 @@ impl SinewWriter {
             offsets.push(cursor);
             cursor = (cursor + s.data.len()).div_ceil(SECTION_ALIGN) * SECTION_ALIGN;
         }
-        let file_len = offsets.last().zip(sections.last()).map_or(HEADER_LEN, |(o, s)| o + s.data.len());
-        let file_len_u32 = u32::try_from(file_len).map_err(|_| anyhow::anyhow!("artefact of {file_len} bytes exceeds 4 GiB"))?;
+        let file_len = offsets
+            .last()
+            .zip(sections.last())
+            .map_or(HEADER_LEN, |(o, s)| o + s.data.len());
+        let file_len_u32 = u32::try_from(file_len)
+            .map_err(|_| anyhow::anyhow!("artefact of {file_len} bytes exceeds 4 GiB"))?;
 
         let mut out = vec![0u8; file_len];
         out[..8].copy_from_slice(&MAGIC);
@@ -167,8 +223,10 @@ impl SinewWriter {
 
 /// Reads and validates a `.sinew` file, naming the file in any error.
 pub fn read(path: &Path) -> Result<Vec<u8>> {
-    let bytes = std::fs::read(path).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
-    sinew_core::SinewFile::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let bytes =
+        std::fs::read(path).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
+    sinew_core::SinewFile::from_bytes(&bytes)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     Ok(bytes)
 }
 
@@ -190,12 +248,20 @@ mod tests {
         assert_eq!(f.kind, ArtifactKind::Network);
         assert_eq!(f.metadata().get("units"), Some("cm"));
         assert_eq!(f.metadata().get("seed"), Some("7"));
-        let back: Vec<u32> = f.f32_tensor("w", &[2, 3]).unwrap().iter().map(f32::to_bits).collect();
-        assert_eq!(back, weights.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+        let back: Vec<u32> = f
+            .f32_tensor("w", &[2, 3])
+            .unwrap()
+            .iter()
+            .map(f32::to_bits)
+            .collect();
+        assert_eq!(
+            back,
+            weights.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
         assert_eq!(f.u32_tensor("idx", &[3]).unwrap().at(2), u32::MAX);
         assert_eq!(f.section("q").unwrap().q16s().unwrap().at(0), -65536);
         // Every section starts aligned, whatever the lengths before it.
-        assert!(f.sections().all(|s| s.offset as usize % SECTION_ALIGN == 0));
+        assert!(f.sections().all(|s| (s.offset as usize).is_multiple_of(SECTION_ALIGN)));
         // Loading from an odd address works as well: the core never assumes alignment.
         let mut shifted = vec![0u8];
         shifted.extend_from_slice(&bytes);
@@ -207,7 +273,10 @@ mod tests {
         let mut w = SinewWriter::new(ArtifactKind::Network);
         assert!(w.f32s("x", &[2], &[1.0, f32::NAN]).is_err());
         assert!(w.f32s("x", &[3], &[1.0]).is_err());
-        assert!(w.f32s("a name that is much too long for the table", &[1], &[1.0]).is_err());
+        assert!(
+            w.f32s("a name that is much too long for the table", &[1], &[1.0])
+                .is_err()
+        );
         w.f32s("x", &[1], &[1.0]).unwrap();
         assert!(w.u32s("x", &[1], &[1]).is_err());
     }
@@ -215,7 +284,8 @@ mod tests {
     #[test]
     fn unknown_section_kinds_are_skipped() {
         let mut w = SinewWriter::new(ArtifactKind::Network);
-        w.raw(SectionKind::Other(999), "future", vec![1, 2, 3]).unwrap();
+        w.raw(SectionKind::Other(999), "future", vec![1, 2, 3])
+            .unwrap();
         w.f32s("w", &[1], &[2.0]).unwrap();
         let bytes = w.to_bytes().unwrap();
         let f = SinewFile::from_bytes(&bytes).unwrap();

@@ -54,7 +54,8 @@ pub struct SectionReport {
 /// Reads and validates `path`; the error names the file and the problem.
 pub fn inspect(path: &Path) -> Result<Report> {
     let bytes = std::fs::read(path).map_err(|e| anyhow!("{}: cannot read: {e}", path.display()))?;
-    let f = SinewFile::from_bytes(&bytes).map_err(|e| anyhow!("{}: invalid .sinew file: {e}", path.display()))?;
+    let f = SinewFile::from_bytes(&bytes)
+        .map_err(|e| anyhow!("{}: invalid .sinew file: {e}", path.display()))?;
     let sections = f
         .sections()
         .map(|s| SectionReport {
@@ -83,23 +84,51 @@ pub fn inspect(path: &Path) -> Result<Report> {
         bytes: bytes.len(),
         header_crc32: format!("{:08x}", f.header_crc),
         checksums: "ok",
-        metadata: f.metadata().iter().map(|(k, v)| (k.to_owned(), v.to_owned())).collect(),
+        metadata: f
+            .metadata()
+            .iter()
+            .map(|(k, v)| (k.to_owned(), v.to_owned()))
+            .collect(),
         sections,
     })
 }
 
 impl std::fmt::Display for Report {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        writeln!(f, "{}: sinew {} v{}, {} bytes, flags {:#x}{}", self.file, self.kind, self.version, self.bytes, self.flags,
-            if self.playback_only { " (playback-only)" } else { "" })?;
-        writeln!(f, "checksums: {} (header+table crc32 {})", self.checksums, self.header_crc32)?;
+        writeln!(
+            f,
+            "{}: sinew {} v{}, {} bytes, flags {:#x}{}",
+            self.file,
+            self.kind,
+            self.version,
+            self.bytes,
+            self.flags,
+            if self.playback_only {
+                " (playback-only)"
+            } else {
+                ""
+            }
+        )?;
+        writeln!(
+            f,
+            "checksums: {} (header+table crc32 {})",
+            self.checksums, self.header_crc32
+        )?;
         for (k, v) in &self.metadata {
             writeln!(f, "  meta {k} = {v}")?;
         }
-        writeln!(f, "  {:<32} {:<10} {:<7} {:<20} {:>10} {:>10}  crc32", "section", "kind", "dtype", "shape", "offset", "bytes")?;
+        writeln!(
+            f,
+            "  {:<32} {:<10} {:<7} {:<20} {:>10} {:>10}  crc32",
+            "section", "kind", "dtype", "shape", "offset", "bytes"
+        )?;
         for s in &self.sections {
             let shape = format!("{:?}", s.shape);
-            writeln!(f, "  {:<32} {:<10} {:<7} {:<20} {:>10} {:>10}  {}", s.name, s.kind, s.dtype, shape, s.offset, s.bytes, s.crc32)?;
+            writeln!(
+                f,
+                "  {:<32} {:<10} {:<7} {:<20} {:>10} {:>10}  {}",
+                s.name, s.kind, s.dtype, shape, s.offset, s.bytes, s.crc32
+            )?;
         }
         Ok(())
     }

@@ -14,7 +14,10 @@ use crate::container::SinewWriter;
 
 /// Reads a float tensor back as a `Vec<f32>`.
 pub fn to_vec<const D: usize>(t: Tensor<D>) -> Vec<f32> {
-    t.into_data().convert::<f32>().try_to_vec::<f32>().unwrap_or_default()
+    t.into_data()
+        .convert::<f32>()
+        .try_to_vec::<f32>()
+        .unwrap_or_default()
 }
 
 /// Makes a float tensor from row-major values.
@@ -50,18 +53,31 @@ impl Mlp {
     pub fn siren(widths: &[usize], omega0: f32, device: &Device) -> Self {
         let n = widths.len().saturating_sub(1);
         let acts = (0..n)
-            .map(|i| if i + 1 == n { Activation::Identity } else { Activation::Sine { omega0 } })
+            .map(|i| {
+                if i + 1 == n {
+                    Activation::Identity
+                } else {
+                    Activation::Sine { omega0 }
+                }
+            })
             .collect::<Vec<_>>();
         let layers = widths
             .windows(2)
             .enumerate()
             .map(|(i, w)| {
                 let fan_in = w[0] as f64;
-                let bound = if i == 0 { 1.0 / fan_in } else { (6.0 / fan_in).sqrt() / f64::from(omega0) };
+                let bound = if i == 0 {
+                    1.0 / fan_in
+                } else {
+                    (6.0 / fan_in).sqrt() / f64::from(omega0)
+                };
                 uniform_linear(w[0], w[1], bound, 1.0 / fan_in.sqrt(), device)
             })
             .collect();
-        Self { layers, activations: acts }
+        Self {
+            layers,
+            activations: acts,
+        }
     }
 
     /// A generic MLP with the given widths and activations (uniform ±1/√in initialisation).
@@ -73,14 +89,20 @@ impl Mlp {
                 uniform_linear(w[0], w[1], b, b, device)
             })
             .collect();
-        Self { layers, activations: activations.to_vec() }
+        Self {
+            layers,
+            activations: activations.to_vec(),
+        }
     }
 
     /// # Shapes
     /// - input: `[n, inputs]`
     /// - output: `[n, outputs]`
     pub fn forward(&self, x: Tensor<2>) -> Tensor<2> {
-        self.layers.iter().zip(&self.activations).fold(x, |x, (layer, &act)| activate(layer.forward(x), act))
+        self.layers
+            .iter()
+            .zip(&self.activations)
+            .fold(x, |x, (layer, &act)| activate(layer.forward(x), act))
     }
 
     /// The weights in the core's layout.
@@ -92,8 +114,17 @@ impl Mlp {
                 // burn stores [in, out]; the core reads one row per output: transpose.
                 let weight = layer.weight.val().transpose();
                 let [outputs, inputs] = weight.dims();
-                let bias = layer.bias.as_ref().map_or_else(|| vec![0.0; outputs], |b| to_vec(b.val()));
-                LayerWeights { weight: to_vec(weight), bias, inputs, outputs, activation }
+                let bias = layer
+                    .bias
+                    .as_ref()
+                    .map_or_else(|| vec![0.0; outputs], |b| to_vec(b.val()));
+                LayerWeights {
+                    weight: to_vec(weight),
+                    bias,
+                    inputs,
+                    outputs,
+                    activation,
+                }
             })
             .collect()
     }
@@ -126,17 +157,38 @@ pub fn write_mlp(w: &mut SinewWriter, prefix: &str, layers: &[LayerWeights]) -> 
     w.u32s(&format!("{prefix}.act"), &[codes.len()], &codes)?;
     w.f32s(&format!("{prefix}.par"), &[params.len()], &params)?;
     for (i, l) in layers.iter().enumerate() {
-        ensure!(l.weight.len() == l.inputs * l.outputs && l.bias.len() == l.outputs, "MLP {prefix}: layer {i} has inconsistent shapes");
-        w.f32s(&format!("{prefix}.{i}.w"), &[l.outputs, l.inputs], &l.weight)?;
+        ensure!(
+            l.weight.len() == l.inputs * l.outputs && l.bias.len() == l.outputs,
+            "MLP {prefix}: layer {i} has inconsistent shapes"
+        );
+        w.f32s(
+            &format!("{prefix}.{i}.w"),
+            &[l.outputs, l.inputs],
+            &l.weight,
+        )?;
         w.f32s(&format!("{prefix}.{i}.b"), &[l.outputs], &l.bias)?;
     }
     Ok(())
 }
 
-fn uniform_linear(inputs: usize, outputs: usize, w_bound: f64, b_bound: f64, device: &Device) -> Linear {
+fn uniform_linear(
+    inputs: usize,
+    outputs: usize,
+    w_bound: f64,
+    b_bound: f64,
+    device: &Device,
+) -> Linear {
     let mut layer = LinearConfig::new(inputs, outputs).init(device);
-    layer.weight = Param::from_tensor(Tensor::random([inputs, outputs], Distribution::Uniform(-w_bound, w_bound), device));
-    layer.bias = Some(Param::from_tensor(Tensor::random([outputs], Distribution::Uniform(-b_bound, b_bound), device)));
+    layer.weight = Param::from_tensor(Tensor::random(
+        [inputs, outputs],
+        Distribution::Uniform(-w_bound, w_bound),
+        device,
+    ));
+    layer.bias = Some(Param::from_tensor(Tensor::random(
+        [outputs],
+        Distribution::Uniform(-b_bound, b_bound),
+        device,
+    )));
     layer
 }
 
@@ -158,7 +210,14 @@ pub struct SpiralConv {
 
 impl SpiralConv {
     /// A spiral convolution over `spirals` (row-major `[vertices, len]`).
-    pub fn new(spirals: &[u32], len: usize, inputs: usize, outputs: usize, activation: Activation, device: &Device) -> Self {
+    pub fn new(
+        spirals: &[u32],
+        len: usize,
+        inputs: usize,
+        outputs: usize,
+        activation: Activation,
+        device: &Device,
+    ) -> Self {
         let b = 1.0 / ((inputs * len) as f64).sqrt();
         let idx: Vec<i64> = spirals.iter().map(|&i| i64::from(i)).collect();
         Self {
@@ -175,7 +234,9 @@ impl SpiralConv {
     pub fn forward(&self, x: Tensor<3>) -> Tensor<3> {
         let [batch, _, features] = x.dims();
         let vertices = self.spirals.dims()[0] / self.len;
-        let gathered = x.select(1, self.spirals.clone()).reshape([batch, vertices, self.len * features]);
+        let gathered =
+            x.select(1, self.spirals.clone())
+                .reshape([batch, vertices, self.len * features]);
         activate(self.linear.forward(gathered), self.activation)
     }
 
@@ -192,11 +253,19 @@ impl SpiralConv {
             .into_iter()
             .map(|i| i as u32)
             .collect();
-        w.u32s(&format!("{prefix}.idx"), &[idx.len() / self.len, self.len], &idx)?;
+        w.u32s(
+            &format!("{prefix}.idx"),
+            &[idx.len() / self.len, self.len],
+            &idx,
+        )?;
         let weight = self.linear.weight.val().transpose();
         let [outputs, inputs] = weight.dims();
         w.f32s(&format!("{prefix}.w"), &[outputs, inputs], &to_vec(weight))?;
-        let bias = self.linear.bias.as_ref().map_or_else(|| vec![0.0; outputs], |b| to_vec(b.val()));
+        let bias = self
+            .linear
+            .bias
+            .as_ref()
+            .map_or_else(|| vec![0.0; outputs], |b| to_vec(b.val()));
         w.f32s(&format!("{prefix}.b"), &[outputs], &bias)?;
         Ok(())
     }

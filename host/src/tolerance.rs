@@ -27,7 +27,10 @@ impl Tolerance {
         if core.len() != reference.len() {
             return Some((core.len().min(reference.len()), f32::NAN, f32::NAN));
         }
-        core.iter().zip(reference).position(|(&c, &r)| !self.accepts(c, r)).map(|i| (i, core[i], reference[i]))
+        core.iter()
+            .zip(reference)
+            .position(|(&c, &r)| !self.accepts(c, r))
+            .map(|i| (i, core[i], reference[i]))
     }
 }
 

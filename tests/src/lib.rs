@@ -10,29 +10,56 @@ pub fn golden_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("data")
 }
 
-/// Compares `actual` with the golden file `name` under `tests/data/`.
+/// Compares `actual` with the golden text file `name` under `tests/data/`.
 ///
 /// With `UPDATE_EXPECT=1` the file is (re)written instead. Panics (failing the test) with a
 /// readable message on a mismatch or a missing file.
 pub fn check(name: &str, actual: &str) {
-    let path = golden_dir().join(name);
-    if std::env::var_os("UPDATE_EXPECT").is_some_and(|v| v == "1") {
-        std::fs::create_dir_all(golden_dir()).expect("create tests/data");
-        std::fs::write(&path, actual).unwrap_or_else(|e| panic!("{}: cannot write golden file: {e}", path.display()));
+    let Some(expected) = golden(name, actual.as_bytes()) else {
         return;
-    }
-    let expected = std::fs::read_to_string(&path).unwrap_or_else(|e| {
-        panic!("{}: golden file missing or unreadable ({e}); run with UPDATE_EXPECT=1 to create it, and commit it", path.display())
-    });
+    };
+    let expected = String::from_utf8_lossy(&expected);
     if expected != actual {
-        let first = expected.lines().zip(actual.lines()).position(|(a, b)| a != b);
+        let first = expected
+            .lines()
+            .zip(actual.lines())
+            .position(|(a, b)| a != b);
         panic!(
-            "{}: output differs from the golden file (first differing line: {:?}).\n--- expected\n{expected}\n--- actual\n{actual}\n\
+            "tests/data/{name}: output differs from the golden file (first differing line: {:?}).\n--- expected\n{expected}\n--- actual\n{actual}\n\
              If the change is deliberate, rerun with UPDATE_EXPECT=1 and explain it in the commit.",
-            path.display(),
             first.map(|i| i + 1)
         );
     }
+}
+
+/// Compares `actual` with the golden binary file `name` under `tests/data/` (see [`check`]).
+pub fn check_bytes(name: &str, actual: &[u8]) {
+    let Some(expected) = golden(name, actual) else {
+        return;
+    };
+    if expected != actual {
+        let first = expected.iter().zip(actual).position(|(a, b)| a != b);
+        panic!(
+            "tests/data/{name}: {} bytes differ from the golden file's {} (first differing byte: {first:?}). \
+             If the change is deliberate, rerun with UPDATE_EXPECT=1 and explain it in the commit.",
+            actual.len(),
+            expected.len()
+        );
+    }
+}
+
+/// Writes the golden file under `UPDATE_EXPECT=1` (returning `None`), else reads it.
+fn golden(name: &str, actual: &[u8]) -> Option<Vec<u8>> {
+    let path = golden_dir().join(name);
+    if std::env::var_os("UPDATE_EXPECT").is_some_and(|v| v == "1") {
+        std::fs::create_dir_all(golden_dir()).expect("create tests/data");
+        std::fs::write(&path, actual)
+            .unwrap_or_else(|e| panic!("{}: cannot write golden file: {e}", path.display()));
+        return None;
+    }
+    Some(std::fs::read(&path).unwrap_or_else(|e| {
+        panic!("{}: golden file missing or unreadable ({e}); run with UPDATE_EXPECT=1 to create it, and commit it", path.display())
+    }))
 }
 
 /// Where the real face data lives: `$SINEW_DATA`, else `../shared/data` beside the repository.
@@ -48,9 +75,15 @@ pub fn data_dir(subfolder: &str) -> Option<PathBuf> {
         return Some(dir);
     }
     if std::env::var_os("SINEW_REQUIRE_DATA").is_some_and(|v| v == "1") {
-        panic!("{}: data set missing and SINEW_REQUIRE_DATA=1", dir.display());
+        panic!(
+            "{}: data set missing and SINEW_REQUIRE_DATA=1",
+            dir.display()
+        );
     }
-    eprintln!("skipping: data set {} not found (set SINEW_DATA)", dir.display());
+    eprintln!(
+        "skipping: data set {} not found (set SINEW_DATA)",
+        dir.display()
+    );
     None
 }
 
@@ -62,7 +95,7 @@ pub struct Rng(rand_pcg::Pcg32);
 impl Rng {
     /// A generator from `seed`.
     pub fn new(seed: u64) -> Self {
-        Self(rand_pcg::Pcg32::new(seed, 0xa02b_dbf7_bb3c_0a7))
+        Self(rand_pcg::Pcg32::new(seed, 0x0a02_bdbf_7bb3_c0a7))
     }
 
     /// Uniform in `[lo, hi)`.

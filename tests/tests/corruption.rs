@@ -14,8 +14,20 @@ fn small_network() -> Vec<u8> {
     let mut w = SinewWriter::new(sinew_core::ArtifactKind::Network);
     w.meta("units", "cm").meta("tool", "sinew-tests");
     let layers = [
-        LayerWeights { weight: rng.vec(12, -1.0, 1.0), bias: rng.vec(4, -1.0, 1.0), inputs: 3, outputs: 4, activation: Activation::Sine { omega0: 30.0 } },
-        LayerWeights { weight: rng.vec(8, -1.0, 1.0), bias: rng.vec(2, -1.0, 1.0), inputs: 4, outputs: 2, activation: Activation::Gelu },
+        LayerWeights {
+            weight: rng.vec(12, -1.0, 1.0),
+            bias: rng.vec(4, -1.0, 1.0),
+            inputs: 3,
+            outputs: 4,
+            activation: Activation::Sine { omega0: 30.0 },
+        },
+        LayerWeights {
+            weight: rng.vec(8, -1.0, 1.0),
+            bias: rng.vec(2, -1.0, 1.0),
+            inputs: 4,
+            outputs: 2,
+            activation: Activation::Gelu,
+        },
     ];
     write_mlp(&mut w, "mlp", &layers).unwrap();
     w.to_bytes().unwrap()
@@ -31,10 +43,19 @@ fn artefacts() -> Vec<(&'static str, Vec<u8>)> {
     vec![("network", small_network())]
 }
 
+/// The writer's bytes are pinned: a change of layout shows up here (and the file seeds the fuzzer).
+#[test]
+fn small_network_bytes_are_pinned() {
+    sinew_tests::check_bytes("network-small.sinew", &small_network());
+}
+
 #[test]
 fn valid_files_load() {
     for (kind, bytes) in artefacts() {
-        assert!(load(&bytes).is_ok(), "{kind}: the uncorrupted file must load");
+        assert!(
+            load(&bytes).is_ok(),
+            "{kind}: the uncorrupted file must load"
+        );
     }
 }
 
@@ -42,7 +63,10 @@ fn valid_files_load() {
 fn every_truncation_is_an_error() {
     for (kind, bytes) in artefacts() {
         for len in 0..bytes.len() {
-            assert!(load(&bytes[..len]).is_err(), "{kind}: truncation to {len} bytes loaded");
+            assert!(
+                load(&bytes[..len]).is_err(),
+                "{kind}: truncation to {len} bytes loaded"
+            );
         }
         let mut longer = bytes.clone();
         longer.push(0);
@@ -59,7 +83,10 @@ fn every_bit_flip_in_header_and_table_is_an_error() {
             for bit in 0..8 {
                 let mut bad = bytes.clone();
                 bad[byte] ^= 1 << bit;
-                assert!(load(&bad).is_err(), "{kind}: flipping bit {bit} of byte {byte} loaded silently");
+                assert!(
+                    load(&bad).is_err(),
+                    "{kind}: flipping bit {bit} of byte {byte} loaded silently"
+                );
             }
         }
     }
@@ -74,7 +101,10 @@ fn every_bit_flip_in_data_is_an_error() {
             for bit in 0..8 {
                 let mut bad = bytes.clone();
                 bad[byte] ^= 1 << bit;
-                assert!(load(&bad).is_err(), "{kind}: flipping bit {bit} of data byte {byte} loaded silently");
+                assert!(
+                    load(&bad).is_err(),
+                    "{kind}: flipping bit {bit} of data byte {byte} loaded silently"
+                );
             }
         }
     }
