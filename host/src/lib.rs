@@ -1,11 +1,20 @@
 //! `sinew-host`: the std side of Sinew. Reads meshes, trains and fits models with burn, bakes
 //! them into the `.sinew` format that `sinew-core` plays back, and inspects and renders results.
 
+pub mod aim;
 pub mod atomic;
 pub mod backend;
+pub mod badin;
+pub mod bones;
+pub mod constraints;
 pub mod container;
+pub mod ict;
 pub mod inspect;
+pub mod mesh;
 pub mod nn;
+pub mod plot;
+pub mod procedural;
+pub mod render;
 pub mod tolerance;
 
 pub use container::SinewWriter;
