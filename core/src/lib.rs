@@ -26,6 +26,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod aim;
 pub mod error;
 pub mod format;
 pub mod hash;

@@ -261,7 +261,10 @@ mod tests {
         assert_eq!(f.u32_tensor("idx", &[3]).unwrap().at(2), u32::MAX);
         assert_eq!(f.section("q").unwrap().q16s().unwrap().at(0), -65536);
         // Every section starts aligned, whatever the lengths before it.
-        assert!(f.sections().all(|s| (s.offset as usize).is_multiple_of(SECTION_ALIGN)));
+        assert!(
+            f.sections()
+                .all(|s| (s.offset as usize).is_multiple_of(SECTION_ALIGN))
+        );
         // Loading from an odd address works as well: the core never assumes alignment.
         let mut shifted = vec![0u8];
         shifted.extend_from_slice(&bytes);

@@ -1,1 +1,506 @@
-//! (being written)
+//! The ICT-FaceKit "Light" face model (USC ICT, MIT licence) as a source of actors.
+//!
+//! The kit is a folder holding `generic_neutral_mesh.obj`, `vertex_indices.json`,
+//! `expressions/NAME.obj[.gz]` (53 ARKit-named shapes, each a full mesh) and
+//! `identities/identityNNN.obj[.gz]` (100 PCA modes, each neutral + 1σ of the mode). All share one
+//! topology (26,719 vertices, 26,384 polygons, cm). An actor is built as the kit's README says:
+//! actor neutral = neutral + Σ wᵢ (identityᵢ − neutral), and each of its blendshapes is the actor
+//! neutral plus the generic expression delta (expression − neutral).
+
+use std::collections::BTreeMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail};
+
+use crate::mesh::Mesh;
+
+/// The full face area: vertices 0–9408 and polygons 0–9229 of the ICT topology (the upstream
+/// README's "Face" geometry; eyes, mouth socket, teeth and back of the head are excluded).
+pub const FACE_REGION: Range<u32> = 0..9409;
+
+/// The expressions of the default ICT actor: the jaw's degrees of freedom, the main mouth
+/// shapes and one or two shapes from each other part of the face, mixing left and right sides so
+/// that asymmetric behaviour is exercised.
+pub const DEFAULT_SHAPES: [&str; 19] = [
+    "jawOpen",
+    "jawLeft",
+    "jawRight",
+    "jawForward",
+    "mouthSmile_L",
+    "mouthSmile_R",
+    "mouthFunnel",
+    "mouthPucker",
+    "mouthStretch_L",
+    "mouthStretch_R",
+    "mouthUpperUp_L",
+    "mouthLowerDown_R",
+    "mouthRollLower",
+    "browInnerUp_L",
+    "browOuterUp_R",
+    "browDown_L",
+    "eyeBlink_R",
+    "cheekPuff_L",
+    "noseSneer_R",
+];
+
+/// Attribution carried into every ICT actor's provenance text.
+const ICT_ATTRIBUTION: &str = "ICT-FaceKit Light face model (github ICT-VGL/ICT-FaceKit), \
+     Copyright (c) 2020 USC Institute for Creative Technologies, MIT licence";
+
+/// An actor: a template mesh and its blendshapes, one set of vertices shared by all.
+#[derive(Clone, Debug)]
+pub struct Actor {
+    /// The actor's neutral face with its polygons and texture coordinates; its positions equal
+    /// `shapes[0]`.
+    pub template: Mesh,
+    /// Vertex positions of each shape, neutral first, each with `template.positions.len()`
+    /// entries.
+    pub shapes: Vec<Vec<[f32; 3]>>,
+    /// The name of each shape: `"neutral"`, then the expression names.
+    pub names: Vec<String>,
+    /// The 68 iBUG (Multi-PIE) landmarks as template vertex indices, in iBUG order; `None`
+    /// where a landmark's vertex is not part of the template.
+    pub landmarks: Vec<Option<u32>>,
+    /// Length unit of every coordinate.
+    pub units: &'static str,
+    /// Where the actor comes from, with licence and attribution, for artefact metadata.
+    pub source: String,
+}
+
+impl Actor {
+    /// Shape `i` as a mesh with the template's topology.
+    ///
+    /// # Panics
+    /// If `i` is not below `shapes.len()`.
+    pub fn shape_mesh(&self, i: usize) -> Mesh {
+        self.template.with_positions(self.shapes[i].clone())
+    }
+}
+
+/// An opened ICT-FaceKit folder: the neutral mesh and landmark data in memory, the expression and
+/// identity files listed (read on demand, as all of them together are ~250 MB of text).
+#[derive(Debug)]
+pub struct IctFaceKit {
+    dir: PathBuf,
+    neutral: Mesh,
+    vertex_indices: serde_json::Value,
+    expressions: BTreeMap<String, PathBuf>,
+    identities: Vec<PathBuf>,
+}
+
+/// The mesh files in `dir` as (name without `.obj`/`.obj.gz`, path), sorted by name.
+fn list_obj(dir: &Path) -> Result<BTreeMap<String, PathBuf>> {
+    let mut out = BTreeMap::new();
+    let entries =
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot list folder", dir.display()))?;
+    for entry in entries {
+        let entry = entry.with_context(|| format!("{}: cannot list folder", dir.display()))?;
+        let file_name = entry.file_name();
+        let name = file_name.to_string_lossy();
+        let stem = name
+            .strip_suffix(".obj.gz")
+            .or_else(|| name.strip_suffix(".obj"));
+        if let Some(stem) = stem {
+            // If both a plain and a compressed copy exist, either will do; keep the first seen.
+            out.entry(stem.to_owned()).or_insert_with(|| entry.path());
+        }
+    }
+    Ok(out)
+}
+
+impl IctFaceKit {
+    /// Opens the kit in `dir`: reads the neutral mesh and `vertex_indices.json`, and lists the
+    /// expressions and identity modes (which must be numbered `identity000` upwards without
+    /// gaps).
+    pub fn open(dir: &Path) -> Result<Self> {
+        let neutral = Mesh::read(&dir.join("generic_neutral_mesh.obj"))?;
+        let json_path = dir.join("vertex_indices.json");
+        let text = std::fs::read_to_string(&json_path)
+            .with_context(|| format!("{}: cannot read", json_path.display()))?;
+        let vertex_indices: serde_json::Value = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not valid JSON", json_path.display()))?;
+        let expressions = list_obj(&dir.join("expressions"))?;
+        if expressions.is_empty() {
+            bail!(
+                "{}: no expression meshes (NAME.obj or NAME.obj.gz)",
+                dir.join("expressions").display()
+            );
+        }
+        let id_dir = dir.join("identities");
+        let mut numbered = BTreeMap::new();
+        for (stem, path) in list_obj(&id_dir)? {
+            let Some(num) = stem.strip_prefix("identity") else {
+                continue;
+            };
+            let i: usize = num
+                .parse()
+                .map_err(|_| anyhow!("{}: identity file name without a number", path.display()))?;
+            numbered.insert(i, path);
+        }
+        let identities: Vec<PathBuf> = numbered.values().cloned().collect();
+        if let Some((pos, (&i, _))) = numbered.iter().enumerate().find(|(k, (i, _))| k != *i) {
+            bail!(
+                "{}: identity modes must be numbered from 000 without gaps; mode {pos} is missing \
+                 (next found: {i})",
+                id_dir.display()
+            );
+        }
+        Ok(Self {
+            dir: dir.to_owned(),
+            neutral,
+            vertex_indices,
+            expressions,
+            identities,
+        })
+    }
+
+    /// The folder the kit was opened from.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The generic neutral mesh (all 26,719 vertices).
+    pub fn neutral(&self) -> &Mesh {
+        &self.neutral
+    }
+
+    /// The expression names, sorted (53 in the published kit).
+    pub fn expression_names(&self) -> Vec<String> {
+        self.expressions.keys().cloned().collect()
+    }
+
+    /// The number of identity modes (100 in the published kit).
+    pub fn identity_count(&self) -> usize {
+        self.identities.len()
+    }
+
+    /// Reads a mesh of the kit and returns its offsets from the neutral, after checking that it
+    /// has the neutral's topology.
+    fn delta_of(&self, path: &Path) -> Result<Vec<[f32; 3]>> {
+        let mesh = Mesh::read(path)?;
+        self.neutral.check_same_topology(&mesh, path)?;
+        Ok(mesh
+            .positions
+            .iter()
+            .zip(&self.neutral.positions)
+            .map(|(p, n)| [p[0] - n[0], p[1] - n[1], p[2] - n[2]])
+            .collect())
+    }
+
+    fn expression_path(&self, name: &str) -> Result<&Path> {
+        self.expressions
+            .get(name)
+            .map(PathBuf::as_path)
+            .ok_or_else(|| {
+                anyhow!(
+                    "{}: no expression {name:?}; valid names: {}",
+                    self.dir.join("expressions").display(),
+                    self.expression_names().join(", ")
+                )
+            })
+    }
+
+    /// The blendshape offsets of expression `name` (expression mesh − neutral), per vertex.
+    pub fn expression_delta(&self, name: &str) -> Result<Vec<[f32; 3]>> {
+        self.delta_of(self.expression_path(name)?)
+    }
+
+    /// The offsets of identity mode `i` at one standard deviation (identity file − neutral).
+    pub fn identity_delta(&self, i: usize) -> Result<Vec<[f32; 3]>> {
+        let path = self.identities.get(i).ok_or_else(|| {
+            anyhow!(
+                "{}: no identity mode {i}; the kit has {} (0 to {})",
+                self.dir.join("identities").display(),
+                self.identities.len(),
+                self.identities.len().saturating_sub(1)
+            )
+        })?;
+        self.delta_of(path)
+    }
+
+    /// The 68 iBUG landmark vertices (`idx_to_landmark_verts` of `vertex_indices.json`), in iBUG
+    /// order.
+    pub fn landmarks68(&self) -> Result<Vec<u32>> {
+        let path = self.dir.join("vertex_indices.json");
+        let list = self
+            .vertex_indices
+            .get("idx_to_landmark_verts")
+            .and_then(serde_json::Value::as_array)
+            .ok_or_else(|| anyhow!("{}: no idx_to_landmark_verts list", path.display()))?;
+        if list.len() != 68 {
+            bail!(
+                "{}: idx_to_landmark_verts has {} entries, 68 expected",
+                path.display(),
+                list.len()
+            );
+        }
+        let nv = self.neutral.positions.len();
+        list.iter()
+            .enumerate()
+            .map(|(k, v)| {
+                v.as_u64()
+                    .filter(|&i| (i as usize) < nv)
+                    .map(|i| i as u32)
+                    .ok_or_else(|| {
+                        anyhow!(
+                            "{}: landmark {k} is {v}, not a vertex index below {nv}",
+                            path.display()
+                        )
+                    })
+            })
+            .collect()
+    }
+
+    /// Builds an actor: identity `identity_weights[i]` (in standard deviations) for the first
+    /// modes, the given expressions, restricted to the vertex range `region` (e.g.
+    /// [`FACE_REGION`]). Only modes with a non-zero weight are read. Files are read on several
+    /// threads; results are summed in mode order, so the actor is the same on every run.
+    pub fn actor(
+        &self,
+        identity_weights: &[f32],
+        expressions: &[&str],
+        region: Range<u32>,
+    ) -> Result<Actor> {
+        let nv = self.neutral.positions.len();
+        if identity_weights.len() > self.identities.len() {
+            bail!(
+                "{} identity weights given but the kit in {} has {} identity modes",
+                identity_weights.len(),
+                self.dir.display(),
+                self.identities.len()
+            );
+        }
+        if let Some(w) = identity_weights.iter().find(|w| !w.is_finite()) {
+            bail!("identity weight {w} is not finite");
+        }
+        if region.is_empty() || region.end as usize > nv {
+            bail!(
+                "vertex region {region:?} is empty or beyond the kit's {nv} vertices ({})",
+                self.dir.display()
+            );
+        }
+        let mut paths = Vec::new();
+        for (k, name) in expressions.iter().enumerate() {
+            if expressions[..k].contains(name) {
+                bail!("expression {name:?} is listed twice");
+            }
+            paths.push(self.expression_path(name)?.to_owned());
+        }
+        let ids: Vec<(usize, f32)> = identity_weights
+            .iter()
+            .copied()
+            .enumerate()
+            .filter(|&(_, w)| w != 0.0)
+            .collect();
+        paths.extend(ids.iter().map(|&(i, _)| self.identities[i].clone()));
+
+        let deltas = self.read_deltas(&paths)?;
+        let (expr_deltas, id_deltas) = deltas.split_at(expressions.len());
+
+        let mut actor_neutral = self.neutral.positions.clone();
+        for (&(_, w), d) in ids.iter().zip(id_deltas) {
+            for (p, d) in actor_neutral.iter_mut().zip(d) {
+                for c in 0..3 {
+                    p[c] += w * d[c];
+                }
+            }
+        }
+        let full = self.neutral.with_positions(actor_neutral);
+        let (template, old_index) = full.submesh(|v| region.contains(&v));
+        let mut shapes = Vec::with_capacity(1 + expressions.len());
+        shapes.push(template.positions.clone());
+        for d in expr_deltas {
+            shapes.push(
+                old_index
+                    .iter()
+                    .map(|&v| {
+                        let (p, d) = (full.positions[v as usize], d[v as usize]);
+                        [p[0] + d[0], p[1] + d[1], p[2] + d[2]]
+                    })
+                    .collect(),
+            );
+        }
+        let mut new_index = vec![None; nv];
+        for (new, &old) in old_index.iter().enumerate() {
+            new_index[old as usize] = Some(new as u32);
+        }
+        let landmarks = self
+            .landmarks68()?
+            .iter()
+            .map(|&v| new_index[v as usize])
+            .collect();
+        let mut names = vec!["neutral".to_owned()];
+        names.extend(expressions.iter().map(|s| (*s).to_owned()));
+        let weights: Vec<String> = ids.iter().map(|(i, w)| format!("{i}:{w}")).collect();
+        let source = format!(
+            "{ICT_ATTRIBUTION}; read from {}; identity weights (mode:sigma) [{}]; vertex region \
+             {}..{}",
+            self.dir.display(),
+            weights.join(", "),
+            region.start,
+            region.end
+        );
+        Ok(Actor {
+            template,
+            shapes,
+            names,
+            landmarks,
+            units: "cm",
+            source,
+        })
+    }
+
+    /// Reads the deltas of `paths` on up to 8 threads, returning them in `paths` order.
+    fn read_deltas(&self, paths: &[PathBuf]) -> Result<Vec<Vec<[f32; 3]>>> {
+        let threads = std::thread::available_parallelism()
+            .map_or(1, usize::from)
+            .clamp(1, 8)
+            .min(paths.len().max(1));
+        let mut slots: Vec<Option<Result<Vec<[f32; 3]>>>> = Vec::new();
+        slots.resize_with(paths.len(), || None);
+        // Each thread fills one contiguous run of slots, so results keep the order of `paths`.
+        let per_thread = paths.len().div_ceil(threads).max(1);
+        std::thread::scope(|s| {
+            for (slots, paths) in slots.chunks_mut(per_thread).zip(paths.chunks(per_thread)) {
+                s.spawn(move || {
+                    for (slot, path) in slots.iter_mut().zip(paths) {
+                        *slot = Some(self.delta_of(path));
+                    }
+                });
+            }
+        });
+        slots
+            .into_iter()
+            .map(|s| s.unwrap_or_else(|| Err(anyhow!("a reader thread did not finish"))))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::tests::data_dir;
+
+    fn kit() -> Option<IctFaceKit> {
+        let dir = data_dir()?.join("ict-facekit");
+        Some(IctFaceKit::open(&dir).unwrap())
+    }
+
+    fn norm(v: [f32; 3]) -> f32 {
+        (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+    }
+
+    #[test]
+    fn kit_listing_and_landmarks() {
+        let Some(kit) = kit() else { return };
+        let names = kit.expression_names();
+        assert_eq!(names.len(), 53);
+        assert!(names.windows(2).all(|w| w[0] < w[1]));
+        // The kit's own list of expressions agrees with the folder.
+        let listed: Vec<String> =
+            serde_json::from_value(kit.vertex_indices["expressions"].clone()).unwrap();
+        assert_eq!(listed, names);
+        assert_eq!(kit.identity_count(), 100);
+        for name in DEFAULT_SHAPES {
+            assert!(names.iter().any(|n| n == name), "{name}");
+        }
+        let lm = kit.landmarks68().unwrap();
+        // First, chin and last landmarks as the upstream README lists them.
+        assert_eq!((lm[0], lm[8], lm[67]), (1225, 966, 5966));
+        // iBUG 8 (chin) lies on the mid-plane; 36 and 45 (outer eye corners) mirror each other,
+        // and the subject's right (iBUG 36) is at negative x.
+        let p = &kit.neutral().positions;
+        assert_eq!(p[lm[8] as usize][0], 0.0);
+        assert!(p[lm[36] as usize][0] < -4.0);
+        assert_eq!(p[lm[36] as usize][0], -p[lm[45] as usize][0]);
+
+        let err = kit
+            .actor(&[], &["jawOpen", "smile"], FACE_REGION)
+            .unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            msg.contains("\"smile\"") && msg.contains("mouthSmile_L"),
+            "{msg}"
+        );
+        assert!(
+            kit.actor(&[], &["jawOpen", "jawOpen"], FACE_REGION)
+                .is_err()
+        );
+        assert!(kit.actor(&[0.0; 101], &[], FACE_REGION).is_err());
+        assert!(kit.actor(&[], &[], 0..30_000).is_err());
+        let msg = kit.identity_delta(100).unwrap_err().to_string();
+        assert!(msg.contains("100"), "{msg}");
+    }
+
+    #[test]
+    fn default_actor() {
+        let Some(kit) = kit() else { return };
+        let t = std::time::Instant::now();
+        let actor = kit.actor(&[], &DEFAULT_SHAPES, FACE_REGION).unwrap();
+        eprintln!("default ICT actor built in {:?}", t.elapsed());
+        assert_eq!(actor.shapes.len(), 20);
+        assert_eq!(actor.names.len(), 20);
+        assert_eq!(actor.names[0], "neutral");
+        assert_eq!(actor.names[1], "jawOpen");
+        assert!(actor.shapes.iter().all(|s| s.len() == 9_409));
+        assert_eq!(actor.template.positions.len(), 9_409);
+        assert_eq!(actor.template.polygons.len(), 9_230);
+        assert_eq!(actor.template.polygon_uvs.len(), 9_230);
+        actor.template.validate().unwrap();
+        // With no identity weights the template is the generic neutral's face.
+        assert_eq!(
+            actor.template.positions[..],
+            kit.neutral().positions[..9_409]
+        );
+        assert_eq!(actor.shapes[0], actor.template.positions);
+        assert_eq!(actor.units, "cm");
+        assert!(actor.source.contains("MIT") && actor.source.contains("USC"));
+
+        // The data README: jawOpen moves some vertex by 4.2 cm, mouthSmile_L by 1.6 cm.
+        let max_disp = |s: usize| {
+            actor.shapes[s]
+                .iter()
+                .zip(&actor.shapes[0])
+                .map(|(a, b)| norm([a[0] - b[0], a[1] - b[1], a[2] - b[2]]))
+                .fold(0.0f32, f32::max)
+        };
+        let jaw = max_disp(1);
+        let smile = max_disp(5);
+        eprintln!("max displacement: jawOpen {jaw} cm, mouthSmile_L {smile} cm");
+        assert!((jaw - 4.2).abs() < 0.1, "{jaw}");
+        assert!((smile - 1.6).abs() < 0.1, "{smile}");
+
+        // All 68 landmarks lie in the face region, which keeps the first 9,409 vertices in
+        // order, so their indices are unchanged.
+        let lm = kit.landmarks68().unwrap();
+        assert_eq!(actor.landmarks.iter().flatten().count(), 68);
+        for (a, &b) in actor.landmarks.iter().zip(&lm) {
+            assert_eq!(*a, Some(b));
+        }
+    }
+
+    #[test]
+    fn identity_weights_change_the_neutral_not_the_deltas() {
+        let Some(kit) = kit() else { return };
+        let actor = kit.actor(&[0.0, 1.5], &["jawOpen"], 0..6706).unwrap();
+        let d1 = kit.identity_delta(1).unwrap();
+        let jaw = kit.expression_delta("jawOpen").unwrap();
+        assert_eq!(actor.template.positions.len(), 6_706);
+        assert!(actor.source.contains("1:1.5"), "{}", actor.source);
+        let mut moved = 0.0f32;
+        for v in 0..6706 {
+            let n = kit.neutral().positions[v];
+            let a = actor.shapes[0][v];
+            let off = [a[0] - n[0], a[1] - n[1], a[2] - n[2]];
+            for c in 0..3 {
+                assert!((off[c] - 1.5 * d1[v][c]).abs() < 1e-4);
+                let e = actor.shapes[1][v][c] - a[c];
+                assert!((e - jaw[v][c]).abs() < 1e-4);
+            }
+            moved = moved.max(norm(off));
+        }
+        eprintln!("identity mode 1 at 1.5 sigma moves the face by up to {moved} cm");
+        assert!(moved > 0.1, "{moved}");
+    }
+}

@@ -6,6 +6,7 @@ pub mod atomic;
 pub mod backend;
 pub mod badin;
 pub mod bones;
+pub mod commands;
 pub mod constraints;
 pub mod container;
 pub mod ict;
@@ -14,6 +15,7 @@ pub mod mesh;
 pub mod nn;
 pub mod plot;
 pub mod procedural;
+pub mod progress;
 pub mod render;
 pub mod tolerance;
 

@@ -1,9 +1,15 @@
-//! The `sinew` command line.
+//! The `sinew` command line: parse, validate, then hand over to `sinew_host::commands`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand};
+use sinew_host::aim::AimConfig;
+use sinew_host::aim::config::Schedule;
+use sinew_host::aim::run::Outputs;
+use sinew_host::backend::Backend;
+use sinew_host::commands;
 
 /// Sinew: learn an actor's face from meshes, and play it back anywhere, bit for bit.
 #[derive(Debug, Parser)]
@@ -15,6 +21,53 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// The built-in demo: train a small AIM on a procedural face, bake it, play it back through
+    /// sinew-core, and write the report, pictures and OBJs. Needs no data files.
+    Demo {
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Optimisation steps (default: the demo configuration's).
+        #[arg(long)]
+        iterations: Option<usize>,
+        /// Hide the progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Train a model.
+    #[command(subcommand)]
+    Train(Train),
+    /// Measure a baked model on data.
+    #[command(subcommand)]
+    Eval(Eval),
+    /// Re-bake a model from a training checkpoint.
+    Bake {
+        /// Checkpoint folder (MODEL.ckpt from `sinew train aim`).
+        #[arg(long)]
+        checkpoint: PathBuf,
+        /// Output .sinew file.
+        #[arg(long)]
+        out: PathBuf,
+        /// Evaluate the networks at this mesh's vertices instead of the training template (e.g.
+        /// another resolution of the same face).
+        #[arg(long)]
+        template: Option<PathBuf>,
+        /// Leave the networks out (small targets).
+        #[arg(long)]
+        playback_only: bool,
+    },
+    /// Pose a baked actor through sinew-core, one OBJ per frame.
+    Play {
+        /// The baked actor.
+        #[arg(long)]
+        model: PathBuf,
+        /// Pose file: {"frames": [{"head": [9], "jaw": [9], "weights": [M]}, ...]}.
+        #[arg(long)]
+        poses: PathBuf,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Show what a .sinew file holds: kind, version, sections, shapes, sizes, checksum status.
     Inspect {
         /// The .sinew file.
@@ -23,10 +76,227 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Anatomy editing.
+    #[command(subcommand)]
+    Edit(Edit),
+    /// Bones under the skin.
+    #[command(subcommand)]
+    Bones(Bones),
 }
 
-fn run(cli: Cli) -> anyhow::Result<()> {
+#[derive(Debug, Subcommand)]
+enum Bones {
+    /// Register the template skull and jaw to an ICT-FaceKit neutral (similarity from landmarks
+    /// offset by soft-tissue thickness, then ICP); writes skull.obj, jaw.obj, fit.json, bones.png.
+    Fit {
+        /// ICT-FaceKit folder.
+        #[arg(long)]
+        data: PathBuf,
+        /// Folder with the template bones (artisynth-jaw/, skull-odedstein/); default
+        /// $SINEW_DATA or ../shared/data.
+        #[arg(long)]
+        templates: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum Train {
+    /// Learn an AIM actor from ICT-FaceKit blendshapes.
+    Aim(TrainAim),
+}
+
+#[derive(Debug, Args)]
+struct TrainAim {
+    /// ICT-FaceKit folder.
+    #[arg(long)]
+    data: PathBuf,
+    /// Output baked model (.sinew); its checkpoints go to MODEL.ckpt/.
+    #[arg(long)]
+    out: PathBuf,
+    /// Output JSON report.
+    #[arg(long)]
+    report: PathBuf,
+    /// Optimisation steps (overrides the configuration).
+    #[arg(long)]
+    iterations: Option<usize>,
+    /// JSON configuration file (fields of AimConfig; missing ones take their defaults).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Continue from this checkpoint folder.
+    #[arg(long)]
+    resume: Option<PathBuf>,
+    /// Folder with skull.obj and jaw.obj aligned to the neutral (from `sinew bones fit`);
+    /// without it the bones are fitted now from the template bones in ../shared/data.
+    #[arg(long)]
+    bones: Option<PathBuf>,
+    /// burn backend.
+    #[arg(long, value_enum, default_value_t = Backend::Flex)]
+    backend: Backend,
+    /// Learning rate (overrides the configuration).
+    #[arg(long)]
+    lr: Option<f64>,
+    /// Final learning rate (overrides the configuration).
+    #[arg(long)]
+    lr_end: Option<f64>,
+    /// Learning-rate schedule (overrides the configuration).
+    #[arg(long, value_enum)]
+    schedule: Option<Schedule>,
+    /// Seed (overrides the configuration).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Folder for pictures (error heatmaps, anatomy, loss curve) and OBJs.
+    #[arg(long)]
+    pictures: Option<PathBuf>,
+    /// Hide the progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(Debug, Subcommand)]
+enum Eval {
+    /// Per-vertex error of a baked AIM actor on its ICT-FaceKit training shapes.
+    Aim {
+        /// The baked actor.
+        #[arg(long)]
+        model: PathBuf,
+        /// ICT-FaceKit folder.
+        #[arg(long)]
+        data: PathBuf,
+        /// Output JSON report.
+        #[arg(long)]
+        report: PathBuf,
+        /// Bones folder (as for `train aim`), for the constraint statistics.
+        #[arg(long)]
+        bones: Option<PathBuf>,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum Edit {
+    /// Scale the learned soft-tissue thickness in a region and re-derive the skin (AIM Fig. 5).
+    Thickness {
+        /// The baked actor.
+        #[arg(long)]
+        model: PathBuf,
+        /// Region: JSON list of vertex indices, or {"weights": [...]} with one weight per vertex.
+        #[arg(long)]
+        mask: PathBuf,
+        /// Thickness factor inside the region.
+        #[arg(long)]
+        scale: f32,
+        /// Output folder (edited neutral OBJ and a before/after picture).
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+fn config_for(args: &TrainAim) -> Result<AimConfig> {
+    let mut config = match &args.config {
+        Some(p) => commands::read_config(p)?,
+        None => AimConfig::default(),
+    };
+    if let Some(n) = args.iterations {
+        config.iterations = n;
+    }
+    if let Some(v) = args.lr {
+        config.lr = v;
+    }
+    if let Some(v) = args.lr_end {
+        config.lr_end = v;
+    }
+    if let Some(s) = args.schedule {
+        config.schedule = s;
+    }
+    if let Some(s) = args.seed {
+        config.seed = s;
+    }
+    if let Some(s) = std::env::var("SINEW_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        config.seed = s;
+    }
+    config.validate()?;
+    Ok(config)
+}
+
+fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Demo {
+            out,
+            iterations,
+            quiet,
+        } => {
+            let report = commands::demo(&out, iterations, quiet)?;
+            println!("{}", serde_json::to_string_pretty(&report)?);
+            eprintln!("demo written to {}", out.display());
+        }
+        Command::Train(Train::Aim(args)) => {
+            let config = config_for(&args)?;
+            eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
+            let (set, said) =
+                commands::ict_training_set(&args.data, args.bones.as_deref(), &config)?;
+            eprintln!(
+                "{said}; {:.1}% of {} vertices constrained",
+                100.0 * set.constrained_fraction(),
+                set.vertices()
+            );
+            let outputs = Outputs {
+                model: args.out.clone(),
+                report: args.report.clone(),
+                pictures: args.pictures.clone(),
+            };
+            let report = commands::train_aim(
+                &set,
+                &config,
+                args.backend,
+                &outputs,
+                args.resume.as_deref(),
+                args.quiet,
+            )?;
+            println!(
+                "{}: mean {:.3} mm, p95 {:.3} mm, max {:.3} mm over {} shapes in {:.0} s",
+                args.out.display(),
+                report.mean_error_mm,
+                report.p95_error_mm,
+                report.max_error_mm,
+                report.shapes,
+                report.seconds
+            );
+        }
+        Command::Eval(Eval::Aim {
+            model,
+            data,
+            report,
+            bones,
+        }) => {
+            let r = commands::eval_aim(&model, &data, bones.as_deref())?;
+            sinew_host::atomic::write(&report, serde_json::to_string_pretty(&r)?.as_bytes())?;
+            println!(
+                "{}: mean {:.3} mm, median {:.3} mm, p95 {:.3} mm, max {:.3} mm",
+                model.display(),
+                r.mean_error_mm,
+                r.median_error_mm,
+                r.p95_error_mm,
+                r.max_error_mm
+            );
+        }
+        Command::Bake {
+            checkpoint,
+            out,
+            template,
+            playback_only,
+        } => {
+            commands::bake(&checkpoint, &out, template.as_deref(), playback_only)?;
+            println!("{}", sinew_host::inspect::inspect(&out)?);
+        }
+        Command::Play { model, poses, out } => {
+            let n = commands::play(&model, &poses, &out, None)?;
+            println!("{n} frames written to {}", out.display());
+        }
         Command::Inspect { file, json } => {
             let report = sinew_host::inspect::inspect(&file)?;
             if json {
@@ -34,6 +304,29 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             } else {
                 print!("{report}");
             }
+        }
+        Command::Bones(Bones::Fit {
+            data,
+            templates,
+            out,
+        }) => {
+            let templates = match templates {
+                Some(t) => t,
+                None => commands::default_bone_templates()?,
+            };
+            let report = commands::bones_fit(&data, &templates, &out)?;
+            println!("{}", serde_json::to_string_pretty(&report)?);
+            eprintln!("bones written to {}", out.display());
+        }
+        Command::Edit(Edit::Thickness {
+            model,
+            mask,
+            scale,
+            out,
+        }) => {
+            commands::edit_thickness(&model, &mask, scale, &out)
+                .with_context(|| format!("editing {}", model.display()))?;
+            println!("edited neutral and picture written to {}", out.display());
         }
     }
     Ok(())

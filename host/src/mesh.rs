@@ -1,1 +1,958 @@
-//! (being written)
+//! Polygon meshes: reading and writing OBJ (optionally gzip-compressed) and PLY, plus the few
+//! geometric helpers every other module needs (fan triangulation, normals, bounds, sub-meshes).
+//!
+//! Vertex order is sacred here: blendshape data (ICT-FaceKit, FLAME, ...) is a list of meshes that
+//! correspond vertex by vertex, so a reader must return positions in file order. That is why OBJ
+//! is parsed by a small reader of our own rather than `tobj`: with `single_index: false` `tobj`
+//! splits the file into models at every `o`/`g` and material change and renumbers each model's
+//! positions in order of first use, dropping unreferenced ones, so file order is lost.
+
+use std::collections::HashMap;
+use std::io::{Read, Write};
+use std::path::Path;
+
+use anyhow::{Context, Result, anyhow, bail};
+use ply_rs_bw::ply::{
+    Addable, DefaultElement, ElementDef, Encoding, Ply, Property, PropertyDef, PropertyType,
+    ScalarType,
+};
+
+/// A polygon mesh as read from a file: polygons are kept as they are (quads stay quads).
+///
+/// Texture coordinates come in one of two layouts:
+/// - per corner: `polygon_uvs` is parallel to `polygons` (same number of polygons, same number of
+///   corners in each) and indexes `uvs` (the OBJ `f v/vt` layout);
+/// - per vertex: `polygon_uvs` is empty and `uvs` has one entry per position.
+///
+/// A mesh without texture coordinates has both empty.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Vertex positions, in file order.
+    pub positions: Vec<[f32; 3]>,
+    /// Polygons as vertex indices (0-based), each with at least 3 corners.
+    pub polygons: Vec<Vec<u32>>,
+    /// Texture coordinates.
+    pub uvs: Vec<[f32; 2]>,
+    /// Per-corner indices into `uvs`, parallel to `polygons`, or empty.
+    pub polygon_uvs: Vec<Vec<u32>>,
+}
+
+/// The file formats [`Mesh::read`] and [`Mesh::write`] know, chosen by file name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Obj,
+    Ply,
+}
+
+/// Picks the format from the file name (`.obj`, `.ply`, either with `.gz`), and whether the
+/// file is gzip-compressed.
+fn format_of(path: &Path) -> Result<(Format, bool)> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let (stem, gz) = match name.strip_suffix(".gz") {
+        Some(stem) => (stem, true),
+        None => (name.as_str(), false),
+    };
+    if stem.ends_with(".obj") {
+        Ok((Format::Obj, gz))
+    } else if stem.ends_with(".ply") {
+        Ok((Format::Ply, gz))
+    } else {
+        bail!(
+            "{}: unknown mesh format (expected .obj, .obj.gz, .ply or .ply.gz)",
+            path.display()
+        )
+    }
+}
+
+impl Mesh {
+    /// Reads a mesh from `.obj`, `.obj.gz`, `.ply` (ASCII or binary) or `.ply.gz`.
+    ///
+    /// OBJ: `v`, `vt` and `f` statements are read (`f` corners as `v`, `v/vt`, `v//vn` or
+    /// `v/vt/vn`, negative indices relative to the end as the format allows); groups, objects
+    /// and materials are ignored and positions stay in file order, so all groups share one
+    /// vertex list as they do in the file. If only some polygons carry texture coordinates the
+    /// coordinates are dropped, as this type cannot hold a partial layout.
+    ///
+    /// PLY: element `vertex` with `x`, `y`, `z` (any numeric type) and optional per-vertex
+    /// texture coordinates (`u`/`v`, `s`/`t`, `texture_u`/`texture_v` or
+    /// `texture_s`/`texture_t`); element `face` with `vertex_indices` (or `vertex_index`) and an
+    /// optional per-corner `texcoord` list (MeshLab's layout).
+    ///
+    /// Every error names the file; the result is validated (see [`Mesh::validate`]).
+    pub fn read(path: &Path) -> Result<Mesh> {
+        let (format, gz) = format_of(path)?;
+        let raw =
+            std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
+        // Gzip is recognised by its magic too, so a compressed file without `.gz` still reads.
+        let bytes = if gz || raw.starts_with(&[0x1f, 0x8b]) {
+            let mut out = Vec::with_capacity(raw.len() * 4);
+            flate2::read::MultiGzDecoder::new(raw.as_slice())
+                .read_to_end(&mut out)
+                .with_context(|| format!("{}: not a valid gzip file", path.display()))?;
+            out
+        } else {
+            raw
+        };
+        let mesh = match format {
+            Format::Obj => parse_obj(&bytes),
+            Format::Ply => parse_ply(&bytes),
+        }
+        .with_context(|| format!("{}: not a valid mesh", path.display()))?;
+        mesh.validate()
+            .with_context(|| format!("{}: inconsistent mesh", path.display()))?;
+        Ok(mesh)
+    }
+
+    /// Writes the mesh atomically as OBJ (`.obj`) or binary little-endian PLY (`.ply`), chosen
+    /// by extension; a trailing `.gz` compresses the output.
+    ///
+    /// OBJ keeps polygons and writes `vt` with `f v/vt` when the mesh has texture coordinates.
+    /// PLY writes per-vertex coordinates as `s`/`t` and per-corner ones as a face `texcoord`
+    /// list. Floats are written exactly (shortest round-trip text in OBJ, raw bits in PLY).
+    /// OBJ has no per-vertex layout, so per-vertex UVs are written as `f v/v` and read back in
+    /// the per-corner layout (same values at every corner).
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let (format, gz) = format_of(path)?;
+        self.validate().with_context(|| {
+            format!("{}: refusing to write an inconsistent mesh", path.display())
+        })?;
+        let mut bytes = Vec::new();
+        match format {
+            Format::Obj => self.write_obj(&mut bytes).map_err(anyhow::Error::from),
+            Format::Ply => self.write_ply(&mut bytes),
+        }
+        .with_context(|| format!("{}: cannot encode the mesh", path.display()))?;
+        if gz {
+            let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+            enc.write_all(&bytes)
+                .and_then(|()| enc.finish())
+                .map(|b| bytes = b)
+                .with_context(|| format!("{}: cannot compress", path.display()))?;
+        }
+        crate::atomic::write(path, &bytes)
+    }
+
+    /// Checks every index and layout rule stated on [`Mesh`]: polygons have at least 3 corners
+    /// and index existing vertices; UVs follow one of the two layouts; positions are finite.
+    pub fn validate(&self) -> Result<()> {
+        let nv = self.positions.len();
+        if let Some(i) = self
+            .positions
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite()))
+        {
+            bail!(
+                "vertex {i} has a non-finite coordinate {:?}",
+                self.positions[i]
+            );
+        }
+        for (pi, poly) in self.polygons.iter().enumerate() {
+            if poly.len() < 3 {
+                bail!(
+                    "polygon {pi} has {} corners (at least 3 needed)",
+                    poly.len()
+                );
+            }
+            if let Some(&v) = poly.iter().find(|&&v| v as usize >= nv) {
+                bail!("polygon {pi} refers to vertex {v} but the mesh has {nv} vertices");
+            }
+        }
+        if self.polygon_uvs.is_empty() {
+            if !self.uvs.is_empty() && self.uvs.len() != nv {
+                bail!(
+                    "{} texture coordinates for {nv} vertices and no per-corner indices",
+                    self.uvs.len()
+                );
+            }
+        } else {
+            if self.polygon_uvs.len() != self.polygons.len() {
+                bail!(
+                    "{} polygons but {} polygons of texture indices",
+                    self.polygons.len(),
+                    self.polygon_uvs.len()
+                );
+            }
+            let nt = self.uvs.len();
+            for (pi, (poly, puv)) in self.polygons.iter().zip(&self.polygon_uvs).enumerate() {
+                if poly.len() != puv.len() {
+                    bail!(
+                        "polygon {pi} has {} corners but {} texture indices",
+                        poly.len(),
+                        puv.len()
+                    );
+                }
+                if let Some(&t) = puv.iter().find(|&&t| t as usize >= nt) {
+                    bail!("polygon {pi} refers to texture coordinate {t} but there are {nt}");
+                }
+            }
+        }
+        if let Some(i) = self
+            .uvs
+            .iter()
+            .position(|t| t.iter().any(|c| !c.is_finite()))
+        {
+            bail!("texture coordinate {i} is not finite: {:?}", self.uvs[i]);
+        }
+        Ok(())
+    }
+
+    fn write_obj(&self, out: &mut Vec<u8>) -> std::io::Result<()> {
+        writeln!(
+            out,
+            "# written by sinew: {} vertices, {} polygons",
+            self.positions.len(),
+            self.polygons.len()
+        )?;
+        for p in &self.positions {
+            writeln!(out, "v {} {} {}", p[0], p[1], p[2])?;
+        }
+        for t in &self.uvs {
+            writeln!(out, "vt {} {}", t[0], t[1])?;
+        }
+        let per_vertex_uv = !self.uvs.is_empty() && self.polygon_uvs.is_empty();
+        for (pi, poly) in self.polygons.iter().enumerate() {
+            out.push(b'f');
+            for (k, &v) in poly.iter().enumerate() {
+                if per_vertex_uv {
+                    write!(out, " {}/{}", v + 1, v + 1)?;
+                } else if let Some(puv) = self.polygon_uvs.get(pi) {
+                    write!(out, " {}/{}", v + 1, puv[k] + 1)?;
+                } else {
+                    write!(out, " {}", v + 1)?;
+                }
+            }
+            out.push(b'\n');
+        }
+        Ok(())
+    }
+
+    fn write_ply(&self, out: &mut Vec<u8>) -> Result<()> {
+        let mut ply = Ply::<DefaultElement>::new();
+        ply.header.encoding = Encoding::BinaryLittleEndian;
+        ply.header.comments.push("written by sinew".to_owned());
+        let per_vertex_uv = !self.uvs.is_empty() && self.polygon_uvs.is_empty();
+        let per_corner_uv = !self.polygon_uvs.is_empty();
+
+        let mut vdef = ElementDef::new("vertex".to_owned());
+        let mut vnames = vec!["x", "y", "z"];
+        if per_vertex_uv {
+            vnames.extend(["s", "t"]);
+        }
+        for name in &vnames {
+            vdef.properties.add(PropertyDef::new(
+                (*name).to_owned(),
+                PropertyType::Scalar(ScalarType::Float),
+            ));
+        }
+        ply.header.elements.add(vdef);
+        let mut fdef = ElementDef::new("face".to_owned());
+        fdef.properties.add(PropertyDef::new(
+            "vertex_indices".to_owned(),
+            PropertyType::List(ScalarType::UChar, ScalarType::Int),
+        ));
+        if per_corner_uv {
+            fdef.properties.add(PropertyDef::new(
+                "texcoord".to_owned(),
+                PropertyType::List(ScalarType::UChar, ScalarType::Float),
+            ));
+        }
+        ply.header.elements.add(fdef);
+
+        let mut verts = Vec::with_capacity(self.positions.len());
+        for (i, p) in self.positions.iter().enumerate() {
+            let mut e = DefaultElement::new();
+            e.insert("x".to_owned(), Property::Float(p[0]));
+            e.insert("y".to_owned(), Property::Float(p[1]));
+            e.insert("z".to_owned(), Property::Float(p[2]));
+            if per_vertex_uv {
+                e.insert("s".to_owned(), Property::Float(self.uvs[i][0]));
+                e.insert("t".to_owned(), Property::Float(self.uvs[i][1]));
+            }
+            verts.push(e);
+        }
+        ply.payload.insert("vertex".to_owned(), verts);
+        let mut faces = Vec::with_capacity(self.polygons.len());
+        for (pi, poly) in self.polygons.iter().enumerate() {
+            // The list length is a uchar, so a PLY polygon has at most 255 corners.
+            if poly.len() > 255 {
+                bail!(
+                    "polygon {pi} has {} corners; PLY lists hold 255",
+                    poly.len()
+                );
+            }
+            let idx = poly
+                .iter()
+                .map(|&v| i32::try_from(v))
+                .collect::<Result<Vec<i32>, _>>()
+                .map_err(|_| anyhow!("polygon {pi}: vertex index beyond the PLY int range"))?;
+            let mut e = DefaultElement::new();
+            e.insert("vertex_indices".to_owned(), Property::ListInt(idx));
+            if per_corner_uv {
+                let tc = self.polygon_uvs[pi]
+                    .iter()
+                    .flat_map(|&t| self.uvs[t as usize])
+                    .collect();
+                e.insert("texcoord".to_owned(), Property::ListFloat(tc));
+            }
+            faces.push(e);
+        }
+        ply.payload.insert("face".to_owned(), faces);
+        ply_rs_bw::writer::Writer::new()
+            .write_ply(out, &mut ply)
+            .map_err(|e| anyhow!("PLY encoding failed: {e}"))?;
+        Ok(())
+    }
+
+    /// Fan-triangulates every polygon (`[v0, vi, vi+1]`), keeping its orientation.
+    pub fn triangles(&self) -> Vec<[u32; 3]> {
+        let n: usize = self
+            .polygons
+            .iter()
+            .map(|p| p.len().saturating_sub(2))
+            .sum();
+        let mut tris = Vec::with_capacity(n);
+        for poly in &self.polygons {
+            for k in 1..poly.len().saturating_sub(1) {
+                tris.push([poly[0], poly[k], poly[k + 1]]);
+            }
+        }
+        tris
+    }
+
+    /// The same topology and texture coordinates with new positions.
+    ///
+    /// # Panics
+    /// If `positions` does not have one entry per vertex: that is a programming error, never
+    /// a property of input data.
+    pub fn with_positions(&self, positions: Vec<[f32; 3]>) -> Mesh {
+        assert_eq!(
+            positions.len(),
+            self.positions.len(),
+            "with_positions: vertex count must not change"
+        );
+        Mesh {
+            positions,
+            polygons: self.polygons.clone(),
+            uvs: self.uvs.clone(),
+            polygon_uvs: self.polygon_uvs.clone(),
+        }
+    }
+
+    /// Checks that `other` (read from `other_path`) has this mesh's vertex count and the same
+    /// polygons, so that the two correspond vertex by vertex. Texture coordinates are not
+    /// compared.
+    pub fn check_same_topology(&self, other: &Mesh, other_path: &Path) -> Result<()> {
+        if self.positions.len() != other.positions.len()
+            || self.polygons.len() != other.polygons.len()
+        {
+            bail!(
+                "{}: topology differs from the reference: expected {} vertices and {} polygons, \
+                 found {} vertices and {} polygons",
+                other_path.display(),
+                self.positions.len(),
+                self.polygons.len(),
+                other.positions.len(),
+                other.polygons.len()
+            );
+        }
+        if let Some(pi) = (0..self.polygons.len()).find(|&i| self.polygons[i] != other.polygons[i])
+        {
+            bail!(
+                "{}: topology differs from the reference: both have {} vertices and {} polygons, \
+                 but polygon {pi} is {:?} instead of {:?}",
+                other_path.display(),
+                self.positions.len(),
+                self.polygons.len(),
+                other.polygons[pi],
+                self.polygons[pi]
+            );
+        }
+        Ok(())
+    }
+
+    /// The part of the mesh made of the polygons whose vertices all pass `keep`.
+    ///
+    /// The new mesh holds the vertices that pass `keep` and belong to a kept polygon (for a mesh
+    /// without polygons, a point cloud, every vertex that passes `keep`), in their original
+    /// order; the second value gives the old index of each new vertex. Texture coordinates are
+    /// carried over and compacted the same way.
+    pub fn submesh(&self, keep: impl Fn(u32) -> bool) -> (Mesh, Vec<u32>) {
+        let nv = self.positions.len();
+        let mut used = vec![false; nv];
+        let mut kept = Vec::new();
+        if self.polygons.is_empty() {
+            for (v, u) in used.iter_mut().enumerate() {
+                *u = keep(v as u32);
+            }
+        } else {
+            for (pi, poly) in self.polygons.iter().enumerate() {
+                if poly.iter().all(|&v| keep(v)) {
+                    kept.push(pi);
+                    for &v in poly {
+                        used[v as usize] = true;
+                    }
+                }
+            }
+        }
+        let mut new_index = vec![u32::MAX; nv];
+        let mut old_index = Vec::new();
+        for v in 0..nv {
+            if used[v] {
+                new_index[v] = old_index.len() as u32;
+                old_index.push(v as u32);
+            }
+        }
+        let positions = old_index
+            .iter()
+            .map(|&v| self.positions[v as usize])
+            .collect();
+        let polygons = kept
+            .iter()
+            .map(|&pi| {
+                self.polygons[pi]
+                    .iter()
+                    .map(|&v| new_index[v as usize])
+                    .collect()
+            })
+            .collect();
+        let (uvs, polygon_uvs) = if !self.polygon_uvs.is_empty() {
+            let mut uv_used = vec![false; self.uvs.len()];
+            for &pi in &kept {
+                for &t in &self.polygon_uvs[pi] {
+                    uv_used[t as usize] = true;
+                }
+            }
+            let mut uv_new = vec![u32::MAX; self.uvs.len()];
+            let mut uvs = Vec::new();
+            for (t, &u) in uv_used.iter().enumerate() {
+                if u {
+                    uv_new[t] = uvs.len() as u32;
+                    uvs.push(self.uvs[t]);
+                }
+            }
+            let puv = kept
+                .iter()
+                .map(|&pi| {
+                    self.polygon_uvs[pi]
+                        .iter()
+                        .map(|&t| uv_new[t as usize])
+                        .collect()
+                })
+                .collect();
+            (uvs, puv)
+        } else if !self.uvs.is_empty() {
+            let uvs = old_index.iter().map(|&v| self.uvs[v as usize]).collect();
+            (uvs, Vec::new())
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let mesh = Mesh {
+            positions,
+            polygons,
+            uvs,
+            polygon_uvs,
+        };
+        (mesh, old_index)
+    }
+
+    /// Area-weighted vertex normals, unit length (zero for a vertex in no polygon or only in
+    /// degenerate ones). For a consistently oriented mesh with counter-clockwise polygons seen
+    /// from outside, they point outwards.
+    pub fn vertex_normals(&self) -> Vec<[f32; 3]> {
+        let mut acc = vec![[0.0f64; 3]; self.positions.len()];
+        for poly in &self.polygons {
+            // Newell's method: the sum of edge cross products is twice the area times the unit
+            // normal for a planar polygon and a robust average for a non-planar quad. Taking
+            // positions relative to the first corner avoids cancellation far from the origin.
+            let p0 = self.positions[poly[0] as usize].map(f64::from);
+            let rel = |v: u32| {
+                let p = self.positions[v as usize];
+                [
+                    f64::from(p[0]) - p0[0],
+                    f64::from(p[1]) - p0[1],
+                    f64::from(p[2]) - p0[2],
+                ]
+            };
+            let mut n = [0.0f64; 3];
+            for k in 0..poly.len() {
+                let a = rel(poly[k]);
+                let b = rel(poly[(k + 1) % poly.len()]);
+                n[0] += a[1] * b[2] - a[2] * b[1];
+                n[1] += a[2] * b[0] - a[0] * b[2];
+                n[2] += a[0] * b[1] - a[1] * b[0];
+            }
+            for &v in poly {
+                let s = &mut acc[v as usize];
+                s[0] += n[0];
+                s[1] += n[1];
+                s[2] += n[2];
+            }
+        }
+        acc.iter()
+            .map(|n| {
+                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                if len > 0.0 {
+                    [
+                        (n[0] / len) as f32,
+                        (n[1] / len) as f32,
+                        (n[2] / len) as f32,
+                    ]
+                } else {
+                    [0.0; 3]
+                }
+            })
+            .collect()
+    }
+
+    /// The axis-aligned bounding box `(min, max)`; both zero for a mesh without vertices.
+    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        let Some(first) = self.positions.first() else {
+            return ([0.0; 3], [0.0; 3]);
+        };
+        let (mut lo, mut hi) = (*first, *first);
+        for p in &self.positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        (lo, hi)
+    }
+}
+
+/// Resolves one OBJ index (1-based, or negative counting back from the last element defined so
+/// far) to a 0-based index. Range is checked later by [`Mesh::validate`], since the format
+/// technically allows no forward references but tolerating them costs nothing.
+fn obj_index(token: &str, defined: usize, what: &str) -> Result<u32> {
+    let i: i64 = token
+        .parse()
+        .map_err(|_| anyhow!("bad {what} index {token:?}"))?;
+    let resolved = if i > 0 {
+        i - 1
+    } else if i < 0 {
+        defined as i64 + i
+    } else {
+        bail!("{what} index 0 (OBJ indices start at 1)")
+    };
+    u32::try_from(resolved).map_err(|_| anyhow!("{what} index {token} is out of range"))
+}
+
+/// Parses `count` floats from `it`; `min` of them are required, the rest default to zero.
+fn obj_floats<const N: usize>(
+    it: &mut std::str::SplitAsciiWhitespace<'_>,
+    min: usize,
+) -> Result<[f32; N]> {
+    let mut out = [0.0f32; N];
+    for (k, slot) in out.iter_mut().enumerate() {
+        match it.next() {
+            Some(t) => {
+                *slot = t.parse().map_err(|_| anyhow!("bad number {t:?}"))?;
+            }
+            None if k >= min => break,
+            None => bail!("expected {min} numbers, found {k}"),
+        }
+    }
+    Ok(out)
+}
+
+fn parse_obj(bytes: &[u8]) -> Result<Mesh> {
+    // Comments may hold any bytes; numbers and keywords are ASCII, so a lossy view is exact
+    // where it matters and only copies when the file has invalid UTF-8.
+    let text = String::from_utf8_lossy(bytes);
+    let mut mesh = Mesh::default();
+    let (mut with_uv, mut without_uv) = (0usize, 0usize);
+    for (n, line) in text.lines().enumerate() {
+        let line = match line.find('#') {
+            Some(c) => &line[..c],
+            None => line,
+        };
+        let mut it = line.split_ascii_whitespace();
+        let parsed: Result<()> = match it.next() {
+            Some("v") => obj_floats::<3>(&mut it, 3).map(|p| mesh.positions.push(p)),
+            Some("vt") => obj_floats::<2>(&mut it, 1).map(|t| mesh.uvs.push(t)),
+            Some("f") => (|| {
+                let mut poly = Vec::with_capacity(4);
+                let mut puv = Vec::with_capacity(4);
+                for corner in it {
+                    let mut parts = corner.split('/');
+                    let v = parts.next().unwrap_or_default();
+                    poly.push(obj_index(v, mesh.positions.len(), "vertex")?);
+                    match parts.next() {
+                        Some(t) if !t.is_empty() => {
+                            puv.push(obj_index(t, mesh.uvs.len(), "texture")?)
+                        }
+                        _ => {}
+                    }
+                }
+                if poly.len() < 3 {
+                    bail!("face with {} corners (at least 3 needed)", poly.len());
+                }
+                if puv.is_empty() {
+                    without_uv += 1;
+                } else if puv.len() == poly.len() {
+                    with_uv += 1;
+                } else {
+                    bail!("face gives texture indices for only some corners");
+                }
+                mesh.polygons.push(poly);
+                mesh.polygon_uvs.push(puv);
+                Ok(())
+            })(),
+            _ => Ok(()),
+        };
+        parsed.with_context(|| format!("line {}", n + 1))?;
+    }
+    if with_uv == 0 || without_uv > 0 {
+        // No polygon, or not every polygon, has texture indices: the per-corner layout cannot
+        // hold that, so texture coordinates are dropped (documented on `Mesh::read`).
+        mesh.polygon_uvs.clear();
+        mesh.uvs.clear();
+    }
+    Ok(mesh)
+}
+
+fn parse_ply(bytes: &[u8]) -> Result<Mesh> {
+    let parser = ply_rs_bw::parser::Parser::<DefaultElement>::new();
+    let mut src = bytes;
+    let ply = parser
+        .read_ply(&mut src)
+        .map_err(|e| anyhow!("PLY parse error: {e}"))?;
+    let mut mesh = Mesh::default();
+    let empty = Vec::new();
+    let verts = ply.payload.get("vertex").unwrap_or(&empty);
+    const UV_NAMES: [(&str, &str); 4] = [
+        ("u", "v"),
+        ("s", "t"),
+        ("texture_u", "texture_v"),
+        ("texture_s", "texture_t"),
+    ];
+    let uv_names = ply.header.elements.get("vertex").and_then(|def| {
+        UV_NAMES
+            .into_iter()
+            .find(|(a, b)| def.properties.contains_key(*a) && def.properties.contains_key(*b))
+    });
+    let scalar = |e: &DefaultElement, i: usize, name: &str| -> Result<f32> {
+        e.get(name)
+            .and_then(Property::to_f32_lossy)
+            .ok_or_else(|| anyhow!("vertex {i}: missing or non-scalar property {name:?}"))
+    };
+    for (i, e) in verts.iter().enumerate() {
+        mesh.positions
+            .push([scalar(e, i, "x")?, scalar(e, i, "y")?, scalar(e, i, "z")?]);
+        if let Some((a, b)) = uv_names {
+            mesh.uvs.push([scalar(e, i, a)?, scalar(e, i, b)?]);
+        }
+    }
+    let faces = ply.payload.get("face").unwrap_or(&empty);
+    // Per-corner coordinates are deduplicated by bit pattern, so shared seams come back shared.
+    let mut corner_uvs: Vec<[f32; 2]> = Vec::new();
+    let mut uv_ids: HashMap<[u32; 2], u32> = HashMap::new();
+    let mut polygon_uvs = Vec::new();
+    for (fi, e) in faces.iter().enumerate() {
+        let idx = e
+            .get("vertex_indices")
+            .or_else(|| e.get("vertex_index"))
+            .ok_or_else(|| anyhow!("face {fi}: no vertex_indices list"))?;
+        let poly = idx
+            .to_u32_list()
+            .ok_or_else(|| anyhow!("face {fi}: vertex_indices is not a list of indices >= 0"))?;
+        let tc: Option<Vec<f32>> = match e.get("texcoord") {
+            Some(Property::ListFloat(v)) => Some(v.clone()),
+            Some(Property::ListDouble(v)) => Some(v.iter().map(|&x| x as f32).collect()),
+            Some(_) => bail!("face {fi}: texcoord is not a float list"),
+            None => None,
+        };
+        if let Some(tc) = tc {
+            if tc.len() != 2 * poly.len() {
+                bail!(
+                    "face {fi}: {} texcoord values for {} corners",
+                    tc.len(),
+                    poly.len()
+                );
+            }
+            let ids = tc
+                .chunks_exact(2)
+                .map(|c| {
+                    let key = [c[0].to_bits(), c[1].to_bits()];
+                    *uv_ids.entry(key).or_insert_with(|| {
+                        corner_uvs.push([c[0], c[1]]);
+                        (corner_uvs.len() - 1) as u32
+                    })
+                })
+                .collect();
+            polygon_uvs.push(ids);
+        }
+        mesh.polygons.push(poly);
+    }
+    if !polygon_uvs.is_empty() {
+        if polygon_uvs.len() != mesh.polygons.len() {
+            bail!("only some faces carry texcoord");
+        }
+        // Per-corner coordinates win over per-vertex ones: they can express seams.
+        mesh.uvs = corner_uvs;
+        mesh.polygon_uvs = polygon_uvs;
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    /// The shared real-data folder, or `None` (after printing why) when it is absent and
+    /// `SINEW_REQUIRE_DATA` is not `1`.
+    pub(crate) fn data_dir() -> Option<PathBuf> {
+        let dir = std::env::var_os("SINEW_DATA")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
+        if dir.is_dir() {
+            Some(dir)
+        } else if std::env::var("SINEW_REQUIRE_DATA").as_deref() == Ok("1") {
+            panic!("SINEW_REQUIRE_DATA=1 but {} is missing", dir.display());
+        } else {
+            eprintln!("skipping: real data folder {} not found", dir.display());
+            None
+        }
+    }
+
+    /// A unit quad and a triangle sharing an edge, with a UV seam (5 UVs for 5 corners' worth
+    /// of distinct coordinates).
+    fn quad_and_triangle() -> Mesh {
+        Mesh {
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [2.0, 0.5, 0.25],
+            ],
+            polygons: vec![vec![0, 1, 2, 3], vec![1, 4, 2]],
+            uvs: vec![
+                [0.0, 0.0],
+                [0.5, 0.0],
+                [0.5, 1.0],
+                [0.0, 1.0],
+                [1.0, 0.5],
+                [0.6, 0.1],
+            ],
+            polygon_uvs: vec![vec![0, 1, 2, 3], vec![5, 4, 2]],
+        }
+    }
+
+    /// Per-corner UV values, which survive any re-indexing of the UV list.
+    fn corner_uvs(m: &Mesh) -> Vec<Vec<[f32; 2]>> {
+        m.polygon_uvs
+            .iter()
+            .map(|p| p.iter().map(|&t| m.uvs[t as usize]).collect())
+            .collect()
+    }
+
+    #[test]
+    fn obj_round_trip_keeps_quads_and_uvs() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = quad_and_triangle();
+        for name in ["m.obj", "m.obj.gz"] {
+            let p = dir.path().join(name);
+            m.write(&p).unwrap();
+            assert_eq!(Mesh::read(&p).unwrap(), m, "{name}");
+        }
+    }
+
+    #[test]
+    fn ply_round_trip_keeps_quads_and_uvs() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.ply");
+        let m = quad_and_triangle();
+        m.write(&p).unwrap();
+        let r = Mesh::read(&p).unwrap();
+        assert_eq!(r.positions, m.positions);
+        assert_eq!(r.polygons, m.polygons);
+        assert_eq!(corner_uvs(&r), corner_uvs(&m));
+
+        // Per-vertex UVs take the vertex s/t path.
+        let mut pv = m.clone();
+        pv.polygon_uvs.clear();
+        pv.uvs = (0..5)
+            .map(|i| [i as f32 * 0.25, 1.0 - i as f32 * 0.125])
+            .collect();
+        pv.write(&p).unwrap();
+        assert_eq!(Mesh::read(&p).unwrap(), pv);
+    }
+
+    #[test]
+    fn reads_ascii_ply_with_double_coordinates() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.ply");
+        std::fs::write(
+            &p,
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\n\
+             property double z\nproperty float u\nproperty float v\n\
+             element face 1\nproperty list uchar uint vertex_indices\nend_header\n\
+             0 0 0 0 0\n1 0 0 1 0\n1 1 0 1 1\n0 1 0.5 0 1\n4 0 1 2 3\n",
+        )
+        .unwrap();
+        let m = Mesh::read(&p).unwrap();
+        assert_eq!(m.positions[3], [0.0, 1.0, 0.5]);
+        assert_eq!(m.polygons, vec![vec![0, 1, 2, 3]]);
+        assert_eq!(m.uvs[2], [1.0, 1.0]);
+        assert!(m.polygon_uvs.is_empty());
+    }
+
+    #[test]
+    fn obj_reader_handles_groups_negative_indices_and_normals() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("g.obj");
+        // Two groups share one vertex list; the second uses a vertex defined before the first
+        // group's faces and negative indices. Positions must stay in file order.
+        std::fs::write(
+            &p,
+            "# c\nv 0 0 0\nv 1 0 0\nv 1 1 0 1.0\ng a\nusemtl x\nf 1//1 2//1 3//1\n\
+             g b\nv 0 1 0\nvn 0 0 1\nf -4 -2 -1\n",
+        )
+        .unwrap();
+        let m = Mesh::read(&p).unwrap();
+        assert_eq!(m.positions.len(), 4);
+        assert_eq!(m.positions[3], [0.0, 1.0, 0.0]);
+        assert_eq!(m.polygons, vec![vec![0, 1, 2], vec![0, 2, 3]]);
+        assert!(m.uvs.is_empty() && m.polygon_uvs.is_empty());
+    }
+
+    #[test]
+    fn malformed_files_are_errors_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let cases = [
+            ("bad_number.obj", "v 0 0 zero\n", "line 1"),
+            (
+                "bad_index.obj",
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+                "vertex 8",
+            ),
+            ("short_face.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n", "line 3"),
+            (
+                "zero_index.obj",
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
+                "index 0",
+            ),
+            (
+                "garbage.ply",
+                "ply\nformat ascii 1.0\nelement vertex 1\nend_head",
+                "PLY",
+            ),
+            ("notgz.obj.gz", "v 0 0 0\n", "gzip"),
+            ("mesh.stl", "solid\n", "unknown mesh format"),
+        ];
+        for (name, text, why) in cases {
+            let p = dir.path().join(name);
+            std::fs::write(&p, text).unwrap();
+            let msg = format!("{:#}", Mesh::read(&p).unwrap_err());
+            assert!(msg.contains(name), "{msg}");
+            assert!(msg.contains(why), "{name}: {msg}");
+        }
+        let missing = dir.path().join("missing.obj");
+        let msg = format!("{:#}", Mesh::read(&missing).unwrap_err());
+        assert!(msg.contains("missing.obj"), "{msg}");
+    }
+
+    #[test]
+    fn geometry_helpers() {
+        let m = quad_and_triangle();
+        assert_eq!(
+            m.triangles(),
+            vec![[0, 1, 2], [0, 2, 3], [1, 4, 2]],
+            "fan triangulation keeps orientation"
+        );
+        assert_eq!(m.bounds(), ([0.0, 0.0, 0.0], [2.0, 1.0, 0.25]));
+        // The quad is counter-clockwise seen from +z, so its corners' normals point to +z.
+        let n = m.vertex_normals();
+        assert_eq!(n[0], [0.0, 0.0, 1.0]);
+        assert_eq!(n[3], [0.0, 0.0, 1.0]);
+        let len = |v: [f32; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        assert!((len(n[4]) - 1.0).abs() < 1e-6 && n[4][2] > 0.9);
+
+        // Keeping vertices 1, 2, 4 keeps only the triangle, renumbered in order.
+        let (sub, old) = m.submesh(|v| v != 0 && v != 3);
+        assert_eq!(old, vec![1, 2, 4]);
+        assert_eq!(sub.polygons, vec![vec![0, 2, 1]]);
+        assert_eq!(sub.positions[2], [2.0, 0.5, 0.25]);
+        assert_eq!(corner_uvs(&sub), vec![corner_uvs(&m)[1].clone()]);
+        sub.validate().unwrap();
+
+        let moved = m.with_positions(vec![[1.0; 3]; 5]);
+        assert_eq!(moved.polygons, m.polygons);
+        m.check_same_topology(&moved, Path::new("x.obj")).unwrap();
+        let err = m
+            .check_same_topology(&sub, Path::new("other.obj"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("other.obj") && err.contains("5 vertices") && err.contains("3 vertices")
+        );
+        let mut flipped = m.clone();
+        flipped.polygons[1].reverse();
+        let err = m
+            .check_same_topology(&flipped, Path::new("f.obj"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("polygon 1"), "{err}");
+    }
+
+    #[test]
+    fn ict_neutral_counts_and_expression_topology() {
+        let Some(data) = data_dir() else { return };
+        let dir = data.join("ict-facekit");
+        let t = std::time::Instant::now();
+        let neutral = Mesh::read(&dir.join("generic_neutral_mesh.obj")).unwrap();
+        eprintln!("ICT neutral read in {:?}", t.elapsed());
+        assert_eq!(neutral.positions.len(), 26_719);
+        assert_eq!(neutral.polygons.len(), 26_384);
+        assert_eq!(neutral.uvs.len(), 28_911);
+        assert_eq!(neutral.polygon_uvs.len(), 26_384);
+        assert_eq!(
+            neutral.polygons.iter().filter(|p| p.len() == 4).count(),
+            25_836
+        );
+        // The first vertex and face of the file, as written there.
+        assert_eq!(neutral.positions[0], [0.0, -2.48251, 11.8387]);
+        assert_eq!(neutral.polygons[0], vec![873, 11, 870, 872]);
+        assert_eq!(neutral.polygon_uvs[0], vec![0, 1, 2, 3]);
+
+        let t = std::time::Instant::now();
+        let path = dir.join("expressions/jawOpen.obj.gz");
+        let jaw = Mesh::read(&path).unwrap();
+        eprintln!("ICT jawOpen.obj.gz read in {:?}", t.elapsed());
+        neutral.check_same_topology(&jaw, &path).unwrap();
+        assert_ne!(jaw.positions, neutral.positions);
+
+        // Cross-check against tobj, an independent parser: every corner of every polygon must
+        // land on the same coordinates (tobj renumbers vertices, so compare through corners).
+        let (models, _) = tobj::load_obj(
+            dir.join("generic_neutral_mesh.obj"),
+            &tobj::LoadOptions {
+                single_index: false,
+                triangulate: false,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let ours: Vec<[f32; 3]> = neutral
+            .polygons
+            .iter()
+            .flatten()
+            .map(|&v| neutral.positions[v as usize])
+            .collect();
+        let theirs: Vec<[f32; 3]> = models
+            .iter()
+            .flat_map(|m| {
+                m.mesh.indices.iter().map(|&i| {
+                    let p = &m.mesh.positions[3 * i as usize..3 * i as usize + 3];
+                    [p[0], p[1], p[2]]
+                })
+            })
+            .collect();
+        assert_eq!(ours, theirs);
+    }
+}

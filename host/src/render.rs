@@ -1,1 +1,1014 @@
-//! (being written)
+//! Pictures of faces: an RGB image type with PNG output and a tiny bitmap font, and a small,
+//! deterministic software rasteriser (orthographic camera, z-buffer, flat Lambert shading) for
+//! meshes coloured per vertex, with a heat-map colour scale and colour bar for error figures.
+//!
+//! Everything here is plain `f32` arithmetic in a fixed order with no threads, so the same input
+//! gives the same bytes on every run of the same build.
+
+use std::fmt;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+
+/// The light grey behind rendered meshes.
+pub const BACKGROUND: [u8; 3] = [235, 235, 235];
+
+/// Width of one character cell of the built-in font at scale 1, in pixels (5 glyph columns + 1).
+pub const GLYPH_ADVANCE: u32 = 6;
+/// Height of one text line of the built-in font at scale 1, in pixels (7 rows, 1 descender, 1 gap).
+pub const LINE_HEIGHT: u32 = 9;
+
+/// An 8-bit RGB picture, rows top to bottom, pixels left to right, 3 bytes per pixel.
+#[derive(Clone, PartialEq, Eq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width * height * 3` bytes, row-major from the top-left corner.
+    pub rgb: Vec<u8>,
+}
+
+impl fmt::Debug for Image {
+    // The pixel bytes would drown any log, so only the size is shown.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Image")
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Image {
+    /// A `width` × `height` picture filled with `background`.
+    pub fn new(width: u32, height: u32, background: [u8; 3]) -> Image {
+        let n = width as usize * height as usize;
+        let mut rgb = Vec::with_capacity(n * 3);
+        for _ in 0..n {
+            rgb.extend_from_slice(&background);
+        }
+        Image { width, height, rgb }
+    }
+
+    /// The colour at (`x`, `y`), or `None` outside the picture.
+    pub fn get(&self, x: i64, y: i64) -> Option<[u8; 3]> {
+        let i = self.index(x, y)?;
+        Some([self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]])
+    }
+
+    /// Sets the colour at (`x`, `y`); points outside the picture are ignored.
+    pub fn set(&mut self, x: i64, y: i64, color: [u8; 3]) {
+        if let Some(i) = self.index(x, y) {
+            self.rgb[i..i + 3].copy_from_slice(&color);
+        }
+    }
+
+    fn index(&self, x: i64, y: i64) -> Option<usize> {
+        if x < 0 || y < 0 || x >= i64::from(self.width) || y >= i64::from(self.height) {
+            return None;
+        }
+        Some((y as usize * self.width as usize + x as usize) * 3)
+    }
+
+    /// Fills the rectangle with top-left corner (`x`, `y`) and size `w` × `h`, clipped to the picture.
+    pub fn fill_rect(&mut self, x: i64, y: i64, w: i64, h: i64, color: [u8; 3]) {
+        let x0 = x.max(0);
+        let y0 = y.max(0);
+        let x1 = x.saturating_add(w).min(i64::from(self.width));
+        let y1 = y.saturating_add(h).min(i64::from(self.height));
+        for yy in y0..y1 {
+            for xx in x0..x1 {
+                self.set(xx, yy, color);
+            }
+        }
+    }
+
+    /// Draws the outline of a rectangle, one pixel wide, clipped to the picture.
+    pub fn stroke_rect(&mut self, x: i64, y: i64, w: i64, h: i64, color: [u8; 3]) {
+        if w <= 0 || h <= 0 {
+            return;
+        }
+        self.fill_rect(x, y, w, 1, color);
+        self.fill_rect(x, y + h - 1, w, 1, color);
+        self.fill_rect(x, y, 1, h, color);
+        self.fill_rect(x + w - 1, y, 1, h, color);
+    }
+
+    /// Draws a straight line from (`x0`, `y0`) to (`x1`, `y1`) (pixel coordinates, rounded) with
+    /// Bresenham's algorithm, stamping a `thickness` × `thickness` square at every step.
+    pub fn line(&mut self, x0: f32, y0: f32, x1: f32, y1: f32, color: [u8; 3], thickness: u32) {
+        // Far-off or non-finite ends would make the step loop run for ever; nothing this crate
+        // draws lies outside a few picture widths, so such lines are simply skipped.
+        const FAR: f32 = 1.0e6;
+        if ![x0, y0, x1, y1]
+            .iter()
+            .all(|v| v.is_finite() && v.abs() < FAR)
+        {
+            return;
+        }
+        let t = i64::from(thickness.max(1));
+        let off = (t - 1) / 2;
+        let (mut x, mut y) = (x0.round() as i64, y0.round() as i64);
+        let (xe, ye) = (x1.round() as i64, y1.round() as i64);
+        let dx = (xe - x).abs();
+        let dy = -(ye - y).abs();
+        let sx = if x < xe { 1 } else { -1 };
+        let sy = if y < ye { 1 } else { -1 };
+        let mut err = dx + dy;
+        loop {
+            self.fill_rect(x - off, y - off, t, t, color);
+            if x == xe && y == ye {
+                break;
+            }
+            let e2 = 2 * err;
+            if e2 >= dy {
+                err += dy;
+                x += sx;
+            }
+            if e2 <= dx {
+                err += dx;
+                y += sy;
+            }
+        }
+    }
+
+    /// Copies `src` into this picture with its top-left corner at (`x`, `y`), clipped.
+    pub fn blit(&mut self, src: &Image, x: i64, y: i64) {
+        for sy in 0..i64::from(src.height) {
+            for sx in 0..i64::from(src.width) {
+                if let Some(c) = src.get(sx, sy) {
+                    self.set(x + sx, y + sy, c);
+                }
+            }
+        }
+    }
+
+    /// Places `images` side by side, top-aligned; shorter ones are padded below with
+    /// [`BACKGROUND`]. An empty slice gives a 0 × 0 picture.
+    pub fn hstack(images: &[Image]) -> Image {
+        let width = images.iter().map(|i| i.width).sum();
+        let height = images.iter().map(|i| i.height).max().unwrap_or(0);
+        let mut out = Image::new(width, height, BACKGROUND);
+        let mut x = 0i64;
+        for im in images {
+            out.blit(im, x, 0);
+            x += i64::from(im.width);
+        }
+        out
+    }
+
+    /// Writes the picture as an 8-bit RGB PNG, atomically (temporary file, then rename).
+    pub fn write_png(&self, path: &Path) -> Result<()> {
+        let expected = self.width as usize * self.height as usize * 3;
+        if self.width == 0 || self.height == 0 || self.rgb.len() != expected {
+            anyhow::bail!(
+                "{}: cannot write a {}x{} picture with {} bytes of pixels (PNG needs a non-empty picture of {} bytes)",
+                path.display(),
+                self.width,
+                self.height,
+                self.rgb.len(),
+                expected
+            );
+        }
+        crate::atomic::write_with(path, |w| {
+            let mut enc = png::Encoder::new(w, self.width, self.height);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            let mut writer = enc.write_header().map_err(std::io::Error::other)?;
+            writer
+                .write_image_data(&self.rgb)
+                .map_err(std::io::Error::other)?;
+            writer.finish().map_err(std::io::Error::other)
+        })
+        .with_context(|| format!("{}: cannot write PNG", path.display()))
+    }
+
+    /// Draws `s` with the built-in 5 × 7 font, each font pixel a `scale` × `scale` square, with the
+    /// top-left corner of the first character cell at (`x`, `y`). `'\n'` starts a new line;
+    /// characters the font lacks are drawn as `?`. See [`text_width`] for layout.
+    pub fn text(&mut self, x: i64, y: i64, s: &str, color: [u8; 3], scale: u32) {
+        let k = i64::from(scale.max(1));
+        let (mut cx, mut cy) = (x, y);
+        for ch in s.chars() {
+            if ch == '\n' {
+                cx = x;
+                cy += i64::from(LINE_HEIGHT) * k;
+                continue;
+            }
+            for (r, row) in glyph(ch).split(' ').enumerate() {
+                for (c, b) in row.bytes().enumerate() {
+                    if b == b'#' {
+                        self.fill_rect(cx + c as i64 * k, cy + r as i64 * k, k, k, color);
+                    }
+                }
+            }
+            cx += i64::from(GLYPH_ADVANCE) * k;
+        }
+    }
+}
+
+/// Width in pixels of the longest line of `s` drawn by [`Image::text`] at `scale`
+/// (including the one-pixel gap after the last character).
+pub fn text_width(s: &str, scale: u32) -> u32 {
+    let longest = s.split('\n').map(|l| l.chars().count()).max().unwrap_or(0);
+    (longest as u32)
+        .saturating_mul(GLYPH_ADVANCE)
+        .saturating_mul(scale.max(1))
+}
+
+/// The text scale that keeps labels readable on a picture of this size: 1 up to 599 pixels on the
+/// shorter side, 2 from 600, 3 from 1200, and so on.
+pub fn text_scale(width: u32, height: u32) -> u32 {
+    (width.min(height) / 600 + 1).max(1)
+}
+
+/// The built-in font: each glyph is up to 8 rows of 5 columns (`#` = ink), rows separated by
+/// spaces. Rows 0–6 hold capitals and digits; row 7 is for descenders. Hand-drawn, so it is
+/// checked for shape and coverage by a test.
+const FONT: &[(char, &str)] = &[
+    (' ', ""),
+    ('0', ".###. #...# #..## #.#.# ##..# #...# .###."),
+    ('1', "..#.. .##.. ..#.. ..#.. ..#.. ..#.. .###."),
+    ('2', ".###. #...# ....# ...#. ..#.. .#... #####"),
+    ('3', "##### ...#. ..#.. ...#. ....# #...# .###."),
+    ('4', "...#. ..##. .#.#. #..#. ##### ...#. ...#."),
+    ('5', "##### #.... ####. ....# ....# #...# .###."),
+    ('6', "..##. .#... #.... ####. #...# #...# .###."),
+    ('7', "##### ....# ...#. ..#.. .#... .#... .#..."),
+    ('8', ".###. #...# #...# .###. #...# #...# .###."),
+    ('9', ".###. #...# #...# .#### ....# ...#. .##.."),
+    ('A', ".###. #...# #...# ##### #...# #...# #...#"),
+    ('B', "####. #...# #...# ####. #...# #...# ####."),
+    ('C', ".###. #...# #.... #.... #.... #...# .###."),
+    ('D', "###.. #..#. #...# #...# #...# #..#. ###.."),
+    ('E', "##### #.... #.... ####. #.... #.... #####"),
+    ('F', "##### #.... #.... ####. #.... #.... #...."),
+    ('G', ".###. #...# #.... #.### #...# #...# .####"),
+    ('H', "#...# #...# #...# ##### #...# #...# #...#"),
+    ('I', ".###. ..#.. ..#.. ..#.. ..#.. ..#.. .###."),
+    ('J', "..### ...#. ...#. ...#. ...#. #..#. .##.."),
+    ('K', "#...# #..#. #.#.. ##... #.#.. #..#. #...#"),
+    ('L', "#.... #.... #.... #.... #.... #.... #####"),
+    ('M', "#...# ##.## #.#.# #.#.# #...# #...# #...#"),
+    ('N', "#...# #...# ##..# #.#.# #..## #...# #...#"),
+    ('O', ".###. #...# #...# #...# #...# #...# .###."),
+    ('P', "####. #...# #...# ####. #.... #.... #...."),
+    ('Q', ".###. #...# #...# #...# #.#.# #..#. .##.#"),
+    ('R', "####. #...# #...# ####. #.#.. #..#. #...#"),
+    ('S', ".#### #.... #.... .###. ....# ....# ####."),
+    ('T', "##### ..#.. ..#.. ..#.. ..#.. ..#.. ..#.."),
+    ('U', "#...# #...# #...# #...# #...# #...# .###."),
+    ('V', "#...# #...# #...# #...# #...# .#.#. ..#.."),
+    ('W', "#...# #...# #...# #.#.# #.#.# #.#.# .#.#."),
+    ('X', "#...# #...# .#.#. ..#.. .#.#. #...# #...#"),
+    ('Y', "#...# #...# .#.#. ..#.. ..#.. ..#.. ..#.."),
+    ('Z', "##### ....# ...#. ..#.. .#... #.... #####"),
+    ('a', "..... ..... .###. ....# .#### #...# .####"),
+    ('b', "#.... #.... #.##. ##..# #...# #...# ####."),
+    ('c', "..... ..... .###. #.... #.... #...# .###."),
+    ('d', "....# ....# .##.# #..## #...# #...# .####"),
+    ('e', "..... ..... .###. #...# ##### #.... .###."),
+    ('f', "..##. .#..# .#... ###.. .#... .#... .#..."),
+    ('g', "..... ..... .#### #...# #...# .#### ....# .###."),
+    ('h', "#.... #.... #.##. ##..# #...# #...# #...#"),
+    ('i', "..#.. ..... .##.. ..#.. ..#.. ..#.. .###."),
+    ('j', "...#. ..... ..##. ...#. ...#. ...#. #..#. .##.."),
+    ('k', "#.... #.... #..#. #.#.. ##... #.#.. #..#."),
+    ('l', ".##.. ..#.. ..#.. ..#.. ..#.. ..#.. .###."),
+    ('m', "..... ..... ##.#. #.#.# #.#.# #.#.# #.#.#"),
+    ('n', "..... ..... #.##. ##..# #...# #...# #...#"),
+    ('o', "..... ..... .###. #...# #...# #...# .###."),
+    ('p', "..... ..... ####. #...# #...# ####. #.... #...."),
+    ('q', "..... ..... .#### #...# #...# .#### ....# ....#"),
+    ('r', "..... ..... #.##. ##..# #.... #.... #...."),
+    ('s', "..... ..... .###. #.... .###. ....# ####."),
+    ('t', ".#... .#... ###.. .#... .#... .#..# ..##."),
+    ('u', "..... ..... #...# #...# #...# #..## .##.#"),
+    ('v', "..... ..... #...# #...# #...# .#.#. ..#.."),
+    ('w', "..... ..... #...# #...# #.#.# #.#.# .#.#."),
+    ('x', "..... ..... #...# .#.#. ..#.. .#.#. #...#"),
+    ('y', "..... ..... #...# #...# #...# .#### ....# .###."),
+    ('z', "..... ..... ##### ...#. ..#.. .#... #####"),
+    ('.', "..... ..... ..... ..... ..... .##.. .##.."),
+    (',', "..... ..... ..... ..... ..... .##.. ..#.. .#..."),
+    ('-', "..... ..... ..... ##### ..... ..... ....."),
+    ('+', "..... ..#.. ..#.. ##### ..#.. ..#.. ....."),
+    ('=', "..... ..... ##### ..... ##### ..... ....."),
+    ('_', "..... ..... ..... ..... ..... ..... #####"),
+    (':', "..... .##.. .##.. ..... .##.. .##.. ....."),
+    ('/', "....# ....# ...#. ..#.. .#... #.... #...."),
+    ('%', "##... ##..# ...#. ..#.. .#... #..## ...##"),
+    ('(', "...#. ..#.. .#... .#... .#... ..#.. ...#."),
+    (')', ".#... ..#.. ...#. ...#. ...#. ..#.. .#..."),
+    ('[', ".###. .#... .#... .#... .#... .#... .###."),
+    (']', ".###. ...#. ...#. ...#. ...#. ...#. .###."),
+    ('<', "...#. ..#.. .#... #.... .#... ..#.. ...#."),
+    ('>', ".#... ..#.. ...#. ....# ...#. ..#.. .#..."),
+    ('*', "..... ..#.. #.#.# .###. #.#.# ..#.. ....."),
+    ('\'', "..#.. ..#.. .#..."),
+    ('|', "..#.. ..#.. ..#.. ..#.. ..#.. ..#.. ..#.."),
+    ('°', ".##.. #..#. #..#. .##.."),
+    ('?', ".###. #...# ....# ...#. ..#.. ..... ..#.."),
+];
+
+fn glyph(ch: char) -> &'static str {
+    let find = |c: char| FONT.iter().find(|(k, _)| *k == c).map(|(_, g)| *g);
+    find(ch).or_else(|| find('?')).unwrap_or("")
+}
+
+/// An orthographic camera. The mesh is turned by `yaw_deg` about the y axis (positive turns its
+/// +z side toward +x, the right of the picture), then by `pitch_deg` about the x axis (positive
+/// turns its +z side down, so the camera looks from above), and viewed along −z with +y up. The
+/// turned mesh's bounding box is fitted into the `width` × `height` picture with a margin.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View {
+    /// Turn about the vertical (y) axis, degrees.
+    pub yaw_deg: f32,
+    /// Turn about the horizontal (x) axis after the yaw, degrees.
+    pub pitch_deg: f32,
+    /// Picture width in pixels.
+    pub width: u32,
+    /// Picture height in pixels.
+    pub height: u32,
+}
+
+impl View {
+    /// Straight-on view (yaw 0, pitch 0) of the given size.
+    pub fn front(width: u32, height: u32) -> View {
+        View {
+            yaw_deg: 0.0,
+            pitch_deg: 0.0,
+            width,
+            height,
+        }
+    }
+}
+
+/// Margin left around the fitted mesh on each side, as a fraction of the shorter picture side.
+const FIT_MARGIN: f32 = 0.05;
+/// Colour of vertices that `colors` does not cover.
+const DEFAULT_COLOR: [u8; 3] = [200, 200, 200];
+/// Share of a colour kept on surfaces facing away from the light.
+const AMBIENT: f32 = 0.4;
+/// Unit direction toward the light: front, upper left. It sits near the camera so that heat-map
+/// colours stay close to their scale (a colour bar is only readable if shading darkens little),
+/// yet far enough off-axis to show the shape.
+const LIGHT: [f32; 3] = [-0.268_328_16, 0.357_770_9, 0.894_427_2];
+
+/// Rasterises the mesh as seen by `view`: vertices turned and fitted as [`View`] describes,
+/// triangles filled where pixel centres fall inside them (z-buffered, the nearer surface wins; on
+/// exact ties the earlier triangle stays), colours interpolated barycentrically from the
+/// per-vertex `colors`, then shaded by `AMBIENT + (1 − AMBIENT)·|n·l|` with the triangle's own
+/// normal `n` (two-sided, so open meshes and inward-wound faces light the same).
+///
+/// Bad input never panics: triangles with an out-of-range index or a non-finite corner, and
+/// degenerate (zero-area) ones, are skipped; vertices beyond `colors` are drawn light grey; the
+/// fit uses only finite vertices. An empty mesh gives a plain [`BACKGROUND`] picture.
+pub fn render(
+    positions: &[[f32; 3]],
+    triangles: &[[u32; 3]],
+    colors: &[[u8; 3]],
+    view: &View,
+) -> Image {
+    let mut img = Image::new(view.width, view.height, BACKGROUND);
+    if view.width == 0 || view.height == 0 {
+        return img;
+    }
+    let (sy, cy) = view.yaw_deg.to_radians().sin_cos();
+    let (sp, cp) = view.pitch_deg.to_radians().sin_cos();
+    // Rotate every vertex once: yaw about y, then pitch about x.
+    let turned: Vec<[f32; 3]> = positions
+        .iter()
+        .map(|&[x, y, z]| {
+            let x1 = cy * x + sy * z;
+            let z1 = -sy * x + cy * z;
+            let y2 = cp * y - sp * z1;
+            let z2 = sp * y + cp * z1;
+            [x1, y2, z2]
+        })
+        .collect();
+
+    // Fit the finite vertices' x/y bounding box into the frame, keeping the aspect ratio.
+    let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
+    for p in turned.iter().filter(|p| p.iter().all(|v| v.is_finite())) {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    if !(lo[0] <= hi[0] && lo[1] <= hi[1]) {
+        return img;
+    }
+    let (w, h) = (view.width as f32, view.height as f32);
+    let margin = FIT_MARGIN * w.min(h);
+    let span = [(hi[0] - lo[0]).max(1e-30), (hi[1] - lo[1]).max(1e-30)];
+    let scale = ((w - 2.0 * margin) / span[0])
+        .min((h - 2.0 * margin) / span[1])
+        .max(0.0);
+    let centre = [(lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5];
+    // Screen x right, screen y down; z kept as depth (larger = nearer the camera).
+    let screen: Vec<[f32; 3]> = turned
+        .iter()
+        .map(|&[x, y, z]| {
+            [
+                w * 0.5 + (x - centre[0]) * scale,
+                h * 0.5 - (y - centre[1]) * scale,
+                z,
+            ]
+        })
+        .collect();
+
+    let mut depth = vec![f32::NEG_INFINITY; view.width as usize * view.height as usize];
+    let vcolor = |i: usize| -> [f32; 3] {
+        let c = colors.get(i).copied().unwrap_or(DEFAULT_COLOR);
+        [f32::from(c[0]), f32::from(c[1]), f32::from(c[2])]
+    };
+    let (wi, hi_px) = (view.width as i64, view.height as i64);
+
+    for tri in triangles {
+        let idx = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
+        let (Some(&a), Some(&b), Some(&c)) =
+            (screen.get(idx[0]), screen.get(idx[1]), screen.get(idx[2]))
+        else {
+            continue;
+        };
+        if ![a, b, c].iter().flatten().all(|v| v.is_finite()) {
+            continue;
+        }
+        // Twice the signed screen area; its sign is the winding, which we normalise away so
+        // both windings fill (two-sided rendering).
+        let area = edge(a, b, c);
+        if area == 0.0 || !area.is_finite() {
+            continue;
+        }
+        let (b, c, ib, ic) = if area > 0.0 {
+            (b, c, idx[1], idx[2])
+        } else {
+            (c, b, idx[2], idx[1])
+        };
+        let area = area.abs();
+
+        // Flat shading from the turned (view-space) triangle normal; |n·l| makes it two-sided.
+        let (ta, tb, tc) = (turned[idx[0]], turned[idx[1]], turned[idx[2]]);
+        let n = cross(sub(tb, ta), sub(tc, ta));
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let lambert = if len > 0.0 && len.is_finite() {
+            ((n[0] * LIGHT[0] + n[1] * LIGHT[1] + n[2] * LIGHT[2]) / len).abs()
+        } else {
+            1.0
+        };
+        let shade = AMBIENT + (1.0 - AMBIENT) * lambert;
+        let (ca, cb, cc) = (vcolor(idx[0]), vcolor(ib), vcolor(ic));
+
+        let x0 = (a[0].min(b[0]).min(c[0]).floor() as i64).max(0);
+        let x1 = (a[0].max(b[0]).max(c[0]).ceil() as i64).min(wi - 1);
+        let y0 = (a[1].min(b[1]).min(c[1]).floor() as i64).max(0);
+        let y1 = (a[1].max(b[1]).max(c[1]).ceil() as i64).min(hi_px - 1);
+        for py in y0..=y1 {
+            for px in x0..=x1 {
+                let p = [px as f32 + 0.5, py as f32 + 0.5, 0.0];
+                // Barycentric weights: each is the sub-triangle area opposite its vertex.
+                let wa = edge(b, c, p);
+                let wb = edge(c, a, p);
+                let wc = edge(a, b, p);
+                if wa < 0.0 || wb < 0.0 || wc < 0.0 {
+                    continue;
+                }
+                let (la, lb, lc) = (wa / area, wb / area, wc / area);
+                let z = la * a[2] + lb * b[2] + lc * c[2];
+                let di = py as usize * view.width as usize + px as usize;
+                if z <= depth[di] {
+                    continue;
+                }
+                depth[di] = z;
+                let mut rgb = [0u8; 3];
+                for k in 0..3 {
+                    let v = (la * ca[k] + lb * cb[k] + lc * cc[k]) * shade;
+                    rgb[k] = v.round().clamp(0.0, 255.0) as u8;
+                }
+                img.set(px, py, rgb);
+            }
+        }
+    }
+    img
+}
+
+/// The edge function: twice the signed area of the screen triangle (a, b, p). Only its sign
+/// relative to the whole triangle's area matters, which is why either winding works.
+fn edge(a: [f32; 3], b: [f32; 3], p: [f32; 3]) -> f32 {
+    (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+}
+
+fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Colour for NaN values in a heat map.
+pub const NAN_COLOR: [u8; 3] = [128, 128, 128];
+
+/// Heat-map stops, low to high: dark blue, blue, cyan, yellow, red. Lightness rises from the
+/// dark-blue end to yellow, so small errors recede and large ones stand out, as in the papers'
+/// per-vertex error figures.
+const RAMP: [(f32, [f32; 3]); 5] = [
+    (0.0, [15.0, 25.0, 110.0]),
+    (0.2, [30.0, 90.0, 220.0]),
+    (0.45, [20.0, 210.0, 230.0]),
+    (0.72, [250.0, 225.0, 40.0]),
+    (1.0, [205.0, 20.0, 20.0]),
+];
+
+/// The heat-map colour at `t` ∈ [0, 1] (clamped), interpolated linearly between the stops.
+fn ramp(t: f32) -> [u8; 3] {
+    let t = t.clamp(0.0, 1.0);
+    let mut i = 0;
+    while i + 2 < RAMP.len() && t > RAMP[i + 1].0 {
+        i += 1;
+    }
+    let (t0, c0) = RAMP[i];
+    let (t1, c1) = RAMP[i + 1];
+    let f = (t - t0) / (t1 - t0);
+    let mut out = [0u8; 3];
+    for k in 0..3 {
+        out[k] = (c0[k] + (c1[k] - c0[k]) * f).round().clamp(0.0, 255.0) as u8;
+    }
+    out
+}
+
+/// Maps each value to a heat-map colour: dark blue at `lo`, through cyan and yellow, to red at
+/// `hi`; values outside are clamped, NaN is [`NAN_COLOR`]. If `hi <= lo` (or either is not
+/// finite), values above `lo` are red and the rest dark blue.
+pub fn heatmap(values: &[f32], lo: f32, hi: f32) -> Vec<[u8; 3]> {
+    let span = hi - lo;
+    values
+        .iter()
+        .map(|&v| {
+            if v.is_nan() {
+                NAN_COLOR
+            } else if span > 0.0 && span.is_finite() {
+                ramp((v - lo) / span)
+            } else {
+                ramp(if v > lo { 1.0 } else { 0.0 })
+            }
+        })
+        .collect()
+}
+
+/// Formats a value with about three significant digits, switching to `1.5e-4` style outside
+/// [0.01, 10000), for ticks and colour-bar labels.
+pub fn format_value(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return if v.is_nan() {
+            "NaN".into()
+        } else if v == 0.0 {
+            "0".into()
+        } else if v > 0.0 {
+            "inf".into()
+        } else {
+            "-inf".into()
+        };
+    }
+    let a = v.abs();
+    if !(0.01..10000.0).contains(&a) {
+        let s = format!("{v:.2e}");
+        // "1.50e-4" → "1.5e-4", "1.00e2" → "1e2".
+        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+        return format!("{}e{}", trim_zeros(m), e);
+    }
+    let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
+    trim_zeros(&format!("{v:.decimals$}")).to_string()
+}
+
+fn trim_zeros(s: &str) -> &str {
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        s
+    }
+}
+
+/// Geometry of the colour bar [`colorbar`] draws on a picture of this size, so callers can keep
+/// that strip clear: (strip width from the right edge, text scale).
+fn colorbar_layout(width: u32, height: u32, lo: f32, hi: f32, label: &str) -> (u32, u32) {
+    let s = text_scale(width, height);
+    let pad = 4 * s;
+    let bar_w = 8 * s;
+    let labels = [lo, (lo + hi) * 0.5, hi].map(|v| format_value(f64::from(v)));
+    let text_w = labels.iter().map(|l| text_width(l, s)).max().unwrap_or(0);
+    let strip = (pad + bar_w + pad + text_w + pad).max(text_width(label, s) + 2 * pad);
+    (strip, s)
+}
+
+/// Width of the strip at the right edge that [`colorbar`] uses on a `width` × `height` picture.
+pub fn colorbar_width(width: u32, height: u32, lo: f32, hi: f32, label: &str) -> u32 {
+    colorbar_layout(width, height, lo, hi, label).0
+}
+
+/// Draws a vertical heat-map colour bar at the right edge of `image` (see [`colorbar_width`]):
+/// `hi` at the top, `lo` at the bottom, their midpoint in between, and `label` above it.
+pub fn colorbar(image: &mut Image, lo: f32, hi: f32, label: &str) {
+    let (w, h) = (image.width, image.height);
+    let (strip, s) = colorbar_layout(w, h, lo, hi, label);
+    let pad = i64::from(4 * s);
+    let bar_w = i64::from(8 * s);
+    let x0 = i64::from(w) - i64::from(strip) + pad;
+    let top = i64::from(h) / 5;
+    let bottom = i64::from(h) - i64::from(h) / 6;
+    if bottom <= top {
+        return;
+    }
+    for y in top..=bottom {
+        let t = (bottom - y) as f32 / (bottom - top) as f32;
+        image.fill_rect(x0, y, bar_w, 1, ramp(t));
+    }
+    let ink = [20, 20, 20];
+    image.stroke_rect(x0 - 1, top - 1, bar_w + 2, bottom - top + 3, ink);
+    let half_line = i64::from(7 * s) / 2;
+    let tx = x0 + bar_w + pad;
+    let mid = (top + bottom) / 2;
+    for (v, y) in [(hi, top), ((lo + hi) * 0.5, mid), (lo, bottom)] {
+        image.fill_rect(x0 + bar_w, y, pad / 2, 1, ink);
+        image.text(tx, y - half_line, &format_value(f64::from(v)), ink, s);
+    }
+    let lw = i64::from(text_width(label, s));
+    let lx = (i64::from(w) - pad - lw).min(x0);
+    image.text(lx, top - i64::from(LINE_HEIGHT * s) - pad, label, ink, s);
+}
+
+/// A heat-map figure: the mesh coloured by per-vertex `values` on the [`heatmap`] scale from `lo`
+/// to `hi`, rendered by [`render`] into the part of the `view.width` × `view.height` picture left
+/// free by `title` (top-left) and the colour bar labelled `label` (right edge).
+#[allow(clippy::too_many_arguments)] // Mirrors the figure's parts one to one; a struct would only rename them.
+pub fn render_heatmap(
+    positions: &[[f32; 3]],
+    triangles: &[[u32; 3]],
+    values: &[f32],
+    lo: f32,
+    hi: f32,
+    label: &str,
+    title: &str,
+    view: &View,
+) -> Image {
+    let (w, h) = (view.width, view.height);
+    let mut out = Image::new(w, h, BACKGROUND);
+    let (strip, s) = colorbar_layout(w, h, lo, hi, label);
+    let title_h = if title.is_empty() {
+        0
+    } else {
+        LINE_HEIGHT * s + 8 * s
+    };
+    let mesh_view = View {
+        width: w.saturating_sub(strip),
+        height: h.saturating_sub(title_h),
+        ..*view
+    };
+    let colors = heatmap(values, lo, hi);
+    out.blit(
+        &render(positions, triangles, &colors, &mesh_view),
+        0,
+        i64::from(title_h),
+    );
+    colorbar(&mut out, lo, hi, label);
+    if !title.is_empty() {
+        out.text(i64::from(4 * s), i64::from(4 * s), title, [20, 20, 20], s);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A UV sphere of radius 1 at the origin: `rings` latitude bands, `segs` longitude segments.
+    fn uv_sphere(rings: u32, segs: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+        let mut pos = vec![[0.0, 1.0, 0.0]];
+        for r in 1..rings {
+            let th = std::f32::consts::PI * r as f32 / rings as f32;
+            for s in 0..segs {
+                let ph = 2.0 * std::f32::consts::PI * s as f32 / segs as f32;
+                pos.push([th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()]);
+            }
+        }
+        pos.push([0.0, -1.0, 0.0]);
+        let south = pos.len() as u32 - 1;
+        let at = |r: u32, s: u32| 1 + (r - 1) * segs + s % segs;
+        let mut tri = Vec::new();
+        for s in 0..segs {
+            tri.push([0, at(1, s + 1), at(1, s)]);
+            tri.push([south, at(rings - 1, s), at(rings - 1, s + 1)]);
+        }
+        for r in 1..rings - 1 {
+            for s in 0..segs {
+                let (a, b, c, d) = (at(r, s), at(r, s + 1), at(r + 1, s), at(r + 1, s + 1));
+                tri.push([a, b, d]);
+                tri.push([a, d, c]);
+            }
+        }
+        (pos, tri)
+    }
+
+    fn count_non_bg(img: &Image) -> usize {
+        img.rgb.chunks(3).filter(|p| *p != BACKGROUND).count()
+    }
+
+    #[test]
+    fn single_triangle_covers_centre_not_corners() {
+        let pos = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]];
+        let img = render(&pos, &[[0, 1, 2]], &[[255, 0, 0]; 3], &View::front(64, 64));
+        let c = img.get(32, 36).unwrap();
+        assert_ne!(c, BACKGROUND);
+        // Facing the camera, so shading only scales the colour: red stays pure red.
+        assert!(c[0] > 100 && c[1] == 0 && c[2] == 0, "{c:?}");
+        for (x, y) in [(0, 0), (63, 0), (2, 2), (61, 2)] {
+            assert_eq!(img.get(x, y).unwrap(), BACKGROUND, "corner ({x},{y})");
+        }
+        // Fitted with a 5% margin: the base spans the width minus the margins.
+        assert_ne!(img.get(5, 58).unwrap(), BACKGROUND);
+        assert_eq!(img.get(1, 62).unwrap(), BACKGROUND);
+        // Opposite winding renders the same pixels (two-sided).
+        let back = render(&pos, &[[0, 2, 1]], &[[255, 0, 0]; 3], &View::front(64, 64));
+        assert_eq!(back, img);
+    }
+
+    #[test]
+    fn z_buffer_keeps_nearer_triangle_in_either_order() {
+        // Two overlapping squares' worth of triangles; the green one is nearer (+z is toward the camera).
+        let pos = [
+            [-1.0, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [-1.0, -1.0, 0.5],
+            [1.0, -1.0, 0.5],
+            [0.0, 1.0, 0.5],
+        ];
+        let mut col = vec![[255, 0, 0]; 3];
+        col.extend([[0, 255, 0]; 3]);
+        let v = View::front(40, 40);
+        for tris in [[[0, 1, 2], [3, 4, 5]], [[3, 4, 5], [0, 1, 2]]] {
+            let img = render(&pos, &tris, &col, &v);
+            let c = img.get(20, 24).unwrap();
+            assert!(c[1] > 100 && c[0] == 0, "{c:?}");
+        }
+        // Turned half way round, the red one is nearer.
+        let back = View {
+            yaw_deg: 180.0,
+            ..v
+        };
+        let c = render(&pos, &[[0, 1, 2], [3, 4, 5]], &col, &back)
+            .get(20, 24)
+            .unwrap();
+        assert!(c[0] > 100 && c[1] == 0, "{c:?}");
+    }
+
+    #[test]
+    fn bad_input_does_not_panic() {
+        let pos = [[0.0, 0.0, 0.0], [f32::NAN, 1.0, 0.0], [1.0, 1.0, 0.0]];
+        let v = View::front(16, 16);
+        let img = render(&pos, &[[0, 1, 2], [0, 2, 7], [0, 0, 0]], &[], &v);
+        assert_eq!(count_non_bg(&img), 0);
+        assert_eq!(render(&[], &[], &[], &v), Image::new(16, 16, BACKGROUND));
+        assert_eq!(render(&pos, &[], &[], &View::front(0, 5)).rgb.len(), 0);
+        // Missing colours fall back to grey rather than failing.
+        let ok = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]];
+        assert!(count_non_bg(&render(&ok, &[[0, 1, 2]], &[], &v)) > 20);
+    }
+
+    #[test]
+    fn sphere_fills_a_disc_and_is_shaded() {
+        let (pos, tri) = uv_sphere(24, 48);
+        let z: Vec<f32> = pos.iter().map(|p| p[2]).collect();
+        let front = View::front(200, 200);
+        let img = render(&pos, &tri, &heatmap(&z, -1.0, 1.0), &front);
+        // Radius = 200 * (1 - 2 * 5%) / 2 = 90 px; the polygonal outline is slightly inside.
+        let disc = std::f64::consts::PI * 90.0 * 90.0;
+        let n = count_non_bg(&img) as f64;
+        assert!((n / disc - 1.0).abs() < 0.03, "{n} vs {disc}");
+        // Front (z = +1) is red-ish, and the upper left (lit) is brighter than the lower right.
+        let c = img.get(100, 100).unwrap();
+        assert!(c[0] > 120 && c[2] < 60, "{c:?}");
+        let lum = |p: [u8; 3]| p.iter().map(|&v| u32::from(v)).sum::<u32>();
+        assert!(lum(img.get(70, 70).unwrap()) > lum(img.get(130, 130).unwrap()));
+        // Yawed 45°, the same sphere still fills the same disc but the red moves right.
+        let yawed = View {
+            yaw_deg: 45.0,
+            ..front
+        };
+        let img45 = render(&pos, &tri, &heatmap(&z, -1.0, 1.0), &yawed);
+        assert!((count_non_bg(&img45) as f64 / disc - 1.0).abs() < 0.03);
+        // Shading darkens the turned front, so "red" means red dominates.
+        let red = |p: [u8; 3]| p[0] > 100 && p[0] > 3 * p[1] && p[0] > 3 * p[2];
+        assert!(red(img45.get(150, 100).unwrap()));
+        assert!(!red(img45.get(40, 100).unwrap()));
+
+        // Set SINEW_RENDER_OUT to a folder to keep these pictures for a look.
+        if let Ok(dir) = std::env::var("SINEW_RENDER_OUT") {
+            let dir = Path::new(&dir);
+            let big = View::front(800, 800);
+            let a = render_heatmap(&pos, &tri, &z, -1.0, 1.0, "z (cm)", "front", &big);
+            let b = render_heatmap(
+                &pos,
+                &tri,
+                &z,
+                -1.0,
+                1.0,
+                "z (cm)",
+                "yaw 45°",
+                &View {
+                    yaw_deg: 45.0,
+                    ..big
+                },
+            );
+            Image::hstack(&[a, b])
+                .write_png(&dir.join("sphere.png"))
+                .unwrap();
+        }
+    }
+
+    /// The shared data folder, or `None` (after saying so) when it is absent and not required.
+    fn data_dir() -> Option<std::path::PathBuf> {
+        let dir = std::env::var_os("SINEW_DATA")
+            .map(std::path::PathBuf::from)
+            .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
+        if dir.is_dir() {
+            Some(dir)
+        } else if std::env::var("SINEW_REQUIRE_DATA").as_deref() == Ok("1") {
+            panic!("SINEW_REQUIRE_DATA=1 but {} is missing", dir.display());
+        } else {
+            println!("skipping: {} not found", dir.display());
+            None
+        }
+    }
+
+    #[test]
+    fn ict_face_front_view_is_symmetric_and_yaw_breaks_it() {
+        let Some(dir) = data_dir() else { return };
+        let path = dir.join("ict-facekit/generic_neutral_mesh.obj");
+        let opts = tobj::LoadOptions {
+            triangulate: true,
+            ..Default::default()
+        };
+        let (models, _) = tobj::load_obj(&path, &opts).unwrap();
+        let mut pos = Vec::new();
+        let mut tri = Vec::new();
+        for m in &models {
+            let base = pos.len() as u32;
+            pos.extend(m.mesh.positions.chunks(3).map(|p| [p[0], p[1], p[2]]));
+            tri.extend(
+                m.mesh
+                    .indices
+                    .chunks(3)
+                    .map(|t| [base + t[0], base + t[1], base + t[2]]),
+            );
+        }
+        assert_eq!(pos.len(), 26_719);
+        // The face and head only (vertices 0–9408, README), as the figures will show it.
+        tri.retain(|t| t.iter().all(|&i| i < 9409));
+        let cols = vec![[210, 190, 175]; pos.len()];
+        let v = View::front(160, 160);
+        let img = render(&pos, &tri, &cols, &v);
+        let half = |img: &Image, right: bool| {
+            (0..160)
+                .flat_map(|y| (0..80).map(move |x| (x, y)))
+                .filter(|&(x, y)| img.get(if right { 159 - x } else { x }, y) != Some(BACKGROUND))
+                .count() as f64
+        };
+        let (l, r) = (half(&img, false), half(&img, true));
+        // The ICT neutral head is left-right symmetric, so its front view is too.
+        assert!((l - r).abs() / (l + r) < 0.02, "{l} vs {r}");
+        // A tall, narrow head fitted to the frame height covers about a quarter of it.
+        assert!((l + r) / (160.0 * 160.0) > 0.2, "head covers {}", l + r);
+        // Mirrored pixel by pixel, nearly all coverage matches.
+        let mismatched = (0..160)
+            .flat_map(|y| (0..80).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                (img.get(x, y) == Some(BACKGROUND)) != (img.get(159 - x, y) == Some(BACKGROUND))
+            })
+            .count() as f64;
+        assert!(mismatched / (l + r) < 0.03, "{mismatched}");
+        // Turned 45°, the silhouette is no longer symmetric.
+        let yawed = render(&pos, &tri, &cols, &View { yaw_deg: 45.0, ..v });
+        let (l, r) = (half(&yawed, false), half(&yawed, true));
+        assert!((l - r).abs() / (l + r) > 0.05, "{l} vs {r}");
+    }
+
+    #[test]
+    fn heatmap_endpoints_clamping_and_nan() {
+        let c = heatmap(&[0.0, 1.0, -5.0, 9.0, f32::NAN, 0.5], 0.0, 1.0);
+        assert_eq!(c[0], [15, 25, 110]);
+        assert_eq!(c[1], [205, 20, 20]);
+        assert_eq!(c[2], c[0]);
+        assert_eq!(c[3], c[1]);
+        assert_eq!(c[4], NAN_COLOR);
+        // Midway lies between cyan and yellow: greenish, bright.
+        assert!(c[5][1] > 200, "{:?}", c[5]);
+        // A degenerate range splits at lo instead of dividing by zero.
+        assert_eq!(heatmap(&[1.0, 2.0], 1.0, 1.0), vec![c[0], c[1]]);
+    }
+
+    #[test]
+    fn png_round_trip() {
+        let mut img = Image::new(7, 5, BACKGROUND);
+        img.set(0, 0, [1, 2, 3]);
+        img.set(6, 4, [250, 0, 9]);
+        img.fill_rect(2, 1, 3, 2, [9, 99, 199]);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a/b.png");
+        img.write_png(&path).unwrap();
+        let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
+        let mut reader = dec.read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        assert_eq!((info.width, info.height), (7, 5));
+        assert_eq!(info.color_type, png::ColorType::Rgb);
+        assert_eq!(&buf[..info.buffer_size()], &img.rgb[..]);
+        // An empty picture is refused with the path in the message, not written.
+        let err = Image::new(0, 3, BACKGROUND).write_png(&path).unwrap_err();
+        assert!(format!("{err:#}").contains("b.png"));
+    }
+
+    #[test]
+    fn text_draws_ink_within_its_box() {
+        let mut img = Image::new(60, 20, BACKGROUND);
+        img.text(2, 2, "Ab9%", [0, 0, 0], 2);
+        let inked: Vec<(i64, i64)> = (0..20)
+            .flat_map(|y| (0..60).map(move |x| (x, y)))
+            .filter(|&(x, y)| img.get(x, y) == Some([0, 0, 0]))
+            .collect();
+        assert!(inked.len() > 40);
+        let w = i64::from(text_width("Ab9%", 2));
+        assert!(
+            inked
+                .iter()
+                .all(|&(x, y)| (2..2 + w).contains(&x) && (2..2 + 16).contains(&y))
+        );
+        // A character the font lacks draws '?', not nothing.
+        let mut a = Image::new(8, 10, BACKGROUND);
+        let mut b = a.clone();
+        a.text(0, 0, "€", [0, 0, 0], 1);
+        b.text(0, 0, "?", [0, 0, 0], 1);
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn font_table_is_well_formed_and_complete() {
+        for (ch, g) in FONT {
+            let rows: Vec<&str> = if g.is_empty() {
+                vec![]
+            } else {
+                g.split(' ').collect()
+            };
+            assert!(rows.len() <= 8, "{ch:?}");
+            for r in rows {
+                assert!(
+                    r.len() == 5 && r.bytes().all(|b| b == b'#' || b == b'.'),
+                    "{ch:?}: {r:?}"
+                );
+            }
+            assert_eq!(FONT.iter().filter(|(k, _)| k == ch).count(), 1, "{ch:?}");
+        }
+        let needed = ('0'..='9')
+            .chain('A'..='Z')
+            .chain('a'..='z')
+            .chain(".-:/%() ".chars());
+        for ch in needed {
+            assert!(FONT.iter().any(|(k, _)| *k == ch), "missing {ch:?}");
+        }
+    }
+
+    #[test]
+    fn hstack_and_colorbar() {
+        let a = Image::new(3, 2, [1, 1, 1]);
+        let b = Image::new(2, 4, [2, 2, 2]);
+        let s = Image::hstack(&[a, b]);
+        assert_eq!((s.width, s.height), (5, 4));
+        assert_eq!(s.get(0, 0), Some([1, 1, 1]));
+        assert_eq!(s.get(0, 3), Some(BACKGROUND));
+        assert_eq!(s.get(4, 3), Some([2, 2, 2]));
+        assert_eq!(Image::hstack(&[]).rgb.len(), 0);
+
+        let mut img = Image::new(300, 200, BACKGROUND);
+        colorbar(&mut img, 0.0, 2.5, "mm");
+        let strip = colorbar_width(300, 200, 0.0, 2.5, "mm") as i64;
+        // The bar runs red at the top to dark blue at the bottom, inside the strip.
+        let x = 300 - strip + 4 + 2;
+        assert_eq!(img.get(x, 200 / 5), Some([205, 20, 20]));
+        assert_eq!(img.get(x, 200 - 200 / 6), Some([15, 25, 110]));
+        assert!(
+            (0..300 - strip)
+                .flat_map(|x| (0..200).map(move |y| (x, y)))
+                .all(|(x, y)| img.get(x, y) == Some(BACKGROUND))
+        );
+        assert_eq!(format_value(1.5e-4), "1.5e-4");
+        assert_eq!(format_value(2.5), "2.5");
+        assert_eq!(format_value(1234.0), "1234");
+        assert_eq!(format_value(0.0123), "0.0123");
+        assert_eq!(format_value(1e5), "1e5");
+    }
+}

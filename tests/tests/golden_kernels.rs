@@ -29,14 +29,26 @@ fn mlp_output(seed: u64, widths: &[usize], acts: &[Activation], rows: usize) -> 
         .windows(2)
         .map(|w| {
             let bound = (6.0 / w[0] as f32).sqrt() / 30.0;
-            (le_f32(&rng.vec(w[0] * w[1], -bound * 30.0, bound * 30.0)), le_f32(&rng.vec(w[1], -0.5, 0.5)))
+            (
+                le_f32(&rng.vec(w[0] * w[1], -bound * 30.0, bound * 30.0)),
+                le_f32(&rng.vec(w[1], -0.5, 0.5)),
+            )
         })
         .collect();
     let layers: Vec<Dense<'_>> = storage
         .iter()
         .zip(widths.windows(2))
         .zip(acts)
-        .map(|(((w, b), dims), &act)| Dense::new(F32s::new(w).unwrap(), F32s::new(b).unwrap(), dims[0], dims[1], act).unwrap())
+        .map(|(((w, b), dims), &act)| {
+            Dense::new(
+                F32s::new(w).unwrap(),
+                F32s::new(b).unwrap(),
+                dims[0],
+                dims[1],
+                act,
+            )
+            .unwrap()
+        })
         .collect();
     let mlp = Mlp::new(&layers).unwrap();
     let input = rng.vec(rows * widths[0], -1.0, 1.0);
@@ -49,10 +61,24 @@ fn mlp_output(seed: u64, widths: &[usize], acts: &[Activation], rows: usize) -> 
 fn spiral_output() -> Vec<f32> {
     let mut rng = Rng::new(3);
     let (sources, vertices, len, fin, fout) = (50usize, 30usize, 9usize, 8usize, 4usize);
-    let idx: Vec<u32> = (0..vertices * len).map(|_| (rng.uniform(0.0, sources as f32) as u32).min(sources as u32 - 1)).collect();
-    let (idx, w, b) = (le_u32(&idx), le_f32(&rng.vec(fout * len * fin, -0.3, 0.3)), le_f32(&rng.vec(fout, -0.1, 0.1)));
+    let idx: Vec<u32> = (0..vertices * len)
+        .map(|_| (rng.uniform(0.0, sources as f32) as u32).min(sources as u32 - 1))
+        .collect();
+    let (idx, w, b) = (
+        le_u32(&idx),
+        le_f32(&rng.vec(fout * len * fin, -0.3, 0.3)),
+        le_f32(&rng.vec(fout, -0.1, 0.1)),
+    );
     let spirals = Spirals::new(U32s::new(&idx).unwrap(), vertices, len, sources).unwrap();
-    let conv = SpiralConv::new(spirals, F32s::new(&w).unwrap(), F32s::new(&b).unwrap(), fin, fout, Activation::Elu { alpha: 1.0 }).unwrap();
+    let conv = SpiralConv::new(
+        spirals,
+        F32s::new(&w).unwrap(),
+        F32s::new(&b).unwrap(),
+        fin,
+        fout,
+        Activation::Elu { alpha: 1.0 },
+    )
+    .unwrap();
     let x = rng.vec(sources * fin, -1.0, 1.0);
     let mut out = vec![0.0; vertices * fout];
     conv.forward(&x, &mut out).unwrap();
@@ -65,7 +91,14 @@ fn csr_output() -> Vec<f32> {
     let row_ptr = le_u32(&[0, 3, 6, 9, 12]);
     let cols = le_u32(&[0, 1, 2, 1, 2, 3, 2, 3, 4, 0, 3, 4]);
     let vals = le_f32(&rng.vec(12, 0.0, 1.0));
-    let csr = Csr::new(4, 5, U32s::new(&row_ptr).unwrap(), U32s::new(&cols).unwrap(), F32s::new(&vals).unwrap()).unwrap();
+    let csr = Csr::new(
+        4,
+        5,
+        U32s::new(&row_ptr).unwrap(),
+        U32s::new(&cols).unwrap(),
+        F32s::new(&vals).unwrap(),
+    )
+    .unwrap();
     let x = rng.vec(15, -1.0, 1.0);
     let mut out = vec![0.0; 12];
     csr.mul_dense(&x, 3, &mut out).unwrap();
@@ -82,9 +115,20 @@ fn skinning_output() -> (Vec<f32>, Vec<f32>) {
     let weights = rng.vec(shapes, 0.0, 1.0);
     let jaw6: [f32; 9] = [1.0, 0.1, -0.05, -0.08, 0.97, 0.2, 0.3, -0.4, 0.1];
     let head6: [f32; 9] = [0.98, -0.1, 0.05, 0.12, 1.0, -0.02, 1.5, 2.0, -0.5];
-    let pose = Pose { jaw: BoneTransform::from_9d(&jaw6, Vec3::new(0.0, -2.0, -5.0)), head: rotation::rigid_from_9d(&head6) };
+    let pose = Pose {
+        jaw: BoneTransform::from_9d(&jaw6, Vec3::new(0.0, -2.0, -5.0)),
+        head: rotation::rigid_from_9d(&head6),
+    };
     let mut out = vec![0.0; n * 3];
-    skin(&rest, &k, F32s::new(&correctives).unwrap(), &weights, &pose, &mut out).unwrap();
+    skin(
+        &rest,
+        &k,
+        F32s::new(&correctives).unwrap(),
+        &weights,
+        &pose,
+        &mut out,
+    )
+    .unwrap();
     // Normals of a 4×4 grid of quads (two triangles each) lifted by the skinned heights.
     let side = 5u32;
     let tris: Vec<u32> = (0..side - 1)
@@ -95,7 +139,9 @@ fn skinning_output() -> (Vec<f32>, Vec<f32>) {
         })
         .collect();
     let tris = le_u32(&tris);
-    let positions: Vec<f32> = (0..side * side).flat_map(|i| [(i % side) as f32, (i / side) as f32, out[i as usize] * 0.1]).collect();
+    let positions: Vec<f32> = (0..side * side)
+        .flat_map(|i| [(i % side) as f32, (i / side) as f32, out[i as usize] * 0.1])
+        .collect();
     let triangles = Triangles::new(U32s::new(&tris).unwrap(), (side * side) as usize).unwrap();
     let mut normals = vec![0.0; positions.len()];
     vertex_normals(&triangles, &positions, &mut normals).unwrap();
@@ -106,17 +152,51 @@ fn skinning_output() -> (Vec<f32>, Vec<f32>) {
 fn kernel_hashes_are_pinned() {
     let (skinned, normals) = skinning_output();
     let cases: Vec<(&str, Vec<f32>)> = vec![
-        ("mlp-gelu-elu", mlp_output(1, &[3, 32, 32, 3], &[Activation::Gelu, Activation::Elu { alpha: 1.0 }, Activation::Identity], 64)),
-        ("siren-w30", mlp_output(2, &[3, 64, 64, 3], &[Activation::Sine { omega0: 30.0 }, Activation::Sine { omega0: 30.0 }, Activation::Identity], 64)),
+        (
+            "mlp-gelu-elu",
+            mlp_output(
+                1,
+                &[3, 32, 32, 3],
+                &[
+                    Activation::Gelu,
+                    Activation::Elu { alpha: 1.0 },
+                    Activation::Identity,
+                ],
+                64,
+            ),
+        ),
+        (
+            "siren-w30",
+            mlp_output(
+                2,
+                &[3, 64, 64, 3],
+                &[
+                    Activation::Sine { omega0: 30.0 },
+                    Activation::Sine { omega0: 30.0 },
+                    Activation::Identity,
+                ],
+                64,
+            ),
+        ),
         ("spiral-conv-elu", spiral_output()),
         ("csr-mul", csr_output()),
         ("skin-eq17", skinned),
         ("vertex-normals", normals),
-        ("rotation-6d", rotation::from_6d(&[0.3, -1.2, 0.5, 2.0, 0.1, -0.7]).cols.iter().flat_map(|c| c.to_array()).collect()),
+        (
+            "rotation-6d",
+            rotation::from_6d(&[0.3, -1.2, 0.5, 2.0, 0.1, -0.7])
+                .cols
+                .iter()
+                .flat_map(|c| c.to_array())
+                .collect(),
+        ),
     ];
     let mut text = String::new();
     for (name, values) in &cases {
-        assert!(values.iter().all(|v| v.is_finite()), "{name}: non-finite output");
+        assert!(
+            values.iter().all(|v| v.is_finite()),
+            "{name}: non-finite output"
+        );
         writeln!(text, "{name} {:016x} {}", frame_hash(values), values.len()).unwrap();
     }
     check("kernels.hashes", &text);

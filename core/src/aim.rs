@@ -1,0 +1,341 @@
+//! A baked AIM actor ("Anatomically Constrained Implicit Face Models", Chandran & Zoss 2024):
+//! real-time playback from a per-vertex cache, anatomy editing on that cache, and evaluation of
+//! the five networks at any template point when the artefact carries them.
+//!
+//! # Sections (artefact kind [`ArtifactKind::AimActor`])
+//! | name | dtype | shape | meaning |
+//! |---|---|---|---|
+//! | `tpl.pos` | f32 | [V, 3] | template points c |
+//! | `tpl.tri` | u32 | [T, 3] | template triangles (for normals and rendering) |
+//! | `cache.s0` | f32 | [V, 3] | neutral skin s0 = b0 + d0·n0 at the template points (eq. 6) |
+//! | `cache.k` | f32 | [V] | jaw skinning weight k (eq. 7) |
+//! | `cache.e` | f32 | [V, M, 3] | corrective basis B_e, vertex-major (eq. 8), M = N − 1 |
+//! | `cache.b0` | f32 | [V, 3] | bone point b0 (eq. 3) |
+//! | `cache.d0` | f32 | [V] | soft-tissue thickness d0 (eq. 4) |
+//! | `cache.n0` | f32 | [V, 3] | unit bone normal n0 (eq. 5) |
+//! | `jaw.pivot` | f32 | [3] | the jaw's pivot p: T_b(x) = R (x − p) + p + t |
+//! | `aim.norm` | f32 | [4] | network input normalisation: ĉ = (c − centre) / scale; centre xyz, scale |
+//! | `net.b`, `net.d`, `net.n`, `net.k`, `net.e` | MLP | | the five networks (absent when playback-only) |
+//!
+//! The networks see ĉ and predict: b0 = c + B(ĉ) (a residual, so the network's outputs stay of
+//! order one), d0 = D(ĉ), n0 = normalise(N(ĉ)), k = K(ĉ), B_e = E(ĉ).
+
+use crate::error::{BufferError, FormatError};
+use crate::format::{ArtifactKind, FLAG_PLAYBACK_ONLY, SinewFile};
+use crate::linalg::Vec3;
+use crate::network::load_mlp;
+use crate::nn::Mlp;
+use crate::skinning::{Pose, Triangles, skin_vertex, vertex_normals};
+use crate::tensor::F32s;
+
+/// Largest number of corrective shapes M a baked actor may hold.
+pub const MAX_SHAPES: usize = 256;
+
+/// The five AIM networks and their input normalisation.
+#[derive(Clone, Debug)]
+pub struct AimNetworks<'a> {
+    /// B: bone point residual, 3 outputs.
+    pub b: Mlp<'a>,
+    /// D: soft-tissue thickness, 1 output.
+    pub d: Mlp<'a>,
+    /// N: bone normal (unnormalised), 3 outputs.
+    pub n: Mlp<'a>,
+    /// K: jaw skinning weight, 1 output.
+    pub k: Mlp<'a>,
+    /// E: corrective basis, 3·M outputs.
+    pub e: Mlp<'a>,
+    centre: Vec3,
+    scale: f32,
+}
+
+/// What the networks say about one template point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointAnatomy {
+    /// Bone point b0.
+    pub bone: Vec3,
+    /// Soft-tissue thickness d0.
+    pub thickness: f32,
+    /// Unit bone normal n0.
+    pub normal: Vec3,
+    /// Neutral skin point s0 = b0 + d0·n0 (AIM eq. 6).
+    pub skin: Vec3,
+    /// Jaw skinning weight k.
+    pub k: f32,
+}
+
+/// A validated AIM actor over the artefact's bytes.
+#[derive(Clone, Debug)]
+pub struct AimActor<'a> {
+    file: SinewFile<'a>,
+    vertices: usize,
+    shapes: usize,
+    template: F32s<'a>,
+    triangles: Triangles<'a>,
+    rest: F32s<'a>,
+    k: F32s<'a>,
+    correctives: F32s<'a>,
+    bone: F32s<'a>,
+    thickness: F32s<'a>,
+    normal: F32s<'a>,
+    pivot: Vec3,
+    networks: Option<AimNetworks<'a>>,
+}
+
+fn vec3(v: F32s<'_>, i: usize) -> Vec3 {
+    Vec3::new(v.at(3 * i), v.at(3 * i + 1), v.at(3 * i + 2))
+}
+
+impl<'a> AimActor<'a> {
+    /// Validates `bytes` as an AIM actor (container checks, then every role and shape).
+    pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
+        let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::AimActor)?;
+        let (shape, rank) = file.dims_of("cache.e")?;
+        let [v, m, three, _] = shape;
+        if rank != 3 || three != 3 {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        if m as usize > MAX_SHAPES {
+            return Err(FormatError::LimitExceeded);
+        }
+        let template = file.f32_tensor("tpl.pos", &[v, 3])?;
+        let (tri_shape, tri_rank) = file.dims_of("tpl.tri")?;
+        if tri_rank != 2 {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        let tri = file.u32_tensor("tpl.tri", &[tri_shape[0], 3])?;
+        let triangles = Triangles::new(tri, v as usize)?;
+        let pivot = file.f32_tensor("jaw.pivot", &[3])?;
+        let networks = if file.flags & FLAG_PLAYBACK_ONLY != 0 {
+            None
+        } else {
+            let norm = file.f32_tensor("aim.norm", &[4])?;
+            let scale = norm.at(3);
+            if scale <= 0.0 {
+                return Err(FormatError::IncompatibleShapes);
+            }
+            let nets = AimNetworks {
+                b: load_mlp(&file, "net.b")?,
+                d: load_mlp(&file, "net.d")?,
+                n: load_mlp(&file, "net.n")?,
+                k: load_mlp(&file, "net.k")?,
+                e: load_mlp(&file, "net.e")?,
+                centre: vec3(norm, 0),
+                scale,
+            };
+            let outputs = [
+                (&nets.b, 3),
+                (&nets.d, 1),
+                (&nets.n, 3),
+                (&nets.k, 1),
+                (&nets.e, 3 * m as usize),
+            ];
+            if outputs
+                .iter()
+                .any(|(mlp, out)| mlp.inputs() != 3 || mlp.outputs() != *out)
+            {
+                return Err(FormatError::IncompatibleShapes);
+            }
+            Some(nets)
+        };
+        Ok(Self {
+            vertices: v as usize,
+            shapes: m as usize,
+            template,
+            triangles,
+            rest: file.f32_tensor("cache.s0", &[v, 3])?,
+            k: file.f32_tensor("cache.k", &[v])?,
+            correctives: file.f32_tensor("cache.e", &[v, m, 3])?,
+            bone: file.f32_tensor("cache.b0", &[v, 3])?,
+            thickness: file.f32_tensor("cache.d0", &[v])?,
+            normal: file.f32_tensor("cache.n0", &[v, 3])?,
+            pivot: vec3(pivot, 0),
+            networks,
+            file,
+        })
+    }
+
+    /// The container (metadata, sections).
+    pub const fn file(&self) -> &SinewFile<'a> {
+        &self.file
+    }
+
+    /// Number of template vertices V.
+    pub const fn vertex_count(&self) -> usize {
+        self.vertices
+    }
+
+    /// Number of corrective shapes M = N − 1 (the length of a pose's coefficient vector).
+    pub const fn shape_count(&self) -> usize {
+        self.shapes
+    }
+
+    /// The template triangles.
+    pub const fn triangles(&self) -> &Triangles<'a> {
+        &self.triangles
+    }
+
+    /// The template points, `[V, 3]`.
+    pub const fn template(&self) -> F32s<'a> {
+        self.template
+    }
+
+    /// The cached neutral skin s0, `[V, 3]`.
+    pub const fn rest(&self) -> F32s<'a> {
+        self.rest
+    }
+
+    /// The cached soft-tissue thickness d0, `[V]`.
+    pub const fn thickness(&self) -> F32s<'a> {
+        self.thickness
+    }
+
+    /// The cached jaw skinning weight k, `[V]`.
+    pub const fn skinning_weights(&self) -> F32s<'a> {
+        self.k
+    }
+
+    /// The jaw pivot.
+    pub const fn jaw_pivot(&self) -> Vec3 {
+        self.pivot
+    }
+
+    /// The networks, unless the artefact is playback-only.
+    pub const fn networks(&self) -> Option<&AimNetworks<'a>> {
+        self.networks.as_ref()
+    }
+
+    /// Poses the actor: AIM eq. 17 with global coefficients, per vertex
+    /// `T_g(LBS(s0, T_b, k) + Σ_j w_j e_j)`. The pose's jaw pivot is the actor's
+    /// ([`Self::jaw_pivot`]) when built with [`Self::pose_from_9d`].
+    ///
+    /// # Shapes
+    /// - `weights`: `[M]`
+    /// - `out`: `[V, 3]`
+    pub fn pose(&self, pose: &Pose, weights: &[f32], out: &mut [f32]) -> Result<(), BufferError> {
+        self.pose_rest(None, pose, weights, out)
+    }
+
+    /// Like [`Self::pose`], but from another neutral skin `rest` (`[V, 3]`), e.g. the result of
+    /// [`Self::edit_thickness`].
+    pub fn pose_rest(
+        &self,
+        rest: Option<&[f32]>,
+        pose: &Pose,
+        weights: &[f32],
+        out: &mut [f32],
+    ) -> Result<(), BufferError> {
+        if weights.len() != self.shapes || rest.is_some_and(|r| r.len() != 3 * self.vertices) {
+            return Err(BufferError::Input);
+        }
+        if out.len() != 3 * self.vertices {
+            return Err(BufferError::Output);
+        }
+        let per_vertex = 3 * self.shapes;
+        for (i, o) in out.chunks_exact_mut(3).enumerate() {
+            let s0 = match rest {
+                Some(r) => Vec3::new(
+                    r.get(3 * i).copied().unwrap_or(0.0),
+                    r.get(3 * i + 1).copied().unwrap_or(0.0),
+                    r.get(3 * i + 2).copied().unwrap_or(0.0),
+                ),
+                None => vec3(self.rest, i),
+            };
+            let e = self.correctives.slice(i * per_vertex, per_vertex);
+            let p = skin_vertex(s0, self.k.at(i), e, weights, pose);
+            o.copy_from_slice(&p.to_array());
+        }
+        Ok(())
+    }
+
+    /// A pose from AIM's parameters: jaw `[6D rotation, translation]` about the actor's pivot,
+    /// head `[6D rotation, translation]`.
+    pub fn pose_from_9d(&self, jaw: &[f32; 9], head: &[f32; 9]) -> Pose {
+        Pose {
+            jaw: crate::skinning::BoneTransform::from_9d(jaw, self.pivot),
+            head: crate::rotation::rigid_from_9d(head),
+        }
+    }
+
+    /// Area-weighted vertex normals of posed positions (`[V, 3]` in and out).
+    pub fn normals(&self, positions: &[f32], out: &mut [f32]) -> Result<(), BufferError> {
+        vertex_normals(&self.triangles, positions, out)
+    }
+
+    /// Anatomy editing (AIM Fig. 5): scales the soft-tissue thickness by `1 + (scale − 1)·m_v`
+    /// per vertex, `m_v ∈ [0, 1]` from `mask`, and re-derives the neutral skin
+    /// s0' = b0 + d0'·n0 (eq. 6). Pose the result with [`Self::pose_rest`].
+    ///
+    /// # Shapes
+    /// - `mask`: `[V]`
+    /// - `out`: `[V, 3]`
+    pub fn edit_thickness(
+        &self,
+        mask: &[f32],
+        scale: f32,
+        out: &mut [f32],
+    ) -> Result<(), BufferError> {
+        if mask.len() != self.vertices {
+            return Err(BufferError::Input);
+        }
+        if out.len() != 3 * self.vertices {
+            return Err(BufferError::Output);
+        }
+        for (i, (o, m)) in out.chunks_exact_mut(3).zip(mask).enumerate() {
+            // AIM eq. 6 with an edited thickness.
+            let d = self.thickness.at(i) * (1.0 + (scale - 1.0) * *m);
+            let s = vec3(self.bone, i) + vec3(self.normal, i) * d;
+            o.copy_from_slice(&s.to_array());
+        }
+        Ok(())
+    }
+}
+
+impl AimNetworks<'_> {
+    /// Scratch length for [`Self::eval`]: the largest of the five networks' scratch, plus room
+    /// for E's outputs.
+    pub fn scratch_len(&self) -> usize {
+        let nets = [&self.b, &self.d, &self.n, &self.k, &self.e];
+        nets.iter().map(|m| m.scratch_len()).max().unwrap_or(0) + self.e.outputs()
+    }
+
+    /// Number of corrective outputs 3·M of E.
+    pub fn corrective_len(&self) -> usize {
+        self.e.outputs()
+    }
+
+    /// Evaluates the networks at template point `c` (AIM eqs. 3–8): the anatomy, and the
+    /// corrective basis into `correctives` (`[M, 3]`).
+    pub fn eval(
+        &self,
+        c: Vec3,
+        correctives: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<PointAnatomy, BufferError> {
+        if correctives.len() != self.e.outputs() {
+            return Err(BufferError::Output);
+        }
+        if scratch.len() < self.scratch_len() {
+            return Err(BufferError::Scratch);
+        }
+        let x = ((c - self.centre) * (1.0 / self.scale)).to_array();
+        let (mut b, mut d, mut n, mut k) = ([0.0f32; 3], [0.0f32; 1], [0.0f32; 3], [0.0f32; 1]);
+        self.b.eval(&x, &mut b, scratch)?;
+        self.d.eval(&x, &mut d, scratch)?;
+        self.n.eval(&x, &mut n, scratch)?;
+        self.k.eval(&x, &mut k, scratch)?;
+        self.e.eval(&x, correctives, scratch)?;
+        let bone = c + Vec3::from_array(b);
+        let normal = Vec3::from_array(n).normalize();
+        let [thickness] = d;
+        // AIM eq. 6: s0 = b0 + d0·n0
+        let skin = bone + normal * thickness;
+        let [k] = k;
+        Ok(PointAnatomy {
+            bone,
+            thickness,
+            normal,
+            skin,
+            k,
+        })
+    }
+}

@@ -1,0 +1,56 @@
+//! One AIM training step at the paper's size: five SIRENs 3→256→256→256→out (ω0 = 30), batch
+//! 4096 (point, shape) samples plus the 512-point symmetry and forehead terms, Adam; 20 shapes
+//! (E has 57 outputs, as on the ICT actor). The comparison with PyTorch is
+//! `scripts/bench_torch_aim_step.py`; results in docs/BENCHMARKS.md.
+//!
+//! Run: `cargo bench -p sinew-host --bench aim_train_step` (add `--features x86-v4` for the
+//! AVX-512 kernels).
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use sinew_host::aim::AimConfig;
+use sinew_host::aim::data::training_set;
+use sinew_host::aim::train::{init, normalisation, step_once};
+use sinew_host::backend::Backend;
+
+fn bench(c: &mut Criterion) {
+    let (mut actor, bones) =
+        sinew_host::procedural::actor(sinew_host::procedural::DEFAULT_RESOLUTION);
+    // 20 shapes like the ICT default actor: repeat the procedural expressions.
+    while actor.shapes.len() < 20 {
+        let i = 1 + (actor.shapes.len() - 1) % 6;
+        actor.shapes.push(actor.shapes[i].clone());
+        actor
+            .names
+            .push(format!("{}#{}", actor.names[i], actor.shapes.len()));
+    }
+    let set = training_set(&actor, &bones.skull, &bones.jaw, Some(bones.jaw_pivot), 2.5)
+        .expect("training set");
+    let config = AimConfig::default();
+    let norm = normalisation(&set.template.positions);
+    let (net, mut optim, device) = init(&set, &config, Backend::Flex).expect("flex backend");
+    let mut net = Some(net);
+    let mut step = 0;
+    let mut group = c.benchmark_group("aim");
+    group.sample_size(20);
+    group.bench_function("train_step_5x256x3_batch4096", |b| {
+        b.iter(|| {
+            let (n, terms) = step_once(
+                net.take().expect("model"),
+                &mut optim,
+                &set,
+                &config,
+                norm,
+                step,
+                &device,
+            );
+            // Reading the loss back forces the step to finish, as the training loop does.
+            let _ = sinew_host::nn::to_vec(terms);
+            net = Some(n);
+            step += 1;
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,111 @@
+//! Baking a trained AIM into the core's format: the networks, and their outputs at the template
+//! vertices as a per-vertex cache for real-time playback (see `sinew_core::aim` for the sections).
+
+use anyhow::Result;
+use burn::tensor::Device;
+use sinew_core::format::{ArtifactKind, FLAG_PLAYBACK_ONLY};
+
+use super::model::AimNet;
+use super::train::normalise;
+use crate::container::SinewWriter;
+use crate::nn::{tensor, to_vec};
+
+/// The networks' outputs at a set of points.
+#[derive(Clone, Debug, Default)]
+pub struct Cache {
+    /// s0 `[V]`.
+    pub skin: Vec<[f32; 3]>,
+    /// k `[V]`.
+    pub k: Vec<f32>,
+    /// B_e `[V, M, 3]` flattened.
+    pub correctives: Vec<f32>,
+    /// b0 `[V]`.
+    pub bone: Vec<[f32; 3]>,
+    /// d0 `[V]`.
+    pub thickness: Vec<f32>,
+    /// n0 `[V]`.
+    pub normal: Vec<[f32; 3]>,
+}
+
+fn triples(v: Vec<f32>) -> Vec<[f32; 3]> {
+    v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
+/// Evaluates the networks at `points` in chunks of 4096 (faster per point than one large batch).
+pub fn evaluate(net: &AimNet, points: &[[f32; 3]], norm: [f32; 4], device: &Device) -> Cache {
+    let mut cache = Cache::default();
+    for chunk in points.chunks(4096) {
+        let n = chunk.len();
+        let x = tensor(
+            chunk.iter().flat_map(|&p| normalise(p, norm)).collect(),
+            [n, 3],
+            device,
+        );
+        let c = tensor(chunk.iter().flatten().copied().collect(), [n, 3], device);
+        let p = net.predict(x, c);
+        cache.skin.extend(triples(to_vec(p.skin)));
+        cache.k.extend(to_vec(p.k));
+        cache.correctives.extend(to_vec(p.correctives));
+        cache.bone.extend(triples(to_vec(p.bone)));
+        cache.thickness.extend(to_vec(p.thickness));
+        cache.normal.extend(triples(to_vec(p.normal)));
+    }
+    cache
+}
+
+/// What goes into a baked actor besides the networks.
+#[derive(Clone, Debug)]
+pub struct BakeInput<'a> {
+    /// Template points the cache is evaluated at.
+    pub points: &'a [[f32; 3]],
+    /// Template triangles.
+    pub triangles: &'a [[u32; 3]],
+    /// Jaw pivot.
+    pub jaw_pivot: [f32; 3],
+    /// Input normalisation.
+    pub normalisation: [f32; 4],
+    /// Leave the networks out.
+    pub playback_only: bool,
+    /// Metadata entries (units, provenance, config…).
+    pub metadata: Vec<(String, String)>,
+}
+
+/// Builds the baked actor.
+pub fn bake(net: &AimNet, input: &BakeInput<'_>, device: &Device) -> Result<(Vec<u8>, Cache)> {
+    let cache = evaluate(net, input.points, input.normalisation, device);
+    let v = input.points.len();
+    let m = net.corrective_shapes();
+    let mut w = SinewWriter::new(ArtifactKind::AimActor);
+    if input.playback_only {
+        w.flags(FLAG_PLAYBACK_ONLY);
+    }
+    for (k, val) in &input.metadata {
+        w.meta(k, val);
+    }
+    let flat = |p: &[[f32; 3]]| p.iter().flatten().copied().collect::<Vec<f32>>();
+    w.f32s("tpl.pos", &[v, 3], &flat(input.points))?;
+    let tri: Vec<u32> = input.triangles.iter().flatten().copied().collect();
+    w.u32s("tpl.tri", &[input.triangles.len(), 3], &tri)?;
+    w.f32s("cache.s0", &[v, 3], &flat(&cache.skin))?;
+    w.f32s("cache.k", &[v], &cache.k)?;
+    w.f32s("cache.e", &[v, m, 3], &cache.correctives)?;
+    w.f32s("cache.b0", &[v, 3], &flat(&cache.bone))?;
+    w.f32s("cache.d0", &[v], &cache.thickness)?;
+    w.f32s("cache.n0", &[v, 3], &flat(&cache.normal))?;
+    w.f32s("jaw.pivot", &[3], &input.jaw_pivot)?;
+    // The learned jaw transform of each training expression, for evaluation and replays.
+    w.f32s("train.jaw", &[m, 9], &to_vec(net.jaw.val()))?;
+    if !input.playback_only {
+        w.f32s("aim.norm", &[4], &input.normalisation)?;
+        for (name, mlp) in [
+            ("net.b", &net.b),
+            ("net.d", &net.d),
+            ("net.n", &net.n),
+            ("net.k", &net.k),
+            ("net.e", &net.e),
+        ] {
+            mlp.export(&mut w, name)?;
+        }
+    }
+    Ok((w.to_bytes()?, cache))
+}

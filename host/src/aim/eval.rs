@@ -1,0 +1,119 @@
+//! Accuracy of a baked actor, measured through `sinew-core` playback: each training shape is
+//! posed with its learned jaw transform and a one-hot coefficient vector (AIM eq. 17) and
+//! compared with the ground-truth mesh, per vertex, in millimetres.
+
+use anyhow::{Context, Result, ensure};
+use serde::Serialize;
+use sinew_core::aim::AimActor;
+
+use super::ErrorStats;
+use super::model::IDENTITY_9D;
+
+/// Per-shape and overall errors.
+#[derive(Clone, Debug, Serialize)]
+pub struct ShapeErrors {
+    /// Over all shapes and vertices.
+    pub overall: ErrorStats,
+    /// Per shape, in the actor's shape order (neutral first).
+    pub per_shape: Vec<(String, ErrorStats)>,
+    /// Per vertex, the mean error over shapes (mm), for heatmaps.
+    pub per_vertex_mean: Vec<f32>,
+    /// Per vertex, the error in each shape (mm), shape-major.
+    pub per_shape_vertex: Vec<Vec<f32>>,
+}
+
+/// The learned jaw transform of every training shape, neutral (identity) first.
+pub fn training_poses(actor: &AimActor<'_>) -> Result<Vec<[f32; 9]>> {
+    let m = actor.shape_count();
+    let jaw = actor
+        .file()
+        .f32_tensor("train.jaw", &[m as u32, 9])
+        .map_err(|e| anyhow::anyhow!("train.jaw: {e}"))?;
+    let mut poses = vec![IDENTITY_9D];
+    for i in 0..m {
+        poses.push(std::array::from_fn(|j| jaw.at(9 * i + j)));
+    }
+    Ok(poses)
+}
+
+/// Poses training shape `i` (0 = neutral) through the core.
+pub fn pose_training_shape(actor: &AimActor<'_>, jaw: &[f32; 9], i: usize) -> Vec<f32> {
+    let mut w = vec![0.0; actor.shape_count()];
+    if i > 0 {
+        w[i - 1] = 1.0;
+    }
+    let pose = actor.pose_from_9d(jaw, &IDENTITY_9D);
+    let mut out = vec![0.0; 3 * actor.vertex_count()];
+    // Buffer sizes come from the actor itself, so this cannot fail.
+    let _ = actor.pose(&pose, &w, &mut out);
+    out
+}
+
+/// Errors of the baked `actor` against `shapes` (neutral first, the training order).
+pub fn shape_errors(
+    actor: &AimActor<'_>,
+    names: &[String],
+    shapes: &[Vec<[f32; 3]>],
+    mm_per_unit: f32,
+) -> Result<ShapeErrors> {
+    ensure!(
+        shapes.len() == actor.shape_count() + 1,
+        "the model has {} shapes, the data {}",
+        actor.shape_count() + 1,
+        shapes.len()
+    );
+    let poses = training_poses(actor).context("the model carries no training poses")?;
+    let v = actor.vertex_count();
+    let mut all = Vec::with_capacity(v * shapes.len());
+    let mut per_shape = Vec::new();
+    let mut per_vertex_sum = vec![0.0f32; v];
+    let mut per_shape_vertex = Vec::new();
+    for (i, (gt, name)) in shapes.iter().zip(names).enumerate() {
+        ensure!(
+            gt.len() == v,
+            "shape {name} has {} vertices, the model {v}",
+            gt.len()
+        );
+        let posed = pose_training_shape(actor, &poses[i], i);
+        let errs: Vec<f32> = gt
+            .iter()
+            .zip(posed.chunks_exact(3))
+            .map(|(g, p)| {
+                ((g[0] - p[0]).powi(2) + (g[1] - p[1]).powi(2) + (g[2] - p[2]).powi(2)).sqrt()
+                    * mm_per_unit
+            })
+            .collect();
+        for (s, e) in per_vertex_sum.iter_mut().zip(&errs) {
+            *s += e;
+        }
+        per_shape.push((
+            name.clone(),
+            ErrorStats::of(errs.iter().map(|&e| f64::from(e)).collect()),
+        ));
+        all.extend(errs.iter().map(|&e| f64::from(e)));
+        per_shape_vertex.push(errs);
+    }
+    let n = shapes.len() as f32;
+    Ok(ShapeErrors {
+        overall: ErrorStats::of(all),
+        per_shape,
+        per_vertex_mean: per_vertex_sum.iter().map(|s| s / n).collect(),
+        per_shape_vertex,
+    })
+}
+
+/// How far the learned thickness is from the bone constraints, in mm, over constrained vertices.
+pub fn thickness_deviation(
+    actor: &AimActor<'_>,
+    anchors: &[Option<super::Anchor>],
+    mm_per_unit: f32,
+) -> ErrorStats {
+    let d = actor.thickness();
+    ErrorStats::of(
+        anchors
+            .iter()
+            .enumerate()
+            .filter_map(|(i, a)| a.map(|a| f64::from((d.at(i) - a.thickness).abs() * mm_per_unit)))
+            .collect(),
+    )
+}

@@ -1,0 +1,156 @@
+//! AIM, "Anatomically Constrained Implicit Face Models" (Chandran & Zoss 2024): the training
+//! set, the five-network model, its training (eqs. 11–16), baking into the core's format and the
+//! accuracy report.
+
+pub mod bake;
+pub mod config;
+pub mod data;
+pub mod eval;
+pub mod model;
+pub mod run;
+pub mod train;
+
+use serde::Serialize;
+
+pub use config::AimConfig;
+
+/// A plane of symmetry: points x with (x − origin)·normal = 0.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Plane {
+    /// Unit normal.
+    pub normal: [f32; 3],
+    /// A point on the plane.
+    pub origin: [f32; 3],
+}
+
+impl Plane {
+    /// Reflects `x` across the plane.
+    pub fn reflect(&self, x: [f32; 3]) -> [f32; 3] {
+        let d = (0..3)
+            .map(|i| (x[i] - self.origin[i]) * self.normal[i])
+            .sum::<f32>();
+        [0, 1, 2].map(|i| x[i] - 2.0 * d * self.normal[i])
+    }
+
+    /// The reflection as `x ↦ M x + t` (M = I − 2 n nᵀ, t = 2 (o·n) n).
+    pub fn affine(&self) -> ([[f32; 3]; 3], [f32; 3]) {
+        let n = self.normal;
+        let on = (0..3).map(|i| self.origin[i] * n[i]).sum::<f32>();
+        let m =
+            [0, 1, 2].map(|r| [0, 1, 2].map(|c| f32::from(u8::from(r == c)) - 2.0 * n[r] * n[c]));
+        (m, n.map(|v| 2.0 * on * v))
+    }
+}
+
+/// One sparse anatomical constraint at a skin vertex (Wu et al. 2016): bone point, soft-tissue
+/// thickness and bone normal.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Anchor {
+    /// Bone point.
+    pub bone: [f32; 3],
+    /// Thickness, in the data's unit.
+    pub thickness: f32,
+    /// Unit bone normal (pointing out of the bone, towards the skin).
+    pub normal: [f32; 3],
+}
+
+/// Everything AIM learns from: template points, the actor's shapes and the anatomy priors.
+#[derive(Clone, Debug)]
+pub struct TrainingSet {
+    /// Template points c and their polygons (for baking, rendering and OBJ export).
+    pub template: crate::mesh::Mesh,
+    /// The N shapes, neutral first, each `[V]` points in the template's order.
+    pub shapes: Vec<Vec<[f32; 3]>>,
+    /// Shape names, "neutral" first.
+    pub names: Vec<String>,
+    /// Per template vertex, the bone constraint where one was found.
+    pub anchors: Vec<Option<Anchor>>,
+    /// Template vertices of the forehead region c* (eq. 15).
+    pub forehead: Vec<u32>,
+    /// The face's plane of symmetry (eq. 14), estimated from the neutral.
+    pub symmetry: Plane,
+    /// The jaw's pivot for LBS (eq. 10).
+    pub jaw_pivot: [f32; 3],
+    /// Length unit of all coordinates ("cm" for ICT-FaceKit).
+    pub units: String,
+    /// Millimetres per unit (10 for cm), for reports.
+    pub mm_per_unit: f32,
+    /// Where the data came from, with its licence.
+    pub source: String,
+}
+
+impl TrainingSet {
+    /// Number of template points V.
+    pub fn vertices(&self) -> usize {
+        self.template.positions.len()
+    }
+
+    /// Fraction of template vertices with a bone constraint.
+    pub fn constrained_fraction(&self) -> f64 {
+        self.anchors.iter().filter(|a| a.is_some()).count() as f64
+            / self.anchors.len().max(1) as f64
+    }
+
+    /// Checks the set is consistent; the error says what is wrong.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        let v = self.vertices();
+        anyhow::ensure!(
+            self.shapes.len() >= 2,
+            "AIM needs a neutral and at least one expression, got {} shapes",
+            self.shapes.len()
+        );
+        anyhow::ensure!(
+            self.shapes.len() == self.names.len(),
+            "{} shapes but {} names",
+            self.shapes.len(),
+            self.names.len()
+        );
+        for (s, name) in self.shapes.iter().zip(&self.names) {
+            anyhow::ensure!(
+                s.len() == v,
+                "shape {name} has {} vertices, the template {v}",
+                s.len()
+            );
+        }
+        anyhow::ensure!(
+            self.anchors.len() == v,
+            "{} constraints for {v} vertices",
+            self.anchors.len()
+        );
+        anyhow::ensure!(
+            self.forehead.iter().all(|&i| (i as usize) < v),
+            "forehead index out of range"
+        );
+        Ok(())
+    }
+}
+
+/// Per-vertex error statistics in millimetres.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct ErrorStats {
+    /// Mean.
+    pub mean: f64,
+    /// Median.
+    pub median: f64,
+    /// 95th percentile.
+    pub p95: f64,
+    /// Maximum.
+    pub max: f64,
+}
+
+impl ErrorStats {
+    /// Statistics of `values` (any order).
+    pub fn of(mut values: Vec<f64>) -> Self {
+        if values.is_empty() {
+            return Self::default();
+        }
+        values.sort_by(f64::total_cmp);
+        let at = |q: f64| values[((values.len() - 1) as f64 * q).round() as usize];
+        Self {
+            mean: values.iter().sum::<f64>() / values.len() as f64,
+            median: at(0.5),
+            p95: at(0.95),
+            max: at(1.0),
+        }
+    }
+}

@@ -1,0 +1,507 @@
+//! AIM training: the loop over eqs. 11–16 with Adam, seeded per step so that a resumed run
+//! reaches the same weights as an uninterrupted one, with atomic checkpoints, Ctrl-C handling,
+//! a progress bar and a loss history.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use burn::module::Module;
+use burn::optim::{AdamConfig, GradientsParams};
+use burn::tensor::{Device, Int, Tensor, TensorData};
+use rand_core::RngCore;
+use serde::{Deserialize, Serialize};
+
+use super::model::AimNet;
+use super::{AimConfig, TrainingSet};
+use crate::backend::Backend;
+use crate::nn::to_vec;
+
+/// Names of the logged loss terms, in [`LossRecord::terms`] order.
+pub const TERMS: [&str; 6] = [
+    "skin",
+    "anatomy",
+    "thickness_reg",
+    "symmetry",
+    "forehead",
+    "total",
+];
+
+/// The loss terms at one step.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct LossRecord {
+    /// Step (0-based).
+    pub step: usize,
+    /// Learning rate used.
+    pub lr: f64,
+    /// L_S, L_A, L_D, L_Sym, L_K and their sum, as weighted in the objective.
+    pub terms: [f32; 6],
+}
+
+/// What a checkpoint folder's `state.json` holds besides the weights.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CheckpointState {
+    /// Steps completed.
+    pub steps_done: usize,
+    /// The configuration (a resumed run must use the same).
+    pub config: AimConfig,
+    /// Loss history so far.
+    pub history: Vec<LossRecord>,
+    /// Training seconds so far.
+    pub seconds: f64,
+    /// Input normalisation: centre xyz and scale.
+    pub normalisation: [f32; 4],
+    /// Shape names, neutral first.
+    pub names: Vec<String>,
+    /// The jaw pivot of the training set.
+    pub jaw_pivot: [f32; 3],
+    /// Metadata of the training set (units, source…), for baking from the checkpoint alone.
+    pub metadata: Vec<(String, String)>,
+}
+
+/// Options of one training run.
+#[derive(Clone, Debug)]
+pub struct TrainOptions {
+    /// The burn backend.
+    pub backend: Backend,
+    /// Folder for checkpoints (created).
+    pub checkpoint_dir: PathBuf,
+    /// Continue from the checkpoint in `checkpoint_dir`.
+    pub resume: bool,
+    /// Stop after this many steps in this invocation (tests of resumption); `None` runs to the end.
+    pub stop_after: Option<usize>,
+    /// Hide the progress bar.
+    pub quiet: bool,
+}
+
+/// A finished (or stopped) training run.
+#[derive(Debug)]
+pub struct Trained {
+    /// The model, moved to an inference (non-autodiff) device.
+    pub model: AimNet,
+    /// Checkpoint state at the end.
+    pub state: CheckpointState,
+    /// Whether all configured iterations ran.
+    pub complete: bool,
+}
+
+/// The input normalisation of a template: centre of its bounding box and half its largest extent,
+/// so SIREN sees coordinates in [−1, 1].
+pub fn normalisation(points: &[[f32; 3]]) -> [f32; 4] {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in points {
+        for i in 0..3 {
+            lo[i] = lo[i].min(p[i]);
+            hi[i] = hi[i].max(p[i]);
+        }
+    }
+    let scale = (0..3).map(|i| hi[i] - lo[i]).fold(0.0f32, f32::max) * 0.5;
+    [
+        (lo[0] + hi[0]) * 0.5,
+        (lo[1] + hi[1]) * 0.5,
+        (lo[2] + hi[2]) * 0.5,
+        scale.max(1e-6),
+    ]
+}
+
+/// Normalised coordinates of `p`.
+pub fn normalise(p: [f32; 3], n: [f32; 4]) -> [f32; 3] {
+    [
+        (p[0] - n[0]) / n[3],
+        (p[1] - n[1]) / n[3],
+        (p[2] - n[2]) / n[3],
+    ]
+}
+
+/// The random draws of one step, from a generator seeded by (seed, step) alone.
+struct Draw {
+    points: Vec<u32>,
+    shapes: Vec<u32>,
+    symmetry: Vec<u32>,
+    forehead: Vec<u32>,
+}
+
+fn draw(set: &TrainingSet, config: &AimConfig, step: usize) -> Draw {
+    let mut rng = rand_pcg::Pcg64::new(
+        u128::from(config.seed) << 64 | step as u128,
+        0xda3e_39cb_94b9_5bdb,
+    );
+    let mut below = |n: usize| ((rng.next_u64() as u128 * n as u128) >> 64) as u32;
+    let v = set.vertices();
+    let n = set.shapes.len();
+    let points = (0..config.batch).map(|_| below(v)).collect();
+    let shapes = (0..config.batch).map(|_| below(n)).collect();
+    let symmetry = (0..config.symmetry_batch).map(|_| below(v)).collect();
+    let forehead = if set.forehead.is_empty() {
+        Vec::new()
+    } else {
+        (0..config.forehead_batch)
+            .map(|_| set.forehead[below(set.forehead.len()) as usize])
+            .collect()
+    };
+    Draw {
+        points,
+        shapes,
+        symmetry,
+        forehead,
+    }
+}
+
+fn rows(values: Vec<f32>, width: usize, device: &Device) -> Tensor<2> {
+    let n = values.len() / width;
+    Tensor::from_data(TensorData::new(values, [n, width]), device)
+}
+
+/// One step's objective, eq. 16: L_S + L_A + L_D + L_Sym + L_K. Returns the total and the terms.
+fn objective(
+    net: &AimNet,
+    set: &TrainingSet,
+    config: &AimConfig,
+    norm: [f32; 4],
+    d: &Draw,
+    device: &Device,
+) -> (Tensor<1>, Tensor<1>) {
+    let tpl = &set.template.positions;
+    let gather3 = |idx: &[u32], f: &dyn Fn(u32) -> [f32; 3]| {
+        rows(idx.iter().flat_map(|&i| f(i)).collect(), 3, device)
+    };
+    let x = gather3(&d.points, &|i| normalise(tpl[i as usize], norm));
+    let c = gather3(&d.points, &|i| tpl[i as usize]);
+    let gt = rows(
+        d.points
+            .iter()
+            .zip(&d.shapes)
+            .flat_map(|(&v, &s)| set.shapes[s as usize][v as usize])
+            .collect(),
+        3,
+        device,
+    );
+    let shape = Tensor::<1, Int>::from_data(
+        TensorData::new(
+            d.shapes.iter().map(|&s| i64::from(s)).collect::<Vec<_>>(),
+            [d.shapes.len()],
+        ),
+        device,
+    );
+    let pivot = rows(set.jaw_pivot.to_vec(), 3, device);
+
+    let p = net.predict(x, c);
+    // AIM eq. 11: L_S = λ_S ||s̃_i − s_i||²
+    let skin = net
+        .pose(&p, shape, pivot)
+        .sub(gt)
+        .square()
+        .sum_dim(1)
+        .mean()
+        .mul_scalar(config.lambda_skin);
+
+    // AIM eq. 12 on the constrained samples: λ_b||b̃0 − b0||² + λ_d||d̃0 − d0||² + λ_n||ñ0 − n0||²
+    let anchor = |i: u32| set.anchors[i as usize];
+    let mask: Vec<f32> = d
+        .points
+        .iter()
+        .map(|&i| f32::from(u8::from(anchor(i).is_some())))
+        .collect();
+    let count = mask.iter().sum::<f32>().max(1.0);
+    let mask = rows(mask, 1, device);
+    let bone_t = gather3(&d.points, &|i| anchor(i).map_or([0.0; 3], |a| a.bone));
+    let normal_t = gather3(&d.points, &|i| anchor(i).map_or([0.0; 3], |a| a.normal));
+    let thick_t = rows(
+        d.points
+            .iter()
+            .map(|&i| anchor(i).map_or(0.0, |a| a.thickness))
+            .collect(),
+        1,
+        device,
+    );
+    let anatomy = (p
+        .bone
+        .clone()
+        .sub(bone_t)
+        .square()
+        .sum_dim(1)
+        .mul_scalar(config.lambda_bone)
+        + p.thickness
+            .clone()
+            .sub(thick_t)
+            .square()
+            .mul_scalar(config.lambda_thickness)
+        + p.normal
+            .clone()
+            .sub(normal_t)
+            .square()
+            .sum_dim(1)
+            .mul_scalar(config.lambda_normal))
+    .mul(mask)
+    .sum()
+    .div_scalar(count);
+
+    // AIM eq. 13: L_D = λ_D ||d̃0||²
+    let thickness_reg = p
+        .thickness
+        .square()
+        .mean()
+        .mul_scalar(config.lambda_thickness_reg);
+
+    // AIM eq. 14: L_Sym = λ_sym ||B(R(c)) − R(B(c))||², B predicting b0 = c + B(ĉ).
+    let refl = |q: [f32; 3]| set.symmetry.reflect(q);
+    let cs = gather3(&d.symmetry, &|i| tpl[i as usize]);
+    let xs = gather3(&d.symmetry, &|i| normalise(tpl[i as usize], norm));
+    let cm = gather3(&d.symmetry, &|i| refl(tpl[i as usize]));
+    let xm = gather3(&d.symmetry, &|i| normalise(refl(tpl[i as usize]), norm));
+    let b_c = cs + net.b.forward(xs);
+    let b_rc = cm + net.b.forward(xm);
+    let (m, t) = set.symmetry.affine();
+    let m = rows(m.iter().flatten().copied().collect(), 3, device);
+    let t = rows(t.to_vec(), 3, device);
+    let symmetry = (b_rc - (b_c.matmul(m) + t))
+        .square()
+        .sum_dim(1)
+        .mean()
+        .mul_scalar(config.lambda_symmetry);
+
+    // AIM eq. 15: L_K = λ_K ||K(c*)||² on the forehead.
+    let forehead = if d.forehead.is_empty() {
+        Tensor::<1>::zeros([1], device)
+    } else {
+        let xf = gather3(&d.forehead, &|i| normalise(tpl[i as usize], norm));
+        net.k
+            .forward(xf)
+            .square()
+            .mean()
+            .mul_scalar(config.lambda_forehead)
+    };
+
+    let total = skin.clone()
+        + anatomy.clone()
+        + thickness_reg.clone()
+        + symmetry.clone()
+        + forehead.clone();
+    let terms = Tensor::cat(
+        vec![
+            skin,
+            anatomy,
+            thickness_reg,
+            symmetry,
+            forehead,
+            total.clone(),
+        ],
+        0,
+    )
+    .detach();
+    (total, terms)
+}
+
+/// One optimisation step (the draw of `step`, the objective, backward, Adam at the scheduled
+/// rate). Returns the updated model and the detached loss terms ([`TERMS`] order).
+pub fn step_once(
+    net: AimNet,
+    optim: &mut burn::optim::ModuleOptimizer,
+    set: &TrainingSet,
+    config: &AimConfig,
+    norm: [f32; 4],
+    step: usize,
+    device: &Device,
+) -> (AimNet, Tensor<1>) {
+    let d = draw(set, config, step);
+    let (total, terms) = objective(&net, set, config, norm, &d, device);
+    let grads = GradientsParams::from_grads(total.backward(), &net);
+    (optim.step(config.lr_at(step), net, grads), terms)
+}
+
+/// A fresh model and Adam optimiser for `set` (for benchmarks and custom loops).
+pub fn init(
+    set: &TrainingSet,
+    config: &AimConfig,
+    backend: Backend,
+) -> Result<(AimNet, burn::optim::ModuleOptimizer, Device)> {
+    let device = backend.autodiff_device(config.seed)?;
+    Ok((
+        AimNet::new(config, set.shapes.len(), &device),
+        AdamConfig::new().with_epsilon(1e-8).init(),
+        device,
+    ))
+}
+
+/// Trains AIM on `set` (or resumes), checkpointing to `options.checkpoint_dir`.
+pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> Result<Trained> {
+    set.validate()?;
+    config.validate()?;
+    let device = options.backend.autodiff_device(config.seed)?;
+    let dir = &options.checkpoint_dir;
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}: cannot create checkpoint folder", dir.display()))?;
+    let norm = normalisation(&set.template.positions);
+    let mut net = AimNet::new(config, set.shapes.len(), &device);
+    let mut optim = AdamConfig::new().with_epsilon(1e-8).init();
+    let mut state = CheckpointState {
+        steps_done: 0,
+        config: config.clone(),
+        history: Vec::new(),
+        seconds: 0.0,
+        normalisation: norm,
+        names: set.names.clone(),
+        jaw_pivot: set.jaw_pivot,
+        metadata: super::run::metadata(set, config)?,
+    };
+    if options.resume {
+        let (n, o, s) = load_checkpoint(dir, net, optim, &device)?;
+        if s.config != *config {
+            bail!(
+                "{}: the checkpoint was trained with another configuration; resume with the same config",
+                dir.display()
+            );
+        }
+        if s.names != set.names {
+            bail!(
+                "{}: the checkpoint was trained on other shapes ({:?})",
+                dir.display(),
+                s.names
+            );
+        }
+        (net, optim, state) = (n, o, s);
+    } else {
+        // The template travels with the checkpoint so that `sinew bake` needs nothing else.
+        set.template.write(&dir.join("template.obj"))?;
+    }
+
+    let interrupted = Arc::new(AtomicBool::new(false));
+    {
+        let flag = interrupted.clone();
+        // A second registration (e.g. in tests) fails harmlessly: Ctrl-C then just stops the process.
+        let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
+    }
+    let bar = crate::progress::bar(config.iterations as u64, options.quiet);
+    bar.set_position(state.steps_done as u64);
+    let start = Instant::now();
+    let seconds_before = state.seconds;
+    let first = state.steps_done;
+    let last = options
+        .stop_after
+        .map_or(config.iterations, |n| (first + n).min(config.iterations));
+    for step in first..last {
+        let lr = config.lr_at(step);
+        let terms;
+        (net, terms) = step_once(net, &mut optim, set, config, norm, step, &device);
+        if std::env::var_os("SINEW_DEBUG_STEPS").is_some() && step % 50 == 0 {
+            eprintln!("step {step} at {:.2}s", start.elapsed().as_secs_f64());
+        }
+        state.steps_done = step + 1;
+        if step % 10 == 0 || step + 1 == config.iterations {
+            let t = to_vec(terms);
+            let mut record = LossRecord {
+                step,
+                lr,
+                terms: [0.0; 6],
+            };
+            record.terms.copy_from_slice(&t[..6]);
+            if !record.terms[5].is_finite() {
+                bail!(
+                    "training diverged at step {step} (loss {:?}); lower the learning rate",
+                    record.terms
+                );
+            }
+            bar.set_message(format!(
+                "skin {:.3e} anat {:.3e} sym {:.2e} K {:.2e}",
+                t[0], t[1], t[3], t[4]
+            ));
+            state.history.push(record);
+        }
+        bar.inc(1);
+        let interrupt = interrupted.load(Ordering::SeqCst);
+        if state.steps_done.is_multiple_of(config.checkpoint_every)
+            || interrupt
+            || state.steps_done == last
+        {
+            state.seconds = seconds_before + start.elapsed().as_secs_f64();
+            save_checkpoint(dir, &net, &optim, &state)?;
+        }
+        if interrupt {
+            bar.abandon();
+            bail!(
+                "interrupted at step {}; checkpoint saved in {} (continue with --resume)",
+                state.steps_done,
+                dir.display()
+            );
+        }
+    }
+    bar.finish_and_clear();
+    state.seconds = seconds_before + start.elapsed().as_secs_f64();
+    let complete = state.steps_done >= config.iterations;
+    Ok(Trained {
+        model: net.valid(),
+        state,
+        complete,
+    })
+}
+
+/// Writes a checkpoint folder atomically, file by file (`state.json` last).
+pub fn save_checkpoint(
+    dir: &Path,
+    net: &AimNet,
+    optim: &burn::optim::ModuleOptimizer,
+    state: &CheckpointState,
+) -> Result<()> {
+    let model = net
+        .clone()
+        .into_record()
+        .into_bytes()
+        .map_err(|e| anyhow::anyhow!("{}: cannot serialise the model: {e:?}", dir.display()))?;
+    let opt = optim
+        .into_bytes()
+        .map_err(|e| anyhow::anyhow!("{}: cannot serialise the optimiser: {e:?}", dir.display()))?;
+    crate::atomic::write(&dir.join("model.bpk"), &model)?;
+    crate::atomic::write(&dir.join("optim.bpk"), &opt)?;
+    // state.json last: a checkpoint is complete once it names its step.
+    crate::atomic::write(
+        &dir.join("state.json"),
+        serde_json::to_string_pretty(state)?.as_bytes(),
+    )
+}
+
+/// Loads a checkpoint folder into a model of the right shape.
+pub fn load_checkpoint(
+    dir: &Path,
+    net: AimNet,
+    optim: burn::optim::ModuleOptimizer,
+    device: &Device,
+) -> Result<(AimNet, burn::optim::ModuleOptimizer, CheckpointState)> {
+    let read = |name: &str| {
+        std::fs::read(dir.join(name))
+            .with_context(|| format!("{}: cannot read checkpoint file {name}", dir.display()))
+    };
+    let state: CheckpointState = serde_json::from_slice(&read("state.json")?)
+        .with_context(|| format!("{}/state.json: invalid", dir.display()))?;
+    let net = if net.corrective_shapes() + 1 == state.names.len() {
+        net
+    } else {
+        AimNet::new(&state.config, state.names.len(), device)
+    };
+    let record = burn::store::ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(read(
+        "model.bpk",
+    )?))
+    .map_err(|e| anyhow::anyhow!("{}/model.bpk: invalid: {e:?}", dir.display()))?;
+    let net = net.try_load_record(record).map_err(|e| {
+        anyhow::anyhow!("{}/model.bpk: does not fit the model: {e:?}", dir.display())
+    })?;
+    let optim = optim
+        .from_bytes(burn::tensor::Bytes::from_bytes_vec(read("optim.bpk")?))
+        .map_err(|e| anyhow::anyhow!("{}/optim.bpk: invalid: {e:?}", dir.display()))?;
+    Ok((net, optim, state))
+}
+
+/// Loads only the model and state of a checkpoint (for baking), on an inference device.
+pub fn load_model(dir: &Path, backend: Backend) -> Result<(AimNet, CheckpointState)> {
+    let state: CheckpointState =
+        serde_json::from_slice(&std::fs::read(dir.join("state.json")).with_context(|| {
+            format!("{}: not a checkpoint folder (no state.json)", dir.display())
+        })?)
+        .with_context(|| format!("{}/state.json: invalid", dir.display()))?;
+    let device = backend.device(state.config.seed)?;
+    let net = AimNet::new(&state.config, state.names.len(), &device);
+    let (net, _, state) = load_checkpoint(dir, net, AdamConfig::new().init(), &device)?;
+    Ok((net, state))
+}
