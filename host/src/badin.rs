@@ -417,23 +417,7 @@ impl Badin {
 mod tests {
     use super::*;
 
-    /// The data folder, or `None` (after printing why) when it is absent and not required.
-    pub(crate) fn data_dir() -> Option<PathBuf> {
-        let dir = std::env::var_os("SINEW_DATA")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
-        if dir.is_dir() {
-            return Some(dir);
-        }
-        if std::env::var("SINEW_REQUIRE_DATA").as_deref() == Ok("1") {
-            panic!(
-                "{}: data folder missing and SINEW_REQUIRE_DATA=1",
-                dir.display()
-            );
-        }
-        println!("skipping: {} not found (set SINEW_DATA)", dir.display());
-        None
-    }
+    use crate::testing::data_dir;
 
     /// ANSYS node lines: id in 8 columns, coordinates right-aligned in 20 (a negative value
     /// fills all 20, so it touches the previous field, as in the real file).

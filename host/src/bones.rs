@@ -1780,25 +1780,8 @@ fn inv3(a: M3) -> Option<M3> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::PathBuf;
 
-    /// The data folder, or `None` (after printing why) when it is absent and not required.
-    fn data_dir() -> Option<PathBuf> {
-        let dir = std::env::var_os("SINEW_DATA")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
-        if dir.is_dir() {
-            return Some(dir);
-        }
-        if std::env::var("SINEW_REQUIRE_DATA").as_deref() == Ok("1") {
-            panic!(
-                "{}: data folder missing and SINEW_REQUIRE_DATA=1",
-                dir.display()
-            );
-        }
-        println!("skipping: {} not found (set SINEW_DATA)", dir.display());
-        None
-    }
+    use crate::testing::data_dir;
 
     /// A small deterministic generator in [-1, 1).
     struct Lcg(u64);

@@ -242,7 +242,7 @@ pub fn play(model: &Path, poses: &Path, out: &Path, template: Option<&Mesh>) -> 
         actor
             .pose(&pose, &f.weights, &mut buf)
             .map_err(|e| anyhow::anyhow!("frame {i}: {e}"))?;
-        let positions = buf.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let positions = crate::mesh::points(buf.iter().copied());
         mesh.with_positions(positions)
             .write(&out.join(format!("frame_{i:05}.obj")))?;
     }
@@ -252,13 +252,7 @@ pub fn play(model: &Path, poses: &Path, out: &Path, template: Option<&Mesh>) -> 
 /// The baked template as a triangle mesh.
 pub fn mesh_of(actor: &AimActor<'_>) -> Mesh {
     let t = actor.triangles().indices();
-    let positions = actor
-        .template()
-        .iter()
-        .collect::<Vec<f32>>()
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]])
-        .collect();
+    let positions = crate::mesh::points(actor.template().iter());
     let polygons = t
         .iter()
         .collect::<Vec<u32>>()
@@ -334,14 +328,8 @@ pub fn edit_thickness(model: &Path, region: &Path, scale: f32, out: &Path) -> Re
         .edit_thickness(&mask, scale, &mut edited)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
     let mesh = mesh_of(&actor);
-    let before: Vec<[f32; 3]> = actor
-        .rest()
-        .iter()
-        .collect::<Vec<f32>>()
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]])
-        .collect();
-    let after: Vec<[f32; 3]> = edited.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let before: Vec<[f32; 3]> = crate::mesh::points(actor.rest().iter());
+    let after: Vec<[f32; 3]> = crate::mesh::points(edited.iter().copied());
     std::fs::create_dir_all(out)
         .with_context(|| format!("{}: cannot create folder", out.display()))?;
     mesh.with_positions(after.clone())

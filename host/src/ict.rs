@@ -380,7 +380,7 @@ impl IctFaceKit {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::tests::data_dir;
+    use crate::testing::data_dir;
 
     fn kit() -> Option<IctFaceKit> {
         let dir = data_dir()?.join("ict-facekit");

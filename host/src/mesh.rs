@@ -698,26 +698,17 @@ fn parse_ply(bytes: &[u8]) -> Result<Mesh> {
     Ok(mesh)
 }
 
+/// Groups flat `x, y, z, x, y, z, …` values into points (a trailing partial point is dropped).
+pub fn points(values: impl IntoIterator<Item = f32>) -> Vec<[f32; 3]> {
+    let flat: Vec<f32> = values.into_iter().collect();
+    flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use std::path::PathBuf;
 
-    /// The shared real-data folder, or `None` (after printing why) when it is absent and
-    /// `SINEW_REQUIRE_DATA` is not `1`.
-    pub(crate) fn data_dir() -> Option<PathBuf> {
-        let dir = std::env::var_os("SINEW_DATA")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
-        if dir.is_dir() {
-            Some(dir)
-        } else if std::env::var("SINEW_REQUIRE_DATA").as_deref() == Ok("1") {
-            panic!("SINEW_REQUIRE_DATA=1 but {} is missing", dir.display());
-        } else {
-            eprintln!("skipping: real data folder {} not found", dir.display());
-            None
-        }
-    }
+    use crate::testing::data_dir;
 
     /// A unit quad and a triangle sharing an edge, with a UV seam (5 UVs for 5 corners' worth
     /// of distinct coordinates).

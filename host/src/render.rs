@@ -831,20 +831,7 @@ mod tests {
         }
     }
 
-    /// The shared data folder, or `None` (after saying so) when it is absent and not required.
-    fn data_dir() -> Option<std::path::PathBuf> {
-        let dir = std::env::var_os("SINEW_DATA")
-            .map(std::path::PathBuf::from)
-            .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
-        if dir.is_dir() {
-            Some(dir)
-        } else if std::env::var("SINEW_REQUIRE_DATA").as_deref() == Ok("1") {
-            panic!("SINEW_REQUIRE_DATA=1 but {} is missing", dir.display());
-        } else {
-            println!("skipping: {} not found", dir.display());
-            None
-        }
-    }
+    use crate::testing::data_dir;
 
     #[test]
     fn ict_face_front_view_is_symmetric_and_yaw_breaks_it() {

@@ -5,12 +5,19 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 fn sinew(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sinew")).args(args).output().expect("run sinew")
+    Command::new(env!("CARGO_BIN_EXE_sinew"))
+        .args(args)
+        .output()
+        .expect("run sinew")
 }
 
 fn ok(args: &[&str]) -> String {
     let out = sinew(args);
-    assert!(out.status.success(), "sinew {args:?} failed:\n{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "sinew {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
@@ -30,56 +37,135 @@ fn demo_then_every_command_on_its_outputs() {
     let out = dir.path().join("demo");
     let report = ok(&["demo", "--out", s(&out), "--iterations", "20", "--quiet"]);
     let report: serde_json::Value = serde_json::from_str(&report).unwrap();
-    for key in ["shapes", "vertices", "iterations", "seconds", "mean_error_mm", "median_error_mm", "p95_error_mm", "max_error_mm", "constrained_fraction", "negative_thickness_count"] {
+    for key in [
+        "shapes",
+        "vertices",
+        "iterations",
+        "seconds",
+        "mean_error_mm",
+        "median_error_mm",
+        "p95_error_mm",
+        "max_error_mm",
+        "constrained_fraction",
+        "negative_thickness_count",
+    ] {
         assert!(report.get(key).is_some(), "report lacks {key}");
     }
     assert_eq!(report["shapes"], 7);
     assert_eq!(report["iterations"], 20);
-    for f in ["actor.sinew", "report.json", "actor.config.json", "loss.png", "error.png", "anatomy.png", "playback.png", "skin.obj", "anatomy.obj", "poses.json"] {
+    for f in [
+        "actor.sinew",
+        "report.json",
+        "actor.config.json",
+        "loss.png",
+        "error.png",
+        "anatomy.png",
+        "playback.png",
+        "skin.obj",
+        "anatomy.obj",
+        "poses.json",
+    ] {
         assert!(out.join(f).is_file(), "demo did not write {f}");
     }
     assert_eq!(std::fs::read_dir(out.join("play")).unwrap().count(), 24);
 
     let model = out.join("actor.sinew");
-    let inspect: serde_json::Value = serde_json::from_str(&ok(&["inspect", s(&model), "--json"])).unwrap();
+    let inspect: serde_json::Value =
+        serde_json::from_str(&ok(&["inspect", s(&model), "--json"])).unwrap();
     assert_eq!(inspect["kind"], "aim-actor");
     assert_eq!(inspect["checksums"], "ok");
 
     // Re-bake playback-only from the checkpoint: the core loads it without networks.
     let small = dir.path().join("small.sinew");
-    ok(&["bake", "--checkpoint", s(&out.join("actor.ckpt")), "--out", s(&small), "--playback-only"]);
+    ok(&[
+        "bake",
+        "--checkpoint",
+        s(&out.join("actor.ckpt")),
+        "--out",
+        s(&small),
+        "--playback-only",
+    ]);
     let bytes = std::fs::read(&small).unwrap();
     let actor = sinew_core::aim::AimActor::from_bytes(&bytes).unwrap();
     assert!(actor.networks().is_none());
     let full = std::fs::read(&model).unwrap();
     let full = sinew_core::aim::AimActor::from_bytes(&full).unwrap();
-    assert_eq!(actor.rest(), full.rest(), "re-baked cache differs from the trained bake");
+    assert_eq!(
+        actor.rest(),
+        full.rest(),
+        "re-baked cache differs from the trained bake"
+    );
 
     // Play: one OBJ per frame; a bad pose file is named in the error.
     let frames = dir.path().join("frames");
-    ok(&["play", "--model", s(&model), "--poses", s(&out.join("poses.json")), "--out", s(&frames)]);
+    ok(&[
+        "play",
+        "--model",
+        s(&model),
+        "--poses",
+        s(&out.join("poses.json")),
+        "--out",
+        s(&frames),
+    ]);
     assert_eq!(std::fs::read_dir(&frames).unwrap().count(), 24);
     let bad = dir.path().join("bad.json");
     std::fs::write(&bad, r#"{"frames": [{"weights": [1.0]}]}"#).unwrap();
-    let e = err(&["play", "--model", s(&model), "--poses", s(&bad), "--out", s(&frames)]);
+    let e = err(&[
+        "play",
+        "--model",
+        s(&model),
+        "--poses",
+        s(&bad),
+        "--out",
+        s(&frames),
+    ]);
     assert!(e.contains("bad.json") && e.contains("weights"), "{e}");
 
     // Edit: thicker tissue on the first vertices moves exactly those.
     let region = dir.path().join("region.json");
     std::fs::write(&region, "[0, 1, 2, 3, 4]").unwrap();
     let edited = dir.path().join("edited");
-    ok(&["edit", "thickness", "--model", s(&model), "--mask", s(&region), "--scale", "2", "--out", s(&edited)]);
+    ok(&[
+        "edit",
+        "thickness",
+        "--model",
+        s(&model),
+        "--mask",
+        s(&region),
+        "--scale",
+        "2",
+        "--out",
+        s(&edited),
+    ]);
     assert!(edited.join("edit.png").is_file() && edited.join("edited_neutral.obj").is_file());
     std::fs::write(&region, "[999999]").unwrap();
-    let e = err(&["edit", "thickness", "--model", s(&model), "--mask", s(&region), "--scale", "2", "--out", s(&edited)]);
-    assert!(e.contains("region.json") && e.contains("out of range"), "{e}");
+    let e = err(&[
+        "edit",
+        "thickness",
+        "--model",
+        s(&model),
+        "--mask",
+        s(&region),
+        "--scale",
+        "2",
+        "--out",
+        s(&edited),
+    ]);
+    assert!(
+        e.contains("region.json") && e.contains("out of range"),
+        "{e}"
+    );
 }
 
 #[test]
 fn bad_files_are_named_and_fail() {
     let dir = tempfile::tempdir().unwrap();
     let junk = dir.path().join("junk.sinew");
-    std::fs::write(&junk, b"this is not a model at all, only some plain text, longer than a header").unwrap();
+    std::fs::write(
+        &junk,
+        b"this is not a model at all, only some plain text, longer than a header",
+    )
+    .unwrap();
     let e = err(&["inspect", s(&junk)]);
     assert!(e.contains("junk.sinew") && e.contains("magic"), "{e}");
     let e = err(&["inspect", s(&dir.path().join("missing.sinew"))]);

@@ -62,29 +62,11 @@ fn golden(name: &str, actual: &[u8]) -> Option<Vec<u8>> {
     }))
 }
 
-/// Where the real face data lives: `$SINEW_DATA`, else `../shared/data` beside the repository.
-///
-/// Returns `None` (after saying so on stderr) when it is absent, so a data test can skip; with
-/// `SINEW_REQUIRE_DATA=1` (set by `.ci/run`) a missing data set fails instead.
+/// Where the real face data lives (`$SINEW_DATA`, else `../shared/data`), with a subfolder;
+/// `None` to skip a data test (see `sinew_host::testing::data_dir`, which fails instead under
+/// `SINEW_REQUIRE_DATA=1`).
 pub fn data_dir(subfolder: &str) -> Option<PathBuf> {
-    let root = std::env::var_os("SINEW_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
-    let dir = root.join(subfolder);
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    if std::env::var_os("SINEW_REQUIRE_DATA").is_some_and(|v| v == "1") {
-        panic!(
-            "{}: data set missing and SINEW_REQUIRE_DATA=1",
-            dir.display()
-        );
-    }
-    eprintln!(
-        "skipping: data set {} not found (set SINEW_DATA)",
-        dir.display()
-    );
-    None
+    sinew_host::testing::data_dir().map(|d| d.join(subfolder))
 }
 
 /// A small deterministic generator for test inputs and weights (PCG32 via `rand_pcg`), so goldens

@@ -43,7 +43,8 @@ fn load(kind: &str, bytes: &[u8]) -> Result<(), sinew_core::FormatError> {
 
 /// One small valid file of each artefact kind that exists.
 fn artefacts() -> Vec<(&'static str, Vec<u8>)> {
-    let aim = std::fs::read(sinew_tests::golden_dir().join("aim-procedural.sinew")).expect("golden AIM actor (tests/data)");
+    let aim = std::fs::read(sinew_tests::golden_dir().join("aim-procedural.sinew"))
+        .expect("golden AIM actor (tests/data)");
     vec![("network", small_network()), ("aim-actor", aim)]
 }
 
@@ -74,7 +75,10 @@ fn every_truncation_is_an_error() {
         }
         let mut longer = bytes.clone();
         longer.push(0);
-        assert!(load(kind, &longer).is_err(), "{kind}: a trailing byte loaded");
+        assert!(
+            load(kind, &longer).is_err(),
+            "{kind}: a trailing byte loaded"
+        );
     }
 }
 

@@ -27,10 +27,6 @@ pub struct Cache {
     pub normal: Vec<[f32; 3]>,
 }
 
-fn triples(v: Vec<f32>) -> Vec<[f32; 3]> {
-    v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
-}
-
 /// Evaluates the networks at `points` in chunks of 4096 (faster per point than one large batch).
 pub fn evaluate(net: &AimNet, points: &[[f32; 3]], norm: [f32; 4], device: &Device) -> Cache {
     let mut cache = Cache::default();
@@ -43,12 +39,12 @@ pub fn evaluate(net: &AimNet, points: &[[f32; 3]], norm: [f32; 4], device: &Devi
         );
         let c = tensor(chunk.iter().flatten().copied().collect(), [n, 3], device);
         let p = net.predict(x, c);
-        cache.skin.extend(triples(to_vec(p.skin)));
+        cache.skin.extend(crate::mesh::points(to_vec(p.skin)));
         cache.k.extend(to_vec(p.k));
         cache.correctives.extend(to_vec(p.correctives));
-        cache.bone.extend(triples(to_vec(p.bone)));
+        cache.bone.extend(crate::mesh::points(to_vec(p.bone)));
         cache.thickness.extend(to_vec(p.thickness));
-        cache.normal.extend(triples(to_vec(p.normal)));
+        cache.normal.extend(crate::mesh::points(to_vec(p.normal)));
     }
     cache
 }

@@ -203,13 +203,7 @@ pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<()> {
         width: 640,
         height: 640,
     };
-    let skin: Vec<[f32; 3]> = actor
-        .rest()
-        .iter()
-        .collect::<Vec<f32>>()
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]])
-        .collect();
+    let skin: Vec<[f32; 3]> = crate::mesh::points(actor.rest().iter());
     let worst = errors
         .per_shape
         .iter()
@@ -219,7 +213,7 @@ pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<()> {
         .map_or(0, |(i, _)| i);
     let poses = super::eval::training_poses(&actor)?;
     let posed = super::eval::pose_training_shape(&actor, &poses[worst], worst);
-    let posed: Vec<[f32; 3]> = posed.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let posed: Vec<[f32; 3]> = crate::mesh::points(posed.iter().copied());
     let err_neutral = render_heatmap(
         &skin,
         &tri,
@@ -279,9 +273,5 @@ pub fn anatomy_surface(bytes: &[u8]) -> Result<Vec<[f32; 3]>> {
         .section("cache.b0")
         .and_then(|s| s.f32s())
         .context("model has no cache.b0")?;
-    Ok(b.iter()
-        .collect::<Vec<f32>>()
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]])
-        .collect())
+    Ok(crate::mesh::points(b.iter()))
 }
