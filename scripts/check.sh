@@ -19,3 +19,6 @@ cargo build -p sinew-core --target thumbv7em-none-eabihf --locked
 
 echo "== tests"
 cargo test --workspace --locked
+
+echo "== firmware-sim: golden replays on Cortex-M4F, RISC-V (QEMU) and wasm (node)"
+bash firmware-sim/run.sh

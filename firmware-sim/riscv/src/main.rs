@@ -1,0 +1,81 @@
+//! Golden AIM replay on a 32-bit RISC-V core without FPU (riscv32imac-unknown-none-elf: every
+//! `f32` operation in software), run under `qemu-system-riscv32 -machine virt` with semihosting.
+//!
+//! Plays the 16-frame golden sequence with `sinew-core`, prints each frame's hash and the
+//! instructions it retired, and exits 0 only when every hash equals the one pinned on the x86_64
+//! host. A panic or a trap exits non-zero too, so the runner never waits on a spinning hart.
+#![no_std]
+#![no_main]
+
+use riscv::register::{mcause, mepc, minstret, mtval};
+use semihosting::{eprintln, println, process};
+use sinew_firmware_common::{GOLDEN_HASHES, GOLDEN_MODEL, Replay, Scratch, Summary};
+
+#[riscv_rt::entry]
+fn main() -> ! {
+    process::exit(if run() { 0 } else { 1 })
+}
+
+/// Replays every frame; true when all matched.
+fn run() -> bool {
+    // The 24 KiB of frame buffers live in a static, not on the stack.
+    let Some(scratch) = riscv::singleton!(: Scratch = Scratch::new()) else {
+        eprintln!("sinew-firmware-sim-riscv: scratch already taken");
+        return false;
+    };
+    let mut replay = match Replay::new(GOLDEN_MODEL, GOLDEN_HASHES, scratch) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("sinew-firmware-sim-riscv: {e}");
+            return false;
+        }
+    };
+    println!(
+        "sinew-firmware-sim-riscv: rv32imac, {} vertices, {} shapes",
+        replay.actor().vertex_count(),
+        replay.actor().shape_count()
+    );
+    let mut summary = Summary {
+        frames: 0,
+        mismatches: 0,
+    };
+    loop {
+        // Instructions retired; exact and repeatable under QEMU's -icount.
+        let start = minstret::read64();
+        let Some(result) = replay.next() else { break };
+        let instructions = minstret::read64().wrapping_sub(start);
+        let report = match result {
+            Ok(r) => r,
+            Err(e) => {
+                eprintln!("sinew-firmware-sim-riscv: {e}");
+                return false;
+            }
+        };
+        println!("{report}  {instructions} instructions");
+        summary.frames += 1;
+        if !report.ok() {
+            summary.mismatches += 1;
+        }
+    }
+    println!(
+        "sinew-firmware-sim-riscv: {}/{} frames bit-identical to the host",
+        summary.frames - summary.mismatches,
+        summary.frames
+    );
+    summary.passed()
+}
+
+/// Any trap (bad memory access, illegal instruction, …) ends the run with a failure instead of
+/// falling into riscv-rt's default `abort`, which spins until the runner's timeout.
+// Safety: riscv-rt's trap entry calls the symbol `ExceptionHandler` with this signature for every
+// exception that has no handler of its own; no other item exports that name.
+#[unsafe(export_name = "ExceptionHandler")]
+fn exception_handler(_trap_frame: &riscv_rt::TrapFrame) -> ! {
+    eprintln!(
+        "sinew-firmware-sim-riscv: trap, mcause {:#x} at mepc {:#010x} (mtval {:#x})",
+        mcause::read().bits(),
+        mepc::read(),
+        mtval::read()
+    );
+    process::exit(1)
+}

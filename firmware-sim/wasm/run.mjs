@@ -1,0 +1,49 @@
+// Runs the golden AIM replay compiled to wasm32-unknown-unknown under node.
+//
+// Usage: node run.mjs [path/to/sinew_firmware_wasm.wasm]
+// Without a path it looks in ../target (run.sh's shared target directory), then ./target.
+// Prints every frame's hash, and exits 0 only when every frame matched the host's.
+import { existsSync, readFileSync } from "node:fs";
+import { fileURLToPath } from "node:url";
+
+const rel = "wasm32-unknown-unknown/release/sinew_firmware_wasm.wasm";
+const candidates = process.argv[2]
+  ? [process.argv[2]]
+  : ["../target/", "./target/"].map((d) => fileURLToPath(new URL(d + rel, import.meta.url)));
+const path = candidates.find((p) => existsSync(p));
+if (!path) {
+  console.error(`sinew-firmware-wasm: no module at ${candidates.join(" or ")}; build it first`);
+  process.exit(2);
+}
+
+const LOAD_ERROR = 0xffff_ffff;
+// wasm i64 arrives as a signed BigInt; print it as the unsigned 16-digit hex of the hash list.
+const hex = (v) => BigInt.asUintN(64, v).toString(16).padStart(16, "0");
+const frames = [];
+const imports = {
+  sinew: {
+    report(frame, hash, expected) {
+      const ok = hash === expected;
+      frames.push({ frame, ok });
+      const f = String(frame).padStart(2);
+      console.log(
+        ok ? `frame ${f} ${hex(hash)} ok` : `frame ${f} ${hex(hash)} MISMATCH (expected ${hex(expected)})`,
+      );
+    },
+  },
+};
+
+const { instance } = await WebAssembly.instantiate(readFileSync(path), imports);
+console.log(`sinew-firmware-wasm: ${path}`);
+// An i32 result comes back signed: `>>> 0` reads it as the u32 it is.
+const result = instance.exports.sinew_replay() >>> 0;
+if (result === LOAD_ERROR) {
+  console.error("sinew-firmware-wasm: the replay could not load the model or the hash list");
+  process.exit(1);
+}
+const bad = frames.filter((f) => !f.ok).length;
+console.log(`sinew-firmware-wasm: ${frames.length - bad}/${frames.length} frames bit-identical to the host`);
+// Cross-check the module's count with what it reported, and refuse a run that checked nothing.
+if (result !== 0 || bad !== 0 || frames.length === 0) {
+  process.exit(1);
+}

@@ -1,0 +1,53 @@
+//! Golden AIM replay in WebAssembly (wasm32-unknown-unknown, no_std): the module exports
+//! [`sinew_replay`], which plays the 16-frame golden sequence with `sinew-core` and returns how
+//! many frames' hashes differ from those pinned on the x86_64 host. Each frame is also handed to
+//! the host through the import `sinew.report`, so `run.mjs` can print it.
+#![no_std]
+#![deny(unsafe_code)]
+
+use sinew_firmware_common::{GOLDEN_HASHES, GOLDEN_MODEL, Scratch, replay};
+
+/// What [`sinew_replay`] returns when the replay could not run (bad model, malformed or empty
+/// hash list).
+pub const LOAD_ERROR: u32 = 0xFFFF_FFFF;
+
+// Safety: the host must supply `sinew.report` with the signature (i32, i64, i64) -> (); the wasm
+// engine checks the import's type when it instantiates the module, so a wrong signature fails
+// there rather than at the call. The function only reads its arguments, which makes it safe to
+// call (hence `safe fn`).
+#[allow(unsafe_code)]
+#[link(wasm_import_module = "sinew")]
+unsafe extern "C" {
+    /// Called after each frame with this module's hash and the pinned one.
+    safe fn report(frame: u32, hash: u64, expected: u64);
+}
+
+/// Replays the golden sequence; returns the number of mismatching frames (0 when every frame is
+/// bit-identical to the host), or [`LOAD_ERROR`].
+// Safety: `no_mangle` exports the function under its own name; no other symbol in the module
+// is called `sinew_replay`.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_replay() -> u32 {
+    // On the stack (24 KiB of the 1 MiB wasm stack): a `static` would need `static mut` or a lock,
+    // and the module runs one replay at a time anyway.
+    let mut scratch = Scratch::new();
+    let summary = replay(GOLDEN_MODEL, GOLDEN_HASHES, &mut scratch, |r| {
+        report(
+            u32::try_from(r.frame).unwrap_or(u32::MAX),
+            r.hash,
+            r.expected,
+        );
+    });
+    match summary {
+        // At most the number of lines of the list, far below LOAD_ERROR.
+        Ok(s) => u32::try_from(s.mismatches).unwrap_or(LOAD_ERROR - 1),
+        Err(_) => LOAD_ERROR,
+    }
+}
+
+/// A panic traps: the host sees a `RuntimeError` from the call, never a wrong count.
+#[panic_handler]
+fn panic(_info: &core::panic::PanicInfo<'_>) -> ! {
+    core::arch::wasm32::unreachable()
+}
