@@ -12,7 +12,8 @@ cargo fmt --all --check
 (cd core/fuzz && cargo fmt --check)
 
 echo "== clippy"
-cargo clippy --workspace --all-targets --locked -- -D warnings
+# The ndarray backend is linted here (once), so its narrow deprecation allowance stays checked.
+cargo clippy --workspace --all-targets --locked --features sinew-host/ndarray -- -D warnings
 
 echo "== no_std core for thumbv7em-none-eabihf"
 cargo build -p sinew-core --target thumbv7em-none-eabihf --locked
