@@ -386,9 +386,6 @@ pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> R
         let lr = config.lr_at(step);
         let terms;
         (net, terms) = step_once(net, &mut optim, set, config, norm, step, &device);
-        if std::env::var_os("SINEW_DEBUG_STEPS").is_some() && step % 50 == 0 {
-            eprintln!("step {step} at {:.2}s", start.elapsed().as_secs_f64());
-        }
         state.steps_done = step + 1;
         if step % 10 == 0 || step + 1 == config.iterations {
             let t = to_vec(terms);
