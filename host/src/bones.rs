@@ -28,7 +28,7 @@ use std::path::Path;
 use anyhow::{Context, Result, anyhow, bail};
 use serde::{Deserialize, Serialize};
 
-use crate::constraints::Bone;
+use crate::constraints::{Bone, V3, cross, dot, norm, sub};
 use crate::mesh::Mesh;
 
 /// The landmark data file, compiled in.
@@ -1487,7 +1487,6 @@ fn bbox(pts: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
 // ---------------------------------------------------------------------------------------------
 // Transforms.
 
-type V3 = [f64; 3];
 type M3 = [[f64; 3]; 3];
 
 /// `x ↦ a x + t`.
@@ -1711,24 +1710,8 @@ fn v32(p: V3) -> [f32; 3] {
 fn add(a: V3, b: V3) -> V3 {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
-fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
 fn scale3(a: V3, s: f64) -> V3 {
     [a[0] * s, a[1] * s, a[2] * s]
-}
-fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn norm(a: V3) -> f64 {
-    dot(a, a).sqrt()
 }
 fn normalize(a: V3) -> V3 {
     let n = norm(a);
