@@ -25,6 +25,7 @@ use crate::format::{ArtifactKind, FLAG_PLAYBACK_ONLY, SinewFile};
 use crate::linalg::Vec3;
 use crate::network::load_mlp;
 use crate::nn::Mlp;
+use crate::q16::AimQ16;
 use crate::skinning::{Pose, Triangles, skin_vertex, vertex_normals};
 use crate::tensor::F32s;
 
@@ -79,6 +80,7 @@ pub struct AimActor<'a> {
     normal: F32s<'a>,
     pivot: Vec3,
     networks: Option<AimNetworks<'a>>,
+    q16: Option<AimQ16<'a>>,
 }
 
 fn vec3(v: F32s<'_>, i: usize) -> Vec3 {
@@ -150,6 +152,7 @@ impl<'a> AimActor<'a> {
             normal: file.f32_tensor("cache.n0", &[v, 3])?,
             pivot: vec3(pivot, 0),
             networks,
+            q16: AimQ16::from_file(&file, v, m)?,
             file,
         })
     }
@@ -197,6 +200,11 @@ impl<'a> AimActor<'a> {
     /// The jaw pivot.
     pub const fn jaw_pivot(&self) -> Vec3 {
         self.pivot
+    }
+
+    /// The Q16.16 playback cache, when the artefact has one (`sinew bake --q16`).
+    pub const fn q16(&self) -> Option<&AimQ16<'a>> {
+        self.q16.as_ref()
     }
 
     /// The networks, unless the artefact is playback-only.

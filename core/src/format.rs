@@ -580,6 +580,17 @@ impl<'a> SinewFile<'a> {
         }
     }
 
+    /// The Q16.16 tensor called `name` with exactly the dimensions `dims`.
+    pub fn q16_tensor(&self, name: &str, dims: &[u32]) -> Result<I32s<'a>, FormatError> {
+        let s = self.section(name).ok_or(FormatError::MissingSection)?;
+        let v = s.q16s().ok_or(FormatError::WrongDtype)?;
+        if s.dims() == dims {
+            Ok(v)
+        } else {
+            Err(FormatError::IncompatibleShapes)
+        }
+    }
+
     /// The dimensions of the tensor called `name`.
     pub fn dims_of(&self, name: &str) -> Result<([u32; MAX_RANK], u8), FormatError> {
         let s = self.section(name).ok_or(FormatError::MissingSection)?;

@@ -28,11 +28,14 @@ extern crate std;
 
 pub mod aim;
 pub mod error;
+pub mod fast;
 pub mod format;
 pub mod hash;
 pub mod linalg;
 pub mod network;
 pub mod nn;
+pub mod q16;
+pub mod replay;
 pub mod rotation;
 pub mod skinning;
 pub mod sparse;

@@ -231,6 +231,20 @@ pub fn vertex_normals(
     positions: &[f32],
     out: &mut [f32],
 ) -> Result<(), BufferError> {
+    vertex_normals_with(triangles, positions, out, Vec3::normalize)
+}
+
+/// [`vertex_normals`] with another normalisation of the summed face normals (the fast mode's
+/// approximate one, `crate::fast::normalize`).
+///
+/// # Errors
+/// As [`vertex_normals`].
+pub fn vertex_normals_with(
+    triangles: &Triangles<'_>,
+    positions: &[f32],
+    out: &mut [f32],
+    normalize: impl Fn(Vec3) -> Vec3,
+) -> Result<(), BufferError> {
     let len = triangles
         .n_vertices
         .checked_mul(3)
@@ -254,7 +268,7 @@ pub fn vertex_normals(
         }
     }
     for o in out.chunks_exact_mut(3) {
-        write3(o, read3(o).normalize());
+        write3(o, normalize(read3(o)));
     }
     Ok(())
 }

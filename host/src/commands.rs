@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
 
 use crate::aim::data::training_set;
@@ -178,7 +178,7 @@ pub fn train_aim(
 }
 
 /// One frame of a pose file.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Frame {
     /// Head transform: 6D rotation + translation (identity if absent).
@@ -196,11 +196,43 @@ fn identity9() -> [f32; 9] {
 }
 
 /// A pose file: `{"frames": [{"head": [...9], "jaw": [...9], "weights": [...]}, ...]}`.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PoseFile {
     /// The frames in order.
     pub frames: Vec<Frame>,
+}
+
+impl PoseFile {
+    /// Reads a pose file for an actor with `shapes` coefficients; the error names the file and
+    /// the first bad frame.
+    pub fn read(path: &Path, shapes: usize) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        let file: PoseFile = serde_json::from_str(&text)
+            .with_context(|| format!("{}: invalid pose file", path.display()))?;
+        if file.frames.is_empty() {
+            bail!("{}: no frames", path.display());
+        }
+        for (i, f) in file.frames.iter().enumerate() {
+            if f.weights.len() != shapes {
+                bail!(
+                    "{}: frame {i} has {} weights, the model {shapes} shapes",
+                    path.display(),
+                    f.weights.len(),
+                );
+            }
+            if f.head
+                .iter()
+                .chain(&f.jaw)
+                .chain(&f.weights)
+                .any(|v| !v.is_finite())
+            {
+                bail!("{}: frame {i} has a non-finite value", path.display());
+            }
+        }
+        Ok(file)
+    }
 }
 
 /// `sinew play`: poses the baked actor through the core, one OBJ per frame.
@@ -208,28 +240,7 @@ pub fn play(model: &Path, poses: &Path, out: &Path, template: Option<&Mesh>) -> 
     let bytes = crate::container::read(model)?;
     let actor =
         AimActor::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
-    let text = std::fs::read_to_string(poses)
-        .with_context(|| format!("{}: cannot read", poses.display()))?;
-    let file: PoseFile = serde_json::from_str(&text)
-        .with_context(|| format!("{}: invalid pose file", poses.display()))?;
-    for (i, f) in file.frames.iter().enumerate() {
-        if f.weights.len() != actor.shape_count() {
-            bail!(
-                "{}: frame {i} has {} weights, the model {} shapes",
-                poses.display(),
-                f.weights.len(),
-                actor.shape_count()
-            );
-        }
-        if f.head
-            .iter()
-            .chain(&f.jaw)
-            .chain(&f.weights)
-            .any(|v| !v.is_finite())
-        {
-            bail!("{}: frame {i} has a non-finite value", poses.display());
-        }
-    }
+    let file = PoseFile::read(poses, actor.shape_count())?;
     let mesh = match template {
         Some(t) => t.clone(),
         None => mesh_of(&actor),
@@ -487,6 +498,7 @@ pub fn bake(
     out: &Path,
     template: Option<&Path>,
     playback_only: bool,
+    q16: bool,
 ) -> Result<()> {
     let (net, state) = crate::aim::train::load_model(checkpoint, Backend::Flex)?;
     let mesh = match template {
@@ -503,6 +515,34 @@ pub fn bake(
         metadata: state.metadata.clone(),
     };
     let device = Backend::Flex.device(state.config.seed)?;
-    let (bytes, _) = crate::aim::bake::bake(&net, &input, &device)?;
+    let (mut bytes, _) = crate::aim::bake::bake(&net, &input, &device)?;
+    if q16 {
+        bytes = crate::aim::bake::with_q16_cache(&bytes)?;
+    }
     crate::atomic::write(out, &bytes)
+}
+
+/// `sinew replay record`: returns the number of frames recorded.
+pub fn replay_record(
+    model: &Path,
+    poses: &Path,
+    out: &Path,
+    mode: sinew_core::replay::Mode,
+) -> Result<usize> {
+    let bytes = crate::container::read(model)?;
+    let actor =
+        AimActor::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
+    let file = PoseFile::read(poses, actor.shape_count())?;
+    let replay = crate::replay::record(&bytes, mode, &file.frames)
+        .with_context(|| format!("recording {} with {}", poses.display(), model.display()))?;
+    crate::atomic::write(out, &replay)?;
+    Ok(file.frames.len())
+}
+
+/// `sinew replay verify`.
+pub fn replay_verify(model: &Path, replay: &Path) -> Result<crate::replay::Verification> {
+    let m = crate::container::read(model)?;
+    let r = crate::container::read(replay)?;
+    crate::replay::verify(&m, &r)
+        .with_context(|| format!("verifying {} against {}", replay.display(), model.display()))
 }

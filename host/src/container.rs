@@ -40,6 +40,30 @@ impl SinewWriter {
         }
     }
 
+    /// A writer holding everything of a validated artefact (kind, flags, metadata, sections in
+    /// order), to add sections to it and write it again.
+    pub fn from_file(file: &sinew_core::SinewFile<'_>) -> Result<Self> {
+        let mut w = Self::new(file.kind);
+        w.flags(file.flags);
+        for (k, v) in file.metadata().iter() {
+            w.meta(k, v);
+        }
+        for s in file.sections() {
+            if s.kind == SectionKind::Metadata {
+                continue;
+            }
+            let dims: Vec<usize> = s.dims().iter().map(|&d| d as usize).collect();
+            let dtype = s
+                .dtype
+                .ok_or_else(|| anyhow::anyhow!("section {}: no data type", s.name()))?;
+            w.push(s.name(), dtype, &dims, s.data().to_vec())?;
+            if let Some(last) = w.sections.last_mut() {
+                last.kind = s.kind;
+            }
+        }
+        Ok(w)
+    }
+
     /// Sets header flags (`sinew_core::format::FLAG_*`).
     pub fn flags(&mut self, flags: u32) -> &mut Self {
         self.flags = flags;

@@ -17,6 +17,7 @@ pub mod plot;
 pub mod procedural;
 pub mod progress;
 pub mod render;
+pub mod replay;
 pub mod s2d;
 pub mod testing;
 pub mod tolerance;

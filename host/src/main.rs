@@ -55,6 +55,9 @@ enum Command {
         /// Leave the networks out (small targets).
         #[arg(long)]
         playback_only: bool,
+        /// Add the Q16.16 playback cache for the core's fixed-point mode (FPU-less targets).
+        #[arg(long)]
+        q16: bool,
     },
     /// Pose a baked actor through sinew-core, one OBJ per frame.
     Play {
@@ -82,6 +85,45 @@ enum Command {
     /// Bones under the skin.
     #[command(subcommand)]
     Bones(Bones),
+    /// Record and verify bit-exact playback replays.
+    #[command(subcommand)]
+    Replay(Replay),
+}
+
+#[derive(Debug, Subcommand)]
+enum Replay {
+    /// Play a pose file through sinew-core and record each frame's hash with the model's content
+    /// hash into a replay (.sinew).
+    Record {
+        /// The baked actor.
+        #[arg(long)]
+        model: PathBuf,
+        /// Pose file: {"frames": [{"head": [9], "jaw": [9], "weights": [M]}, ...]}.
+        #[arg(long)]
+        poses: PathBuf,
+        /// Output replay (.sinew).
+        #[arg(long)]
+        out: PathBuf,
+        /// Numeric mode: f32 (reference), q16 (fixed point; needs `bake --q16`), fast
+        /// (micromath).
+        #[arg(long, default_value = "f32", value_parser = parse_mode)]
+        mode: sinew_core::replay::Mode,
+    },
+    /// Play a replay through sinew-core and compare every frame's hash with the recorded one;
+    /// fails naming the first frame that differs.
+    Verify {
+        /// The baked actor the replay was recorded with.
+        #[arg(long)]
+        model: PathBuf,
+        /// The replay (.sinew).
+        #[arg(long)]
+        replay: PathBuf,
+    },
+}
+
+fn parse_mode(s: &str) -> Result<sinew_core::replay::Mode, String> {
+    sinew_core::replay::Mode::from_name(s)
+        .ok_or_else(|| format!("unknown mode {s:?}: f32, q16 or fast"))
 }
 
 #[derive(Debug, Subcommand)]
@@ -289,8 +331,9 @@ fn run(cli: Cli) -> Result<()> {
             out,
             template,
             playback_only,
+            q16,
         } => {
-            commands::bake(&checkpoint, &out, template.as_deref(), playback_only)?;
+            commands::bake(&checkpoint, &out, template.as_deref(), playback_only, q16)?;
             println!("{}", sinew_host::inspect::inspect(&out)?);
         }
         Command::Play { model, poses, out } => {
@@ -317,6 +360,35 @@ fn run(cli: Cli) -> Result<()> {
             let report = commands::bones_fit(&data, &templates, &out)?;
             println!("{}", serde_json::to_string_pretty(&report)?);
             eprintln!("bones written to {}", out.display());
+        }
+        Command::Replay(Replay::Record {
+            model,
+            poses,
+            out,
+            mode,
+        }) => {
+            let n = commands::replay_record(&model, &poses, &out, mode)?;
+            println!("{n} frames ({mode}) recorded to {}", out.display());
+        }
+        Command::Replay(Replay::Verify { model, replay }) => {
+            let v = commands::replay_verify(&model, &replay)?;
+            for f in &v.frames {
+                println!("{f}");
+            }
+            match v.first_mismatch {
+                None => println!(
+                    "{}: {} frames ({}) bit-identical",
+                    replay.display(),
+                    v.frames.len(),
+                    v.mode
+                ),
+                Some(f) => anyhow::bail!(
+                    "{}: frame {f} differs from the recording ({} of {} frames differ)",
+                    replay.display(),
+                    v.frames.iter().filter(|c| !c.ok()).count(),
+                    v.frames.len()
+                ),
+            }
         }
         Command::Edit(Edit::Thickness {
             model,

@@ -1,13 +1,18 @@
-//! Golden AIM playback: a small baked actor (the procedural face, trained briefly and committed,
-//! since training is reproducible only per build) posed through a fixed sequence by the core;
-//! the per-frame hashes are pinned. The same files drive the firmware replays.
+//! Golden AIM replays: small baked actors (the procedural face, trained briefly, and a decimated
+//! ICT face; committed, since training is reproducible only per build) posed through a fixed
+//! sequence by the core in every numeric mode. Each replay (`*.replay.sinew`: the model's
+//! content hash, the inputs, the per-frame hashes) is pinned byte for byte, with a readable hash
+//! list beside it. The same replays run on every firmware target.
 //!
-//! `UPDATE_EXPECT=1` retrains and rewrites both the model and the hash list.
+//! `UPDATE_EXPECT=1` retrains the procedural actor and rewrites the replays and hash lists.
 
 use std::fmt::Write;
 
 use sinew_core::aim::AimActor;
-use sinew_core::hash::FrameHasher;
+use sinew_core::replay::Mode;
+use sinew_host::aim::bake::with_q16_cache;
+use sinew_host::commands::Frame;
+use sinew_host::replay::{record, verify};
 use sinew_tests::{check, check_bytes, golden_dir};
 
 const MODEL: &str = "aim-procedural.sinew";
@@ -61,32 +66,67 @@ fn bake_golden() -> Vec<u8> {
         .0
 }
 
-/// Frame `f` of the golden sequence: head turn, jaw opening, coefficients ramping.
-fn pose(actor: &AimActor<'_>, f: usize) -> (sinew_core::skinning::Pose, Vec<f32>) {
-    let t = f as f32 / 16.0;
-    let jaw = [
-        1.0,
-        0.0,
-        0.0,
-        0.0,
-        1.0 - 0.1 * t,
-        -0.25 * t,
-        0.0,
-        -0.05 * t,
-        0.02 * t,
-    ];
-    let head = [1.0, 0.0, 0.05 * t, 0.0, 1.0, 0.0, 0.3 * t, -0.1 * t, 0.2];
-    let weights = (0..actor.shape_count())
-        .map(|j| ((j + 1) as f32 * 0.13 * t) % 1.0)
-        .collect();
-    (actor.pose_from_9d(&jaw, &head), weights)
+/// The golden sequence for an actor with `m` coefficients: 16 frames of head turn, jaw opening
+/// and coefficients ramping (`t = f / 16` over `[0, 1)`).
+fn sequence(m: usize) -> Vec<Frame> {
+    (0..16)
+        .map(|f| {
+            let t = f as f32 / 16.0;
+            Frame {
+                jaw: [
+                    1.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    1.0 - 0.1 * t,
+                    -0.25 * t,
+                    0.0,
+                    -0.05 * t,
+                    0.02 * t,
+                ],
+                head: [1.0, 0.0, 0.05 * t, 0.0, 1.0, 0.0, 0.3 * t, -0.1 * t, 0.2],
+                weights: (0..m).map(|j| ((j + 1) as f32 * 0.13 * t) % 1.0).collect(),
+            }
+        })
+        .collect()
+}
+
+/// Records the golden sequence in every mode, pins each replay's bytes and the hash list, and
+/// verifies the committed replays through the core.
+fn pin_replays(name: &str, model: &[u8]) {
+    let actor = AimActor::from_bytes(model).unwrap();
+    assert!(
+        actor.q16().is_some(),
+        "{name}: golden models carry the Q16.16 cache"
+    );
+    let mut text = String::new();
+    writeln!(
+        text,
+        "# {name}.sinew: {} vertices, {} shapes; per mode and frame: f32/fast hash positions then \
+         normals, q16 the positions' raw bits",
+        actor.vertex_count(),
+        actor.shape_count()
+    )
+    .unwrap();
+    for mode in [Mode::F32, Mode::Q16, Mode::Fast] {
+        let file = format!("{name}.{mode}.replay.sinew");
+        let replay = record(model, mode, &sequence(actor.shape_count())).unwrap();
+        check_bytes(&file, &replay);
+        let committed = std::fs::read(golden_dir().join(&file)).unwrap();
+        let v = verify(model, &committed).unwrap();
+        assert_eq!(v.first_mismatch, None, "{file}");
+        for c in &v.frames {
+            writeln!(text, "{mode} {} {:016x}", c.frame, c.hash).unwrap();
+        }
+    }
+    check(&format!("{name}.hashes"), &text);
 }
 
 #[test]
-fn aim_playback_hashes_are_pinned() {
+fn procedural_actor_replays_are_pinned() {
     let path = golden_dir().join(MODEL);
     let bytes = if std::env::var_os("UPDATE_EXPECT").is_some_and(|v| v == "1") {
-        let b = bake_golden();
+        let b = with_q16_cache(&bake_golden()).unwrap();
         check_bytes(MODEL, &b);
         b
     } else {
@@ -97,25 +137,16 @@ fn aim_playback_hashes_are_pinned() {
             )
         })
     };
-    let actor = AimActor::from_bytes(&bytes).unwrap();
-    let mut text = String::new();
-    writeln!(
-        text,
-        "# {MODEL}: {} vertices, {} shapes; frame hash of positions then normals",
-        actor.vertex_count(),
-        actor.shape_count()
-    )
-    .unwrap();
-    let mut positions = vec![0.0; 3 * actor.vertex_count()];
-    let mut normals = vec![0.0; 3 * actor.vertex_count()];
-    for f in 0..16 {
-        let (p, w) = pose(&actor, f);
-        actor.pose(&p, &w, &mut positions).unwrap();
-        actor.normals(&positions, &mut normals).unwrap();
-        let mut h = FrameHasher::new();
-        h.write_f32s(&positions);
-        h.write_f32s(&normals);
-        writeln!(text, "{f} {:016x}", h.finish()).unwrap();
-    }
-    check("aim-procedural.hashes", &text);
+    pin_replays("aim-procedural", &bytes);
+}
+
+/// The ICT actor: a decimated ICT-FaceKit face baked from a trained checkpoint (see NOTICE and
+/// docs/BENCHMARKS.md for the command); not retrainable in a test, so only its replays are
+/// re-recorded under `UPDATE_EXPECT=1`.
+#[test]
+fn ict_actor_replays_are_pinned() {
+    let path = golden_dir().join("aim-ict.sinew");
+    let bytes = std::fs::read(&path)
+        .unwrap_or_else(|e| panic!("{}: golden model missing ({e})", path.display()));
+    pin_replays("aim-ict", &bytes);
 }

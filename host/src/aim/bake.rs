@@ -105,3 +105,64 @@ pub fn bake(net: &AimNet, input: &BakeInput<'_>, device: &Device) -> Result<(Vec
     }
     Ok((w.to_bytes()?, cache))
 }
+
+/// Adds the Q16.16 playback cache (`q16.s0`, `q16.k`, `q16.e`: the `f32` cache rounded to
+/// nearest with `sinew_core::q16::q16`, exactly as the core would) to a baked actor, for the
+/// core's fixed-point mode (`sinew_core::q16`). An actor that has one already is returned as is.
+pub fn with_q16_cache(actor_bytes: &[u8]) -> Result<Vec<u8>> {
+    let actor = sinew_core::aim::AimActor::from_bytes(actor_bytes)
+        .map_err(|e| anyhow::anyhow!("not an AIM actor: {e}"))?;
+    if actor.q16().is_some() {
+        return Ok(actor_bytes.to_vec());
+    }
+    let (v, m) = (actor.vertex_count(), actor.shape_count());
+    let file = actor.file();
+    let q = |name: &str| -> Result<Vec<i32>> {
+        let s = file
+            .section(name)
+            .and_then(|s| s.f32s())
+            .ok_or_else(|| anyhow::anyhow!("section {name} missing"))?;
+        Ok(s.iter()
+            .map(|x| sinew_core::q16::q16(x).to_bits())
+            .collect())
+    };
+    let mut w = SinewWriter::from_file(file)?;
+    w.q16s("q16.s0", &[v, 3], &q("cache.s0")?)?;
+    w.q16s("q16.k", &[v], &q("cache.k")?)?;
+    w.q16s("q16.e", &[v, m, 3], &q("cache.e")?)?;
+    w.to_bytes()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn q16_cache_is_the_rounded_f32_cache_and_loads_in_the_core() {
+        let bytes = std::fs::read(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../tests/data/aim-procedural.sinew"
+        ))
+        .unwrap();
+        let out = with_q16_cache(&bytes).unwrap();
+        let before = sinew_core::aim::AimActor::from_bytes(&bytes).unwrap();
+        let after = sinew_core::aim::AimActor::from_bytes(&out).unwrap();
+        assert!(before.q16().is_none());
+        let q = after.q16().unwrap();
+        assert_eq!(q.vertex_count(), before.vertex_count());
+        // Everything else is carried over unchanged.
+        assert_eq!(
+            after.file().metadata().text(),
+            before.file().metadata().text()
+        );
+        for s in before.file().sections() {
+            assert_eq!(after.file().section(s.name()).unwrap().data(), s.data());
+        }
+        let s0 = after.file().section("q16.s0").unwrap().q16s().unwrap();
+        for (i, x) in before.rest().iter().enumerate() {
+            assert!((f64::from(s0.at(i)) / 65536.0 - f64::from(x)).abs() <= 0.5 / 65536.0);
+        }
+        // Idempotent.
+        assert_eq!(with_q16_cache(&out).unwrap(), out);
+    }
+}

@@ -1,0 +1,346 @@
+//! Replays: a model's content hash, a sequence of inputs and the hash of every frame the core
+//! computed from them, so that any target can prove it plays the model back bit for bit.
+//!
+//! A replay is a `.sinew` artefact of kind [`ArtifactKind::Replay`] (sections in
+//! `docs/FORMAT.md`): `replay.model` (the xxh64 of the model's bytes, [`model_hash`]), the
+//! numeric [`Mode`] in the metadata key `mode`, the per-frame inputs and `replay.hash`. AIM
+//! inputs are `replay.aim`, `[F, 18 + M]` per frame: head `[6D rotation, translation]`, jaw
+//! `[6D rotation, translation]` about the actor's pivot, then the `M` coefficients.
+//!
+//! [`frame_hash`] is the one definition of a frame's hash in each mode; recording (host) and
+//! verification (every target) both call it.
+
+use core::fmt;
+
+use crate::aim::{AimActor, MAX_SHAPES};
+use crate::error::{BufferError, FormatError};
+use crate::format::{ArtifactKind, SinewFile};
+use crate::hash::FrameHasher;
+use crate::q16::{PoseQ16, Q16, q16_slice};
+use crate::tensor::{F32s, U32s};
+
+/// Values per AIM frame before the coefficients: head 9, jaw 9.
+pub const AIM_POSE_LEN: usize = 18;
+
+/// The numeric mode a replay was recorded in; each has its own goldens.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// `f32` with `libm`: the reference. Hash: positions, then normals.
+    F32,
+    /// Q16.16 fixed point ([`crate::q16`]). Hash: the positions' raw Q16.16 bits.
+    Q16,
+    /// `f32` with micromath's approximations ([`crate::fast`]). Hash: positions, then normals.
+    Fast,
+}
+
+impl Mode {
+    /// The name in the metadata (`f32`, `q16`, `fast`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::F32 => "f32",
+            Self::Q16 => "q16",
+            Self::Fast => "fast",
+        }
+    }
+
+    /// The mode called `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "f32" => Some(Self::F32),
+            "q16" => Some(Self::Q16),
+            "fast" => Some(Self::Fast),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for Mode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The content hash of a model artefact: xxh64 (seed 0) of all its bytes.
+pub fn model_hash(bytes: &[u8]) -> u64 {
+    xxhash_rust::xxh64::xxh64(bytes, 0)
+}
+
+/// A validated AIM replay over the artefact's bytes.
+#[derive(Clone, Copy, Debug)]
+pub struct AimReplay<'a> {
+    model_hash: u64,
+    mode: Mode,
+    frames: usize,
+    shapes: usize,
+    inputs: F32s<'a>,
+    hashes: U32s<'a>,
+}
+
+impl<'a> AimReplay<'a> {
+    /// Validates `bytes` as an AIM replay.
+    ///
+    /// # Errors
+    /// A [`FormatError`] for a bad container, a missing or misshapen section, an unknown mode,
+    /// no frames, or more coefficients than [`MAX_SHAPES`].
+    pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
+        let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::Replay)?;
+        let model = file.u32_tensor("replay.model", &[2])?;
+        let mode = file
+            .metadata()
+            .get("mode")
+            .and_then(Mode::from_name)
+            .ok_or(FormatError::UnknownCode)?;
+        let (shape, rank) = file.dims_of("replay.aim")?;
+        let [frames, width, ..] = shape;
+        if rank != 2 || frames == 0 || (width as usize) < AIM_POSE_LEN {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        let shapes = width as usize - AIM_POSE_LEN;
+        if shapes > MAX_SHAPES {
+            return Err(FormatError::LimitExceeded);
+        }
+        Ok(Self {
+            model_hash: u64::from(model.at(0)) | (u64::from(model.at(1)) << 32),
+            mode,
+            frames: frames as usize,
+            shapes,
+            inputs: file.f32_tensor("replay.aim", &[frames, width])?,
+            hashes: file.u32_tensor("replay.hash", &[frames, 2])?,
+        })
+    }
+
+    /// The content hash ([`model_hash`]) of the model this replay was recorded with.
+    pub const fn model_hash(&self) -> u64 {
+        self.model_hash
+    }
+
+    /// The numeric mode.
+    pub const fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// Number of frames (at least one).
+    pub const fn frames(&self) -> usize {
+        self.frames
+    }
+
+    /// Coefficients per frame.
+    pub const fn shape_count(&self) -> usize {
+        self.shapes
+    }
+
+    /// Frame `f`'s inputs: head 9, jaw 9, and the coefficients copied into `weights`
+    /// (`[M]`). `None` if `f` is past the end or `weights` has the wrong length.
+    pub fn frame(&self, f: usize, weights: &mut [f32]) -> Option<([f32; 9], [f32; 9])> {
+        if f >= self.frames || weights.len() != self.shapes {
+            return None;
+        }
+        let width = AIM_POSE_LEN + self.shapes;
+        let row = self.inputs.slice(f * width, width);
+        let mut head = [0.0; 9];
+        let mut jaw = [0.0; 9];
+        for (i, h) in head.iter_mut().enumerate() {
+            *h = row.at(i);
+        }
+        for (i, j) in jaw.iter_mut().enumerate() {
+            *j = row.at(9 + i);
+        }
+        for (i, w) in weights.iter_mut().enumerate() {
+            *w = row.at(AIM_POSE_LEN + i);
+        }
+        Some((head, jaw))
+    }
+
+    /// The recorded hash of frame `f`.
+    pub fn expected(&self, f: usize) -> Option<u64> {
+        let lo = self.hashes.get(2 * f)?;
+        let hi = self.hashes.get(2 * f + 1)?;
+        Some(u64::from(lo) | (u64::from(hi) << 32))
+    }
+}
+
+/// Caller-owned buffers for one frame of an actor with `V` vertices and `M` coefficients.
+#[derive(Debug)]
+pub struct FrameBuffers<'b> {
+    /// `[V, 3]` posed positions (f32 and fast modes).
+    pub positions: &'b mut [f32],
+    /// `[V, 3]` vertex normals (f32 and fast modes).
+    pub normals: &'b mut [f32],
+    /// `[V, 3]` posed positions in Q16.16 (Q16 mode; may be empty otherwise).
+    pub positions_q16: &'b mut [Q16],
+    /// `[M]` coefficients.
+    pub weights: &'b mut [f32],
+    /// `[M]` coefficients in Q16.16 (Q16 mode; may be empty otherwise).
+    pub weights_q16: &'b mut [Q16],
+}
+
+/// Why a frame could not be computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ReplayError {
+    /// The replay was recorded with another model (content hashes differ).
+    WrongModel {
+        /// The hash the replay names.
+        expected: u64,
+        /// The hash of the model given.
+        found: u64,
+    },
+    /// The replay's coefficient count differs from the actor's.
+    ShapeCount {
+        /// The replay's.
+        replay: usize,
+        /// The actor's.
+        actor: usize,
+    },
+    /// Q16 mode asked of an actor baked without a Q16.16 cache.
+    NoQ16Cache,
+    /// A caller buffer has the wrong length.
+    Buffer(BufferError),
+}
+
+impl fmt::Display for ReplayError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::WrongModel { expected, found } => write!(
+                f,
+                "replay was recorded with model {expected:016x}, this model is {found:016x}"
+            ),
+            Self::ShapeCount { replay, actor } => write!(
+                f,
+                "replay has {replay} coefficients per frame, the actor {actor}"
+            ),
+            Self::NoQ16Cache => write!(f, "q16 mode needs a model baked with a Q16.16 cache"),
+            Self::Buffer(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl core::error::Error for ReplayError {}
+
+impl From<BufferError> for ReplayError {
+    fn from(e: BufferError) -> Self {
+        Self::Buffer(e)
+    }
+}
+
+/// Poses `actor` for one frame in `mode` and returns the frame's hash: in the f32 and fast modes
+/// the positions then the normals ([`FrameHasher::write_f32s`]); in Q16 mode the positions' raw
+/// bits ([`FrameHasher::write_u32`] of each). `buf.weights` must hold the frame's coefficients.
+///
+/// # Errors
+/// [`ReplayError::NoQ16Cache`] in Q16 mode without the cache; [`ReplayError::Buffer`] if a
+/// buffer has the wrong length.
+pub fn frame_hash(
+    actor: &AimActor<'_>,
+    mode: Mode,
+    head: &[f32; 9],
+    jaw: &[f32; 9],
+    buf: &mut FrameBuffers<'_>,
+) -> Result<u64, ReplayError> {
+    let pose = actor.pose_from_9d(jaw, head);
+    let mut h = FrameHasher::new();
+    match mode {
+        Mode::F32 | Mode::Fast => {
+            actor.pose(&pose, buf.weights, buf.positions)?;
+            if mode == Mode::F32 {
+                actor.normals(buf.positions, buf.normals)?;
+            } else {
+                crate::fast::vertex_normals(actor.triangles(), buf.positions, buf.normals)?;
+            }
+            h.write_f32s(buf.positions);
+            h.write_f32s(buf.normals);
+        }
+        Mode::Q16 => {
+            let cache = actor.q16().ok_or(ReplayError::NoQ16Cache)?;
+            q16_slice(buf.weights, buf.weights_q16)?;
+            cache.pose(
+                &PoseQ16::from_pose(&pose),
+                buf.weights_q16,
+                buf.positions_q16,
+            )?;
+            for v in buf.positions_q16.iter() {
+                h.write_u32(v.to_bits() as u32);
+            }
+        }
+    }
+    Ok(h.finish())
+}
+
+/// One verified frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameCheck {
+    /// Frame index.
+    pub frame: usize,
+    /// The hash computed here.
+    pub hash: u64,
+    /// The hash the replay recorded.
+    pub expected: u64,
+}
+
+impl FrameCheck {
+    /// Whether the frame is bit-identical to the recording.
+    pub const fn ok(&self) -> bool {
+        self.hash == self.expected
+    }
+}
+
+impl fmt::Display for FrameCheck {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.ok() {
+            write!(f, "frame {} {:016x} ok", self.frame, self.hash)
+        } else {
+            write!(
+                f,
+                "frame {} {:016x} DIFFERS (recorded {:016x})",
+                self.frame, self.hash, self.expected
+            )
+        }
+    }
+}
+
+/// Plays `replay` through `actor` frame by frame, calling `on_frame` after each; returns the
+/// first frame whose hash differs, or `None` when every frame matched.
+///
+/// `model_bytes` must be the bytes `actor` was loaded from: the replay names their content hash.
+///
+/// # Errors
+/// [`ReplayError`] if the replay belongs to another model, the coefficient counts differ, the
+/// mode is unavailable or a buffer has the wrong length.
+pub fn verify(
+    model_bytes: &[u8],
+    actor: &AimActor<'_>,
+    replay: &AimReplay<'_>,
+    buf: &mut FrameBuffers<'_>,
+    mut on_frame: impl FnMut(&FrameCheck),
+) -> Result<Option<usize>, ReplayError> {
+    let found = model_hash(model_bytes);
+    if found != replay.model_hash() {
+        return Err(ReplayError::WrongModel {
+            expected: replay.model_hash(),
+            found,
+        });
+    }
+    if replay.shape_count() != actor.shape_count() {
+        return Err(ReplayError::ShapeCount {
+            replay: replay.shape_count(),
+            actor: actor.shape_count(),
+        });
+    }
+    let mut first_bad = None;
+    for f in 0..replay.frames() {
+        let (head, jaw) = replay
+            .frame(f, buf.weights)
+            .ok_or(ReplayError::Buffer(BufferError::Input))?;
+        let hash = frame_hash(actor, replay.mode(), &head, &jaw, buf)?;
+        let check = FrameCheck {
+            frame: f,
+            hash,
+            expected: replay.expected(f).unwrap_or(!hash),
+        };
+        if !check.ok() && first_bad.is_none() {
+            first_bad = Some(f);
+        }
+        on_frame(&check);
+    }
+    Ok(first_bad)
+}
