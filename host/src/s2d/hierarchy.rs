@@ -36,6 +36,9 @@ const MIN_AREA_RATIO: f64 = 1e-6;
 /// Version of the algorithm, part of the cache key: bump it whenever the output may change.
 const ALGORITHM_VERSION: u32 = 1;
 
+/// One level's vertex positions and triangles.
+type Geometry = (Vec<[f32; 3]>, Vec<[u32; 3]>);
+
 /// Builds the hierarchy of `mesh`: level 0 is the mesh itself (polygons triangulated by fans),
 /// level `i + 1` has `ceil(n_i / factors[i])` vertices. Spirals follow
 /// [`spirals::reference_schedule`].
@@ -53,8 +56,7 @@ pub fn build(mesh: &Mesh, factors: &[usize]) -> Result<Hierarchy> {
             factors[i]
         );
     }
-    let mut levels_geo: Vec<(Vec<[f32; 3]>, Vec<[u32; 3]>)> =
-        vec![(mesh.positions.clone(), triangles)];
+    let mut levels_geo: Vec<Geometry> = vec![(mesh.positions.clone(), triangles)];
     let mut kept_per_level: Vec<Vec<u32>> = Vec::with_capacity(factors.len());
     for (i, &factor) in factors.iter().enumerate() {
         let (positions, triangles) = &levels_geo[i];
@@ -1100,7 +1102,8 @@ mod tests {
                 }
             }
             let mut total = 0.0;
-            for r in 0..u.rows {
+            assert_eq!(selected.len(), u.rows);
+            for (r, &sel) in selected.iter().enumerate() {
                 let (a, b) = (u.row_ptr[r] as usize, u.row_ptr[r + 1] as usize);
                 assert!(
                     (1..=3).contains(&(b - a)),
@@ -1110,8 +1113,8 @@ mod tests {
                 let sum: f32 = u.values[a..b].iter().sum();
                 assert!((sum - 1.0).abs() < 1e-6, "U{i} row {r} sums to {sum}");
                 assert!(u.values[a..b].iter().all(|&w| w > 0.0 && w <= 1.0));
-                if selected[r] != u32::MAX {
-                    assert_eq!(&u.col_idx[a..b], &[selected[r]], "U{i} row {r}");
+                if sel != u32::MAX {
+                    assert_eq!(&u.col_idx[a..b], &[sel], "U{i} row {r}");
                     assert_eq!(u.values[a], 1.0);
                 }
                 if r < n {
