@@ -546,3 +546,19 @@ pub fn replay_verify(model: &Path, replay: &Path) -> Result<crate::replay::Verif
     crate::replay::verify(&m, &r)
         .with_context(|| format!("verifying {} against {}", replay.display(), model.display()))
 }
+
+/// `sinew s2d hierarchy`: builds the S2D mesh hierarchy of `template` with `factors` and writes
+/// it to `out` (see `s2d::hierarchy::to_bytes`). Errors name the template file.
+pub fn s2d_hierarchy(
+    template: &Path,
+    out: &Path,
+    factors: &[usize],
+) -> Result<crate::s2d::Hierarchy> {
+    use crate::s2d::hierarchy;
+    let mesh = Mesh::read(template)?;
+    let h = hierarchy::build(&mesh, factors)
+        .with_context(|| format!("{}: cannot build the S2D hierarchy", template.display()))?;
+    let key = hierarchy::cache_key(&mesh, factors);
+    crate::atomic::write(out, &hierarchy::to_bytes(&h, key, factors)?)?;
+    Ok(h)
+}

@@ -10,6 +10,7 @@ use sinew_host::aim::config::Schedule;
 use sinew_host::aim::run::Outputs;
 use sinew_host::backend::Backend;
 use sinew_host::commands;
+use sinew_host::s2d::hierarchy::DEFAULT_FACTORS;
 
 /// Sinew: learn an actor's face from meshes, and play it back anywhere, bit for bit.
 #[derive(Debug, Parser)]
@@ -88,6 +89,9 @@ enum Command {
     /// Record and verify bit-exact playback replays.
     #[command(subcommand)]
     Replay(Replay),
+    /// S2D: sparse-to-dense expression decoding.
+    #[command(subcommand)]
+    S2d(S2d),
 }
 
 #[derive(Debug, Subcommand)]
@@ -124,6 +128,23 @@ enum Replay {
 fn parse_mode(s: &str) -> Result<sinew_core::replay::Mode, String> {
     sinew_core::replay::Mode::from_name(s)
         .ok_or_else(|| format!("unknown mode {s:?}: f32, q16 or fast"))
+}
+
+#[derive(Debug, Subcommand)]
+enum S2d {
+    /// Build the mesh hierarchy (quadric decimation, up/down-sampling, spirals) of a template
+    /// and write it as a .sinew file.
+    Hierarchy {
+        /// Template mesh (.obj or .ply); quads and polygons are triangulated.
+        #[arg(long)]
+        template: PathBuf,
+        /// Output .sinew file.
+        #[arg(long)]
+        out: PathBuf,
+        /// Decimation factor of each level, comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_FACTORS)]
+        factors: Vec<usize>,
+    },
 }
 
 #[derive(Debug, Subcommand)]
@@ -389,6 +410,19 @@ fn run(cli: Cli) -> Result<()> {
                     v.frames.len()
                 ),
             }
+        }
+        Command::S2d(S2d::Hierarchy {
+            template,
+            out,
+            factors,
+        }) => {
+            let h = commands::s2d_hierarchy(&template, &out, &factors)?;
+            let sizes: Vec<usize> = h.levels.iter().map(|l| l.positions.len()).collect();
+            let lens: Vec<usize> = h.levels.iter().map(|l| l.spiral_len).collect();
+            println!(
+                "{}: vertices per level {sizes:?}, spiral lengths {lens:?}",
+                out.display()
+            );
         }
         Command::Edit(Edit::Thickness {
             model,
