@@ -1,4 +1,4 @@
-// Runs the golden AIM replay compiled to wasm32-unknown-unknown under node.
+// Runs the golden AIM replays compiled to wasm32-unknown-unknown under node.
 //
 // Usage: node run.mjs [path/to/sinew_firmware_wasm.wasm]
 // Without a path it looks in ../target (run.sh's shared target directory), then ./target.
@@ -25,7 +25,8 @@ const imports = {
     report(frame, hash, expected) {
       const ok = hash === expected;
       frames.push({ frame, ok });
-      const f = String(frame).padStart(2);
+      // frame = replay index * 1000 + frame number (see src/lib.rs).
+      const f = `${Math.floor(frame / 1000)}:${String(frame % 1000).padStart(2)}`;
       console.log(
         ok ? `frame ${f} ${hex(hash)} ok` : `frame ${f} ${hex(hash)} MISMATCH (expected ${hex(expected)})`,
       );

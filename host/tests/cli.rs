@@ -84,10 +84,12 @@ fn demo_then_every_command_on_its_outputs() {
         "--out",
         s(&small),
         "--playback-only",
+        "--q16",
     ]);
     let bytes = std::fs::read(&small).unwrap();
     let actor = sinew_core::aim::AimActor::from_bytes(&bytes).unwrap();
     assert!(actor.networks().is_none());
+    assert!(actor.q16().is_some(), "--q16 adds the fixed-point cache");
     let full = std::fs::read(&model).unwrap();
     let full = sinew_core::aim::AimActor::from_bytes(&full).unwrap();
     assert_eq!(
@@ -120,6 +122,68 @@ fn demo_then_every_command_on_its_outputs() {
         s(&frames),
     ]);
     assert!(e.contains("bad.json") && e.contains("weights"), "{e}");
+
+    // Replays: record in every mode, verify; the wrong model and a tampered replay fail.
+    for mode in ["f32", "q16", "fast"] {
+        let replay = dir.path().join(format!("replay.{mode}.sinew"));
+        let poses = out.join("poses.json");
+        let args = [
+            "replay",
+            "record",
+            "--model",
+            s(&small),
+            "--poses",
+            s(&poses),
+            "--out",
+            s(&replay),
+            "--mode",
+            mode,
+        ];
+        assert!(ok(&args).contains("24 frames"));
+        let v = ok(&[
+            "replay",
+            "verify",
+            "--model",
+            s(&small),
+            "--replay",
+            s(&replay),
+        ]);
+        assert!(
+            v.contains("24 frames") && v.contains("bit-identical"),
+            "{v}"
+        );
+        let e = err(&[
+            "replay",
+            "verify",
+            "--model",
+            s(&model),
+            "--replay",
+            s(&replay),
+        ]);
+        assert!(e.contains("recorded with model"), "{e}");
+    }
+    let e = err(&[
+        "replay",
+        "record",
+        "--model",
+        s(&model),
+        "--poses",
+        s(&out.join("poses.json")),
+        "--out",
+        s(&dir.path().join("x.sinew")),
+        "--mode",
+        "q16",
+    ]);
+    assert!(e.contains("Q16.16 cache"), "{e}");
+    let e = err(&[
+        "replay",
+        "verify",
+        "--model",
+        s(&small),
+        "--replay",
+        s(&small),
+    ]);
+    assert!(e.contains("small.sinew") && e.contains("replay"), "{e}");
 
     // Edit: thicker tissue on the first vertices moves exactly those.
     let region = dir.path().join("region.json");

@@ -33,7 +33,9 @@ use core::fmt;
 use sinew_core::FormatError;
 use sinew_core::aim::{AimActor, MAX_SHAPES};
 use sinew_core::q16::Q16;
-use sinew_core::replay::{AimReplay, FrameBuffers, FrameCheck, ReplayError, frame_hash, model_hash};
+use sinew_core::replay::{
+    AimReplay, FrameBuffers, FrameCheck, ReplayError, frame_hash, model_hash,
+};
 
 /// A golden model and one of its replays.
 #[derive(Clone, Copy, Debug)]
@@ -319,13 +321,22 @@ mod tests {
 
     #[test]
     fn modes_differ() {
-        let first = |g: &Golden| replay(g, &mut scratch(), |_| {}).map(|_| {
-            AimReplay::from_bytes(g.replay).unwrap().expected(15).unwrap()
-        });
+        let first = |g: &Golden| {
+            replay(g, &mut scratch(), |_| {}).map(|_| {
+                AimReplay::from_bytes(g.replay)
+                    .unwrap()
+                    .expected(15)
+                    .unwrap()
+            })
+        };
         let hashes: Vec<u64> = GOLDENS.iter().map(|g| first(g).unwrap()).collect();
         for i in 0..hashes.len() {
             for j in 0..i {
-                assert_ne!(hashes[i], hashes[j], "{} vs {}", GOLDENS[i].name, GOLDENS[j].name);
+                assert_ne!(
+                    hashes[i], hashes[j],
+                    "{} vs {}",
+                    GOLDENS[i].name, GOLDENS[j].name
+                );
             }
         }
     }

@@ -12,7 +12,7 @@ use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::{ExceptionFrame, entry, exception};
 use cortex_m_semihosting::{debug, heprintln, hprintln};
 use panic_semihosting as _;
-use sinew_firmware_common::{GOLDEN_HASHES, GOLDEN_MODEL, Replay, Scratch, Summary};
+use sinew_firmware_common::{GOLDENS, Replay, Scratch, Summary};
 
 /// SysTick reload: the counter is 24 bits wide.
 const SYST_MAX: u32 = 0x00FF_FFFF;
@@ -37,7 +37,7 @@ fn main() -> ! {
 
 /// Replays every frame; true when all matched.
 fn run() -> bool {
-    // The 24 KiB of frame buffers live in a static, not on the stack.
+    // The frame buffers (180 KiB) live in a static, not on the stack.
     let Some(scratch) = cortex_m::singleton!(: Scratch = Scratch::new()) else {
         heprintln!("sinew-firmware-sim: scratch already taken");
         return false;
@@ -58,57 +58,52 @@ fn run() -> bool {
     syst.clear_current();
     syst.enable_counter();
 
-    let mut replay = match Replay::new(GOLDEN_MODEL, GOLDEN_HASHES, scratch) {
-        Ok(r) => r,
-        Err(e) => {
-            heprintln!("sinew-firmware-sim: {}", e);
-            return false;
-        }
-    };
-    hprintln!(
-        "sinew-firmware-sim: cortex-m4f, {} vertices, {} shapes",
-        replay.actor().vertex_count(),
-        replay.actor().shape_count()
-    );
-    let mut summary = Summary {
-        frames: 0,
-        mismatches: 0,
-    };
-    loop {
-        // Clear COUNTFLAG, so that a frame longer than one SysTick period is noticed.
-        let _ = syst.has_wrapped();
-        let start = SYST::get_current();
-        let Some(result) = replay.next() else { break };
-        let end = SYST::get_current();
-        // SysTick counts down.
-        let ticks = start.wrapping_sub(end) & SYST_MAX;
-        let report = match result {
+    let mut total = Summary::default();
+    for golden in &GOLDENS {
+        let mut replay = match Replay::new(golden, scratch) {
             Ok(r) => r,
             Err(e) => {
-                heprintln!("sinew-firmware-sim: {}", e);
+                heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
                 return false;
             }
         };
-        if syst.has_wrapped() {
-            hprintln!("{}  (over one SysTick period: cost not measured)", report);
-        } else {
-            hprintln!(
-                "{}  ~{} instructions",
-                report,
-                ticks * INSTRUCTIONS_PER_TICK
-            );
-        }
-        summary.frames += 1;
-        if !report.ok() {
-            summary.mismatches += 1;
+        hprintln!(
+            "sinew-firmware-sim: cortex-m4f, {}: {} vertices, {} shapes, {} frames",
+            golden.name,
+            replay.actor().vertex_count(),
+            replay.actor().shape_count(),
+            replay.replay().frames()
+        );
+        loop {
+            // Clear COUNTFLAG, so that a frame longer than one SysTick period is noticed.
+            let _ = syst.has_wrapped();
+            let start = SYST::get_current();
+            let Some(result) = replay.next() else { break };
+            let end = SYST::get_current();
+            // SysTick counts down.
+            let ticks = start.wrapping_sub(end) & SYST_MAX;
+            let check = match result {
+                Ok(r) => r,
+                Err(e) => {
+                    heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
+                    return false;
+                }
+            };
+            if syst.has_wrapped() {
+                hprintln!("{}  (over one SysTick period: cost not measured)", check);
+            } else {
+                hprintln!("{}  ~{} instructions", check, ticks * INSTRUCTIONS_PER_TICK);
+            }
+            total.add(&check);
         }
     }
     hprintln!(
-        "sinew-firmware-sim: {}/{} frames bit-identical to the host",
-        summary.frames - summary.mismatches,
-        summary.frames
+        "sinew-firmware-sim: {}/{} frames of {} replays bit-identical to the host",
+        total.frames - total.mismatches,
+        total.frames,
+        GOLDENS.len()
     );
-    summary.passed()
+    total.passed()
 }
 
 /// A fault (bad memory access, undefined instruction, …) ends the run with a failure instead of

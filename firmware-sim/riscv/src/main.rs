@@ -9,7 +9,7 @@
 
 use riscv::register::{mcause, mepc, minstret, mtval};
 use semihosting::{eprintln, println, process};
-use sinew_firmware_common::{GOLDEN_HASHES, GOLDEN_MODEL, Replay, Scratch, Summary};
+use sinew_firmware_common::{GOLDENS, Replay, Scratch, Summary};
 
 #[riscv_rt::entry]
 fn main() -> ! {
@@ -18,51 +18,50 @@ fn main() -> ! {
 
 /// Replays every frame; true when all matched.
 fn run() -> bool {
-    // The 24 KiB of frame buffers live in a static, not on the stack.
+    // The frame buffers (180 KiB) live in a static, not on the stack.
     let Some(scratch) = riscv::singleton!(: Scratch = Scratch::new()) else {
         eprintln!("sinew-firmware-sim-riscv: scratch already taken");
         return false;
     };
-    let mut replay = match Replay::new(GOLDEN_MODEL, GOLDEN_HASHES, scratch) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("sinew-firmware-sim-riscv: {e}");
-            return false;
-        }
-    };
-    println!(
-        "sinew-firmware-sim-riscv: rv32imac, {} vertices, {} shapes",
-        replay.actor().vertex_count(),
-        replay.actor().shape_count()
-    );
-    let mut summary = Summary {
-        frames: 0,
-        mismatches: 0,
-    };
-    loop {
-        // Instructions retired; exact and repeatable under QEMU's -icount.
-        let start = minstret::read64();
-        let Some(result) = replay.next() else { break };
-        let instructions = minstret::read64().wrapping_sub(start);
-        let report = match result {
+    let mut total = Summary::default();
+    for golden in &GOLDENS {
+        let mut replay = match Replay::new(golden, scratch) {
             Ok(r) => r,
             Err(e) => {
-                eprintln!("sinew-firmware-sim-riscv: {e}");
+                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
                 return false;
             }
         };
-        println!("{report}  {instructions} instructions");
-        summary.frames += 1;
-        if !report.ok() {
-            summary.mismatches += 1;
+        println!(
+            "sinew-firmware-sim-riscv: rv32imac, {}: {} vertices, {} shapes, {} frames",
+            golden.name,
+            replay.actor().vertex_count(),
+            replay.actor().shape_count(),
+            replay.replay().frames()
+        );
+        loop {
+            // Instructions retired; exact and repeatable under QEMU's -icount.
+            let start = minstret::read64();
+            let Some(result) = replay.next() else { break };
+            let instructions = minstret::read64().wrapping_sub(start);
+            let check = match result {
+                Ok(r) => r,
+                Err(e) => {
+                    eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
+                    return false;
+                }
+            };
+            println!("{check}  {instructions} instructions");
+            total.add(&check);
         }
     }
     println!(
-        "sinew-firmware-sim-riscv: {}/{} frames bit-identical to the host",
-        summary.frames - summary.mismatches,
-        summary.frames
+        "sinew-firmware-sim-riscv: {}/{} frames of {} replays bit-identical to the host",
+        total.frames - total.mismatches,
+        total.frames,
+        GOLDENS.len()
     );
-    summary.passed()
+    total.passed()
 }
 
 /// Any trap (bad memory access, illegal instruction, …) ends the run with a failure instead of

@@ -1,11 +1,12 @@
-//! Golden AIM replay in WebAssembly (wasm32-unknown-unknown, no_std): the module exports
-//! [`sinew_replay`], which plays the 16-frame golden sequence with `sinew-core` and returns how
-//! many frames' hashes differ from those pinned on the x86_64 host. Each frame is also handed to
-//! the host through the import `sinew.report`, so `run.mjs` can print it.
+//! Golden AIM replays in WebAssembly (wasm32-unknown-unknown, no_std): the module exports
+//! [`sinew_replay`], which plays every golden replay (`tests/data/*.replay.sinew`) with
+//! `sinew-core` and returns how many frames' hashes differ from those recorded on the x86_64
+//! host. Each frame is also handed to the host through the import `sinew.report`, so `run.mjs`
+//! can print it.
 #![no_std]
 #![deny(unsafe_code)]
 
-use sinew_firmware_common::{GOLDEN_HASHES, GOLDEN_MODEL, Scratch, replay};
+use sinew_firmware_common::{GOLDENS, Scratch, Summary, replay};
 
 /// What [`sinew_replay`] returns when the replay could not run (bad model, malformed or empty
 /// hash list).
@@ -22,28 +23,39 @@ unsafe extern "C" {
     safe fn report(frame: u32, hash: u64, expected: u64);
 }
 
-/// Replays the golden sequence; returns the number of mismatching frames (0 when every frame is
-/// bit-identical to the host), or [`LOAD_ERROR`].
+/// Plays every golden replay; returns the number of mismatching frames (0 when every frame is
+/// bit-identical to the host), or [`LOAD_ERROR`]. Frames are reported with the index of their
+/// replay in `GOLDENS` times 1000 added to the frame number.
 // Safety: `no_mangle` exports the function under its own name; no other symbol in the module
 // is called `sinew_replay`.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_replay() -> u32 {
-    // On the stack (24 KiB of the 1 MiB wasm stack): a `static` would need `static mut` or a lock,
-    // and the module runs one replay at a time anyway.
+    // On the stack (180 KiB of the 1 MiB wasm stack): a `static` would need `static mut` or a
+    // lock, and the module runs one replay at a time anyway.
     let mut scratch = Scratch::new();
-    let summary = replay(GOLDEN_MODEL, GOLDEN_HASHES, &mut scratch, |r| {
-        report(
-            u32::try_from(r.frame).unwrap_or(u32::MAX),
-            r.hash,
-            r.expected,
-        );
-    });
-    match summary {
-        // At most the number of lines of the list, far below LOAD_ERROR.
-        Ok(s) => u32::try_from(s.mismatches).unwrap_or(LOAD_ERROR - 1),
-        Err(_) => LOAD_ERROR,
+    let mut total = Summary::default();
+    for (i, golden) in GOLDENS.iter().enumerate() {
+        let summary = replay(golden, &mut scratch, |r| {
+            report(
+                u32::try_from(i * 1000 + r.frame).unwrap_or(u32::MAX),
+                r.hash,
+                r.expected,
+            );
+        });
+        match summary {
+            Ok(s) => {
+                total.frames += s.frames;
+                total.mismatches += s.mismatches;
+            }
+            Err(_) => return LOAD_ERROR,
+        }
     }
+    if total.frames == 0 {
+        return LOAD_ERROR;
+    }
+    // At most the number of frames, far below LOAD_ERROR.
+    u32::try_from(total.mismatches).unwrap_or(LOAD_ERROR - 1)
 }
 
 /// A panic traps: the host sees a `RuntimeError` from the call, never a wrong count.
