@@ -547,6 +547,14 @@ pub fn replay_verify(model: &Path, replay: &Path) -> Result<crate::replay::Verif
         .with_context(|| format!("verifying {} against {}", replay.display(), model.display()))
 }
 
+/// The deviation of a replay's numeric mode from the `f32` reference (`sinew replay verify`).
+pub fn replay_deviation(model: &Path, replay: &Path) -> Result<crate::replay::Deviation> {
+    let m = crate::container::read(model)?;
+    let r = crate::container::read(replay)?;
+    crate::replay::deviation(&m, &r)
+        .with_context(|| format!("measuring {} against {}", replay.display(), model.display()))
+}
+
 /// `sinew s2d hierarchy`: builds the S2D mesh hierarchy of `template` with `factors` and writes
 /// it to `out` (see `s2d::hierarchy::to_bytes`). Errors name the template file.
 pub fn s2d_hierarchy(

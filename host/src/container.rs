@@ -64,6 +64,13 @@ impl SinewWriter {
         Ok(w)
     }
 
+    /// Removes the sections whose names start with `prefix`; returns how many.
+    pub fn remove_prefixed(&mut self, prefix: &str) -> usize {
+        let before = self.sections.len();
+        self.sections.retain(|s| !s.name.starts_with(prefix));
+        before - self.sections.len()
+    }
+
     /// Sets header flags (`sinew_core::format::FLAG_*`).
     pub fn flags(&mut self, flags: u32) -> &mut Self {
         self.flags = flags;

@@ -396,6 +396,13 @@ fn run(cli: Cli) -> Result<()> {
             for f in &v.frames {
                 println!("{f}");
             }
+            if v.mode != sinew_core::replay::Mode::F32 {
+                let d = commands::replay_deviation(&model, &replay)?;
+                println!(
+                    "{} mode vs f32: positions max {:.6} mm, mean {:.6} mm; unit normals max {:.2e}, mean {:.2e} apart",
+                    v.mode, d.max_mm, d.mean_mm, d.max_normal_diff, d.mean_normal_diff
+                );
+            }
             match v.first_mismatch {
                 None => println!(
                     "{}: {} frames ({}) bit-identical",

@@ -120,6 +120,103 @@ pub fn verify(model: &[u8], replay: &[u8]) -> Result<Verification> {
     })
 }
 
+/// How far a mode's output lies from the `f32` reference over a replay's frames.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Deviation {
+    /// Largest per-vertex position distance, mm.
+    pub max_mm: f64,
+    /// Mean per-vertex position distance, mm.
+    pub mean_mm: f64,
+    /// Largest distance between a unit vertex normal and the reference's (0 in Q16 mode, which
+    /// computes no normals): the fast mode's normalisation changes lengths, not directions.
+    pub max_normal_diff: f64,
+    /// Mean distance between normals.
+    pub mean_normal_diff: f64,
+}
+
+/// Millimetres per unit of a model's `units` metadata (`m`, `cm` or `mm`; cm if absent, the
+/// ICT-FaceKit unit).
+pub fn mm_per_unit(actor: &AimActor<'_>) -> Result<f64> {
+    match actor.file().metadata().get("units").unwrap_or("cm") {
+        "m" => Ok(1000.0),
+        "cm" => Ok(10.0),
+        "mm" => Ok(1.0),
+        u => bail!("unknown units {u:?} in the model's metadata"),
+    }
+}
+
+/// Plays the replay's inputs in its mode and in the `f32` reference mode and measures how far
+/// the mode's positions (and normals) lie from the reference's.
+///
+/// # Errors
+/// As [`verify`].
+pub fn deviation(model: &[u8], replay: &[u8]) -> Result<Deviation> {
+    use sinew_core::q16::{PoseQ16, q16_slice};
+    let actor = AimActor::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
+    let r = AimReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
+    let unit = mm_per_unit(&actor)?;
+    let v = actor.vertex_count();
+    let mut reference = Buffers::for_actor(&actor);
+    let mut mode = Buffers::for_actor(&actor);
+    let (mut max_mm, mut sum_mm, mut max_nd, mut sum_nd) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for f in 0..r.frames() {
+        let (head, jaw) = r
+            .frame(f, &mut reference.weights)
+            .ok_or_else(|| anyhow!("replay has another coefficient count than the model"))?;
+        mode.weights.copy_from_slice(&reference.weights);
+        let pose = actor.pose_from_9d(&jaw, &head);
+        actor.pose(&pose, &reference.weights, &mut reference.positions)?;
+        actor.normals(&reference.positions, &mut reference.normals)?;
+        match r.mode() {
+            Mode::F32 => {
+                mode.positions.copy_from_slice(&reference.positions);
+                mode.normals.copy_from_slice(&reference.normals);
+            }
+            Mode::Fast => {
+                actor.pose(&pose, &mode.weights, &mut mode.positions)?;
+                sinew_core::fast::vertex_normals(
+                    actor.triangles(),
+                    &mode.positions,
+                    &mut mode.normals,
+                )?;
+            }
+            Mode::Q16 => {
+                let cache = actor
+                    .q16()
+                    .ok_or_else(|| anyhow!("q16 mode needs a model baked with a Q16.16 cache"))?;
+                q16_slice(&mode.weights, &mut mode.weights_q16)?;
+                cache.pose(
+                    &PoseQ16::from_pose(&pose),
+                    &mode.weights_q16,
+                    &mut mode.positions_q16,
+                )?;
+                for (p, q) in mode.positions.iter_mut().zip(&mode.positions_q16) {
+                    *p = q.to_num();
+                }
+                mode.normals.copy_from_slice(&reference.normals);
+            }
+        }
+        let vec = |a: &[f32], i: usize| [0, 1, 2].map(|k| f64::from(a[3 * i + k]));
+        for i in 0..v {
+            let (p, q) = (vec(&mode.positions, i), vec(&reference.positions, i));
+            let mm = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt() * unit;
+            let (a, b) = (vec(&mode.normals, i), vec(&reference.normals, i));
+            let nd = (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
+            max_mm = max_mm.max(mm);
+            sum_mm += mm;
+            max_nd = max_nd.max(nd);
+            sum_nd += nd;
+        }
+    }
+    let n = (r.frames() * v) as f64;
+    Ok(Deviation {
+        max_mm,
+        mean_mm: sum_mm / n,
+        max_normal_diff: max_nd,
+        mean_normal_diff: sum_nd / n,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -145,22 +242,44 @@ mod tests {
 
     #[test]
     fn record_then_verify_passes_and_a_changed_model_is_refused() {
-        let model = crate::aim::bake::with_q16_cache(&golden()).unwrap();
+        let model = golden();
         let m = AimActor::from_bytes(&model).unwrap().shape_count();
+        let file = sinew_core::SinewFile::from_bytes(&model).unwrap();
+        let mut w = SinewWriter::from_file(&file).unwrap();
+        w.meta("note", "another model");
+        let other = w.to_bytes().unwrap();
+        assert_eq!(w.remove_prefixed("q16."), 3);
+        let no_q16 = w.to_bytes().unwrap();
         for mode in [Mode::F32, Mode::Q16, Mode::Fast] {
             let r = record(&model, mode, &frames(m, 3)).unwrap();
             let v = verify(&model, &r).unwrap();
             assert_eq!(v.mode, mode);
             assert_eq!(v.frames.len(), 3);
             assert_eq!(v.first_mismatch, None);
-            // Another model (one byte of metadata differs) is refused by content hash.
-            let other = golden();
+            // Another model (one metadata entry more) is refused by content hash.
             let err = verify(&other, &r).unwrap_err().to_string();
             assert!(err.contains("recorded with model"), "{err}");
         }
         // Q16 needs the cache.
-        let err = record(&golden(), Mode::Q16, &frames(m, 1)).unwrap_err();
+        let err = record(&no_q16, Mode::Q16, &frames(m, 1)).unwrap_err();
         assert!(err.to_string().contains("Q16.16 cache"), "{err}");
+    }
+
+    #[test]
+    fn deviations_of_the_modes_on_the_golden_actor() {
+        let model = golden();
+        let m = AimActor::from_bytes(&model).unwrap().shape_count();
+        let dev = |mode| deviation(&model, &record(&model, mode, &frames(m, 4)).unwrap()).unwrap();
+        let exact = dev(Mode::F32);
+        assert_eq!((exact.max_mm, exact.max_normal_diff), (0.0, 0.0));
+        // Q16.16 of centimetres: steps of 1.5e-4 mm, a few roundings per vertex.
+        let q = dev(Mode::Q16);
+        assert!(q.max_mm > 0.0 && q.max_mm < 1e-2, "{q:?}");
+        assert!(q.mean_mm <= q.max_mm);
+        // Fast: positions bit-identical, normals within the approximation's 0.2 %.
+        let f = dev(Mode::Fast);
+        assert_eq!(f.max_mm, 0.0);
+        assert!(f.max_normal_diff > 0.0 && f.max_normal_diff < 2e-3, "{f:?}");
     }
 
     #[test]
@@ -177,7 +296,6 @@ mod tests {
         let bad_r = AimReplay::from_bytes(&bad).unwrap();
         assert_ne!(good_r.expected(2), bad_r.expected(2));
         let file = sinew_core::SinewFile::from_bytes(&bad).unwrap();
-        let mut w = SinewWriter::from_file(&file).unwrap();
         let mut hashes: Vec<u32> = Vec::new();
         for f in 0..4 {
             let h = if f == 2 {
@@ -207,7 +325,6 @@ mod tests {
                 .unwrap();
             }
         }
-        let _ = &mut w;
         let v = verify(&model, &w2.to_bytes().unwrap()).unwrap();
         assert_eq!(v.first_mismatch, Some(2));
         assert!(v.frames[2].to_string().contains("DIFFERS"));
