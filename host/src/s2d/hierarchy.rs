@@ -847,6 +847,9 @@ pub fn read_sections(f: &SinewFile<'_>, prefix: &str) -> Result<Hierarchy> {
     let mut levels = Vec::new();
     for (i, row) in table.chunks_exact(2).enumerate() {
         let (n, len) = (row[0], row[1]);
+        let rows = n
+            .checked_add(1)
+            .with_context(|| format!("section {prefix}.levels: level {i} is too large"))?;
         let name = format!("{prefix}.h{i}.pos");
         let pos = f.f32_tensor(&name, &[n, 3]).map_err(|e| fmt(e, &name))?;
         let positions = pos
@@ -874,9 +877,9 @@ pub fn read_sections(f: &SinewFile<'_>, prefix: &str) -> Result<Hierarchy> {
             .collect();
         let name = format!("{prefix}.h{i}.spiral");
         let sp = f
-            .u32_tensor(&name, &[n + 1, len])
+            .u32_tensor(&name, &[rows, len])
             .map_err(|e| fmt(e, &name))?;
-        sinew_core::spiral::Spirals::new(sp, n as usize + 1, len as usize, n as usize + 1)
+        sinew_core::spiral::Spirals::new(sp, rows as usize, len as usize, rows as usize)
             .map_err(|e| fmt(e, &name))?;
         levels.push(Level {
             positions,
@@ -1259,6 +1262,34 @@ mod tests {
                 assert!(l.positions.iter().any(|p| p[0] == c[0] && p[1] == c[1]));
             }
         }
+    }
+
+    #[test]
+    fn sections_round_trip_and_bad_ones_are_named() {
+        let h = build(&grid(8), &[4, 4]).unwrap();
+        let bytes = to_bytes(&h, 7, &[4, 4]).unwrap();
+        assert_eq!(from_bytes(&bytes).unwrap(), h);
+        let f = SinewFile::from_bytes(&bytes).unwrap();
+        assert_eq!(f.metadata().get("key"), Some("0000000000000007"));
+        assert_eq!(f.metadata().get("factors"), Some("4,4"));
+
+        let rewrite = |h: &Hierarchy| {
+            let mut w = SinewWriter::new(ArtifactKind::S2dDecoder);
+            write_sections(h, &mut w, "s2d").unwrap();
+            format!("{:#}", from_bytes(&w.to_bytes().unwrap()).unwrap_err())
+        };
+        let mut bad = h.clone();
+        bad.levels[1].spirals[0] = 1000;
+        let e = rewrite(&bad);
+        assert!(e.contains("s2d.h1.spiral"), "{e}");
+        let mut bad = h.clone();
+        bad.up[0].col_idx[0] = 1000;
+        let e = rewrite(&bad);
+        assert!(e.contains("s2d.u0"), "{e}");
+        let mut bad = h.clone();
+        bad.levels[0].triangles[0][0] = 1000;
+        let e = rewrite(&bad);
+        assert!(e.contains("s2d.h0.tri"), "{e}");
     }
 
     #[test]
