@@ -59,6 +59,17 @@ impl Default for Config {
     }
 }
 
+impl Config {
+    /// The reference network's exact shapes on FLAME: [`DEFAULT_FACTORS`] and the spiral
+    /// lengths pinned to [`spirals::REFERENCE_FLAME_LENGTHS`].
+    pub fn reference_flame() -> Self {
+        Self {
+            factors: DEFAULT_FACTORS.to_vec(),
+            spiral_lengths: Some(spirals::REFERENCE_FLAME_LENGTHS.to_vec()),
+        }
+    }
+}
+
 /// [`build_with`] with `factors` and spiral lengths from the statistics.
 pub fn build(mesh: &Mesh, factors: &[usize]) -> Result<Hierarchy> {
     build_with(
@@ -1235,10 +1246,7 @@ mod tests {
         assert_eq!(from_bytes(&bytes).unwrap(), h);
 
         // Pinned to the reference's lengths, the spirals give the reference network's shapes.
-        let pinned = Config {
-            spiral_lengths: Some(spirals::REFERENCE_FLAME_LENGTHS.to_vec()),
-            ..Config::default()
-        };
+        let pinned = Config::reference_flame();
         let hp = build_with(&mesh, &pinned).unwrap();
         check(&hp);
         let lens: Vec<usize> = hp.levels.iter().map(|l| l.spiral_len).collect();
