@@ -712,7 +712,7 @@ impl Decimator {
     }
 
     fn push(&mut self, from: u32, to: u32) {
-        // Garland–Heckbert eq. 2 for the merged quadric at the kept position: Δ = p_vᵀ (Q_u + Q_v) p_v
+        // Garland–Heckbert eq. 2 at the kept position: Δ = p_vᵀ (Q_u + Q_v) p_v
         let q = self.quadric[from as usize].sum(&self.quadric[to as usize]);
         self.heap.push(Reverse(Candidate {
             cost: q.eval(self.pos[to as usize]),
