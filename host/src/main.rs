@@ -10,7 +10,7 @@ use sinew_host::aim::config::Schedule;
 use sinew_host::aim::run::Outputs;
 use sinew_host::backend::Backend;
 use sinew_host::commands;
-use sinew_host::s2d::hierarchy::DEFAULT_FACTORS;
+use sinew_host::s2d::hierarchy::{Config, DEFAULT_FACTORS};
 
 /// Sinew: learn an actor's face from meshes, and play it back anywhere, bit for bit.
 #[derive(Debug, Parser)]
@@ -144,6 +144,10 @@ enum S2d {
         /// Decimation factor of each level, comma-separated.
         #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_FACTORS)]
         factors: Vec<usize>,
+        /// Spiral length of each level, comma-separated (one more than factors), instead of
+        /// int(mean + 2·std); `15,14,9,9,7` gives the reference network's shapes on FLAME.
+        #[arg(long, value_delimiter = ',')]
+        spiral_lengths: Option<Vec<usize>>,
     },
 }
 
@@ -422,8 +426,13 @@ fn run(cli: Cli) -> Result<()> {
             template,
             out,
             factors,
+            spiral_lengths,
         }) => {
-            let h = commands::s2d_hierarchy(&template, &out, &factors)?;
+            let config = Config {
+                factors,
+                spiral_lengths,
+            };
+            let h = commands::s2d_hierarchy(&template, &out, &config)?;
             let sizes: Vec<usize> = h.levels.iter().map(|l| l.positions.len()).collect();
             let lens: Vec<usize> = h.levels.iter().map(|l| l.spiral_len).collect();
             println!(

@@ -276,6 +276,20 @@ fn s2d_hierarchy_writes_a_file_and_names_bad_templates() {
         "4,4",
     ]);
     assert!(said.contains("[49, 13, 4]"), "{said}");
+    let pinned = dir.path().join("pinned.sinew");
+    let said = ok(&[
+        "s2d",
+        "hierarchy",
+        "--template",
+        s(&template),
+        "--out",
+        s(&pinned),
+        "--factors",
+        "4,4",
+        "--spiral-lengths",
+        "9,8,3",
+    ]);
+    assert!(said.contains("spiral lengths [9, 8, 3]"), "{said}");
     let bytes = std::fs::read(&out).unwrap();
     let h = sinew_host::s2d::hierarchy::from_bytes(&bytes).unwrap();
     assert_eq!(h.levels.len(), 3);

@@ -39,16 +39,67 @@ const ALGORITHM_VERSION: u32 = 1;
 /// One level's vertex positions and triangles.
 type Geometry = (Vec<[f32; 3]>, Vec<[u32; 3]>);
 
+/// What a hierarchy is built with.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Config {
+    /// Decimation factor of each level: level `i + 1` has `ceil(n_i / factors[i])` vertices.
+    pub factors: Vec<usize>,
+    /// Spiral length of each level, overriding `int(mean + 2·std)` (e.g.
+    /// [`spirals::REFERENCE_FLAME_LENGTHS`], to build the reference network's exact shapes).
+    pub spiral_lengths: Option<Vec<usize>>,
+}
+
+impl Default for Config {
+    /// The reference configuration: [`DEFAULT_FACTORS`], spiral lengths from the statistics.
+    fn default() -> Self {
+        Self {
+            factors: DEFAULT_FACTORS.to_vec(),
+            spiral_lengths: None,
+        }
+    }
+}
+
+impl Config {
+    /// The reference network's exact shapes on FLAME: [`DEFAULT_FACTORS`] and the spiral
+    /// lengths pinned to [`spirals::REFERENCE_FLAME_LENGTHS`].
+    pub fn reference_flame() -> Self {
+        Self {
+            factors: DEFAULT_FACTORS.to_vec(),
+            spiral_lengths: Some(spirals::REFERENCE_FLAME_LENGTHS.to_vec()),
+        }
+    }
+}
+
+/// [`build_with`] with `factors` and spiral lengths from the statistics.
+pub fn build(mesh: &Mesh, factors: &[usize]) -> Result<Hierarchy> {
+    build_with(
+        mesh,
+        &Config {
+            factors: factors.to_vec(),
+            spiral_lengths: None,
+        },
+    )
+}
+
 /// Builds the hierarchy of `mesh`: level 0 is the mesh itself (polygons triangulated by fans),
 /// level `i + 1` has `ceil(n_i / factors[i])` vertices. Spirals follow
-/// [`spirals::reference_schedule`].
+/// [`spirals::reference_schedule`], their lengths the statistics or `config.spiral_lengths`.
 ///
 /// # Errors
 /// An empty mesh, an index out of range, a polygon with a repeated vertex or zero area, a
 /// non-manifold edge or vertex, inconsistently oriented neighbours, duplicate faces, a vertex in
-/// no face, a factor below 2, or a level that cannot be decimated that far without breaking the
-/// surface. Errors name the face or vertex; callers add the file name.
-pub fn build(mesh: &Mesh, factors: &[usize]) -> Result<Hierarchy> {
+/// no face, a factor below 2, spiral lengths that are zero or not one per level, or a level that
+/// cannot be decimated that far without breaking the surface. Errors name the face or vertex;
+/// callers add the file name.
+pub fn build_with(mesh: &Mesh, config: &Config) -> Result<Hierarchy> {
+    let factors = config.factors.as_slice();
+    if let Some(lens) = &config.spiral_lengths {
+        ensure!(
+            lens.len() == factors.len() + 1 && lens.iter().all(|&l| l > 0),
+            "spiral lengths {lens:?}: need {} positive lengths, one per level",
+            factors.len() + 1
+        );
+    }
     let triangles = checked_triangles(mesh)?;
     if let Some(i) = factors.iter().position(|&f| f < 2) {
         bail!(
@@ -88,8 +139,10 @@ pub fn build(mesh: &Mesh, factors: &[usize]) -> Result<Hierarchy> {
         .zip(schedule)
         .enumerate()
         .map(|(i, ((positions, triangles), (steps, dilation)))| {
-            let (spiral_len, spirals) = spirals::build(&positions, &triangles, steps, dilation)
-                .with_context(|| format!("spirals of level {i}"))?;
+            let len = config.spiral_lengths.as_ref().map(|l| l[i]);
+            let (spiral_len, spirals) =
+                spirals::build(&positions, &triangles, steps, dilation, len)
+                    .with_context(|| format!("spirals of level {i}"))?;
             Ok(Level {
                 positions,
                 triangles,
@@ -659,6 +712,7 @@ impl Decimator {
     }
 
     fn push(&mut self, from: u32, to: u32) {
+        // Garland–Heckbert eq. 2 at the kept position: Δ = p_vᵀ (Q_u + Q_v) p_v
         let q = self.quadric[from as usize].sum(&self.quadric[to as usize]);
         self.heap.push(Reverse(Candidate {
             cost: q.eval(self.pos[to as usize]),
@@ -847,6 +901,9 @@ pub fn read_sections(f: &SinewFile<'_>, prefix: &str) -> Result<Hierarchy> {
     let mut levels = Vec::new();
     for (i, row) in table.chunks_exact(2).enumerate() {
         let (n, len) = (row[0], row[1]);
+        let rows = n
+            .checked_add(1)
+            .with_context(|| format!("section {prefix}.levels: level {i} is too large"))?;
         let name = format!("{prefix}.h{i}.pos");
         let pos = f.f32_tensor(&name, &[n, 3]).map_err(|e| fmt(e, &name))?;
         let positions = pos
@@ -874,9 +931,9 @@ pub fn read_sections(f: &SinewFile<'_>, prefix: &str) -> Result<Hierarchy> {
             .collect();
         let name = format!("{prefix}.h{i}.spiral");
         let sp = f
-            .u32_tensor(&name, &[n + 1, len])
+            .u32_tensor(&name, &[rows, len])
             .map_err(|e| fmt(e, &name))?;
-        sinew_core::spiral::Spirals::new(sp, n as usize + 1, len as usize, n as usize + 1)
+        sinew_core::spiral::Spirals::new(sp, rows as usize, len as usize, rows as usize)
             .map_err(|e| fmt(e, &name))?;
         levels.push(Level {
             positions,
@@ -933,19 +990,16 @@ fn read_sampling(f: &SinewFile<'_>, p: &str, rows: usize, cols: usize) -> Result
 
 /// The hierarchy as a stand-alone `.sinew` file (kind S2D decoder, hierarchy sections only,
 /// under prefix `s2d`), with the cache key and factors as metadata.
-pub fn to_bytes(h: &Hierarchy, key: u64, factors: &[usize]) -> Result<Vec<u8>> {
+pub fn to_bytes(h: &Hierarchy, key: u64, config: &Config) -> Result<Vec<u8>> {
+    let list = |v: &[usize]| v.iter().map(usize::to_string).collect::<Vec<_>>().join(",");
     let mut w = SinewWriter::new(ArtifactKind::S2dDecoder);
     w.meta("tool", concat!("sinew ", env!("CARGO_PKG_VERSION")))
         .meta("content", "s2d-hierarchy")
         .meta("key", format!("{key:016x}"))
-        .meta(
-            "factors",
-            factors
-                .iter()
-                .map(usize::to_string)
-                .collect::<Vec<_>>()
-                .join(","),
-        );
+        .meta("factors", list(&config.factors));
+    if let Some(lens) = &config.spiral_lengths {
+        w.meta("spiral_lengths", list(lens));
+    }
     write_sections(h, &mut w, "s2d")?;
     w.to_bytes()
 }
@@ -956,9 +1010,9 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Hierarchy> {
     read_sections(&f, "s2d")
 }
 
-/// A stable 64-bit key of the mesh's positions and faces, the factors and the algorithm
+/// A stable 64-bit key of the mesh's positions and faces, the configuration and the algorithm
 /// version (CRC-64/XZ over their little-endian bytes; a cache key, not a security hash).
-pub fn cache_key(mesh: &Mesh, factors: &[usize]) -> u64 {
+pub fn cache_key(mesh: &Mesh, config: &Config) -> u64 {
     let crc = crc::Crc::<u64>::new(&crc::CRC_64_XZ);
     let mut d = crc.digest();
     d.update(b"sinew-s2d-hierarchy");
@@ -976,27 +1030,47 @@ pub fn cache_key(mesh: &Mesh, factors: &[usize]) -> u64 {
             d.update(&v.to_le_bytes());
         }
     }
-    d.update(&(factors.len() as u64).to_le_bytes());
-    for f in factors {
+    d.update(&(config.factors.len() as u64).to_le_bytes());
+    for f in &config.factors {
         d.update(&(*f as u64).to_le_bytes());
+    }
+    match &config.spiral_lengths {
+        None => d.update(&[0]),
+        Some(lens) => {
+            d.update(&[1]);
+            d.update(&(lens.len() as u64).to_le_bytes());
+            for l in lens {
+                d.update(&(*l as u64).to_le_bytes());
+            }
+        }
     }
     d.finalize()
 }
 
-/// The path [`cached`] uses in `cache_dir` for `mesh` and `factors`.
-pub fn cache_path(mesh: &Mesh, factors: &[usize], cache_dir: &Path) -> PathBuf {
+/// The path [`cached_with`] uses in `cache_dir` for `mesh` and `config`.
+pub fn cache_path(mesh: &Mesh, config: &Config, cache_dir: &Path) -> PathBuf {
     cache_dir.join(format!(
         "s2d-hierarchy-{:016x}.sinew",
-        cache_key(mesh, factors)
+        cache_key(mesh, config)
     ))
 }
 
-/// The hierarchy of `mesh`, read from `cache_dir` if an entry for this mesh and these factors
-/// exists and matches, else built and written there atomically. A cache entry that cannot be
-/// read, or whose key or level-0 mesh differs, is rebuilt and replaced.
+/// [`cached_with`] with `factors` and spiral lengths from the statistics.
 pub fn cached(mesh: &Mesh, factors: &[usize], cache_dir: &Path) -> Result<Hierarchy> {
-    let key = cache_key(mesh, factors);
-    let path = cache_path(mesh, factors, cache_dir);
+    let config = Config {
+        factors: factors.to_vec(),
+        spiral_lengths: None,
+    };
+    cached_with(mesh, &config, cache_dir)
+}
+
+/// The hierarchy of `mesh`, read from `cache_dir` if an entry for this mesh and configuration
+/// exists and matches, else built and written there atomically (so training and playback build
+/// it once). An entry that cannot be read, or whose key or level-0 positions differ, is rebuilt
+/// and replaced.
+pub fn cached_with(mesh: &Mesh, config: &Config, cache_dir: &Path) -> Result<Hierarchy> {
+    let key = cache_key(mesh, config);
+    let path = cache_path(mesh, config, cache_dir);
     if let Ok(bytes) = std::fs::read(&path)
         && let Ok(f) = SinewFile::from_bytes(&bytes)
         && f.metadata().get("key") == Some(format!("{key:016x}").as_str())
@@ -1007,8 +1081,8 @@ pub fn cached(mesh: &Mesh, factors: &[usize], cache_dir: &Path) -> Result<Hierar
     {
         return Ok(h);
     }
-    let h = build(mesh, factors)?;
-    crate::atomic::write(&path, &to_bytes(&h, key, factors)?)?;
+    let h = build_with(mesh, config)?;
+    crate::atomic::write(&path, &to_bytes(&h, key, config)?)?;
     Ok(h)
 }
 
@@ -1165,16 +1239,30 @@ mod tests {
         assert_eq!(lens, FLAME_SPIRAL_LENGTHS);
 
         // Byte-identical when built again, and read back unchanged.
-        let key = cache_key(&mesh, &DEFAULT_FACTORS);
-        let bytes = to_bytes(&h, key, &DEFAULT_FACTORS).unwrap();
-        let again = to_bytes(
-            &build(&mesh, &DEFAULT_FACTORS).unwrap(),
-            key,
-            &DEFAULT_FACTORS,
-        )
-        .unwrap();
+        let config = Config::default();
+        let key = cache_key(&mesh, &config);
+        let bytes = to_bytes(&h, key, &config).unwrap();
+        let again = to_bytes(&build(&mesh, &DEFAULT_FACTORS).unwrap(), key, &config).unwrap();
         assert!(bytes == again, "two builds differ");
         assert_eq!(from_bytes(&bytes).unwrap(), h);
+
+        // Pinned to the reference's lengths, the spirals give the reference network's shapes.
+        let pinned = Config::reference_flame();
+        let hp = build_with(&mesh, &pinned).unwrap();
+        check(&hp);
+        let lens: Vec<usize> = hp.levels.iter().map(|l| l.spiral_len).collect();
+        assert_eq!(lens, spirals::REFERENCE_FLAME_LENGTHS);
+        assert_eq!(hp.up, h.up);
+        assert!(
+            build_with(
+                &mesh,
+                &Config {
+                    spiral_lengths: Some(vec![9; 4]),
+                    ..pinned
+                }
+            )
+            .is_err()
+        );
     }
 
     /// Spiral lengths Sinew's construction gives on FLAME (reference: `[15, 14, 9, 9, 7]`).
@@ -1208,14 +1296,27 @@ mod tests {
         let mesh = Mesh::read(&dir.join("flame/FLAME_template.ply")).unwrap();
         let tmp = tempfile::tempdir().unwrap();
         let factors = [4, 4];
+        let config = Config {
+            factors: factors.to_vec(),
+            spiral_lengths: None,
+        };
         let h = cached(&mesh, &factors, tmp.path()).unwrap();
-        let path = cache_path(&mesh, &factors, tmp.path());
+        let path = cache_path(&mesh, &config, tmp.path());
         let written = std::fs::read(&path).unwrap();
         let again = cached(&mesh, &factors, tmp.path()).unwrap();
         assert_eq!(h, again);
         assert_eq!(std::fs::read(&path).unwrap(), written);
         // A different factor list is a different entry; a corrupt entry is rebuilt.
-        assert_ne!(cache_path(&mesh, &[4, 3], tmp.path()), path);
+        let other = Config {
+            factors: vec![4, 3],
+            spiral_lengths: None,
+        };
+        assert_ne!(cache_path(&mesh, &other, tmp.path()), path);
+        let other = Config {
+            spiral_lengths: Some(vec![9, 9, 9]),
+            ..config
+        };
+        assert_ne!(cache_path(&mesh, &other, tmp.path()), path);
         std::fs::write(&path, b"garbage").unwrap();
         assert_eq!(cached(&mesh, &factors, tmp.path()).unwrap(), h);
         assert_eq!(std::fs::read(&path).unwrap(), written);
@@ -1259,6 +1360,39 @@ mod tests {
                 assert!(l.positions.iter().any(|p| p[0] == c[0] && p[1] == c[1]));
             }
         }
+    }
+
+    #[test]
+    fn sections_round_trip_and_bad_ones_are_named() {
+        let h = build(&grid(8), &[4, 4]).unwrap();
+        let config = Config {
+            factors: vec![4, 4],
+            spiral_lengths: Some(vec![7, 6, 5]),
+        };
+        let bytes = to_bytes(&h, 7, &config).unwrap();
+        assert_eq!(from_bytes(&bytes).unwrap(), h);
+        let f = SinewFile::from_bytes(&bytes).unwrap();
+        assert_eq!(f.metadata().get("key"), Some("0000000000000007"));
+        assert_eq!(f.metadata().get("factors"), Some("4,4"));
+        assert_eq!(f.metadata().get("spiral_lengths"), Some("7,6,5"));
+
+        let rewrite = |h: &Hierarchy| {
+            let mut w = SinewWriter::new(ArtifactKind::S2dDecoder);
+            write_sections(h, &mut w, "s2d").unwrap();
+            format!("{:#}", from_bytes(&w.to_bytes().unwrap()).unwrap_err())
+        };
+        let mut bad = h.clone();
+        bad.levels[1].spirals[0] = 1000;
+        let e = rewrite(&bad);
+        assert!(e.contains("s2d.h1.spiral"), "{e}");
+        let mut bad = h.clone();
+        bad.up[0].col_idx[0] = 1000;
+        let e = rewrite(&bad);
+        assert!(e.contains("s2d.u0"), "{e}");
+        let mut bad = h.clone();
+        bad.levels[0].triangles[0][0] = 1000;
+        let e = rewrite(&bad);
+        assert!(e.contains("s2d.h0.tri"), "{e}");
     }
 
     #[test]

@@ -28,6 +28,11 @@ use anyhow::{Result, bail};
 
 use super::hierarchy::{fan, incident_triangles};
 
+/// The spiral lengths of the authors' reference configuration on FLAME, levels 0 to 4
+/// (`shared/notes/s2d-reference.md`). Sinew's statistics give `[15, 13, 9, 9, 7]` on its own
+/// FLAME hierarchy (see docs/S2D.md); pass these to reproduce the reference network's shapes.
+pub const REFERENCE_FLAME_LENGTHS: [usize; 5] = [15, 14, 9, 9, 7];
+
 /// Rings and dilation of each level, finest first, for a hierarchy of `levels` levels: the
 /// reference's `[2, 2, 1, 1, 1]` for both, extended with `1` for deeper hierarchies.
 pub fn reference_schedule(levels: usize) -> Vec<(usize, usize)> {
@@ -192,11 +197,13 @@ pub fn reference_length(lengths: &[usize]) -> usize {
 
 /// The padded spirals of one level: `(len, indices)` with `indices` row-major
 /// `[(n + 1) × len]`, the dummy vertex `n` padding short spirals and filling the last row.
+/// `len` is [`reference_length`] of the dilated spirals unless `fixed_len` is given.
 pub fn build(
     positions: &[[f32; 3]],
     triangles: &[[u32; 3]],
     steps: usize,
     dilation: usize,
+    fixed_len: Option<usize>,
 ) -> Result<(usize, Vec<u32>)> {
     let n = positions.len();
     let spirals: Vec<Vec<u32>> = natural(positions, triangles, steps)?
@@ -204,7 +211,9 @@ pub fn build(
         .map(|s| dilate(s, dilation))
         .collect();
     let lengths: Vec<usize> = spirals.iter().map(Vec::len).collect();
-    let len = reference_length(&lengths);
+    let len = fixed_len
+        .unwrap_or_else(|| reference_length(&lengths))
+        .max(1);
     let dummy = n as u32;
     let mut out = Vec::with_capacity((n + 1) * len);
     for s in &spirals {
@@ -252,23 +261,20 @@ mod tests {
         assert_eq!(dilate(&[0, 1, 2], 1), [0, 1, 2]);
         assert_eq!(reference_length(&[7, 4, 4, 4, 4, 4, 4]), 6);
         let (p, t) = hexagon();
-        let (len, rows) = build(&p, &t, 1, 1).unwrap();
+        let (len, rows) = build(&p, &t, 1, 1, None).unwrap();
         assert_eq!(len, 6);
         assert_eq!(rows.len(), 8 * 6);
         assert_eq!(&rows[..6], &[0, 4, 5, 6, 1, 2]);
         assert_eq!(&rows[6..12], &[1, 0, 6, 2, 7, 7]);
         assert_eq!(&rows[42..], &[7; 6]);
+        let (len, rows) = build(&p, &t, 1, 1, Some(8)).unwrap();
+        assert_eq!(len, 8);
+        assert_eq!(&rows[..8], &[0, 4, 5, 6, 1, 2, 3, 7]);
     }
 
-    /// The statistics behind FLAME's spiral lengths (printed for docs/S2D.md).
-    #[test]
-    fn flame_spiral_statistics() {
-        let Some(dir) = crate::testing::data_dir() else {
-            return;
-        };
-        let mesh = crate::mesh::Mesh::read(&dir.join("flame/FLAME_template.ply")).unwrap();
-        let h = super::super::hierarchy::build(&mesh, &super::super::hierarchy::DEFAULT_FACTORS)
-            .unwrap();
+    fn print_statistics(name: &str, mesh: &crate::mesh::Mesh) {
+        use super::super::hierarchy::{DEFAULT_FACTORS, build};
+        let h = build(mesh, &DEFAULT_FACTORS).unwrap();
         for (i, (l, (steps, dil))) in h.levels.iter().zip(reference_schedule(5)).enumerate() {
             let lens: Vec<f64> = natural(&l.positions, &l.triangles, steps)
                 .unwrap()
@@ -279,11 +285,27 @@ mod tests {
             let mean = lens.iter().sum::<f64>() / n;
             let std = (lens.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n).sqrt();
             eprintln!(
-                "FLAME level {i}: {} vertices, dilated natural length mean {mean:.3} std {std:.3} \
-                 → mean + 2 std = {:.3}",
+                "{name} level {i}: {} vertices, dilated natural length mean {mean:.3} std \
+                 {std:.3} → mean + 2 std = {:.3}",
                 l.positions.len(),
                 mean + 2.0 * std
             );
         }
+    }
+
+    /// The statistics behind the spiral lengths on FLAME and the ICT face region (printed for
+    /// docs/S2D.md).
+    #[test]
+    fn spiral_statistics_on_real_meshes() {
+        let Some(dir) = crate::testing::data_dir() else {
+            return;
+        };
+        let flame = crate::mesh::Mesh::read(&dir.join("flame/FLAME_template.ply")).unwrap();
+        print_statistics("FLAME", &flame);
+        let ict =
+            crate::mesh::Mesh::read(&dir.join("ict-facekit/generic_neutral_mesh.obj")).unwrap();
+        let region = crate::ict::FACE_REGION;
+        let (face, _) = ict.submesh(|v| region.contains(&v));
+        print_statistics("ICT face region", &face);
     }
 }
