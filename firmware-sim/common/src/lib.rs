@@ -296,6 +296,90 @@ pub fn replay(
     Ok(summary)
 }
 
+/// What one frame of a golden actor costs, phase by phase, in the units of the counter given to
+/// [`phase_costs`] (instructions on the simulators).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct PhaseCosts {
+    /// `f32` posing (AIM eq. 17), the reference mode.
+    pub pose_f32: u64,
+    /// Q16.16 posing, the weights' conversion included (0 without a Q16.16 cache).
+    pub pose_q16: u64,
+    /// Vertex normals with `libm` (f32 mode).
+    pub normals_f32: u64,
+    /// Vertex normals with micromath (fast mode).
+    pub normals_fast: u64,
+    /// Hashing positions and normals (the replay check, not playback).
+    pub hash: u64,
+}
+
+impl fmt::Display for PhaseCosts {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "pose_f32={} pose_q16={} normals_f32={} normals_fast={} hash={}",
+            self.pose_f32, self.pose_q16, self.normals_f32, self.normals_fast, self.hash
+        )
+    }
+}
+
+/// Measures each phase of frame `frame` of `golden` separately with `now` (a monotonic counter:
+/// retired instructions on RISC-V, SysTick on the Cortex-M).
+pub fn phase_costs(
+    golden: &Golden,
+    frame: usize,
+    scratch: &mut Scratch,
+    mut now: impl FnMut() -> u64,
+) -> Result<PhaseCosts, Error> {
+    use sinew_core::hash::FrameHasher;
+    use sinew_core::q16::{PoseQ16, q16_slice};
+    let r = Replay::new(golden, scratch)?;
+    let (actor, replay) = (r.actor, r.replay);
+    let s = r.scratch;
+    let n = 3 * actor.vertex_count();
+    let m = actor.shape_count();
+    let (Some(positions), Some(normals), Some(positions_q16), Some(weights), Some(weights_q16)) = (
+        s.positions.get_mut(..n),
+        s.normals.get_mut(..n),
+        s.positions_q16.get_mut(..n),
+        s.weights.get_mut(..m),
+        s.weights_q16.get_mut(..m),
+    ) else {
+        return Err(Error::TooManyVertices {
+            vertices: actor.vertex_count(),
+        });
+    };
+    let Some((head, jaw)) = replay.frame(frame, weights) else {
+        return Err(Error::Replay(FormatError::IncompatibleShapes));
+    };
+    let buffer = |e| Error::Playback(ReplayError::Buffer(e));
+    let mut costs = PhaseCosts::default();
+    let t = now();
+    let pose = actor.pose_from_9d(&jaw, &head);
+    actor.pose(&pose, weights, positions).map_err(buffer)?;
+    costs.pose_f32 = now() - t;
+    if let Some(cache) = actor.q16() {
+        let t = now();
+        q16_slice(weights, weights_q16).map_err(buffer)?;
+        cache
+            .pose(&PoseQ16::from_pose(&pose), weights_q16, positions_q16)
+            .map_err(buffer)?;
+        costs.pose_q16 = now() - t;
+    }
+    let t = now();
+    sinew_core::fast::vertex_normals(actor.triangles(), positions, normals).map_err(buffer)?;
+    costs.normals_fast = now() - t;
+    let t = now();
+    actor.normals(positions, normals).map_err(buffer)?;
+    costs.normals_f32 = now() - t;
+    let t = now();
+    let mut h = FrameHasher::new();
+    h.write_f32s(positions);
+    h.write_f32s(normals);
+    core::hint::black_box(h.finish());
+    costs.hash = now() - t;
+    Ok(costs)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -385,6 +469,27 @@ mod tests {
         h.update(&bytes[HEADER_LEN..table_end]);
         bytes[HEADER_CRC_OFFSET..HEADER_LEN].copy_from_slice(&h.finalize().to_le_bytes());
         bytes
+    }
+
+    #[test]
+    fn phase_costs_measure_every_phase() {
+        let mut clock = 0u64;
+        let c = phase_costs(&GOLDENS[3], 8, &mut scratch(), || {
+            clock += 1;
+            clock
+        })
+        .unwrap();
+        // Each phase is one tick of this counter: every phase ran and was timed on its own.
+        assert_eq!(
+            c,
+            PhaseCosts {
+                pose_f32: 1,
+                pose_q16: 1,
+                normals_f32: 1,
+                normals_fast: 1,
+                hash: 1
+            }
+        );
     }
 
     #[test]

@@ -12,7 +12,7 @@ use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::{ExceptionFrame, entry, exception};
 use cortex_m_semihosting::{debug, heprintln, hprintln};
 use panic_semihosting as _;
-use sinew_firmware_common::{GOLDENS, Replay, Scratch, Summary};
+use sinew_firmware_common::{GOLDENS, Replay, Scratch, Summary, phase_costs};
 
 /// SysTick reload: the counter is 24 bits wide.
 const SYST_MAX: u32 = 0x00FF_FFFF;
@@ -21,8 +21,63 @@ const SYST_MAX: u32 = 0x00FF_FFFF;
 /// nanosecond, SysTick on the mps2 core clock of 25 MHz.
 const INSTRUCTIONS_PER_TICK: u32 = 40;
 
+/// What unused stack holds after [`paint_stack`].
+const STACK_PAINT: u32 = 0x5EED_5EED;
+
+unsafe extern "C" {
+    /// Lowest stack address (end of .bss/.uninit), from cortex-m-rt's linker script.
+    static _stack_end: u32;
+    /// Initial stack pointer (top of RAM), from cortex-m-rt's linker script.
+    static _stack_start: u32;
+}
+
+/// Fills the free stack below the current frame (less a margin) with [`STACK_PAINT`], so that
+/// [`stack_high_water`] can find the deepest address the run wrote.
+fn paint_stack() {
+    let bottom = core::ptr::addr_of!(_stack_end) as usize;
+    let sp = cortex_m::register::msp::read() as usize;
+    let mut p = bottom;
+    while p + 256 < sp {
+        // Safety: [bottom, sp − 256) is RAM between the end of .bss and the live stack, used by
+        // nothing else in this single-threaded program; word-aligned (cortex-m-rt aligns
+        // _stack_end to 4).
+        unsafe { (p as *mut u32).write_volatile(STACK_PAINT) };
+        p += 4;
+    }
+}
+
+/// Bytes of stack used so far: from the top of RAM down to the lowest word no longer holding
+/// [`STACK_PAINT`].
+fn stack_high_water() -> usize {
+    let bottom = core::ptr::addr_of!(_stack_end) as usize;
+    let top = core::ptr::addr_of!(_stack_start) as usize;
+    let mut p = bottom;
+    // Safety: reads of RAM between the end of .bss and the top of the stack, word-aligned.
+    while p < top && unsafe { (p as *const u32).read_volatile() } == STACK_PAINT {
+        p += 4;
+    }
+    top - p
+}
+
+/// A monotonic instruction count from SysTick (24 bits, counting down): each call adds the ticks
+/// since the previous one, so it never wraps as long as calls are less than a period apart.
+struct Clock {
+    last: u32,
+    total: u64,
+}
+
+impl Clock {
+    fn now(&mut self) -> u64 {
+        let current = SYST::get_current();
+        self.total += u64::from(self.last.wrapping_sub(current) & SYST_MAX);
+        self.last = current;
+        self.total * u64::from(INSTRUCTIONS_PER_TICK)
+    }
+}
+
 #[entry]
 fn main() -> ! {
+    paint_stack();
     let passed = run();
     debug::exit(if passed {
         debug::EXIT_SUCCESS
@@ -103,6 +158,21 @@ fn run() -> bool {
         total.frames,
         GOLDENS.len()
     );
+    // Cost of each phase of one frame, per golden actor (the f32 replay stands for its model).
+    for golden in GOLDENS.iter().filter(|g| g.name.ends_with(".f32")) {
+        let mut clock = Clock {
+            last: SYST::get_current(),
+            total: 0,
+        };
+        match phase_costs(golden, 8, scratch, || clock.now()) {
+            Ok(c) => hprintln!("cost {} frame 8 (instructions): {}", golden.name, c),
+            Err(e) => {
+                heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
+                return false;
+            }
+        }
+    }
+    hprintln!("stack high-water {} bytes", stack_high_water());
     total.passed()
 }
 

@@ -9,7 +9,7 @@
 
 use riscv::register::{mcause, mepc, minstret, mtval};
 use semihosting::{eprintln, println, process};
-use sinew_firmware_common::{GOLDENS, Replay, Scratch, Summary};
+use sinew_firmware_common::{GOLDENS, Replay, Scratch, Summary, phase_costs};
 
 #[riscv_rt::entry]
 fn main() -> ! {
@@ -61,6 +61,16 @@ fn run() -> bool {
         total.frames,
         GOLDENS.len()
     );
+    // Cost of each phase of one frame, per golden actor (the f32 replay stands for its model).
+    for golden in GOLDENS.iter().filter(|g| g.name.ends_with(".f32")) {
+        match phase_costs(golden, 8, scratch, minstret::read64) {
+            Ok(c) => println!("cost {} frame 8 (instructions): {c}", golden.name),
+            Err(e) => {
+                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
+                return false;
+            }
+        }
+    }
     total.passed()
 }
 

@@ -1,0 +1,156 @@
+#!/usr/bin/env python3
+"""Measures sinew-core playback on the emulated microcontrollers and writes the tables into
+docs/BENCHMARKS.md (between the `firmware-costs` markers).
+
+Runs the Cortex-M4F and RISC-V firmware under QEMU with `-icount shift=0` (instruction counts
+repeat exactly), reads the per-phase costs they print for one frame of each golden actor, the
+per-frame totals of every golden replay, the Cortex-M stack high-water mark, and the flash and
+RAM footprint of the Cortex-M image from its ELF section headers (readelf).
+
+Usage: python3 scripts/firmware_costs.py [--check]
+  --check  fail instead of rewriting when docs/BENCHMARKS.md differs from the measurement.
+Needs what firmware-sim/run.sh installs (run that once first on a fresh machine).
+"""
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+FW = ROOT / "firmware-sim"
+TARGET = Path(os.environ.get("CARGO_TARGET_DIR", FW / "target"))
+DOC = ROOT / "docs" / "BENCHMARKS.md"
+START, END = "<!-- firmware-costs:start -->", "<!-- firmware-costs:end -->"
+
+COST = re.compile(r"^cost (\S+) frame (\d+) \(instructions\): (.*)$")
+HEADER = re.compile(r"^sinew-firmware-sim(?:-riscv)?: [^,]+, (\S+): (\d+) vertices, (\d+) shapes")
+FRAME = re.compile(r"^frame +\d+ [0-9a-f]{16} ok +~?(\d+) instructions")
+STACK = re.compile(r"^stack high-water (\d+) bytes")
+
+
+def run(crate: str) -> str:
+    env = dict(os.environ, CARGO_TARGET_DIR=str(TARGET))
+    out = subprocess.run(
+        ["cargo", "run", "--quiet", "--locked", "--release"],
+        cwd=FW / crate,
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+    if out.returncode != 0:
+        sys.exit(f"firmware_costs: {crate} failed (exit {out.returncode}):\n{out.stdout}\n{out.stderr}")
+    return out.stdout
+
+
+def parse(text: str):
+    costs, frames, sizes, stack = {}, {}, {}, None
+    current = None
+    for line in text.splitlines():
+        if m := HEADER.match(line):
+            current = m.group(1)
+            sizes[current] = (int(m.group(2)), int(m.group(3)))
+            frames[current] = []
+        elif m := FRAME.match(line):
+            frames[current].append(int(m.group(1)))
+        elif m := COST.match(line):
+            costs[m.group(1).rsplit(".", 1)[0]] = dict(
+                kv.split("=") for kv in m.group(3).split()
+            )
+        elif m := STACK.match(line):
+            stack = int(m.group(1))
+    return costs, frames, sizes, stack
+
+
+def footprint(elf: Path):
+    out = subprocess.run(["readelf", "-S", "-W", str(elf)], capture_output=True, text=True, check=True)
+    sec = {}
+    for line in out.stdout.splitlines():
+        m = re.match(r"^\s*\[\s*\d+\]\s+(\S+)\s+\S+\s+[0-9a-f]+\s+[0-9a-f]+\s+([0-9a-f]+)", line)
+        if m:
+            sec[m.group(1)] = int(m.group(2), 16)
+    flash = sum(sec.get(s, 0) for s in (".vector_table", ".text", ".rodata", ".data"))
+    ram = sum(sec.get(s, 0) for s in (".data", ".bss", ".uninit"))
+    return sec, flash, ram
+
+
+def kib(n: int) -> str:
+    return f"{n / 1024:,.1f} KiB"
+
+
+def mil(n: float) -> str:
+    return f"{n / 1e6:.2f} M"
+
+
+def main() -> None:
+    check = "--check" in sys.argv[1:]
+    arm = run("cortex-m")
+    rv = run("riscv")
+    arm_costs, arm_frames, sizes, stack = parse(arm)
+    rv_costs, rv_frames, _, _ = parse(rv)
+    sec, flash, ram = footprint(TARGET / "thumbv7em-none-eabihf/release/sinew-firmware-sim")
+    lines = [START, ""]
+    lines += [
+        "Per-phase cost of frame 8 of the golden sequence, in instructions (Cortex-M4F: SysTick",
+        "ticks × 40 under `-icount shift=0`, resolution 40; RISC-V: `minstret`, exact):",
+        "",
+        "| actor | phase | Cortex-M4F (FPU) | RISC-V rv32imac (soft float) |",
+        "|---|---|---|---|",
+    ]
+    names = {
+        "pose_f32": "pose, f32 (eq. 17: jaw LBS + correctives + head)",
+        "pose_q16": "pose, Q16.16",
+        "normals_f32": "vertex normals, f32 (libm)",
+        "normals_fast": "vertex normals, fast (micromath)",
+        "hash": "frame hash (replay check only)",
+    }
+    for actor in arm_costs:
+        v, m = sizes[f"{actor}.f32"]
+        for key, label in names.items():
+            lines.append(
+                f"| {actor} ({v:,} vertices, {m} correctives) | {label} | "
+                f"{mil(int(arm_costs[actor][key]))} | {mil(int(rv_costs[actor][key]))} |"
+            )
+    lines += [
+        "",
+        "Whole frames as the replays run them (f32 and fast: pose + normals + hash; q16: pose +",
+        "hash), mean over the 16 frames:",
+        "",
+        "| replay | Cortex-M4F | RISC-V |",
+        "|---|---|---|",
+    ]
+    for name in arm_frames:
+        a, r = arm_frames[name], rv_frames.get(name, [])
+        lines.append(f"| {name} | {mil(sum(a) / len(a))} | {mil(sum(r) / len(r))} |")
+    lines += [
+        "",
+        "Cortex-M4F image (`firmware-sim/cortex-m`, release; both golden actors in flash, the ICT one",
+        "with its Q16.16 cache):",
+        "",
+        "| | bytes |",
+        "|---|---|",
+        f"| flash: .vector_table + .text + .rodata + .data | {flash:,} ({kib(flash)}) |",
+        f"| of which code (.text) | {sec.get('.text', 0):,} ({kib(sec.get('.text', 0))}) |",
+        f"| RAM: .data + .bss (frame buffers for 5,120 vertices) | {ram:,} ({kib(ram)}) |",
+        f"| stack high-water mark | {stack:,} ({kib(stack)}) |",
+        f"| RAM in all | {ram + stack:,} ({kib(ram + stack)}) |",
+        "",
+        END,
+    ]
+    block = "\n".join(lines)
+    doc = DOC.read_text()
+    if START not in doc or END not in doc:
+        sys.exit(f"firmware_costs: {DOC} lacks the {START} … {END} markers")
+    new = doc[: doc.index(START)] + block + doc[doc.index(END) + len(END):]
+    if check:
+        if new != doc:
+            sys.exit("firmware_costs: docs/BENCHMARKS.md differs from this measurement")
+        print("firmware_costs: docs/BENCHMARKS.md matches")
+        return
+    DOC.write_text(new)
+    print(block)
+
+
+if __name__ == "__main__":
+    main()
