@@ -36,6 +36,13 @@ const imports = {
 
 const { instance } = await WebAssembly.instantiate(readFileSync(path), imports);
 console.log(`sinew-firmware-wasm: ${path}`);
+// The kernel suite first (reported as frames 9:0…), then the replays.
+const kernels = instance.exports.sinew_kernels() >>> 0;
+if (kernels !== 0) {
+  console.error(`sinew-firmware-wasm: kernel suite: ${kernels === LOAD_ERROR ? "could not run" : `${kernels} cases differ`}`);
+  process.exit(1);
+}
+console.log("sinew-firmware-wasm: 7 kernels bit-identical to the host");
 // An i32 result comes back signed: `>>> 0` reads it as the u32 it is.
 const result = instance.exports.sinew_replay() >>> 0;
 if (result === LOAD_ERROR) {

@@ -28,6 +28,8 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod kernels;
+
 use core::fmt;
 
 use sinew_core::FormatError;
@@ -469,6 +471,17 @@ mod tests {
         h.update(&bytes[HEADER_LEN..table_end]);
         bytes[HEADER_CRC_OFFSET..HEADER_LEN].copy_from_slice(&h.finalize().to_le_bytes());
         bytes
+    }
+
+    #[test]
+    fn kernel_suite_matches_the_pinned_host_hashes() {
+        let mut names = Vec::new();
+        let (cases, bad) = kernels::check_kernels(&mut Box::default(), |name, _, ok| {
+            names.push((name.to_string(), ok));
+        })
+        .unwrap();
+        assert_eq!((cases, bad), (7, 0), "{names:?}");
+        assert_eq!(cases, kernels::KERNEL_HASHES.lines().count());
     }
 
     #[test]

@@ -12,6 +12,7 @@ use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::{ExceptionFrame, entry, exception};
 use cortex_m_semihosting::{debug, heprintln, hprintln};
 use panic_semihosting as _;
+use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
 use sinew_firmware_common::{GOLDENS, Replay, Scratch, Summary, phase_costs};
 
 /// SysTick reload: the counter is 24 bits wide.
@@ -113,6 +114,37 @@ fn run() -> bool {
     syst.clear_current();
     syst.enable_counter();
 
+    // The core kernels on seeded weights, against the hashes pinned on the host.
+    let Some(kernel_scratch) = cortex_m::singleton!(: KernelScratch = KernelScratch::new()) else {
+        heprintln!("sinew-firmware-sim: kernel scratch already taken");
+        return false;
+    };
+    match check_kernels(kernel_scratch, |name, hash, ok| {
+        hprintln!(
+            "kernel {} {:016x} {}",
+            name,
+            hash,
+            if ok { "ok" } else { "DIFFERS" }
+        );
+    }) {
+        Ok((cases, 0)) => hprintln!(
+            "sinew-firmware-sim: {}/{} kernels bit-identical to the host",
+            cases,
+            cases
+        ),
+        Ok((cases, bad)) => {
+            heprintln!(
+                "sinew-firmware-sim: {} of {} kernels differ from the host",
+                bad,
+                cases
+            );
+            return false;
+        }
+        Err(e) => {
+            heprintln!("sinew-firmware-sim: kernel suite failed: {:?}", e);
+            return false;
+        }
+    }
     let mut total = Summary::default();
     for golden in &GOLDENS {
         let mut replay = match Replay::new(golden, scratch) {

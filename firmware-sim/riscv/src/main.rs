@@ -9,6 +9,7 @@
 
 use riscv::register::{mcause, mepc, minstret, mtval};
 use semihosting::{eprintln, println, process};
+use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
 use sinew_firmware_common::{GOLDENS, Replay, Scratch, Summary, phase_costs};
 
 #[riscv_rt::entry]
@@ -23,6 +24,35 @@ fn run() -> bool {
         eprintln!("sinew-firmware-sim-riscv: scratch already taken");
         return false;
     };
+    // The core kernels on seeded weights, against the hashes pinned on the host.
+    let Some(kernel_scratch) = riscv::singleton!(: KernelScratch = KernelScratch::new()) else {
+        eprintln!("sinew-firmware-sim-riscv: kernel scratch already taken");
+        return false;
+    };
+    match check_kernels(kernel_scratch, |name, hash, ok| {
+        println!(
+            "kernel {} {:016x} {}",
+            name,
+            hash,
+            if ok { "ok" } else { "DIFFERS" }
+        );
+    }) {
+        Ok((cases, 0)) => println!(
+            "sinew-firmware-sim-riscv: {}/{} kernels bit-identical to the host",
+            cases, cases
+        ),
+        Ok((cases, bad)) => {
+            eprintln!(
+                "sinew-firmware-sim-riscv: {} of {} kernels differ from the host",
+                bad, cases
+            );
+            return false;
+        }
+        Err(e) => {
+            eprintln!("sinew-firmware-sim-riscv: kernel suite failed: {:?}", e);
+            return false;
+        }
+    }
     let mut total = Summary::default();
     for golden in &GOLDENS {
         let mut replay = match Replay::new(golden, scratch) {

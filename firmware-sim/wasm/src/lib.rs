@@ -6,6 +6,7 @@
 #![no_std]
 #![deny(unsafe_code)]
 
+use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
 use sinew_firmware_common::{GOLDENS, Scratch, Summary, replay};
 
 /// What [`sinew_replay`] returns when the replay could not run (bad model, malformed or empty
@@ -56,6 +57,27 @@ pub extern "C" fn sinew_replay() -> u32 {
     }
     // At most the number of frames, far below LOAD_ERROR.
     u32::try_from(total.mismatches).unwrap_or(LOAD_ERROR - 1)
+}
+
+/// Runs the core kernel suite on seeded weights; returns the number of cases whose hash differs
+/// from the one pinned on the host, or [`LOAD_ERROR`]. Each case is reported through
+/// `sinew.report` with frame number 9000 + its index.
+// Safety: `no_mangle` exports the function under its own name; no other symbol in the module
+// is called `sinew_kernels`.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_kernels() -> u32 {
+    let mut scratch = KernelScratch::new();
+    let mut index = 0u32;
+    let result = check_kernels(&mut scratch, |name, hash, ok| {
+        let pinned = sinew_firmware_common::kernels::pinned(name).map_or(!hash, |(h, _)| h);
+        report(9000 + index, hash, if ok { hash } else { pinned });
+        index += 1;
+    });
+    match result {
+        Ok((cases, bad)) if cases > 0 => u32::try_from(bad).unwrap_or(LOAD_ERROR - 1),
+        _ => LOAD_ERROR,
+    }
 }
 
 /// A panic traps: the host sees a `RuntimeError` from the call, never a wrong count.
