@@ -132,7 +132,7 @@ def main() -> None:
         "|---|---|",
         f"| flash: .vector_table + .text + .rodata + .data | {flash:,} ({kib(flash)}) |",
         f"| of which code (.text) | {sec.get('.text', 0):,} ({kib(sec.get('.text', 0))}) |",
-        f"| RAM: .data + .bss (frame buffers for 5,120 vertices) | {ram:,} ({kib(ram)}) |",
+        f"| RAM: .data + .bss (frame buffers for 5,120 vertices, kernel-suite buffers) | {ram:,} ({kib(ram)}) |",
         f"| stack high-water mark | {stack:,} ({kib(stack)}) |",
         f"| RAM in all | {ram + stack:,} ({kib(ram + stack)}) |",
         "",
