@@ -37,6 +37,7 @@ fn small_network() -> Vec<u8> {
 fn load(kind: &str, bytes: &[u8]) -> Result<(), sinew_core::FormatError> {
     match kind {
         "network" => load_mlp(&SinewFile::from_bytes(bytes)?, "mlp").map(|_| ()),
+        "replay" => sinew_core::replay::AimReplay::from_bytes(bytes).map(|_| ()),
         _ => sinew_core::aim::AimActor::from_bytes(bytes).map(|_| ()),
     }
 }
@@ -45,7 +46,13 @@ fn load(kind: &str, bytes: &[u8]) -> Result<(), sinew_core::FormatError> {
 fn artefacts() -> Vec<(&'static str, Vec<u8>)> {
     let aim = std::fs::read(sinew_tests::golden_dir().join("aim-procedural.sinew"))
         .expect("golden AIM actor (tests/data)");
-    vec![("network", small_network()), ("aim-actor", aim)]
+    let replay = std::fs::read(sinew_tests::golden_dir().join("aim-procedural.q16.replay.sinew"))
+        .expect("golden replay (tests/data)");
+    vec![
+        ("network", small_network()),
+        ("aim-actor", aim),
+        ("replay", replay),
+    ]
 }
 
 /// The writer's bytes are pinned: a change of layout shows up here (and the file seeds the fuzzer).
