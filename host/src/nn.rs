@@ -171,6 +171,13 @@ pub fn write_mlp(w: &mut SinewWriter, prefix: &str, layers: &[LayerWeights]) -> 
     Ok(())
 }
 
+/// A linear layer with PyTorch's default `nn.Linear` initialisation: weight and bias uniform in
+/// ±1/√inputs (kaiming-uniform with a = √5 gives exactly that bound for the weight).
+pub fn pytorch_linear(inputs: usize, outputs: usize, device: &Device) -> Linear {
+    let b = 1.0 / (inputs as f64).sqrt();
+    uniform_linear(inputs, outputs, b, b, device)
+}
+
 fn uniform_linear(
     inputs: usize,
     outputs: usize,
@@ -238,6 +245,28 @@ impl SpiralConv {
             x.select(1, self.spirals.clone())
                 .reshape([batch, vertices, self.len * features]);
         activate(self.linear.forward(gathered), self.activation)
+    }
+
+    /// The same convolution on a vertex-major batch: `x` holds one row per source vertex with the
+    /// `batch` samples' features side by side. Keeping the vertex as the leading dimension of a
+    /// 2-D tensor makes the gather a row copy, and its backward (burn-flex's `select_add`) a row
+    /// addition, instead of the per-element index arithmetic of the N-D path.
+    ///
+    /// # Shapes
+    /// - input: `[source_vertices, batch · in]`
+    /// - output: `[vertices, batch · out]`
+    pub fn forward_vertex_major(&self, x: Tensor<2>, batch: usize) -> Tensor<2> {
+        let [_, width] = x.dims();
+        let features = width / batch.max(1);
+        let vertices = self.spirals.dims()[0] / self.len;
+        let gathered = x
+            .select(0, self.spirals.clone())
+            .reshape([vertices, self.len, batch, features])
+            .swap_dims(1, 2)
+            .reshape([vertices * batch, self.len * features]);
+        let y = activate(self.linear.forward(gathered), self.activation);
+        let outputs = y.dims()[1];
+        y.reshape([vertices, batch * outputs])
     }
 
     /// Writes the layer as sections `prefix.idx` (`u32 [vertices, len]`), `prefix.w`

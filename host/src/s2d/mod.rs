@@ -48,3 +48,6 @@ pub struct Hierarchy {
     /// `up[i]`: level `i + 1` → level `i`, barycentric weights, `(n_i + 1) × (n_{i+1} + 1)`.
     pub up: Vec<Sampling>,
 }
+
+pub mod decoder;
+pub mod synthetic;
