@@ -222,6 +222,21 @@ impl Upsample {
             .sum_dim(1)
             .reshape([rows, width])
     }
+
+    /// [`Upsample::forward`] on a batch-major tensor (see [`S2dDecoder::forward_batch_major`]).
+    ///
+    /// # Shapes
+    /// - input: `[batch, n_coarse + 1, features]`
+    /// - output: `[batch, n_fine + 1, features]`
+    pub fn forward_batch_major(&self, x: Tensor<3>) -> Tensor<3> {
+        let [batch, _, features] = x.dims();
+        let rows = self.weights.dims()[0];
+        x.select(1, self.parents.clone())
+            .reshape([batch, rows, self.arity, features])
+            .mul(self.weights.clone().reshape([1, rows, self.arity, 1]))
+            .sum_dim(2)
+            .reshape([batch, rows, features])
+    }
 }
 
 /// The S2D decoder.
@@ -325,6 +340,29 @@ impl S2dDecoder {
             .reshape([n0 + 1, batch, o])
             .narrow(0, 0, n0)
             .swap_dims(0, 1)
+    }
+
+    /// The same function as [`S2dDecoder::forward`] with batch-major `[batch, vertices,
+    /// features]` feature maps, gathering along dimension 1. Slower to train (its gathers'
+    /// backward takes burn-flex's N-D path); kept as the benchmark's baseline and as a check of
+    /// the vertex-major layout.
+    ///
+    /// # Shapes
+    /// - input: `[batch, inputs]`
+    /// - output: `[batch, n_0, outputs]`
+    pub fn forward_batch_major(&self, x: Tensor<2>) -> Tensor<3> {
+        let [batch, _] = x.dims();
+        let f = self.config.fc_features;
+        let coarsest = self.vertices[self.vertices.len() - 1] + 1;
+        let mut h = self.fc.forward(x).reshape([batch, coarsest, f]);
+        for ((up, conv), mask) in self.ups.iter().zip(&self.convs).zip(&self.masks) {
+            let rows = mask.dims()[0];
+            h = conv
+                .forward(up.forward_batch_major(h))
+                .mul(mask.clone().reshape([1, rows, 1]));
+        }
+        let out = &self.convs[self.convs.len() - 1];
+        out.forward(h).narrow(1, 0, self.vertices[0])
     }
 }
 
@@ -459,6 +497,13 @@ mod tests {
             .fold(0.0f32, f32::max);
         assert!(max < 1e-5, "max difference {max}");
         assert!(reference.iter().any(|v| v.abs() > 1e-2));
+        let z = to_vec(dec.forward_batch_major(tensor(x, [batch, 6], &device)));
+        let max = z
+            .iter()
+            .zip(&reference)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(max < 1e-5, "batch-major: max difference {max}");
     }
 
     #[test]

@@ -51,3 +51,4 @@ pub struct Hierarchy {
 
 pub mod decoder;
 pub mod synthetic;
+pub mod train;
