@@ -34,6 +34,7 @@ pub mod linalg;
 pub mod network;
 pub mod nn;
 pub mod rotation;
+pub mod s2d;
 pub mod skinning;
 pub mod sparse;
 pub mod spiral;
