@@ -170,10 +170,13 @@ fn tiny_decoder_hand_computed() {
     );
 }
 
+/// A change to the tiny decoder's sections.
+type Edit = Box<dyn Fn(&mut Tiny)>;
+
 #[test]
 fn every_shape_and_bound_is_validated() {
     assert_eq!(tiny().load(), Ok(()));
-    let cases: Vec<(&str, Box<dyn Fn(&mut Tiny)>, FormatError)> = vec![
+    let cases: Vec<(&str, Edit, FormatError)> = vec![
         (
             "four outputs",
             Box::new(|t| t.cfg[3] = 4),
