@@ -8,17 +8,21 @@
 //! activation. Every level carries one dummy vertex (index `n_k`) that pads short spirals.
 //!
 //! # Sections (artefact kind [`ArtifactKind::S2dDecoder`])
+//! The mesh hierarchy under prefix `s2d` as `sinew_host::s2d::hierarchy::write_sections` writes it
+//! (of which the decoder reads `s2d.levels`, `s2d.h<k>.pos` for k = 0, `s2d.h<k>.spiral` and
+//! `s2d.u<k>.*`), plus the network:
+//!
 //! | name | dtype | shape | meaning |
 //! |---|---|---|---|
-//! | `s2d.cfg` | u32 | [4] | inputs, F (features after the FC), levels L + 1, outputs (3) |
-//! | `s2d.nv` | u32 | [L + 1] | vertices n_k of each level, finest first, without the dummy |
+//! | `s2d.levels` | u32 | [L + 1, 2] | per level, finest first: vertices n_k (without the dummy), spiral length len_k |
+//! | `s2d.h0.pos` | f32 | [n_0, 3] | the template's neutral positions |
+//! | `s2d.h<k>.spiral` | u32 | [n_k + 1, len_k] | spirals of level k (indices ≤ n_k) |
+//! | `s2d.u<k>.ptr`, `.col`, `.val` | u32, u32, f32 | [n_k + 2], [nnz], [nnz] | U_k: level k+1 → k, CSR `(n_k + 1) × (n_{k+1} + 1)` |
+//! | `s2d.cfg` | u32 | [3] | inputs, F (features after the FC), outputs (3) |
 //! | `s2d.input` | u32 | [1] | input normalisation code ([`INPUT_FROBENIUS`]) |
 //! | `s2d.lmk` | u32 | [inputs / 3] | landmark vertex of each input landmark (< n_0) |
-//! | `s2d.neutral` | f32 | [n_0, 3] | the template's neutral positions |
 //! | `s2d.fc.w`, `s2d.fc.b` | f32 | [(n_L + 1) · F, inputs], [(n_L + 1) · F] | the FC layer |
-//! | `s2d.sp.<k>` | u32 | [n_k + 1, len_k] | spirals of level k < L (indices ≤ n_k); the coarsest level's feed no convolution and are not stored |
-//! | `s2d.up.<k>.ptr`, `.col`, `.val` | u32, u32, f32 | [n_k + 2], [nnz], [nnz] | U_k: level k+1 → k, CSR `(n_k + 1) × (n_{k+1} + 1)` |
-//! | `s2d.conv.<k>.w`, `.b` | f32 | [out, len_k · in], [out] | the stage convolution at level k (ELU) |
+//! | `s2d.conv.<k>.w`, `.b` | f32 | [out, len_k · in], [out] | the stage convolution at level k < L (ELU) |
 //! | `s2d.out.w`, `s2d.out.b` | f32 | [outputs, len_0 · in], [outputs] | the output convolution (identity) |
 
 use core::fmt::Write;
@@ -85,34 +89,45 @@ impl<'a> S2dDecoder<'a> {
     /// Validates the S2D sections of an already-checked container (of any kind, so that a
     /// decoder can travel inside another artefact).
     pub fn from_file(file: SinewFile<'a>) -> Result<Self, FormatError> {
-        let cfg = file.u32_tensor("s2d.cfg", &[4])?;
-        let [inputs, fc_features, levels, outputs] =
-            [0, 1, 2, 3].map(|i| cfg.get(i).unwrap_or(0) as usize);
-        if levels == 0 || levels > MAX_LEVELS {
-            return Err(FormatError::LimitExceeded);
-        }
+        let cfg = file.u32_tensor("s2d.cfg", &[3])?;
+        let [inputs, fc_features, outputs] = [0, 1, 2].map(|i| cfg.get(i).unwrap_or(0) as usize);
         if inputs == 0 || fc_features == 0 || outputs != 3 || !inputs.is_multiple_of(3) {
             return Err(FormatError::IncompatibleShapes);
         }
         if file.u32_tensor("s2d.input", &[1])?.get(0) != Some(INPUT_FROBENIUS) {
             return Err(FormatError::UnknownCode);
         }
-        let nv = file.u32_tensor("s2d.nv", &[to_u32(levels)?])?;
+        let [levels, two] = dims2(&file, "s2d.levels")?;
+        let levels = levels as usize;
+        if levels == 0 || levels > MAX_LEVELS {
+            return Err(FormatError::LimitExceeded);
+        }
+        if two != 2 {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        let table = file.u32_tensor("s2d.levels", &[to_u32(levels)?, 2])?;
         let mut vertices = heapless::Vec::<usize, MAX_LEVELS>::new();
-        for n in nv.iter() {
+        let mut spirals = heapless::Vec::<Spirals<'a>, MAX_LEVELS>::new();
+        for k in 0..levels {
+            let (n, len) = (table.at(2 * k), table.at(2 * k + 1));
             // n + 1 (the dummy) must stay representable as a u32 section dimension.
-            if n == 0 || n == u32::MAX {
+            let rows = n.checked_add(1).ok_or(FormatError::LimitExceeded)?;
+            if n == 0 {
                 return Err(FormatError::IncompatibleShapes);
             }
+            let sp = name(format_args!("s2d.h{k}.spiral"))?;
+            let idx = file.u32_tensor(&sp, &[rows, len])?;
+            let s = Spirals::new(idx, rows as usize, len as usize, rows as usize)?;
             vertices
                 .push(n as usize)
                 .map_err(|_| FormatError::LimitExceeded)?;
+            spirals.push(s).map_err(|_| FormatError::LimitExceeded)?;
         }
         let n_at = |k: usize| vertices.get(k).copied().unwrap_or(0);
         let n0 = n_at(0);
         let coarsest = n_at(levels - 1) + 1;
 
-        let neutral = file.f32_tensor("s2d.neutral", &[to_u32(n0)?, 3])?;
+        let neutral = file.f32_tensor("s2d.h0.pos", &[to_u32(n0)?, 3])?;
         if !all_finite(neutral) {
             return Err(FormatError::NonFinite);
         }
@@ -128,18 +143,11 @@ impl<'a> S2dDecoder<'a> {
         let fc_b = file.f32_tensor("s2d.fc.b", &[to_u32(fc_out)?])?;
         let fc = Dense::new(fc_w, fc_b, inputs, fc_out, Activation::Identity)?;
 
-        let spirals_at = |k: usize| -> Result<(Spirals<'a>, usize), FormatError> {
-            let sp = name(format_args!("s2d.sp.{k}"))?;
-            let rows = n_at(k) + 1;
-            let [r, len] = dims2(&file, &sp)?;
-            if r as usize != rows {
-                return Err(FormatError::IncompatibleShapes);
-            }
-            let idx = file.u32_tensor(&sp, &[r, len])?;
-            Ok((Spirals::new(idx, rows, len as usize, rows)?, len as usize))
-        };
         let conv_at = |prefix: &str, k: Option<usize>, inputs: usize, act: Activation| {
-            let (spirals, len) = spirals_at(k.unwrap_or(0))?;
+            let spirals = *spirals
+                .get(k.unwrap_or(0))
+                .ok_or(FormatError::IncompatibleShapes)?;
+            let len = spirals.len();
             let (wn, bn) = match k {
                 Some(k) => (
                     name(format_args!("{prefix}.{k}.w"))?,
@@ -170,14 +178,14 @@ impl<'a> S2dDecoder<'a> {
         for k in (0..levels - 1).rev() {
             let (rows, cols) = (n_at(k) + 1, n_at(k + 1) + 1);
             let ptr =
-                file.u32_tensor(&name(format_args!("s2d.up.{k}.ptr"))?, &[to_u32(rows + 1)?])?;
-            let col_name = name(format_args!("s2d.up.{k}.col"))?;
+                file.u32_tensor(&name(format_args!("s2d.u{k}.ptr"))?, &[to_u32(rows + 1)?])?;
+            let col_name = name(format_args!("s2d.u{k}.col"))?;
             let ([nnz, ..], rank) = file.dims_of(&col_name)?;
             if rank != 1 {
                 return Err(FormatError::IncompatibleShapes);
             }
             let col = file.u32_tensor(&col_name, &[nnz])?;
-            let val = file.f32_tensor(&name(format_args!("s2d.up.{k}.val"))?, &[nnz])?;
+            let val = file.f32_tensor(&name(format_args!("s2d.u{k}.val"))?, &[nnz])?;
             ups.push(Csr::new(rows, cols, ptr, col, val)?)
                 .map_err(|_| FormatError::LimitExceeded)?;
             half = grow(half, rows, width)?;
@@ -402,10 +410,10 @@ mod tests {
     #[test]
     fn section_names_fit() {
         assert_eq!(
-            name(format_args!("s2d.up.{}.ptr", MAX_LEVELS))
+            name(format_args!("s2d.u{}.ptr", MAX_LEVELS))
                 .unwrap()
                 .as_str(),
-            "s2d.up.8.ptr"
+            "s2d.u8.ptr"
         );
         assert!(name(format_args!("{}", "x".repeat(NAME_LEN + 1).as_str())).is_err());
     }

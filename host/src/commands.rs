@@ -506,3 +506,19 @@ pub fn bake(
     let (bytes, _) = crate::aim::bake::bake(&net, &input, &device)?;
     crate::atomic::write(out, &bytes)
 }
+
+/// `sinew s2d hierarchy`: builds the S2D mesh hierarchy of `template` with `config` and writes
+/// it to `out` (see `s2d::hierarchy::to_bytes`). Errors name the template file.
+pub fn s2d_hierarchy(
+    template: &Path,
+    out: &Path,
+    config: &crate::s2d::hierarchy::Config,
+) -> Result<crate::s2d::Hierarchy> {
+    use crate::s2d::hierarchy;
+    let mesh = Mesh::read(template)?;
+    let h = hierarchy::build_with(&mesh, config)
+        .with_context(|| format!("{}: cannot build the S2D hierarchy", template.display()))?;
+    let key = hierarchy::cache_key(&mesh, config);
+    crate::atomic::write(out, &hierarchy::to_bytes(&h, key, config)?)?;
+    Ok(h)
+}

@@ -10,6 +10,7 @@ use sinew_host::aim::config::Schedule;
 use sinew_host::aim::run::Outputs;
 use sinew_host::backend::Backend;
 use sinew_host::commands;
+use sinew_host::s2d::hierarchy::{Config, DEFAULT_FACTORS};
 
 /// Sinew: learn an actor's face from meshes, and play it back anywhere, bit for bit.
 #[derive(Debug, Parser)]
@@ -82,6 +83,30 @@ enum Command {
     /// Bones under the skin.
     #[command(subcommand)]
     Bones(Bones),
+    /// S2D: sparse-to-dense expression decoding.
+    #[command(subcommand)]
+    S2d(S2d),
+}
+
+#[derive(Debug, Subcommand)]
+enum S2d {
+    /// Build the mesh hierarchy (quadric decimation, up/down-sampling, spirals) of a template
+    /// and write it as a .sinew file.
+    Hierarchy {
+        /// Template mesh (.obj or .ply); quads and polygons are triangulated.
+        #[arg(long)]
+        template: PathBuf,
+        /// Output .sinew file.
+        #[arg(long)]
+        out: PathBuf,
+        /// Decimation factor of each level, comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_FACTORS)]
+        factors: Vec<usize>,
+        /// Spiral length of each level, comma-separated (one more than factors), instead of
+        /// int(mean + 2·std); `15,14,9,9,7` gives the reference network's shapes on FLAME.
+        #[arg(long, value_delimiter = ',')]
+        spiral_lengths: Option<Vec<usize>>,
+    },
 }
 
 #[derive(Debug, Subcommand)]
@@ -317,6 +342,24 @@ fn run(cli: Cli) -> Result<()> {
             let report = commands::bones_fit(&data, &templates, &out)?;
             println!("{}", serde_json::to_string_pretty(&report)?);
             eprintln!("bones written to {}", out.display());
+        }
+        Command::S2d(S2d::Hierarchy {
+            template,
+            out,
+            factors,
+            spiral_lengths,
+        }) => {
+            let config = Config {
+                factors,
+                spiral_lengths,
+            };
+            let h = commands::s2d_hierarchy(&template, &out, &config)?;
+            let sizes: Vec<usize> = h.levels.iter().map(|l| l.positions.len()).collect();
+            let lens: Vec<usize> = h.levels.iter().map(|l| l.spiral_len).collect();
+            println!(
+                "{}: vertices per level {sizes:?}, spiral lengths {lens:?}",
+                out.display()
+            );
         }
         Command::Edit(Edit::Thickness {
             model,

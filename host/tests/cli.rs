@@ -172,3 +172,79 @@ fn bad_files_are_named_and_fail() {
     assert!(e.contains("missing.sinew"), "{e}");
     assert!(ok(&["--version"]).contains(env!("CARGO_PKG_VERSION")));
 }
+
+#[test]
+fn s2d_hierarchy_writes_a_file_and_names_bad_templates() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 6 × 6 grid of quads, slightly bumped.
+    let mut obj = String::new();
+    for y in 0..7 {
+        for x in 0..7 {
+            obj += &format!(
+                "v {x} {y} {}\n",
+                f32::from(((x * 7 + y * 3) % 5) as u8) * 0.01
+            );
+        }
+    }
+    for y in 0..6 {
+        for x in 0..6 {
+            let id = |x: u32, y: u32| y * 7 + x + 1;
+            obj += &format!(
+                "f {} {} {} {}\n",
+                id(x, y),
+                id(x + 1, y),
+                id(x + 1, y + 1),
+                id(x, y + 1)
+            );
+        }
+    }
+    let template = dir.path().join("grid.obj");
+    std::fs::write(&template, obj).unwrap();
+    let out = dir.path().join("h.sinew");
+    let said = ok(&[
+        "s2d",
+        "hierarchy",
+        "--template",
+        s(&template),
+        "--out",
+        s(&out),
+        "--factors",
+        "4,4",
+    ]);
+    assert!(said.contains("[49, 13, 4]"), "{said}");
+    let pinned = dir.path().join("pinned.sinew");
+    let said = ok(&[
+        "s2d",
+        "hierarchy",
+        "--template",
+        s(&template),
+        "--out",
+        s(&pinned),
+        "--factors",
+        "4,4",
+        "--spiral-lengths",
+        "9,8,3",
+    ]);
+    assert!(said.contains("spiral lengths [9, 8, 3]"), "{said}");
+    let bytes = std::fs::read(&out).unwrap();
+    let h = sinew_host::s2d::hierarchy::from_bytes(&bytes).unwrap();
+    assert_eq!(h.levels.len(), 3);
+    let inspect: serde_json::Value =
+        serde_json::from_str(&ok(&["inspect", s(&out), "--json"])).unwrap();
+    assert_eq!(inspect["checksums"], "ok");
+
+    // Three triangles on one edge: the error names the file and the edge.
+    let bad = dir.path().join("fin.obj");
+    std::fs::write(
+        &bad,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
+    )
+    .unwrap();
+    let e = err(&["s2d", "hierarchy", "--template", s(&bad), "--out", s(&out)]);
+    assert!(
+        e.contains("fin.obj") && e.contains("non-manifold edge"),
+        "{e}"
+    );
+    // The earlier output is untouched.
+    assert_eq!(std::fs::read(&out).unwrap(), bytes);
+}

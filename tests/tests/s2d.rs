@@ -9,13 +9,14 @@ use sinew_host::SinewWriter;
 #[derive(Clone)]
 struct Tiny {
     cfg: Vec<u32>,
-    nv: Vec<u32>,
+    levels: Vec<u32>,
     input: Vec<u32>,
     lmk: Vec<u32>,
     neutral: Vec<f32>,
     fc_w: Vec<f32>,
     fc_b: Vec<f32>,
     sp0: Vec<u32>,
+    sp1: Vec<u32>,
     up_ptr: Vec<u32>,
     up_col: Vec<u32>,
     up_val: Vec<f32>,
@@ -29,8 +30,8 @@ struct Tiny {
 /// 1 filter; spirals of length 2 at level 0.
 fn tiny() -> Tiny {
     Tiny {
-        cfg: vec![3, 1, 2, 3],
-        nv: vec![2, 1],
+        cfg: vec![3, 1, 3],
+        levels: vec![2, 2, 1, 1],
         input: vec![1],
         lmk: vec![1],
         neutral: vec![1.0, 1.0, 1.0, 2.0, 2.0, 2.0],
@@ -39,6 +40,8 @@ fn tiny() -> Tiny {
         fc_b: vec![0.5, -1.0],
         // Level 0 spirals: v0 = (0, 1), v1 = (1, 2), dummy = (2, 2).
         sp0: vec![0, 1, 1, 2, 2, 2],
+        // Level 1 spirals of length 1 (no convolution reads them; validated all the same).
+        sp1: vec![0, 1],
         // U0 (3 × 2): row 0 = c0, row 1 = 0.5 c0 + 0.5 c1, row 2 (dummy) = c1.
         up_ptr: vec![0, 1, 3, 4],
         up_col: vec![0, 0, 1, 1],
@@ -69,12 +72,13 @@ impl Tiny {
         };
         let n = |v: &[u32]| v.len();
         w.u32s("s2d.cfg", &[n(&self.cfg)], &self.cfg).unwrap();
-        w.u32s("s2d.nv", &[n(&self.nv)], &self.nv).unwrap();
+        w.u32s("s2d.levels", &[n(&self.levels) / 2, 2], &self.levels)
+            .unwrap();
         w.u32s("s2d.input", &[n(&self.input)], &self.input).unwrap();
         w.u32s("s2d.lmk", &[n(&self.lmk)], &self.lmk).unwrap();
         f32s(
             &mut w,
-            "s2d.neutral",
+            "s2d.h0.pos",
             &[self.neutral.len() / 3, 3],
             &self.neutral,
         );
@@ -85,13 +89,15 @@ impl Tiny {
             &self.fc_w,
         );
         f32s(&mut w, "s2d.fc.b", &[self.fc_b.len()], &self.fc_b);
-        w.u32s("s2d.sp.0", &[n(&self.sp0) / 2, 2], &self.sp0)
+        w.u32s("s2d.h0.spiral", &[n(&self.sp0) / 2, 2], &self.sp0)
             .unwrap();
-        w.u32s("s2d.up.0.ptr", &[n(&self.up_ptr)], &self.up_ptr)
+        w.u32s("s2d.h1.spiral", &[n(&self.sp1), 1], &self.sp1)
             .unwrap();
-        w.u32s("s2d.up.0.col", &[n(&self.up_col)], &self.up_col)
+        w.u32s("s2d.u0.ptr", &[n(&self.up_ptr)], &self.up_ptr)
             .unwrap();
-        f32s(&mut w, "s2d.up.0.val", &[self.up_val.len()], &self.up_val);
+        w.u32s("s2d.u0.col", &[n(&self.up_col)], &self.up_col)
+            .unwrap();
+        f32s(&mut w, "s2d.u0.val", &[self.up_val.len()], &self.up_val);
         f32s(
             &mut w,
             "s2d.conv.0.w",
@@ -179,7 +185,7 @@ fn every_shape_and_bound_is_validated() {
     let cases: Vec<(&str, Edit, FormatError)> = vec![
         (
             "four outputs",
-            Box::new(|t| t.cfg[3] = 4),
+            Box::new(|t| t.cfg[2] = 4),
             FormatError::IncompatibleShapes,
         ),
         (
@@ -189,18 +195,28 @@ fn every_shape_and_bound_is_validated() {
         ),
         (
             "too many levels",
-            Box::new(|t| t.cfg[2] = 9),
+            Box::new(|t| t.levels = [2, 2].repeat(9)),
             FormatError::LimitExceeded,
         ),
         (
-            "level count differs from nv",
-            Box::new(|t| t.cfg[2] = 3),
-            FormatError::IncompatibleShapes,
+            "a third level without its sections",
+            Box::new(|t| t.levels = vec![2, 2, 1, 1, 1, 1]),
+            FormatError::MissingSection,
         ),
         (
             "empty level",
-            Box::new(|t| t.nv[1] = 0),
+            Box::new(|t| t.levels[2] = 0),
             FormatError::IncompatibleShapes,
+        ),
+        (
+            "spiral length differs from the table",
+            Box::new(|t| t.levels[1] = 3),
+            FormatError::IncompatibleShapes,
+        ),
+        (
+            "coarse spiral past the dummy",
+            Box::new(|t| t.sp1[0] = 2),
+            FormatError::IndexOutOfRange,
         ),
         (
             "unknown input normalisation",

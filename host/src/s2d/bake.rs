@@ -1,5 +1,6 @@
 //! Bakes a trained S2D decoder with its hierarchy into the `s2d.` sections that
-//! `sinew_core::s2d::S2dDecoder` reads (table in `docs/FORMAT.md`, "S2D decoder").
+//! `sinew_core::s2d::S2dDecoder` reads (tables in `docs/FORMAT.md`, "S2D mesh hierarchy" and
+//! "S2D decoder"): the hierarchy's own sections, then the network's.
 
 use anyhow::{Result, ensure};
 use sinew_core::ArtifactKind;
@@ -37,22 +38,17 @@ pub fn write(
         "a landmark vertex is outside the template"
     );
     let levels = vertices.len();
+    // The hierarchy in its own sections (positions, triangles, spirals, D and U): the decoder
+    // reads the template positions, spirals and U from them, and a viewer gets the triangles.
+    super::hierarchy::write_sections(hierarchy, w, "s2d")?;
     let u32s = |v: &[usize]| v.iter().map(|&x| x as u32).collect::<Vec<_>>();
     w.u32s(
         "s2d.cfg",
-        &[4],
-        &u32s(&[c.inputs, c.fc_features, levels, c.outputs]),
+        &[3],
+        &u32s(&[c.inputs, c.fc_features, c.outputs]),
     )?;
-    w.u32s("s2d.nv", &[levels], &u32s(&vertices))?;
     w.u32s("s2d.input", &[1], &[INPUT_FROBENIUS])?;
     w.u32s("s2d.lmk", &[landmarks.len()], landmarks)?;
-    let neutral: Vec<f32> = hierarchy.levels[0]
-        .positions
-        .iter()
-        .flatten()
-        .copied()
-        .collect();
-    w.f32s("s2d.neutral", &[vertices[0], 3], &neutral)?;
 
     // burn stores [in, out]; the core reads one row per output.
     let fc_w = decoder.fc.weight.val().transpose();
@@ -60,20 +56,6 @@ pub fn write(
     w.f32s("s2d.fc.w", &[out, inp], &to_vec(fc_w))?;
     w.f32s("s2d.fc.b", &[out], &bias(&decoder.fc, out))?;
 
-    // The coarsest level's spirals feed no convolution (the FC produces that level), so they
-    // are not stored.
-    for (k, level) in hierarchy.levels.iter().enumerate().take(levels - 1) {
-        w.u32s(
-            &format!("s2d.sp.{k}"),
-            &[vertices[k] + 1, level.spiral_len],
-            &level.spirals,
-        )?;
-    }
-    for (k, u) in hierarchy.up.iter().enumerate() {
-        w.u32s(&format!("s2d.up.{k}.ptr"), &[u.row_ptr.len()], &u.row_ptr)?;
-        w.u32s(&format!("s2d.up.{k}.col"), &[u.col_idx.len()], &u.col_idx)?;
-        w.f32s(&format!("s2d.up.{k}.val"), &[u.values.len()], &u.values)?;
-    }
     let n_convs = decoder.convs.len();
     for (stage, conv) in decoder.convs.iter().enumerate() {
         let prefix = if stage + 1 == n_convs {

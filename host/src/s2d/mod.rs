@@ -51,5 +51,7 @@ pub struct Hierarchy {
 
 pub mod bake;
 pub mod decoder;
+pub mod hierarchy;
+pub mod spirals;
 pub mod synthetic;
 pub mod train;
