@@ -155,3 +155,33 @@ fn s2d_decoder_matches_burn() {
     }
     assert_within(&tolerance::S2D_DECODER, &out, &burn);
 }
+
+/// The same on the real FLAME hierarchy built with the reference's spiral lengths: the reference
+/// network's 666,083 parameters, and the core's decode against burn's.
+#[test]
+fn s2d_decoder_matches_burn_on_flame() {
+    use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
+    use sinew_host::s2d::hierarchy::{Config, build_with};
+    let Some(dir) = sinew_host::testing::data_dir() else {
+        return;
+    };
+    let mesh = sinew_host::mesh::Mesh::read(&dir.join("flame/FLAME_template.ply")).unwrap();
+    let h = build_with(&mesh, &Config::reference_flame()).unwrap();
+    let device = device();
+    let config = DecoderConfig::default();
+    let dec = S2dDecoder::new(&config, &h, &device).unwrap();
+    assert_eq!(config.parameter_count(&h), 666_083);
+    assert_eq!(dec.parameter_count(), 666_083);
+    let landmarks: Vec<u32> = (0..68).map(|i| i * 73).collect();
+    let bytes = sinew_host::s2d::bake::bake(&dec, &h, &landmarks, &[]).unwrap();
+    let core = sinew_core::s2d::S2dDecoder::from_bytes(&bytes).unwrap();
+    let input = Rng::new(23).vec(2 * 204, -0.05, 0.05);
+    let burn = to_vec(dec.forward(tensor(input.clone(), [2, 204], &device)));
+    let v = core.vertex_count();
+    let mut out = vec![0.0; 2 * v * 3];
+    let mut scratch = vec![0.0; core.scratch_len()];
+    for (x, y) in input.chunks(204).zip(out.chunks_mut(v * 3)) {
+        core.displacements(x, &mut scratch, y).unwrap();
+    }
+    assert_within(&tolerance::S2D_DECODER, &out, &burn);
+}
