@@ -70,7 +70,7 @@ pub const S2D_DECODER: Tolerance = Tolerance {
     reason: "burn's matmul sums each product in a different order (blocked, FMA) and burn's \
              training layout multiplies before it gathers, so a convolution output is summed per \
              spiral position and then across positions instead of in one pass; the core sums in \
-             index order without FMA. Five layers of dot products of up to 1152 terms and three \
+             index order without FMA. Five layers of dot products of up to 1152 terms and four \
              sparse up-samplings pass each rounding on: a few ulps of the largest intermediate \
              values, which are O(1). Measured 3e-8 to 4e-8 at initialisation (docs/S2D.md).",
 };
