@@ -75,14 +75,14 @@ impl DecoderConfig {
     /// per stage (at levels L−1 down to 0), then the output convolution at level 0.
     pub fn convolutions(&self, hierarchy: &Hierarchy) -> Vec<(usize, usize, usize)> {
         let levels = hierarchy.levels.len();
+        let len = |level: usize| hierarchy.levels.get(level).map_or(0, |l| l.spiral_len);
         let mut width = self.fc_features;
         let mut convs = Vec::new();
         for (stage, &f) in self.filters.iter().enumerate() {
-            let level = levels.saturating_sub(2 + stage);
-            convs.push((width, f, hierarchy.levels[level].spiral_len));
+            convs.push((width, f, len(levels.saturating_sub(2 + stage))));
             width = f;
         }
-        convs.push((width, self.outputs, hierarchy.levels[0].spiral_len));
+        convs.push((width, self.outputs, len(0)));
         convs
     }
 

@@ -246,6 +246,10 @@ pub struct Batch {
 
 impl Batch {
     /// Stacks the samples `indices` of `set`.
+    ///
+    /// # Panics
+    /// If `indices` is empty or names a sample outside `set` ([`train`] checks the samples'
+    /// lengths first).
     pub fn new(set: &[Sample], indices: &[usize], device: &Device) -> Self {
         let inputs = set[indices[0]].input.len();
         let values = set[indices[0]].displacement.len();
