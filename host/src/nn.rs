@@ -250,13 +250,14 @@ impl SpiralConv {
     /// The same convolution on a vertex-major batch: `x` holds one row per source vertex with the
     /// `batch` samples' features side by side (`[sources, batch, in]` row-major).
     ///
-    /// The product comes before the gather: `Y = x · W'` with `W'[c, (p, o)] = W[(p, c), o]`
-    /// gives every source vertex's contribution at every spiral position, and each output sums
-    /// `Y[s(v, p), p]` over the positions. Gathering the `in`-wide inputs first would build a
-    /// `[vertices · len, batch · in]` tensor and then transpose it into the linear layer's rows;
-    /// at 5023 vertices, len 15, in 32 and batch 16 that is 154 MB written twice forward and
-    /// twice backward, where `Y` is `out/in` of it and needs no transpose. All gathers select
-    /// rows of 2-D tensors, whose backward in burn-flex (`select_add`) is a row addition.
+    /// One product per spiral position, before the gather: `Y_p = x · W_p`, with `W_p` the rows
+    /// of the linear layer's weight that read position p, holds position p's contribution of
+    /// every source vertex, `[sources, batch · out]`; output `v` sums `Y_p[s(v, p)]` over p.
+    /// Gathering the inputs first would build a `[vertices · len, batch · in]` tensor and then
+    /// transpose it into the linear layer's rows (154 MB at 5023 vertices, len 15, in 32, batch
+    /// 16, written twice forward and twice backward). Here every gather selects whole rows of
+    /// `batch · out` values from a 2-D tensor, which burn-flex copies as rows and whose backward
+    /// (`select_add`) adds as rows. docs/S2D.md has the measured steps of each formulation.
     ///
     /// # Shapes
     /// - input: `[source_vertices, batch · in]`
@@ -267,31 +268,7 @@ impl SpiralConv {
         let vertices = self.spirals.dims()[0] / self.len;
         let weight = self.linear.weight.val();
         let outputs = weight.dims()[1];
-        // [len · in, out] → [in, len · out]: column (p, o) multiplies feature c at position p.
-        let w = weight
-            .reshape([self.len, features, outputs])
-            .swap_dims(0, 1)
-            .reshape([features, self.len * outputs]);
-        // Rows (s, b, p) of `out` values.
-        let y = x
-            .reshape([sources * batch, features])
-            .matmul(w)
-            .reshape([sources * batch * self.len, outputs]);
-        let index = self.product_index(batch);
-        let mut z = y
-            .select(0, index)
-            .reshape([vertices * batch, self.len, outputs])
-            .sum_dim(1)
-            .reshape([vertices * batch, outputs]);
-        if let Some(b) = &self.linear.bias {
-            z = z + b.val().reshape([1, outputs]);
-        }
-        activate(z, self.activation).reshape([vertices, batch * outputs])
-    }
-
-    /// The rows of `Y` (see [`Self::forward_vertex_major`]) that output `(v, b)` sums:
-    /// `(s(v, p) · batch + b) · len + p` for `p = 0..len`, flattened in `(v, b, p)` order.
-    fn product_index(&self, batch: usize) -> Tensor<1, Int> {
+        let rows = x.reshape([sources * batch, features]);
         let spirals: Vec<i64> = self
             .spirals
             .clone()
@@ -299,17 +276,30 @@ impl SpiralConv {
             .convert::<i64>()
             .try_to_vec::<i64>()
             .unwrap_or_default();
-        let len = self.len as i64;
-        let mut index = Vec::with_capacity(spirals.len() * batch);
-        for spiral in spirals.chunks_exact(self.len) {
-            for b in 0..batch as i64 {
-                for (p, &s) in spiral.iter().enumerate() {
-                    index.push((s * batch as i64 + b) * len + p as i64);
-                }
-            }
+        let device = self.spirals.device();
+        let mut z: Option<Tensor<2>> = None;
+        for p in 0..self.len {
+            // Position p's contribution of every source vertex, `[sources, batch · out]`: rows
+            // of whole samples, so the gather and its backward move batch · out values per row.
+            let y = rows
+                .clone()
+                .matmul(weight.clone().narrow(0, p * features, features))
+                .reshape([sources, batch * outputs]);
+            let index: Vec<i64> = spirals.iter().skip(p).step_by(self.len).copied().collect();
+            let index = Tensor::<1, Int>::from_data(TensorData::new(index, [vertices]), &device);
+            let g = y.select(0, index);
+            z = Some(match z {
+                Some(z) => z + g,
+                None => g,
+            });
         }
-        let n = index.len();
-        Tensor::from_data(TensorData::new(index, [n]), &self.spirals.device())
+        let mut z = z
+            .unwrap_or_else(|| Tensor::zeros([vertices, batch * outputs], &device))
+            .reshape([vertices * batch, outputs]);
+        if let Some(b) = &self.linear.bias {
+            z = z + b.val().reshape([1, outputs]);
+        }
+        activate(z, self.activation).reshape([vertices, batch * outputs])
     }
 
     /// Writes the layer as sections `prefix.idx` (`u32 [vertices, len]`), `prefix.w`
