@@ -170,14 +170,37 @@ impl<'a> SpiralConv<'a> {
         for (v, out_row) in out.chunks_exact_mut(self.out_f).enumerate() {
             out_row.fill(0.0);
             // Positions in order, and within a position features in order: for each output the
-            // accumulation visits j = p · in_f + c in increasing order.
+            // accumulation visits j = p · in_f + c in increasing order. Four outputs advance
+            // together (their sums are independent, so the additions overlap instead of each
+            // waiting on the previous one); the order within each output's sum is unchanged.
             for (p, s) in self.spirals.spiral(v).iter().enumerate() {
                 let s = s as usize;
                 // s < n_source_vertices (validated), so the row lies inside x.
                 let xs = x.get(s * in_f..s * in_f + in_f).unwrap_or(&[]);
-                for (o, acc) in out_row.iter_mut().enumerate() {
-                    let w = self.weight.slice(o * width + p * in_f, in_f);
-                    for (wj, xj) in w.iter().zip(xs) {
+                let weight = self.weight;
+                let row = move |o: usize| {
+                    weight
+                        .slice(o * width + p * in_f, in_f)
+                        .as_bytes()
+                        .chunks_exact(4)
+                        .map(|b| b.try_into().map_or(0.0, f32::from_le_bytes))
+                };
+                let mut quads = out_row.chunks_exact_mut(4);
+                for (q, accs) in (&mut quads).enumerate() {
+                    if let [a0, a1, a2, a3] = accs {
+                        let o = 4 * q;
+                        let ws = row(o).zip(row(o + 1)).zip(row(o + 2)).zip(row(o + 3));
+                        for ((((w0, w1), w2), w3), x) in ws.zip(xs) {
+                            *a0 += w0 * *x;
+                            *a1 += w1 * *x;
+                            *a2 += w2 * *x;
+                            *a3 += w3 * *x;
+                        }
+                    }
+                }
+                let done = self.out_f / 4 * 4;
+                for (k, acc) in quads.into_remainder().iter_mut().enumerate() {
+                    for (wj, xj) in row(done + k).zip(xs) {
                         *acc += wj * *xj;
                     }
                 }

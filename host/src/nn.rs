@@ -171,6 +171,13 @@ pub fn write_mlp(w: &mut SinewWriter, prefix: &str, layers: &[LayerWeights]) -> 
     Ok(())
 }
 
+/// A linear layer with PyTorch's default `nn.Linear` initialisation: weight and bias uniform in
+/// ±1/√inputs (kaiming-uniform with a = √5 gives exactly that bound for the weight).
+pub fn pytorch_linear(inputs: usize, outputs: usize, device: &Device) -> Linear {
+    let b = 1.0 / (inputs as f64).sqrt();
+    uniform_linear(inputs, outputs, b, b, device)
+}
+
 fn uniform_linear(
     inputs: usize,
     outputs: usize,
@@ -238,6 +245,61 @@ impl SpiralConv {
             x.select(1, self.spirals.clone())
                 .reshape([batch, vertices, self.len * features]);
         activate(self.linear.forward(gathered), self.activation)
+    }
+
+    /// The same convolution on a vertex-major batch: `x` holds one row per source vertex with the
+    /// `batch` samples' features side by side (`[sources, batch, in]` row-major).
+    ///
+    /// One product per spiral position, before the gather: `Y_p = x · W_p`, with `W_p` the rows
+    /// of the linear layer's weight that read position p, holds position p's contribution of
+    /// every source vertex, `[sources, batch · out]`; output `v` sums `Y_p[s(v, p)]` over p.
+    /// Gathering the inputs first would build a `[vertices · len, batch · in]` tensor and then
+    /// transpose it into the linear layer's rows (154 MB at 5023 vertices, len 15, in 32, batch
+    /// 16, written twice forward and twice backward). Here every gather selects whole rows of
+    /// `batch · out` values from a 2-D tensor, which burn-flex copies as rows and whose backward
+    /// (`select_add`) adds as rows. docs/S2D.md has the measured steps of each formulation.
+    ///
+    /// # Shapes
+    /// - input: `[source_vertices, batch · in]`
+    /// - output: `[vertices, batch · out]`
+    pub fn forward_vertex_major(&self, x: Tensor<2>, batch: usize) -> Tensor<2> {
+        let [sources, width] = x.dims();
+        let features = width / batch.max(1);
+        let vertices = self.spirals.dims()[0] / self.len;
+        let weight = self.linear.weight.val();
+        let outputs = weight.dims()[1];
+        let rows = x.reshape([sources * batch, features]);
+        let spirals: Vec<i64> = self
+            .spirals
+            .clone()
+            .into_data()
+            .convert::<i64>()
+            .try_to_vec::<i64>()
+            .unwrap_or_default();
+        let device = self.spirals.device();
+        let mut z: Option<Tensor<2>> = None;
+        for p in 0..self.len {
+            // Position p's contribution of every source vertex, `[sources, batch · out]`: rows
+            // of whole samples, so the gather and its backward move batch · out values per row.
+            let y = rows
+                .clone()
+                .matmul(weight.clone().narrow(0, p * features, features))
+                .reshape([sources, batch * outputs]);
+            let index: Vec<i64> = spirals.iter().skip(p).step_by(self.len).copied().collect();
+            let index = Tensor::<1, Int>::from_data(TensorData::new(index, [vertices]), &device);
+            let g = y.select(0, index);
+            z = Some(match z {
+                Some(z) => z + g,
+                None => g,
+            });
+        }
+        let mut z = z
+            .unwrap_or_else(|| Tensor::zeros([vertices, batch * outputs], &device))
+            .reshape([vertices * batch, outputs]);
+        if let Some(b) = &self.linear.bias {
+            z = z + b.val().reshape([1, outputs]);
+        }
+        activate(z, self.activation).reshape([vertices, batch * outputs])
     }
 
     /// Writes the layer as sections `prefix.idx` (`u32 [vertices, len]`), `prefix.w`

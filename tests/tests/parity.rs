@@ -130,3 +130,58 @@ fn spiral_conv_matches_burn() {
     core.forward(&x, &mut out).unwrap();
     assert_within(&tolerance::SPIRAL_CONV, &out, &burn);
 }
+
+/// The whole decoder at the reference size (random weights, synthetic connectivity with the
+/// FLAME hierarchy's sizes): burn's training forward against the core's baked decode.
+#[test]
+fn s2d_decoder_matches_burn() {
+    use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
+    use sinew_host::s2d::synthetic::{self, REFERENCE_SIZES, REFERENCE_SPIRALS};
+    let device = device();
+    let h = synthetic::hierarchy(&REFERENCE_SIZES, &REFERENCE_SPIRALS, 21);
+    let dec = S2dDecoder::new(&DecoderConfig::default(), &h, &device).unwrap();
+    let landmarks: Vec<u32> = (0..68).map(|i| i * 70).collect();
+    let bytes = sinew_host::s2d::bake::bake(&dec, &h, &landmarks, &[]).unwrap();
+    let core = sinew_core::s2d::S2dDecoder::from_bytes(&bytes).unwrap();
+    let batch = 3;
+    // Landmark displacements of the size normalisation gives (a few hundredths).
+    let input = Rng::new(22).vec(batch * 204, -0.05, 0.05);
+    let burn = to_vec(dec.forward(tensor(input.clone(), [batch, 204], &device)));
+    let v = REFERENCE_SIZES[0];
+    let mut out = vec![0.0; batch * v * 3];
+    let mut scratch = vec![0.0; core.scratch_len()];
+    for (x, y) in input.chunks(204).zip(out.chunks_mut(v * 3)) {
+        core.displacements(x, &mut scratch, y).unwrap();
+    }
+    assert_within(&tolerance::S2D_DECODER, &out, &burn);
+}
+
+/// The same on the real FLAME hierarchy built with the reference's spiral lengths: the reference
+/// network's 666,083 parameters, and the core's decode against burn's.
+#[test]
+fn s2d_decoder_matches_burn_on_flame() {
+    use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
+    use sinew_host::s2d::hierarchy::{Config, build_with};
+    let Some(dir) = sinew_host::testing::data_dir() else {
+        return;
+    };
+    let mesh = sinew_host::mesh::Mesh::read(&dir.join("flame/FLAME_template.ply")).unwrap();
+    let h = build_with(&mesh, &Config::reference_flame()).unwrap();
+    let device = device();
+    let config = DecoderConfig::default();
+    let dec = S2dDecoder::new(&config, &h, &device).unwrap();
+    assert_eq!(config.parameter_count(&h), 666_083);
+    assert_eq!(dec.parameter_count(), 666_083);
+    let landmarks: Vec<u32> = (0..68).map(|i| i * 73).collect();
+    let bytes = sinew_host::s2d::bake::bake(&dec, &h, &landmarks, &[]).unwrap();
+    let core = sinew_core::s2d::S2dDecoder::from_bytes(&bytes).unwrap();
+    let input = Rng::new(23).vec(2 * 204, -0.05, 0.05);
+    let burn = to_vec(dec.forward(tensor(input.clone(), [2, 204], &device)));
+    let v = core.vertex_count();
+    let mut out = vec![0.0; 2 * v * 3];
+    let mut scratch = vec![0.0; core.scratch_len()];
+    for (x, y) in input.chunks(204).zip(out.chunks_mut(v * 3)) {
+        core.displacements(x, &mut scratch, y).unwrap();
+    }
+    assert_within(&tolerance::S2D_DECODER, &out, &burn);
+}
