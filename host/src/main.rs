@@ -149,6 +149,37 @@ enum S2d {
         #[arg(long, value_delimiter = ',')]
         spiral_lengths: Option<Vec<usize>>,
     },
+    /// Expression neutralisation: an expressive face in, its neutral out (the decoder maps the
+    /// face's landmarks onto the template's neutral landmarks).
+    Neutralize {
+        /// The baked S2D decoder.
+        #[arg(long)]
+        model: PathBuf,
+        /// The expressive face (the decoder's template topology).
+        #[arg(long)]
+        input: PathBuf,
+        /// Output mesh.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Expression transfer: a source sequence's landmark motion applied to a target neutral.
+    Transfer {
+        /// The baked S2D decoder.
+        #[arg(long)]
+        model: PathBuf,
+        /// The source actor's neutral face.
+        #[arg(long)]
+        source_neutral: PathBuf,
+        /// The source sequence: a folder of meshes (name order) or one mesh.
+        #[arg(long)]
+        source: PathBuf,
+        /// The target actor's neutral face.
+        #[arg(long)]
+        target: PathBuf,
+        /// Output folder: one OBJ per frame.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 #[derive(Debug, Subcommand)]
@@ -439,6 +470,22 @@ fn run(cli: Cli) -> Result<()> {
                 "{}: vertices per level {sizes:?}, spiral lengths {lens:?}",
                 out.display()
             );
+        }
+        Command::S2d(S2d::Neutralize { model, input, out }) => {
+            sinew_host::s2d::apply::neutralize(&model, &input, &out)?;
+            println!("neutral face written to {}", out.display());
+        }
+        Command::S2d(S2d::Transfer {
+            model,
+            source_neutral,
+            source,
+            target,
+            out,
+        }) => {
+            let frames = sinew_host::s2d::apply::mesh_files(&source)?;
+            let n =
+                sinew_host::s2d::apply::transfer(&model, &source_neutral, &frames, &target, &out)?;
+            println!("{n} frames written to {}", out.display());
         }
         Command::Edit(Edit::Thickness {
             model,

@@ -49,6 +49,7 @@ pub struct Hierarchy {
     pub up: Vec<Sampling>,
 }
 
+pub mod apply;
 pub mod bake;
 pub mod decoder;
 pub mod hierarchy;
