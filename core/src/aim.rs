@@ -47,6 +47,22 @@ pub struct AimNetworks<'a> {
     pub e: Mlp<'a>,
     centre: Vec3,
     scale: f32,
+    thickness_activation: u32,
+}
+
+/// Section `aim.dact` value: d0 = D(c) (also when the section is absent).
+pub const THICKNESS_IDENTITY: u32 = 0;
+/// Section `aim.dact` value: d0 = softplus(D(c)) ([`softplus`]).
+pub const THICKNESS_SOFTPLUS: u32 = 1;
+
+/// `ln(1 + e^x)` with `libm`, and `x` itself above 20 (where the two agree to f32 precision; the
+/// threshold of burn's and PyTorch's softplus).
+pub fn softplus(x: f32) -> f32 {
+    if x > 20.0 {
+        x
+    } else {
+        libm::log1pf(libm::expf(x))
+    }
 }
 
 /// What the networks say about one template point.
@@ -123,6 +139,13 @@ impl<'a> AimActor<'a> {
                 e: load_mlp(&file, "net.e")?,
                 centre: vec3(norm, 0),
                 scale,
+                thickness_activation: match file.section("aim.dact") {
+                    None => THICKNESS_IDENTITY,
+                    Some(_) => match file.u32_tensor("aim.dact", &[1])?.at(0) {
+                        code @ (THICKNESS_IDENTITY | THICKNESS_SOFTPLUS) => code,
+                        _ => return Err(FormatError::UnknownCode),
+                    },
+                },
             };
             let outputs = [
                 (&nets.b, 3),
@@ -334,7 +357,12 @@ impl AimNetworks<'_> {
         self.e.eval(&x, correctives, scratch)?;
         let bone = c + Vec3::from_array(b);
         let normal = Vec3::from_array(n).normalize();
-        let [thickness] = d;
+        let [raw] = d;
+        let thickness = if self.thickness_activation == THICKNESS_SOFTPLUS {
+            softplus(raw)
+        } else {
+            raw
+        };
         // AIM eq. 6: s0 = b0 + d0·n0
         let skin = bone + normal * thickness;
         let [k] = k;
@@ -345,5 +373,20 @@ impl AimNetworks<'_> {
             skin,
             k,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn softplus_values() {
+        assert_eq!(softplus(0.0), libm::logf(2.0));
+        assert_eq!(softplus(25.0), 25.0);
+        assert!(softplus(-30.0) > 0.0 && softplus(-30.0) < 1e-12);
+        // Continuous at the threshold to f32 precision.
+        assert!((softplus(20.0) - 20.0).abs() < 1e-6);
+        assert!(softplus(-200.0) >= 0.0);
     }
 }

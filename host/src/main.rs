@@ -245,6 +245,10 @@ struct TrainAim {
     /// Seed (overrides the configuration).
     #[arg(long)]
     seed: Option<u64>,
+    /// Thickness activation: identity (the paper) or softplus (positive by construction);
+    /// overrides the configuration.
+    #[arg(long, value_enum)]
+    thickness_activation: Option<sinew_host::aim::config::ThicknessActivation>,
     /// Folder for pictures (error heatmaps, anatomy, loss curve) and OBJs.
     #[arg(long)]
     pictures: Option<PathBuf>,
@@ -307,6 +311,9 @@ fn config_for(args: &TrainAim) -> Result<AimConfig> {
     }
     if let Some(s) = args.schedule {
         config.schedule = s;
+    }
+    if let Some(a) = args.thickness_activation {
+        config.thickness_activation = a;
     }
     if let Some(s) = args.seed {
         config.seed = s;

@@ -158,3 +158,52 @@ fn training_learns_the_procedural_actor_and_the_core_agrees() {
         assert!(tol.accepts(p.k, actor.skinning_weights().at(i)));
     }
 }
+
+#[test]
+fn softplus_thickness_is_positive_and_the_core_agrees() {
+    let _serial = SERIAL
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let set = small_set();
+    let config = AimConfig {
+        thickness_activation: sinew_host::aim::config::ThicknessActivation::Softplus,
+        ..tiny_config(60)
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let trained = train(&set, &config, &options(dir.path(), false, None)).unwrap();
+    let bytes = baked(&trained.model, &set, trained.state.normalisation);
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    assert!(
+        actor.thickness().iter().all(|d| d > 0.0),
+        "softplus thickness must be positive"
+    );
+    assert_eq!(
+        actor
+            .file()
+            .section("aim.dact")
+            .unwrap()
+            .u32s()
+            .unwrap()
+            .at(0),
+        sinew_core::aim::THICKNESS_SOFTPLUS
+    );
+    // The core applies the same activation when it evaluates the networks.
+    let nets = actor.networks().expect("networks baked");
+    let mut scratch = vec![0.0; nets.scratch_len()];
+    let mut e = vec![0.0; nets.corrective_len()];
+    let tol = sinew_host::tolerance::SIREN;
+    for i in (0..actor.vertex_count()).step_by(29) {
+        let c = sinew_core::linalg::Vec3::new(
+            actor.template().at(3 * i),
+            actor.template().at(3 * i + 1),
+            actor.template().at(3 * i + 2),
+        );
+        let p = nets.eval(c, &mut e, &mut scratch).unwrap();
+        let cached = actor.thickness().at(i);
+        assert!(
+            tol.accepts(p.thickness, cached),
+            "vertex {i}: core {} vs burn {cached}",
+            p.thickness
+        );
+    }
+}

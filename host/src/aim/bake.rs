@@ -93,6 +93,10 @@ pub fn bake(net: &AimNet, input: &BakeInput<'_>, device: &Device) -> Result<(Vec
     w.f32s("train.jaw", &[m, 9], &to_vec(net.jaw.val()))?;
     if !input.playback_only {
         w.f32s("aim.norm", &[4], &input.normalisation)?;
+        // Written only when not the identity, so that files of the paper's model stay as before.
+        if net.thickness_activation != super::config::ThicknessActivation::Identity {
+            w.u32s("aim.dact", &[1], &[net.thickness_activation.code()])?;
+        }
         for (name, mlp) in [
             ("net.b", &net.b),
             ("net.d", &net.d),

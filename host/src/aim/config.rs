@@ -15,6 +15,28 @@ pub enum Schedule {
     Cosine,
 }
 
+/// How the thickness network's output becomes the soft-tissue thickness d0.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum ThicknessActivation {
+    /// d0 = D(c), as in the paper (eq. 4); the thickness can turn negative where eq. 13 pulls
+    /// it to zero.
+    #[default]
+    Identity,
+    /// d0 = softplus(D(c)) = ln(1 + e^D(c)): positive by construction.
+    Softplus,
+}
+
+impl ThicknessActivation {
+    /// The code of section `aim.dact` (`sinew_core::aim::THICKNESS_SOFTPLUS`, …).
+    pub const fn code(self) -> u32 {
+        match self {
+            Self::Identity => sinew_core::aim::THICKNESS_IDENTITY,
+            Self::Softplus => sinew_core::aim::THICKNESS_SOFTPLUS,
+        }
+    }
+}
+
 /// The AIM training configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -59,6 +81,8 @@ pub struct AimConfig {
     pub checkpoint_every: usize,
     /// Largest skin-to-bone depth for a constraint, in the data's unit.
     pub max_constraint_depth: f32,
+    /// The thickness network's output activation.
+    pub thickness_activation: ThicknessActivation,
 }
 
 impl Default for AimConfig {
@@ -87,6 +111,7 @@ impl Default for AimConfig {
             lambda_forehead: 1e2,
             checkpoint_every: 1000,
             max_constraint_depth: 2.5,
+            thickness_activation: ThicknessActivation::Identity,
         }
     }
 }

@@ -23,6 +23,9 @@ pub struct AimNet {
     /// Jaw transform of each expression: `[N − 1, 9]` = 6D rotation (two columns) + translation.
     /// The neutral's is the identity and is not a parameter.
     pub jaw: Param<Tensor<2>>,
+    /// How D's output becomes the thickness.
+    #[module(skip)]
+    pub thickness_activation: super::config::ThicknessActivation,
 }
 
 /// The anatomy and deformation the networks predict at a batch of points.
@@ -64,6 +67,7 @@ impl AimNet {
             k: Mlp::siren(&widths(1), config.omega0, device),
             e: Mlp::siren(&widths(3 * m), config.omega0, device),
             jaw: Param::from_tensor(Tensor::from_data(TensorData::new(jaw, [m, 9]), device)),
+            thickness_activation: config.thickness_activation,
         }
     }
 
@@ -79,7 +83,13 @@ impl AimNet {
     pub fn predict(&self, x: Tensor<2>, c: Tensor<2>) -> Prediction {
         let [batch, _] = x.dims();
         let bone = c + self.b.forward(x.clone());
-        let thickness = self.d.forward(x.clone());
+        let thickness = match self.thickness_activation {
+            super::config::ThicknessActivation::Identity => self.d.forward(x.clone()),
+            // ln(1 + e^x), linear above 20 (as the core's `softplus`).
+            super::config::ThicknessActivation::Softplus => {
+                burn::tensor::activation::softplus(self.d.forward(x.clone()), 1.0)
+            }
+        };
         let raw = self.n.forward(x.clone());
         let norm = raw.clone().square().sum_dim(1).add_scalar(1e-12).sqrt();
         let normal = raw / norm;
