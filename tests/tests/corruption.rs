@@ -35,19 +35,7 @@ fn small_network() -> Vec<u8> {
 
 /// An S2D decoder on a tiny synthetic hierarchy (8 → 3 vertices), 2 landmarks.
 fn small_s2d() -> Vec<u8> {
-    use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
-    use sinew_host::s2d::synthetic;
-    let device = sinew_host::backend::Backend::Flex.device(3).unwrap();
-    let h = synthetic::hierarchy(&[8, 3], &[3, 2], 4);
-    let config = DecoderConfig {
-        inputs: 6,
-        fc_features: 2,
-        filters: vec![2],
-        outputs: 3,
-    };
-    let dec = S2dDecoder::new(&config, &h, &device).unwrap();
-    let meta = [("units".to_owned(), "m".to_owned())];
-    sinew_host::s2d::bake::bake(&dec, &h, &[1, 6], &meta).unwrap()
+    sinew_host::s2d::synthetic::tiny_baked_decoder().1
 }
 
 /// Loads as far as a user would: container, then the typed artefact.

@@ -140,21 +140,11 @@ pub fn mesh_files(path: &Path) -> Result<Vec<PathBuf>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::s2d::decoder::{DecoderConfig, S2dDecoder as BurnDecoder};
     use crate::s2d::synthetic;
 
     /// A decoder on a synthetic 8-vertex template with two landmarks, and a mesh of it.
     fn fixture(dir: &Path) -> (PathBuf, Mesh) {
-        let device = crate::backend::Backend::Flex.device(3).unwrap();
-        let h = synthetic::hierarchy(&[8, 3], &[3, 2], 4);
-        let config = DecoderConfig {
-            inputs: 6,
-            fc_features: 2,
-            filters: vec![2],
-            outputs: 3,
-        };
-        let dec = BurnDecoder::new(&config, &h, &device).unwrap();
-        let bytes = crate::s2d::bake::bake(&dec, &h, &[1, 6], &[]).unwrap();
+        let (h, bytes) = synthetic::tiny_baked_decoder();
         let model = dir.join("dec.sinew");
         std::fs::write(&model, bytes).unwrap();
         let positions = h.levels[0].positions.clone();

@@ -111,6 +111,27 @@ pub fn hierarchy(sizes: &[usize], spiral_lens: &[usize], seed: u64) -> Hierarchy
     Hierarchy { levels, down, up }
 }
 
+/// A tiny baked decoder for tests: the synthetic hierarchy of 8 → 3 vertices (spirals 3, 2), a
+/// freshly initialised decoder (6 inputs: landmarks at vertices 1 and 6, 2 FC features, one
+/// 2-filter stage) baked with `units = m`. Returns the hierarchy and the bytes.
+pub fn tiny_baked_decoder() -> (Hierarchy, Vec<u8>) {
+    use super::decoder::{DecoderConfig, S2dDecoder};
+    let device = crate::backend::Backend::Flex
+        .device(3)
+        .expect("the flex backend is always built in");
+    let h = hierarchy(&[8, 3], &[3, 2], 4);
+    let config = DecoderConfig {
+        inputs: 6,
+        fc_features: 2,
+        filters: vec![2],
+        outputs: 3,
+    };
+    let dec = S2dDecoder::new(&config, &h, &device).expect("a valid configuration");
+    let meta = [("units".to_owned(), "m".to_owned())];
+    let bytes = super::bake::bake(&dec, &h, &[1, 6], &meta).expect("the tiny decoder bakes");
+    (h, bytes)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
