@@ -37,6 +37,7 @@ pub mod nn;
 pub mod q16;
 pub mod replay;
 pub mod rotation;
+pub mod s2d;
 pub mod skinning;
 pub mod sparse;
 pub mod spiral;

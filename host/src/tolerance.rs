@@ -62,5 +62,18 @@ pub const SPIRAL_CONV: Tolerance = Tolerance {
     reason: "one dot product of len·in terms per output, summed in a different order by burn's matmul.",
 };
 
+/// The whole S2D decoder (FC, four up-sampling + spiral + ELU stages, output convolution).
+pub const S2D_DECODER: Tolerance = Tolerance {
+    what: "S2D decoder (FC 204 → 2688, 4 stages, output conv; 5023 vertices)",
+    abs: 1e-5,
+    rel: 1e-4,
+    reason: "burn's matmul sums each product in a different order (blocked, FMA) and burn's \
+             training layout multiplies before it gathers, so a convolution output is summed per \
+             spiral position and then across positions instead of in one pass; the core sums in \
+             index order without FMA. Five layers of dot products of up to 1152 terms and three \
+             sparse up-samplings pass each rounding on: a few ulps of the largest intermediate \
+             values, which are O(1).",
+};
+
 /// Every entry, for documentation and the report.
-pub const TABLE: [Tolerance; 3] = [MLP, SIREN, SPIRAL_CONV];
+pub const TABLE: [Tolerance; 4] = [MLP, SIREN, SPIRAL_CONV, S2D_DECODER];

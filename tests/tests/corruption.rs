@@ -33,10 +33,28 @@ fn small_network() -> Vec<u8> {
     w.to_bytes().unwrap()
 }
 
+/// An S2D decoder on a tiny synthetic hierarchy (8 → 3 vertices), 2 landmarks.
+fn small_s2d() -> Vec<u8> {
+    use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
+    use sinew_host::s2d::synthetic;
+    let device = sinew_host::backend::Backend::Flex.device(3).unwrap();
+    let h = synthetic::hierarchy(&[8, 3], &[3, 2], 4);
+    let config = DecoderConfig {
+        inputs: 6,
+        fc_features: 2,
+        filters: vec![2],
+        outputs: 3,
+    };
+    let dec = S2dDecoder::new(&config, &h, &device).unwrap();
+    let meta = [("units".to_owned(), "m".to_owned())];
+    sinew_host::s2d::bake::bake(&dec, &h, &[1, 6], &meta).unwrap()
+}
+
 /// Loads as far as a user would: container, then the typed artefact.
 fn load(kind: &str, bytes: &[u8]) -> Result<(), sinew_core::FormatError> {
     match kind {
         "network" => load_mlp(&SinewFile::from_bytes(bytes)?, "mlp").map(|_| ()),
+        "s2d-decoder" => sinew_core::s2d::S2dDecoder::from_bytes(bytes).map(|_| ()),
         _ => sinew_core::aim::AimActor::from_bytes(bytes).map(|_| ()),
     }
 }
@@ -45,7 +63,11 @@ fn load(kind: &str, bytes: &[u8]) -> Result<(), sinew_core::FormatError> {
 fn artefacts() -> Vec<(&'static str, Vec<u8>)> {
     let aim = std::fs::read(sinew_tests::golden_dir().join("aim-procedural.sinew"))
         .expect("golden AIM actor (tests/data)");
-    vec![("network", small_network()), ("aim-actor", aim)]
+    vec![
+        ("network", small_network()),
+        ("aim-actor", aim),
+        ("s2d-decoder", small_s2d()),
+    ]
 }
 
 /// The writer's bytes are pinned: a change of layout shows up here (and the file seeds the fuzzer).

@@ -130,3 +130,28 @@ fn spiral_conv_matches_burn() {
     core.forward(&x, &mut out).unwrap();
     assert_within(&tolerance::SPIRAL_CONV, &out, &burn);
 }
+
+/// The whole decoder at the reference size (random weights, synthetic connectivity with the
+/// FLAME hierarchy's sizes): burn's training forward against the core's baked decode.
+#[test]
+fn s2d_decoder_matches_burn() {
+    use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
+    use sinew_host::s2d::synthetic::{self, REFERENCE_SIZES, REFERENCE_SPIRALS};
+    let device = device();
+    let h = synthetic::hierarchy(&REFERENCE_SIZES, &REFERENCE_SPIRALS, 21);
+    let dec = S2dDecoder::new(&DecoderConfig::default(), &h, &device).unwrap();
+    let landmarks: Vec<u32> = (0..68).map(|i| i * 70).collect();
+    let bytes = sinew_host::s2d::bake::bake(&dec, &h, &landmarks, &[]).unwrap();
+    let core = sinew_core::s2d::S2dDecoder::from_bytes(&bytes).unwrap();
+    let batch = 3;
+    // Landmark displacements of the size normalisation gives (a few hundredths).
+    let input = Rng::new(22).vec(batch * 204, -0.05, 0.05);
+    let burn = to_vec(dec.forward(tensor(input.clone(), [batch, 204], &device)));
+    let v = REFERENCE_SIZES[0];
+    let mut out = vec![0.0; batch * v * 3];
+    let mut scratch = vec![0.0; core.scratch_len()];
+    for (x, y) in input.chunks(204).zip(out.chunks_mut(v * 3)) {
+        core.displacements(x, &mut scratch, y).unwrap();
+    }
+    assert_within(&tolerance::S2D_DECODER, &out, &burn);
+}

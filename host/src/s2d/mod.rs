@@ -49,5 +49,9 @@ pub struct Hierarchy {
     pub up: Vec<Sampling>,
 }
 
+pub mod bake;
+pub mod decoder;
 pub mod hierarchy;
 pub mod spirals;
+pub mod synthetic;
+pub mod train;

@@ -1,0 +1,446 @@
+//! A baked S2D-Dec ("Sparse to Dense Dynamic 3D Facial Expression Generation", Otberdout et al.
+//! 2022, §3.2): 68 landmark displacements → a dense per-vertex displacement of the template mesh.
+//!
+//! # Network
+//! `inputs → (n_L + 1) · F` fully connected (the dummy row is not zeroed), then per stage, from
+//! level `L − 1` down to 0: up-sampling by the CSR matrix `U_k`, a spiral convolution with ELU
+//! (α = 1), and the dummy row zeroed; then an output spiral convolution at level 0 without
+//! activation. Every level carries one dummy vertex (index `n_k`) that pads short spirals.
+//!
+//! # Sections (artefact kind [`ArtifactKind::S2dDecoder`])
+//! | name | dtype | shape | meaning |
+//! |---|---|---|---|
+//! | `s2d.cfg` | u32 | [4] | inputs, F (features after the FC), levels L + 1, outputs (3) |
+//! | `s2d.nv` | u32 | [L + 1] | vertices n_k of each level, finest first, without the dummy |
+//! | `s2d.input` | u32 | [1] | input normalisation code ([`INPUT_FROBENIUS`]) |
+//! | `s2d.lmk` | u32 | [inputs / 3] | landmark vertex of each input landmark (< n_0) |
+//! | `s2d.neutral` | f32 | [n_0, 3] | the template's neutral positions |
+//! | `s2d.fc.w`, `s2d.fc.b` | f32 | [(n_L + 1) · F, inputs], [(n_L + 1) · F] | the FC layer |
+//! | `s2d.sp.<k>` | u32 | [n_k + 1, len_k] | spirals of level k < L (indices ≤ n_k); the coarsest level's feed no convolution and are not stored |
+//! | `s2d.up.<k>.ptr`, `.col`, `.val` | u32, u32, f32 | [n_k + 2], [nnz], [nnz] | U_k: level k+1 → k, CSR `(n_k + 1) × (n_{k+1} + 1)` |
+//! | `s2d.conv.<k>.w`, `.b` | f32 | [out, len_k · in], [out] | the stage convolution at level k (ELU) |
+//! | `s2d.out.w`, `s2d.out.b` | f32 | [outputs, len_0 · in], [outputs] | the output convolution (identity) |
+
+use core::fmt::Write;
+
+use crate::error::{BufferError, FormatError};
+use crate::format::{ArtifactKind, NAME_LEN, SinewFile};
+use crate::nn::{Activation, Dense, all_finite};
+use crate::sparse::Csr;
+use crate::spiral::{SpiralConv, Spirals, zero_row};
+use crate::tensor::{F32s, U32s};
+
+/// Most levels (mesh resolutions) a baked decoder may have.
+pub const MAX_LEVELS: usize = 8;
+
+/// `s2d.input` code: each landmark set is centred on its mean and divided by its Frobenius norm;
+/// the input is `normalised(expressive) − normalised(neutral)` ([`landmark_input`]).
+pub const INPUT_FROBENIUS: u32 = 1;
+
+/// A validated S2D decoder over the artefact's bytes.
+#[derive(Clone, Debug)]
+pub struct S2dDecoder<'a> {
+    file: SinewFile<'a>,
+    inputs: usize,
+    fc_features: usize,
+    vertices: heapless::Vec<usize, MAX_LEVELS>,
+    fc: Dense<'a>,
+    ups: heapless::Vec<Csr<'a>, MAX_LEVELS>,
+    convs: heapless::Vec<SpiralConv<'a>, MAX_LEVELS>,
+    out: SpiralConv<'a>,
+    neutral: F32s<'a>,
+    landmarks: U32s<'a>,
+    half: usize,
+}
+
+fn name(parts: core::fmt::Arguments<'_>) -> Result<heapless::String<NAME_LEN>, FormatError> {
+    let mut s = heapless::String::new();
+    s.write_fmt(parts).map_err(|_| FormatError::LimitExceeded)?;
+    Ok(s)
+}
+
+fn to_u32(n: usize) -> Result<u32, FormatError> {
+    u32::try_from(n).map_err(|_| FormatError::LimitExceeded)
+}
+
+/// The dimensions of a rank-2 section.
+fn dims2(file: &SinewFile<'_>, name: &str) -> Result<[u32; 2], FormatError> {
+    let ([a, b, ..], rank) = file.dims_of(name)?;
+    if rank != 2 {
+        return Err(FormatError::IncompatibleShapes);
+    }
+    Ok([a, b])
+}
+
+impl<'a> S2dDecoder<'a> {
+    /// Validates `bytes` as an S2D decoder (container checks, then every section's role, shape and
+    /// bound: CSR structure and columns, spiral indices, chained widths, finite weights).
+    pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
+        Self::from_file(SinewFile::from_bytes_of_kind(
+            bytes,
+            ArtifactKind::S2dDecoder,
+        )?)
+    }
+
+    /// Validates the S2D sections of an already-checked container (of any kind, so that a
+    /// decoder can travel inside another artefact).
+    pub fn from_file(file: SinewFile<'a>) -> Result<Self, FormatError> {
+        let cfg = file.u32_tensor("s2d.cfg", &[4])?;
+        let [inputs, fc_features, levels, outputs] =
+            [0, 1, 2, 3].map(|i| cfg.get(i).unwrap_or(0) as usize);
+        if levels == 0 || levels > MAX_LEVELS {
+            return Err(FormatError::LimitExceeded);
+        }
+        if inputs == 0 || fc_features == 0 || outputs != 3 || !inputs.is_multiple_of(3) {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        if file.u32_tensor("s2d.input", &[1])?.get(0) != Some(INPUT_FROBENIUS) {
+            return Err(FormatError::UnknownCode);
+        }
+        let nv = file.u32_tensor("s2d.nv", &[to_u32(levels)?])?;
+        let mut vertices = heapless::Vec::<usize, MAX_LEVELS>::new();
+        for n in nv.iter() {
+            // n + 1 (the dummy) must stay representable as a u32 section dimension.
+            if n == 0 || n == u32::MAX {
+                return Err(FormatError::IncompatibleShapes);
+            }
+            vertices
+                .push(n as usize)
+                .map_err(|_| FormatError::LimitExceeded)?;
+        }
+        let n_at = |k: usize| vertices.get(k).copied().unwrap_or(0);
+        let n0 = n_at(0);
+        let coarsest = n_at(levels - 1) + 1;
+
+        let neutral = file.f32_tensor("s2d.neutral", &[to_u32(n0)?, 3])?;
+        if !all_finite(neutral) {
+            return Err(FormatError::NonFinite);
+        }
+        let landmarks = file.u32_tensor("s2d.lmk", &[to_u32(inputs / 3)?])?;
+        if landmarks.iter().any(|i| i as usize >= n0) {
+            return Err(FormatError::IndexOutOfRange);
+        }
+
+        let fc_out = coarsest
+            .checked_mul(fc_features)
+            .ok_or(FormatError::LimitExceeded)?;
+        let fc_w = file.f32_tensor("s2d.fc.w", &[to_u32(fc_out)?, to_u32(inputs)?])?;
+        let fc_b = file.f32_tensor("s2d.fc.b", &[to_u32(fc_out)?])?;
+        let fc = Dense::new(fc_w, fc_b, inputs, fc_out, Activation::Identity)?;
+
+        let spirals_at = |k: usize| -> Result<(Spirals<'a>, usize), FormatError> {
+            let sp = name(format_args!("s2d.sp.{k}"))?;
+            let rows = n_at(k) + 1;
+            let [r, len] = dims2(&file, &sp)?;
+            if r as usize != rows {
+                return Err(FormatError::IncompatibleShapes);
+            }
+            let idx = file.u32_tensor(&sp, &[r, len])?;
+            Ok((Spirals::new(idx, rows, len as usize, rows)?, len as usize))
+        };
+        let conv_at = |prefix: &str, k: Option<usize>, inputs: usize, act: Activation| {
+            let (spirals, len) = spirals_at(k.unwrap_or(0))?;
+            let (wn, bn) = match k {
+                Some(k) => (
+                    name(format_args!("{prefix}.{k}.w"))?,
+                    name(format_args!("{prefix}.{k}.b"))?,
+                ),
+                None => (
+                    name(format_args!("{prefix}.w"))?,
+                    name(format_args!("{prefix}.b"))?,
+                ),
+            };
+            let [out, width] = dims2(&file, &wn)?;
+            if Some(width as usize) != len.checked_mul(inputs) {
+                return Err(FormatError::IncompatibleShapes);
+            }
+            let w = file.f32_tensor(&wn, &[out, width])?;
+            let b = file.f32_tensor(&bn, &[out])?;
+            SpiralConv::new(spirals, w, b, inputs, out as usize, act)
+        };
+
+        let mut half = fc_out;
+        let grow = |half: usize, rows: usize, width: usize| -> Result<usize, FormatError> {
+            let n = rows.checked_mul(width).ok_or(FormatError::LimitExceeded)?;
+            Ok(half.max(n))
+        };
+        let mut ups = heapless::Vec::new();
+        let mut convs = heapless::Vec::new();
+        let mut width = fc_features;
+        for k in (0..levels - 1).rev() {
+            let (rows, cols) = (n_at(k) + 1, n_at(k + 1) + 1);
+            let ptr =
+                file.u32_tensor(&name(format_args!("s2d.up.{k}.ptr"))?, &[to_u32(rows + 1)?])?;
+            let col_name = name(format_args!("s2d.up.{k}.col"))?;
+            let ([nnz, ..], rank) = file.dims_of(&col_name)?;
+            if rank != 1 {
+                return Err(FormatError::IncompatibleShapes);
+            }
+            let col = file.u32_tensor(&col_name, &[nnz])?;
+            let val = file.f32_tensor(&name(format_args!("s2d.up.{k}.val"))?, &[nnz])?;
+            ups.push(Csr::new(rows, cols, ptr, col, val)?)
+                .map_err(|_| FormatError::LimitExceeded)?;
+            half = grow(half, rows, width)?;
+            let conv = conv_at("s2d.conv", Some(k), width, Activation::Elu { alpha: 1.0 })?;
+            width = conv.out_features();
+            half = grow(half, rows, width)?;
+            convs.push(conv).map_err(|_| FormatError::LimitExceeded)?;
+        }
+        let out = conv_at("s2d.out", None, width, Activation::Identity)?;
+        if out.out_features() != outputs {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        half = grow(half, n0 + 1, outputs)?;
+        half.checked_mul(2).ok_or(FormatError::LimitExceeded)?;
+        Ok(Self {
+            file,
+            inputs,
+            fc_features,
+            vertices,
+            fc,
+            ups,
+            convs,
+            out,
+            neutral,
+            landmarks,
+            half,
+        })
+    }
+
+    /// The container (metadata, sections).
+    pub const fn file(&self) -> &SinewFile<'a> {
+        &self.file
+    }
+
+    /// Input width (3 × landmarks).
+    pub const fn input_len(&self) -> usize {
+        self.inputs
+    }
+
+    /// Features per coarsest-level vertex after the fully connected layer.
+    pub const fn fc_features(&self) -> usize {
+        self.fc_features
+    }
+
+    /// Vertices of the output mesh (level 0, without the dummy).
+    pub fn vertex_count(&self) -> usize {
+        self.vertices.first().copied().unwrap_or(0)
+    }
+
+    /// Vertices of each level, finest first, without the dummy.
+    pub fn level_sizes(&self) -> &[usize] {
+        &self.vertices
+    }
+
+    /// The template's neutral positions, `[n_0, 3]`.
+    pub const fn neutral(&self) -> F32s<'a> {
+        self.neutral
+    }
+
+    /// The landmark vertex indices, `[inputs / 3]`.
+    pub const fn landmarks(&self) -> U32s<'a> {
+        self.landmarks
+    }
+
+    /// Scratch length [`Self::decode`] needs: two buffers of the largest feature map (dummy rows
+    /// included).
+    pub const fn scratch_len(&self) -> usize {
+        2 * self.half
+    }
+
+    /// Dense displacements from landmark displacements (see the module documentation).
+    ///
+    /// # Shapes
+    /// `input`: `[inputs]`; `out`: `[n_0, 3]`; `scratch`: at least [`Self::scratch_len`] values
+    /// (contents on entry ignored, on exit unspecified).
+    ///
+    /// # Errors
+    /// [`BufferError::Input`], [`BufferError::Output`] for wrong lengths,
+    /// [`BufferError::Scratch`] if `scratch` is too short.
+    pub fn displacements(
+        &self,
+        input: &[f32],
+        scratch: &mut [f32],
+        out: &mut [f32],
+    ) -> Result<(), BufferError> {
+        if input.len() != self.inputs {
+            return Err(BufferError::Input);
+        }
+        if Some(out.len()) != self.vertex_count().checked_mul(3) {
+            return Err(BufferError::Output);
+        }
+        if scratch.len() < self.scratch_len() {
+            return Err(BufferError::Scratch);
+        }
+        // Every length below was bounded by `half` in `from_file`, so each `get` succeeds and each
+        // kernel's own length check passes; the `?`s cannot fire on a validated model.
+        let (a, b) = scratch
+            .split_at_mut_checked(self.half)
+            .ok_or(BufferError::Scratch)?;
+        let fc_out = self.fc.outputs();
+        self.fc
+            .forward(input, a.get_mut(..fc_out).ok_or(BufferError::Scratch)?)?;
+        let mut width = self.fc_features;
+        for (up, conv) in self.ups.iter().zip(&self.convs) {
+            let (rows, cols) = (up.rows(), up.cols());
+            let x = a.get(..cols * width).ok_or(BufferError::Scratch)?;
+            let fine = b.get_mut(..rows * width).ok_or(BufferError::Scratch)?;
+            up.mul_dense(x, width, fine)?;
+            let out_f = conv.out_features();
+            let y = a.get_mut(..rows * out_f).ok_or(BufferError::Scratch)?;
+            conv.forward(fine, y)?;
+            zero_row(y, rows.saturating_sub(1), out_f)?;
+            width = out_f;
+        }
+        let rows = self.vertex_count() + 1;
+        let x = a.get(..rows * width).ok_or(BufferError::Scratch)?;
+        let y = b.get_mut(..rows * 3).ok_or(BufferError::Scratch)?;
+        self.out.forward(x, y)?;
+        out.copy_from_slice(y.get(..out.len()).ok_or(BufferError::Scratch)?);
+        Ok(())
+    }
+
+    /// The expressive template: neutral positions plus [`Self::displacements`].
+    ///
+    /// # Shapes and errors
+    /// As [`Self::displacements`]; `out_vertices`: `[n_0, 3]`.
+    pub fn decode(
+        &self,
+        input: &[f32],
+        scratch: &mut [f32],
+        out_vertices: &mut [f32],
+    ) -> Result<(), BufferError> {
+        self.displacements(input, scratch, out_vertices)?;
+        for (o, n) in out_vertices.iter_mut().zip(self.neutral.iter()) {
+            *o += n;
+        }
+        Ok(())
+    }
+
+    /// Another neutral face (same topology) plus [`Self::displacements`]: S2D's expression
+    /// transfer to a new identity.
+    ///
+    /// # Errors
+    /// [`BufferError::Input`] if `neutral` is not `[n_0, 3]`, else as [`Self::displacements`].
+    pub fn decode_onto(
+        &self,
+        neutral: &[f32],
+        input: &[f32],
+        scratch: &mut [f32],
+        out_vertices: &mut [f32],
+    ) -> Result<(), BufferError> {
+        if neutral.len() != self.neutral.len() {
+            return Err(BufferError::Input);
+        }
+        self.displacements(input, scratch, out_vertices)?;
+        for (o, n) in out_vertices.iter_mut().zip(neutral) {
+            *o += *n;
+        }
+        Ok(())
+    }
+}
+
+/// The decoder's input from two landmark sets ([`INPUT_FROBENIUS`]): each set, `[K, 3]`, is
+/// centred on its mean and divided by its Frobenius norm (left only centred if the norm is 0),
+/// and `out = normalised(expressive) − normalised(neutral)`, `[K · 3]`.
+///
+/// # Errors
+/// [`BufferError::Input`] if the sets differ in length or are not whole points;
+/// [`BufferError::Output`] if `out` has another length.
+pub fn landmark_input(
+    neutral: &[f32],
+    expressive: &[f32],
+    out: &mut [f32],
+) -> Result<(), BufferError> {
+    if neutral.len() != expressive.len() || !neutral.len().is_multiple_of(3) {
+        return Err(BufferError::Input);
+    }
+    if out.len() != neutral.len() {
+        return Err(BufferError::Output);
+    }
+    let (cn, sn) = centre_scale(neutral);
+    let (ce, se) = centre_scale(expressive);
+    for ((o, n), e) in out
+        .chunks_exact_mut(3)
+        .zip(neutral.chunks_exact(3))
+        .zip(expressive.chunks_exact(3))
+    {
+        for (((o, n), e), (a, b)) in o.iter_mut().zip(n).zip(e).zip(cn.iter().zip(&ce)) {
+            *o = (*e - b) * se - (*n - a) * sn;
+        }
+    }
+    Ok(())
+}
+
+/// Mean of a `[K, 3]` set and the reciprocal of its centred Frobenius norm (1 for a zero norm).
+fn centre_scale(points: &[f32]) -> ([f32; 3], f32) {
+    let k = (points.len() / 3).max(1) as f32;
+    let mut c = [0.0f32; 3];
+    for p in points.chunks_exact(3) {
+        for (ci, pi) in c.iter_mut().zip(p) {
+            *ci += *pi;
+        }
+    }
+    for ci in &mut c {
+        *ci /= k;
+    }
+    let mut sq = 0.0f32;
+    for p in points.chunks_exact(3) {
+        for (pi, ci) in p.iter().zip(&c) {
+            let d = *pi - *ci;
+            sq += d * d;
+        }
+    }
+    let norm = libm::sqrtf(sq);
+    (c, if norm > 0.0 { 1.0 / norm } else { 1.0 })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn section_names_fit() {
+        assert_eq!(
+            name(format_args!("s2d.up.{}.ptr", MAX_LEVELS))
+                .unwrap()
+                .as_str(),
+            "s2d.up.8.ptr"
+        );
+        assert!(name(format_args!("{}", "x".repeat(NAME_LEN + 1).as_str())).is_err());
+    }
+
+    #[test]
+    fn landmark_input_hand_computed() {
+        // Neutral (0,0,0), (2,0,0): centre (1,0,0), norm √2 → ±(1/√2, 0, 0).
+        // Expressive (0,0,0), (0,4,0): centre (0,2,0), norm √8 → ∓(0, 1/√2, 0).
+        let neutral = [0.0, 0.0, 0.0, 2.0, 0.0, 0.0];
+        let expressive = [0.0, 0.0, 0.0, 0.0, 4.0, 0.0];
+        let mut out = [0.0; 6];
+        landmark_input(&neutral, &expressive, &mut out).unwrap();
+        let s = core::f32::consts::FRAC_1_SQRT_2;
+        let expected = [s, -s, 0.0, -s, s, 0.0];
+        for (o, e) in out.iter().zip(expected) {
+            assert!((o - e).abs() < 1e-6, "{out:?}");
+        }
+        // Scale and translation of a set do not matter.
+        let moved = [5.0, 1.0, 1.0, 5.0, 9.0, 1.0];
+        let mut again = [0.0; 6];
+        landmark_input(&neutral, &moved, &mut again).unwrap();
+        for (a, b) in out.iter().zip(again) {
+            assert!((a - b).abs() < 1e-6);
+        }
+        assert_eq!(
+            landmark_input(&neutral, &expressive[..3], &mut out),
+            Err(BufferError::Input)
+        );
+        assert_eq!(
+            landmark_input(&neutral, &expressive, &mut out[..5]),
+            Err(BufferError::Output)
+        );
+        // A degenerate set is only centred.
+        let mut z = [9.0; 6];
+        landmark_input(&[1.0; 6], &[1.0; 6], &mut z).unwrap();
+        assert_eq!(z, [0.0; 6]);
+    }
+}

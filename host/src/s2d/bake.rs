@@ -1,0 +1,155 @@
+//! Bakes a trained S2D decoder with its hierarchy into the `s2d.` sections that
+//! `sinew_core::s2d::S2dDecoder` reads (table in `docs/FORMAT.md`, "S2D decoder").
+
+use anyhow::{Result, ensure};
+use sinew_core::ArtifactKind;
+use sinew_core::s2d::INPUT_FROBENIUS;
+
+use super::Hierarchy;
+use super::decoder::S2dDecoder;
+use crate::container::SinewWriter;
+use crate::nn::{SpiralConv, to_vec};
+
+/// Writes `decoder` over `hierarchy`, with the landmark vertex indices of the template (level 0),
+/// as `s2d.` sections of `w`.
+pub fn write(
+    decoder: &S2dDecoder,
+    hierarchy: &Hierarchy,
+    landmarks: &[u32],
+    w: &mut SinewWriter,
+) -> Result<()> {
+    let c = &decoder.config;
+    c.validate(hierarchy)?;
+    let vertices: Vec<usize> = hierarchy.levels.iter().map(|l| l.positions.len()).collect();
+    ensure!(
+        vertices == decoder.vertices,
+        "the decoder was built for levels of {:?} vertices, the hierarchy has {vertices:?}",
+        decoder.vertices
+    );
+    ensure!(
+        landmarks.len() * 3 == c.inputs,
+        "{} landmarks for {} inputs",
+        landmarks.len(),
+        c.inputs
+    );
+    ensure!(
+        landmarks.iter().all(|&i| (i as usize) < vertices[0]),
+        "a landmark vertex is outside the template"
+    );
+    let levels = vertices.len();
+    let u32s = |v: &[usize]| v.iter().map(|&x| x as u32).collect::<Vec<_>>();
+    w.u32s(
+        "s2d.cfg",
+        &[4],
+        &u32s(&[c.inputs, c.fc_features, levels, c.outputs]),
+    )?;
+    w.u32s("s2d.nv", &[levels], &u32s(&vertices))?;
+    w.u32s("s2d.input", &[1], &[INPUT_FROBENIUS])?;
+    w.u32s("s2d.lmk", &[landmarks.len()], landmarks)?;
+    let neutral: Vec<f32> = hierarchy.levels[0]
+        .positions
+        .iter()
+        .flatten()
+        .copied()
+        .collect();
+    w.f32s("s2d.neutral", &[vertices[0], 3], &neutral)?;
+
+    // burn stores [in, out]; the core reads one row per output.
+    let fc_w = decoder.fc.weight.val().transpose();
+    let [out, inp] = fc_w.dims();
+    w.f32s("s2d.fc.w", &[out, inp], &to_vec(fc_w))?;
+    w.f32s("s2d.fc.b", &[out], &bias(&decoder.fc, out))?;
+
+    // The coarsest level's spirals feed no convolution (the FC produces that level), so they
+    // are not stored.
+    for (k, level) in hierarchy.levels.iter().enumerate().take(levels - 1) {
+        w.u32s(
+            &format!("s2d.sp.{k}"),
+            &[vertices[k] + 1, level.spiral_len],
+            &level.spirals,
+        )?;
+    }
+    for (k, u) in hierarchy.up.iter().enumerate() {
+        w.u32s(&format!("s2d.up.{k}.ptr"), &[u.row_ptr.len()], &u.row_ptr)?;
+        w.u32s(&format!("s2d.up.{k}.col"), &[u.col_idx.len()], &u.col_idx)?;
+        w.f32s(&format!("s2d.up.{k}.val"), &[u.values.len()], &u.values)?;
+    }
+    let n_convs = decoder.convs.len();
+    for (stage, conv) in decoder.convs.iter().enumerate() {
+        let prefix = if stage + 1 == n_convs {
+            "s2d.out".to_owned()
+        } else {
+            format!("s2d.conv.{}", levels - 2 - stage)
+        };
+        write_conv(w, &prefix, conv)?;
+    }
+    Ok(())
+}
+
+/// A complete S2D-decoder artefact: the sections of [`write`] and metadata.
+pub fn bake(
+    decoder: &S2dDecoder,
+    hierarchy: &Hierarchy,
+    landmarks: &[u32],
+    metadata: &[(String, String)],
+) -> Result<Vec<u8>> {
+    let mut w = SinewWriter::new(ArtifactKind::S2dDecoder);
+    for (k, v) in metadata {
+        w.meta(k, v);
+    }
+    write(decoder, hierarchy, landmarks, &mut w)?;
+    let bytes = w.to_bytes()?;
+    // The core must accept what the host writes.
+    sinew_core::s2d::S2dDecoder::from_bytes(&bytes)
+        .map_err(|e| anyhow::anyhow!("the baked decoder does not validate: {e}"))?;
+    Ok(bytes)
+}
+
+fn bias(linear: &burn::nn::Linear, outputs: usize) -> Vec<f32> {
+    linear
+        .bias
+        .as_ref()
+        .map_or_else(|| vec![0.0; outputs], |b| to_vec(b.val()))
+}
+
+fn write_conv(w: &mut SinewWriter, prefix: &str, conv: &SpiralConv) -> Result<()> {
+    let weight = conv.linear.weight.val().transpose();
+    let [outputs, inputs] = weight.dims();
+    w.f32s(&format!("{prefix}.w"), &[outputs, inputs], &to_vec(weight))?;
+    w.f32s(
+        &format!("{prefix}.b"),
+        &[outputs],
+        &bias(&conv.linear, outputs),
+    )?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::s2d::decoder::DecoderConfig;
+    use crate::s2d::synthetic;
+
+    #[test]
+    fn baked_decoder_loads_and_decodes() {
+        let device = crate::backend::Backend::Flex.device(4).unwrap();
+        let h = synthetic::hierarchy(&[30, 12, 5], &[5, 4, 3], 6);
+        let config = DecoderConfig {
+            inputs: 6,
+            fc_features: 4,
+            filters: vec![5, 3],
+            outputs: 3,
+        };
+        let dec = S2dDecoder::new(&config, &h, &device).unwrap();
+        let meta = [("units".to_owned(), "m".to_owned())];
+        let bytes = bake(&dec, &h, &[3, 17], &meta).unwrap();
+        let core = sinew_core::s2d::S2dDecoder::from_bytes(&bytes).unwrap();
+        assert_eq!(core.level_sizes(), &[30, 12, 5]);
+        assert_eq!(core.landmarks().iter().collect::<Vec<_>>(), [3, 17]);
+        assert_eq!(core.file().metadata().get("units"), Some("m"));
+        assert!(bake(&dec, &h, &[3], &meta).is_err());
+        assert!(bake(&dec, &h, &[3, 30], &meta).is_err());
+        let other = synthetic::hierarchy(&[31, 12, 5], &[5, 4, 3], 6);
+        assert!(bake(&dec, &other, &[3, 17], &meta).is_err());
+    }
+}

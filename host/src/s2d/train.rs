@@ -1,0 +1,482 @@
+//! S2D-Dec training (S2D §3.2 and §4.2): input normalisation, the landmark-distance vertex
+//! weights, both loss variants, and the Adam loop of the reference (lr 1e-3 decayed ×0.99 per
+//! epoch over 300 epochs, L2 weight decay 5e-5 added to the gradient, batch 16).
+
+use anyhow::{Result, bail, ensure};
+use burn::optim::decay::WeightDecayConfig;
+use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::tensor::{Device, Tensor, TensorData};
+use serde::{Deserialize, Serialize};
+
+use super::decoder::S2dDecoder;
+
+/// Centres a landmark set on its mean and scales it to unit Frobenius norm (the reference's
+/// per-set normalisation). A set with zero norm (all points equal) is only centred.
+pub fn normalise_landmarks(points: &[[f32; 3]]) -> Vec<[f32; 3]> {
+    let n = points.len().max(1) as f64;
+    let mut centre = [0.0f64; 3];
+    for p in points {
+        for i in 0..3 {
+            centre[i] += f64::from(p[i]) / n;
+        }
+    }
+    let centred: Vec<[f64; 3]> = points
+        .iter()
+        .map(|p| [0, 1, 2].map(|i| f64::from(p[i]) - centre[i]))
+        .collect();
+    let norm = centred.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
+    let scale = if norm > 0.0 { 1.0 / norm } else { 1.0 };
+    centred
+        .iter()
+        .map(|p| p.map(|v| (v * scale) as f32))
+        .collect()
+}
+
+/// The decoder's input (S2D §3.2): `normalise(expressive) − normalise(neutral)`, flattened
+/// `x1, y1, z1, x2, …`.
+pub fn landmark_input(neutral: &[[f32; 3]], expressive: &[[f32; 3]]) -> Result<Vec<f32>> {
+    ensure!(
+        neutral.len() == expressive.len(),
+        "{} neutral landmarks but {} expressive ones",
+        neutral.len(),
+        expressive.len()
+    );
+    let (n, e) = (
+        normalise_landmarks(neutral),
+        normalise_landmarks(expressive),
+    );
+    Ok(n.iter()
+        .zip(&e)
+        .flat_map(|(a, b)| [0, 1, 2].map(|i| b[i] - a[i]))
+        .collect())
+}
+
+/// Distance of every template vertex to its nearest landmark vertex.
+pub fn landmark_distances(template: &[[f32; 3]], landmarks: &[u32]) -> Result<Vec<f32>> {
+    ensure!(!landmarks.is_empty(), "no landmark vertices");
+    let lm: Vec<[f32; 3]> = landmarks
+        .iter()
+        .map(|&i| {
+            template.get(i as usize).copied().ok_or_else(|| {
+                anyhow::anyhow!(
+                    "landmark vertex {i} is outside the template ({} vertices)",
+                    template.len()
+                )
+            })
+        })
+        .collect::<Result<_>>()?;
+    Ok(template
+        .iter()
+        .map(|p| {
+            lm.iter()
+                .map(|q| {
+                    let d = [0, 1, 2].map(|i| p[i] - q[i]);
+                    (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+                })
+                .fold(f32::INFINITY, f32::min)
+        })
+        .collect())
+}
+
+/// Which S2D objective to train with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum LossVariant {
+    /// The authors' code (which produced the published numbers): `mean_{batch, xyz} Σ_v w_v |e_v|
+    /// + 0.1 · mean |e|`, `w_v = 1 − d_v / max d` (1 at landmarks).
+    #[default]
+    Code,
+    /// The paper's text: `L_S2D = β1 L_dr + β2 L_pr` with β1 = 1, β2 = 0.1 (eqs. 6–7), `w_v =
+    /// 1/d_v` rescaled to [0, 1] (landmark vertices get the maximum).
+    Paper,
+}
+
+/// The per-vertex weights `w_v` of `variant` from the distances to the nearest landmark.
+///
+/// - Code: `1 − (d − min d)/(max d − min d)`.
+/// - Paper: `u_v = 1/d_v`, with landmark vertices (`d = 0`) given the largest `u` of the others,
+///   then min–max rescaled to [0, 1].
+///
+/// All weights are 1 when every distance is equal.
+pub fn vertex_weights(variant: LossVariant, distances: &[f32]) -> Vec<f32> {
+    let rescale = |u: &[f32]| {
+        let lo = u.iter().copied().fold(f32::INFINITY, f32::min);
+        let hi = u.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        (hi > lo).then(|| u.iter().map(|v| (v - lo) / (hi - lo)).collect::<Vec<f32>>())
+    };
+    let weights = match variant {
+        LossVariant::Code => rescale(distances).map(|r| r.iter().map(|v| 1.0 - v).collect()),
+        LossVariant::Paper => {
+            let top = distances
+                .iter()
+                .filter(|&&d| d > 0.0)
+                .map(|d| 1.0 / d)
+                .fold(0.0f32, f32::max);
+            let inverse: Vec<f32> = distances
+                .iter()
+                .map(|&d| if d > 0.0 { 1.0 / d } else { top })
+                .collect();
+            rescale(&inverse)
+        }
+    };
+    weights.unwrap_or_else(|| vec![1.0; distances.len()])
+}
+
+/// The S2D objective on a batch of displacements.
+///
+/// The position error of the prediction `neutral + D^g` against `S^gt = neutral + D^gt` equals the
+/// displacement error `e = D^g − D^gt`, so both terms read `e`.
+///
+/// # Shapes
+/// - `predicted`, `target`: `[batch, vertices, 3]`
+/// - `weights`: `[1, vertices, 1]`
+/// - output: `[1]`
+pub fn loss(
+    variant: LossVariant,
+    predicted: Tensor<3>,
+    target: Tensor<3>,
+    weights: Tensor<3>,
+) -> Tensor<1> {
+    let [batch, vertices, xyz] = predicted.dims();
+    let e = predicted.sub(target).abs();
+    match variant {
+        // Reference code: mean over batch and xyz of Σ_v w_v |e| + 0.1 · mean |e|.
+        LossVariant::Code => {
+            let weighted = e
+                .clone()
+                .mul(weights)
+                .sum()
+                .div_scalar((batch * xyz) as f64);
+            weighted + e.mean().mul_scalar(0.1)
+        }
+        // S2D eqs. 6–7: L_dr = 1/N Σ ||e_i||_1, L_pr = 1/N Σ w_i ||e_i||_1 (batch-averaged);
+        // L_S2D = 1 · L_dr + 0.1 · L_pr.
+        LossVariant::Paper => {
+            let n = (batch * vertices) as f64;
+            let dr = e.clone().sum().div_scalar(n);
+            let pr = e.mul(weights).sum().div_scalar(n);
+            dr + pr.mul_scalar(0.1)
+        }
+    }
+}
+
+/// Training hyper-parameters (the reference's defaults).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrainConfig {
+    /// Epochs (300).
+    pub epochs: usize,
+    /// Samples per batch (16).
+    pub batch: usize,
+    /// Initial learning rate (1e-3).
+    pub lr: f64,
+    /// Learning-rate factor per 300 epochs' worth of epochs (0.99: ×0.99^(300/epochs) per epoch,
+    /// so that a shorter run ends at the same rate as the reference's 300).
+    pub lr_decay: f64,
+    /// L2 penalty added to the gradient, as PyTorch's `Adam(weight_decay=…)` (5e-5).
+    pub weight_decay: f32,
+    /// The objective.
+    pub loss: LossVariant,
+    /// Seed of the weights and of the shuffling.
+    pub seed: u64,
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        Self {
+            epochs: 300,
+            batch: 16,
+            lr: 1e-3,
+            lr_decay: 0.99,
+            weight_decay: 5e-5,
+            loss: LossVariant::Code,
+            seed: 42,
+        }
+    }
+}
+
+impl TrainConfig {
+    /// Learning rate of `epoch` (0-based): `lr · lr_decay^(epoch · 300 / epochs)`.
+    pub fn lr_at(&self, epoch: usize) -> f64 {
+        self.lr
+            * self
+                .lr_decay
+                .powf(epoch as f64 * 300.0 / self.epochs.max(1) as f64)
+    }
+
+    /// Adam as PyTorch configures it for S2D (β = (0.9, 0.999), ε = 1e-8, L2 weight decay added
+    /// to the gradient — burn's `WeightDecay` adds `penalty · θ`, as PyTorch's `Adam` does, not
+    /// AdamW's decoupled decay).
+    pub fn optimizer(&self) -> ModuleOptimizer {
+        AdamConfig::new()
+            .with_epsilon(1e-8)
+            .with_weight_decay(Some(WeightDecayConfig::new(self.weight_decay)))
+            .init()
+    }
+
+    fn validate(&self) -> Result<()> {
+        ensure!(
+            self.epochs > 0 && self.batch > 0,
+            "epochs and batch must be positive"
+        );
+        ensure!(
+            self.lr > 0.0 && self.lr_decay > 0.0 && self.weight_decay >= 0.0,
+            "learning rate, decay and weight decay must be positive"
+        );
+        Ok(())
+    }
+}
+
+/// One training sample: the decoder's input and the ground-truth dense displacement.
+#[derive(Clone, Debug)]
+pub struct Sample {
+    /// Normalised landmark displacement, `[inputs]` ([`landmark_input`]).
+    pub input: Vec<f32>,
+    /// Ground-truth displacement `S^gt − neutral`, `[vertices · 3]`.
+    pub displacement: Vec<f32>,
+}
+
+/// A batch on the device.
+#[derive(Debug)]
+pub struct Batch {
+    /// `[batch, inputs]`.
+    pub input: Tensor<2>,
+    /// `[batch, vertices, 3]`.
+    pub target: Tensor<3>,
+}
+
+impl Batch {
+    /// Stacks the samples `indices` of `set`.
+    pub fn new(set: &[Sample], indices: &[usize], device: &Device) -> Self {
+        let inputs = set[indices[0]].input.len();
+        let values = set[indices[0]].displacement.len();
+        let mut x = Vec::with_capacity(indices.len() * inputs);
+        let mut y = Vec::with_capacity(indices.len() * values);
+        for &i in indices {
+            x.extend_from_slice(&set[i].input);
+            y.extend_from_slice(&set[i].displacement);
+        }
+        let b = indices.len();
+        Self {
+            input: Tensor::from_data(TensorData::new(x, [b, inputs]), device),
+            target: Tensor::from_data(TensorData::new(y, [b, values / 3, 3]), device),
+        }
+    }
+}
+
+/// The weights `w_v` as the `[1, vertices, 1]` tensor [`loss`] takes.
+pub fn weights_tensor(weights: &[f32], device: &Device) -> Tensor<3> {
+    Tensor::from_data(
+        TensorData::new(weights.to_vec(), [1, weights.len(), 1]),
+        device,
+    )
+}
+
+/// One Adam step at learning rate `lr`; returns the model and the (detached) loss.
+pub fn step_once(
+    decoder: S2dDecoder,
+    optim: &mut ModuleOptimizer,
+    batch: &Batch,
+    weights: &Tensor<3>,
+    variant: LossVariant,
+    lr: f64,
+) -> (S2dDecoder, Tensor<1>) {
+    let predicted = decoder.forward(batch.input.clone());
+    let l = loss(variant, predicted, batch.target.clone(), weights.clone());
+    let grads = GradientsParams::from_grads(l.backward(), &decoder);
+    (optim.step(lr, decoder, grads), l.detach())
+}
+
+/// The order of the samples in `epoch`: a Fisher–Yates shuffle from a generator seeded by
+/// (seed, epoch) alone, so any epoch can be reproduced on its own.
+pub fn epoch_order(n: usize, seed: u64, epoch: usize) -> Vec<usize> {
+    use rand_core::RngCore;
+    let mut rng = rand_pcg::Pcg64::new(
+        u128::from(seed) << 64 | epoch as u128,
+        0x5d2d_ec00_0000_0000_0000_0000_0000_0001,
+    );
+    let mut order: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
+        let j = ((u128::from(rng.next_u64()) * (i as u128 + 1)) >> 64) as usize;
+        order.swap(i, j);
+    }
+    order
+}
+
+/// Trains `decoder` on `set` for `config.epochs` epochs (the last batch of an epoch may be short,
+/// as PyTorch's `DataLoader` without `drop_last`). Returns the model and the mean loss of each
+/// epoch (batch losses weighted by batch size).
+pub fn train(
+    mut decoder: S2dDecoder,
+    set: &[Sample],
+    vertex_weights: &[f32],
+    config: &TrainConfig,
+    device: &Device,
+) -> Result<(S2dDecoder, Vec<f32>)> {
+    config.validate()?;
+    ensure!(!set.is_empty(), "no training samples");
+    let v = decoder.output_vertices();
+    ensure!(
+        vertex_weights.len() == v,
+        "{} vertex weights for {v} vertices",
+        vertex_weights.len()
+    );
+    for (i, s) in set.iter().enumerate() {
+        ensure!(
+            s.input.len() == decoder.config.inputs && s.displacement.len() == 3 * v,
+            "sample {i}: input {} (expected {}), displacement {} (expected {})",
+            s.input.len(),
+            decoder.config.inputs,
+            s.displacement.len(),
+            3 * v
+        );
+    }
+    let weights = weights_tensor(vertex_weights, device);
+    let mut optim = config.optimizer();
+    let mut losses = Vec::with_capacity(config.epochs);
+    for epoch in 0..config.epochs {
+        let lr = config.lr_at(epoch);
+        let order = epoch_order(set.len(), config.seed, epoch);
+        let mut total = 0.0f64;
+        for chunk in order.chunks(config.batch) {
+            let batch = Batch::new(set, chunk, device);
+            let l;
+            (decoder, l) = step_once(decoder, &mut optim, &batch, &weights, config.loss, lr);
+            let value = crate::nn::to_vec(l)[0];
+            if !value.is_finite() {
+                bail!("training diverged in epoch {epoch} (loss {value})");
+            }
+            total += f64::from(value) * chunk.len() as f64;
+        }
+        losses.push((total / set.len() as f64) as f32);
+    }
+    Ok((decoder, losses))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::nn::{tensor, to_vec};
+    use crate::s2d::decoder::DecoderConfig;
+    use crate::s2d::synthetic;
+
+    #[test]
+    fn normalisation_centres_and_scales() {
+        // Points (0,0,0), (2,0,0): centre (1,0,0), centred ±(1,0,0), norm √2.
+        let n = normalise_landmarks(&[[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]]);
+        let s = std::f32::consts::FRAC_1_SQRT_2;
+        assert!((n[0][0] + s).abs() < 1e-7 && (n[1][0] - s).abs() < 1e-7);
+        assert_eq!((n[0][1], n[1][2]), (0.0, 0.0));
+        // Translating and scaling the expressive set changes nothing; a displacement does.
+        let neutral = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let moved = neutral.map(|p| [p[0] * 3.0 + 5.0, p[1] * 3.0 - 1.0, p[2] * 3.0]);
+        assert!(
+            landmark_input(&neutral, &moved)
+                .unwrap()
+                .iter()
+                .all(|v| v.abs() < 1e-6)
+        );
+        let open = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.5, 0.0]];
+        let d = landmark_input(&neutral, &open).unwrap();
+        assert_eq!(d.len(), 9);
+        assert!(d.iter().any(|v| v.abs() > 0.05));
+        assert!(landmark_input(&neutral, &open[..2]).is_err());
+    }
+
+    #[test]
+    fn weights_of_both_variants() {
+        // Vertices at x = 0 (the landmark), 1, 2, 4.
+        let tpl = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [4.0, 0.0, 0.0],
+        ];
+        let d = landmark_distances(&tpl, &[0]).unwrap();
+        assert_eq!(d, [0.0, 1.0, 2.0, 4.0]);
+        // Code: 1 − d/4.
+        assert_eq!(vertex_weights(LossVariant::Code, &d), [1.0, 0.75, 0.5, 0.0]);
+        // Paper: 1/d = [·, 1, 0.5, 0.25], landmark gets the max 1; rescaled (u − 0.25)/0.75.
+        let w = vertex_weights(LossVariant::Paper, &d);
+        let expected = [1.0, 1.0, 1.0 / 3.0, 0.0];
+        assert!(w.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-6));
+        assert!(landmark_distances(&tpl, &[4]).is_err());
+        assert_eq!(vertex_weights(LossVariant::Code, &[2.0, 2.0]), [1.0, 1.0]);
+        assert_eq!(vertex_weights(LossVariant::Paper, &[2.0, 2.0]), [1.0, 1.0]);
+    }
+
+    #[test]
+    fn loss_values_hand_computed() {
+        let device = crate::backend::Backend::Flex.device(1).unwrap();
+        // batch 1, 2 vertices: e = [[1, 0, 2], [0, 3, 0]], w = [1, 0.5].
+        let p = tensor(vec![1.0, 0.0, 2.0, 0.0, 3.0, 0.0], [1, 2, 3], &device);
+        let t = tensor(vec![0.0; 6], [1, 2, 3], &device);
+        let w = weights_tensor(&[1.0, 0.5], &device);
+        // Code: (1·3 + 0.5·3)/3 + 0.1·6/6 = 1.5 + 0.1 = 1.6.
+        let code = to_vec(loss(LossVariant::Code, p.clone(), t.clone(), w.clone()))[0];
+        assert!((code - 1.6).abs() < 1e-6, "{code}");
+        // Paper: L_dr = 6/2 = 3, L_pr = 4.5/2 = 2.25; 3 + 0.225 = 3.225.
+        let paper = to_vec(loss(LossVariant::Paper, p, t, w))[0];
+        assert!((paper - 3.225).abs() < 1e-6, "{paper}");
+    }
+
+    #[test]
+    fn schedule_and_shuffle() {
+        let c = TrainConfig::default();
+        assert_eq!(c.lr_at(0), 1e-3);
+        assert!((c.lr_at(1) - 0.99e-3).abs() < 1e-12);
+        let short = TrainConfig {
+            epochs: 30,
+            ..TrainConfig::default()
+        };
+        // 30 epochs decay like 300: ×0.99^10 per epoch.
+        assert!((short.lr_at(3) - c.lr_at(30)).abs() < 1e-12);
+        let a = epoch_order(50, 1, 0);
+        let mut sorted = a.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..50).collect::<Vec<_>>());
+        assert_eq!(a, epoch_order(50, 1, 0));
+        assert_ne!(a, epoch_order(50, 1, 1));
+        assert_ne!(a, epoch_order(50, 2, 0));
+    }
+
+    /// A small decoder learns a fixed linear map from inputs to displacements: the epoch loss falls.
+    #[test]
+    fn training_reduces_the_loss() {
+        let device = crate::backend::Backend::Flex.autodiff_device(5).unwrap();
+        let h = synthetic::hierarchy(&[40, 15, 6], &[6, 5, 4], 3);
+        let config = DecoderConfig {
+            inputs: 6,
+            fc_features: 8,
+            filters: vec![8, 8],
+            outputs: 3,
+        };
+        let decoder = S2dDecoder::new(&config, &h, &device).unwrap();
+        let mut rng = synthetic::Rng::new(4);
+        let basis: Vec<f32> = (0..6 * 120).map(|_| rng.uniform(-0.5, 0.5)).collect();
+        let set: Vec<Sample> = (0..48)
+            .map(|_| {
+                let input: Vec<f32> = (0..6).map(|_| rng.uniform(-1.0, 1.0)).collect();
+                let displacement = (0..120)
+                    .map(|j| (0..6).map(|i| input[i] * basis[i * 120 + j]).sum())
+                    .collect();
+                Sample {
+                    input,
+                    displacement,
+                }
+            })
+            .collect();
+        let tc = TrainConfig {
+            epochs: 60,
+            batch: 8,
+            lr: 3e-3,
+            ..TrainConfig::default()
+        };
+        let w = vec![1.0; 40];
+        let (_, losses) = train(decoder, &set, &w, &tc, &device).unwrap();
+        assert_eq!(losses.len(), 60);
+        assert!(
+            losses[59] < 0.5 * losses[0],
+            "loss did not fall: {losses:?}"
+        );
+    }
+}

@@ -1,0 +1,372 @@
+//! The core's S2D decoder on hand-written artefacts: a tiny network whose output is computed by
+//! hand, and the validation of every section's shape and bounds.
+
+use sinew_core::s2d::S2dDecoder;
+use sinew_core::{ArtifactKind, BufferError, FormatError};
+use sinew_host::SinewWriter;
+
+/// Sections of the tiny decoder, each replaceable by a test.
+#[derive(Clone)]
+struct Tiny {
+    cfg: Vec<u32>,
+    nv: Vec<u32>,
+    input: Vec<u32>,
+    lmk: Vec<u32>,
+    neutral: Vec<f32>,
+    fc_w: Vec<f32>,
+    fc_b: Vec<f32>,
+    sp0: Vec<u32>,
+    up_ptr: Vec<u32>,
+    up_col: Vec<u32>,
+    up_val: Vec<f32>,
+    conv_w: Vec<f32>,
+    conv_b: Vec<f32>,
+    out_w: Vec<f32>,
+    out_b: Vec<f32>,
+}
+
+/// Two levels: 2 vertices (+ dummy) and 1 vertex (+ dummy); one landmark; F = 1; one stage of
+/// 1 filter; spirals of length 2 at level 0.
+fn tiny() -> Tiny {
+    Tiny {
+        cfg: vec![3, 1, 2, 3],
+        nv: vec![2, 1],
+        input: vec![1],
+        lmk: vec![1],
+        neutral: vec![1.0, 1.0, 1.0, 2.0, 2.0, 2.0],
+        // FC 3 → 2: [x0 + 0.5, x1 − 1].
+        fc_w: vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+        fc_b: vec![0.5, -1.0],
+        // Level 0 spirals: v0 = (0, 1), v1 = (1, 2), dummy = (2, 2).
+        sp0: vec![0, 1, 1, 2, 2, 2],
+        // U0 (3 × 2): row 0 = c0, row 1 = 0.5 c0 + 0.5 c1, row 2 (dummy) = c1.
+        up_ptr: vec![0, 1, 3, 4],
+        up_col: vec![0, 0, 1, 1],
+        up_val: vec![1.0, 0.5, 0.5, 1.0],
+        // Stage convolution at level 0, 1 → 1 over 2 positions: −2·h(s0) + 1·h(s1), ELU.
+        conv_w: vec![-2.0, 1.0],
+        conv_b: vec![0.0],
+        // Output convolution 1 → 3 over 2 positions: [h(s0), h(s1), h(s0) + h(s1) + 10].
+        out_w: vec![1.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+        out_b: vec![0.0, 0.0, 10.0],
+    }
+}
+
+impl Tiny {
+    fn bytes(&self) -> Vec<u8> {
+        // The writer refuses non-finite weights, so those are written as 0 and patched in after.
+        let mut patches = Vec::new();
+        let mut w = SinewWriter::new(ArtifactKind::S2dDecoder);
+        let mut f32s = |w: &mut SinewWriter, name: &str, dims: &[usize], v: &[f32]| {
+            for (i, x) in v.iter().enumerate().filter(|(_, x)| !x.is_finite()) {
+                patches.push((name.to_owned(), i, *x));
+            }
+            let finite: Vec<f32> = v
+                .iter()
+                .map(|x| if x.is_finite() { *x } else { 0.0 })
+                .collect();
+            w.f32s(name, dims, &finite).unwrap();
+        };
+        let n = |v: &[u32]| v.len();
+        w.u32s("s2d.cfg", &[n(&self.cfg)], &self.cfg).unwrap();
+        w.u32s("s2d.nv", &[n(&self.nv)], &self.nv).unwrap();
+        w.u32s("s2d.input", &[n(&self.input)], &self.input).unwrap();
+        w.u32s("s2d.lmk", &[n(&self.lmk)], &self.lmk).unwrap();
+        f32s(
+            &mut w,
+            "s2d.neutral",
+            &[self.neutral.len() / 3, 3],
+            &self.neutral,
+        );
+        f32s(
+            &mut w,
+            "s2d.fc.w",
+            &[self.fc_b.len(), self.fc_w.len() / self.fc_b.len()],
+            &self.fc_w,
+        );
+        f32s(&mut w, "s2d.fc.b", &[self.fc_b.len()], &self.fc_b);
+        w.u32s("s2d.sp.0", &[n(&self.sp0) / 2, 2], &self.sp0)
+            .unwrap();
+        w.u32s("s2d.up.0.ptr", &[n(&self.up_ptr)], &self.up_ptr)
+            .unwrap();
+        w.u32s("s2d.up.0.col", &[n(&self.up_col)], &self.up_col)
+            .unwrap();
+        f32s(&mut w, "s2d.up.0.val", &[self.up_val.len()], &self.up_val);
+        f32s(
+            &mut w,
+            "s2d.conv.0.w",
+            &[self.conv_b.len(), self.conv_w.len() / self.conv_b.len()],
+            &self.conv_w,
+        );
+        f32s(&mut w, "s2d.conv.0.b", &[self.conv_b.len()], &self.conv_b);
+        f32s(
+            &mut w,
+            "s2d.out.w",
+            &[self.out_b.len(), self.out_w.len() / self.out_b.len()],
+            &self.out_w,
+        );
+        f32s(&mut w, "s2d.out.b", &[self.out_b.len()], &self.out_b);
+        let mut bytes = w.to_bytes().unwrap();
+        for (name, i, x) in patches {
+            patch_f32(&mut bytes, &name, i, x);
+        }
+        bytes
+    }
+
+    fn load(&self) -> Result<(), FormatError> {
+        S2dDecoder::from_bytes(&self.bytes()).map(|_| ())
+    }
+}
+
+#[test]
+fn tiny_decoder_hand_computed() {
+    let bytes = tiny().bytes();
+    let dec = S2dDecoder::from_bytes(&bytes).unwrap();
+    assert_eq!(
+        (dec.input_len(), dec.vertex_count(), dec.fc_features()),
+        (3, 2, 1)
+    );
+    // FC on x = [1, 2, 3]: [1.5, 1.0] (the coarse dummy row keeps its value).
+    // U0: [1.5, 0.5·1.5 + 0.5·1.0 = 1.25, 1.0].
+    // Stage: v0 = −3 + 1.25 = −1.75, v1 = −2.5 + 1 = −1.5, dummy = −2 + 1 = −1 → ELU → zeroed.
+    // ELU(z) = 1 · expm1(z) for z ≤ 0, with libm's expm1f as the core evaluates it.
+    let elu = sinew_core::nn::Activation::Elu { alpha: 1.0 };
+    let (e1, e2) = (elu.apply(-1.75), elu.apply(-1.5));
+    assert!((e1 - (-1.75f32).exp_m1()).abs() < 1e-6);
+    // Output: v0 over (0, 1) = [e1, e2, (e1 + e2) + 10]; v1 over (1, dummy) = [e2, 0, e2 + 10].
+    let expected = [e1, e2, (e1 + e2) + 10.0, e2, 0.0, e2 + 10.0];
+    // Scratch: two buffers of the largest map, 3 rows × 3 outputs.
+    assert_eq!(dec.scratch_len(), 18);
+    let mut scratch = vec![f32::NAN; dec.scratch_len()];
+    let mut out = [f32::NAN; 6];
+    dec.displacements(&[1.0, 2.0, 3.0], &mut scratch, &mut out)
+        .unwrap();
+    assert_eq!(out, expected);
+    dec.decode(&[1.0, 2.0, 3.0], &mut scratch, &mut out)
+        .unwrap();
+    let neutral = [1.0, 1.0, 1.0, 2.0, 2.0, 2.0];
+    for i in 0..6 {
+        assert_eq!(out[i], expected[i] + neutral[i]);
+    }
+    dec.decode_onto(&[0.0; 6], &[1.0, 2.0, 3.0], &mut scratch, &mut out)
+        .unwrap();
+    assert_eq!(out, expected);
+
+    assert_eq!(
+        dec.decode(&[1.0, 2.0], &mut scratch, &mut out),
+        Err(BufferError::Input)
+    );
+    assert_eq!(
+        dec.decode(&[1.0, 2.0, 3.0], &mut scratch, &mut out[..5]),
+        Err(BufferError::Output)
+    );
+    assert_eq!(
+        dec.decode(&[1.0, 2.0, 3.0], &mut scratch[..17], &mut out),
+        Err(BufferError::Scratch)
+    );
+    assert_eq!(
+        dec.decode_onto(&[0.0; 3], &[1.0, 2.0, 3.0], &mut scratch, &mut out),
+        Err(BufferError::Input)
+    );
+}
+
+/// A change to the tiny decoder's sections.
+type Edit = Box<dyn Fn(&mut Tiny)>;
+
+#[test]
+fn every_shape_and_bound_is_validated() {
+    assert_eq!(tiny().load(), Ok(()));
+    let cases: Vec<(&str, Edit, FormatError)> = vec![
+        (
+            "four outputs",
+            Box::new(|t| t.cfg[3] = 4),
+            FormatError::IncompatibleShapes,
+        ),
+        (
+            "inputs not whole landmarks",
+            Box::new(|t| t.cfg[0] = 4),
+            FormatError::IncompatibleShapes,
+        ),
+        (
+            "too many levels",
+            Box::new(|t| t.cfg[2] = 9),
+            FormatError::LimitExceeded,
+        ),
+        (
+            "level count differs from nv",
+            Box::new(|t| t.cfg[2] = 3),
+            FormatError::IncompatibleShapes,
+        ),
+        (
+            "empty level",
+            Box::new(|t| t.nv[1] = 0),
+            FormatError::IncompatibleShapes,
+        ),
+        (
+            "unknown input normalisation",
+            Box::new(|t| t.input[0] = 2),
+            FormatError::UnknownCode,
+        ),
+        (
+            "landmark outside the mesh",
+            Box::new(|t| t.lmk[0] = 2),
+            FormatError::IndexOutOfRange,
+        ),
+        (
+            "non-finite neutral",
+            Box::new(|t| t.neutral[4] = f32::NAN),
+            FormatError::NonFinite,
+        ),
+        (
+            "non-finite FC weight",
+            Box::new(|t| t.fc_w[1] = f32::INFINITY),
+            FormatError::NonFinite,
+        ),
+        (
+            "FC of the wrong width",
+            Box::new(|t| {
+                t.fc_w.extend([0.0; 3]);
+                t.fc_b.push(0.0);
+            }),
+            FormatError::IncompatibleShapes,
+        ),
+        (
+            "spiral past the dummy",
+            Box::new(|t| t.sp0[1] = 3),
+            FormatError::IndexOutOfRange,
+        ),
+        (
+            "spirals of the wrong count",
+            Box::new(|t| t.sp0.truncate(4)),
+            FormatError::IncompatibleShapes,
+        ),
+        (
+            "CSR column past the coarse dummy",
+            Box::new(|t| t.up_col[3] = 2),
+            FormatError::IndexOutOfRange,
+        ),
+        (
+            "CSR row pointers decrease",
+            Box::new(|t| t.up_ptr[1] = 4),
+            FormatError::IndexOutOfRange,
+        ),
+        (
+            "CSR row pointers end early",
+            Box::new(|t| t.up_ptr[3] = 3),
+            FormatError::IndexOutOfRange,
+        ),
+        (
+            "CSR with a row too few",
+            Box::new(|t| t.up_ptr.truncate(3)),
+            FormatError::IncompatibleShapes,
+        ),
+        (
+            "CSR values and columns differ",
+            Box::new(|t| t.up_val.push(1.0)),
+            FormatError::IncompatibleShapes,
+        ),
+        (
+            "non-finite CSR value",
+            Box::new(|t| t.up_val[0] = f32::NAN),
+            FormatError::NonFinite,
+        ),
+        (
+            "stage convolution reads the wrong width",
+            Box::new(|t| {
+                t.conv_w = vec![1.0; 4];
+            }),
+            FormatError::IncompatibleShapes,
+        ),
+        (
+            "output convolution does not chain",
+            Box::new(|t| {
+                t.conv_w = vec![1.0; 4];
+                t.conv_b = vec![0.0; 2];
+            }),
+            FormatError::IncompatibleShapes,
+        ),
+        (
+            "non-finite output bias",
+            Box::new(|t| t.out_b[2] = f32::NEG_INFINITY),
+            FormatError::NonFinite,
+        ),
+    ];
+    for (what, edit, expected) in cases {
+        let mut t = tiny();
+        edit(&mut t);
+        assert_eq!(t.load(), Err(expected), "{what}");
+    }
+}
+
+#[test]
+fn missing_sections_and_wrong_kind() {
+    let bytes = tiny().bytes();
+    let file = sinew_core::SinewFile::from_bytes(&bytes).unwrap();
+    for skip in 0..file.section_count() {
+        let mut w = SinewWriter::new(ArtifactKind::S2dDecoder);
+        for (i, s) in file.sections().enumerate() {
+            if i == skip {
+                continue;
+            }
+            let dims: Vec<usize> = s.dims().iter().map(|&d| d as usize).collect();
+            if let Some(v) = s.f32s() {
+                w.f32s(s.name(), &dims, &v.iter().collect::<Vec<_>>())
+                    .unwrap();
+            } else {
+                let v = s.u32s().expect("every tiny section is f32 or u32");
+                w.u32s(s.name(), &dims, &v.iter().collect::<Vec<_>>())
+                    .unwrap();
+            }
+        }
+        let name = file.section_at(skip).unwrap().name().to_owned();
+        assert_eq!(
+            S2dDecoder::from_bytes(&w.to_bytes().unwrap()).map(|_| ()),
+            Err(FormatError::MissingSection),
+            "without {name}"
+        );
+    }
+    // The typed loader refuses another artefact kind; `from_file` reads any container.
+    let mut other = bytes.clone();
+    other[16] = ArtifactKind::Network.code() as u8;
+    let count = sinew_core::SinewFile::from_bytes(&bytes)
+        .unwrap()
+        .section_count();
+    fix_header_crc(&mut other, count);
+    let crc_fixed = other;
+    assert_eq!(
+        S2dDecoder::from_bytes(&crc_fixed).map(|_| ()),
+        Err(FormatError::WrongKind)
+    );
+    let file = sinew_core::SinewFile::from_bytes(&crc_fixed).unwrap();
+    assert!(S2dDecoder::from_file(file).is_ok());
+}
+
+/// Overwrites value `i` of the f32 section `name` and recomputes the section and header CRCs,
+/// as a writer that did not check finiteness would have.
+fn patch_f32(bytes: &mut [u8], name: &str, i: usize, x: f32) {
+    use sinew_core::format::{CRC32, HEADER_LEN, SECTION_ENTRY_LEN};
+    let (index, offset, len, count) = {
+        let file = sinew_core::SinewFile::from_bytes(bytes).unwrap();
+        let index = file.sections().position(|s| s.name() == name).unwrap();
+        let s = file.section_at(index).unwrap();
+        let offset = s.data().as_ptr() as usize - bytes.as_ptr() as usize;
+        (index, offset, s.data().len(), file.section_count())
+    };
+    bytes[offset + 4 * i..offset + 4 * i + 4].copy_from_slice(&x.to_le_bytes());
+    let crc = CRC32.checksum(&bytes[offset..offset + len]);
+    let entry = HEADER_LEN + index * SECTION_ENTRY_LEN;
+    bytes[entry + SECTION_ENTRY_LEN - 4..entry + SECTION_ENTRY_LEN]
+        .copy_from_slice(&crc.to_le_bytes());
+    fix_header_crc(bytes, count);
+}
+
+/// Recomputes the header CRC (over header bytes 0..28 and the section table).
+fn fix_header_crc(bytes: &mut [u8], sections: usize) {
+    use sinew_core::format::{CRC32, HEADER_CRC_OFFSET, HEADER_LEN, SECTION_ENTRY_LEN};
+    let table_end = HEADER_LEN + sections * SECTION_ENTRY_LEN;
+    let mut digest = CRC32.digest();
+    digest.update(&bytes[..HEADER_CRC_OFFSET]);
+    digest.update(&bytes[HEADER_LEN..table_end]);
+    let crc = digest.finalize();
+    bytes[HEADER_CRC_OFFSET..HEADER_CRC_OFFSET + 4].copy_from_slice(&crc.to_le_bytes());
+}
