@@ -10,6 +10,7 @@ use sinew_host::aim::config::Schedule;
 use sinew_host::aim::run::Outputs;
 use sinew_host::backend::Backend;
 use sinew_host::commands;
+use sinew_host::s2d::data::PairsConfig;
 use sinew_host::s2d::hierarchy::{Config, DEFAULT_FACTORS};
 
 /// Sinew: learn an actor's face from meshes, and play it back anywhere, bit for bit.
@@ -92,6 +93,36 @@ enum Command {
     /// S2D: sparse-to-dense expression decoding.
     #[command(subcommand)]
     S2d(S2d),
+    /// Generate data sets.
+    #[command(subcommand)]
+    Data(Data),
+}
+
+#[derive(Debug, Subcommand)]
+enum Data {
+    /// S2D training pairs (neutral, expressive) on the ICT-FaceKit face region: random
+    /// identities (N(0, 1) weights of the identity modes) and sparse combinations of expression
+    /// shapes; writes pairs.sinew and manifest.json into the output folder.
+    S2dPairs {
+        /// ICT-FaceKit folder.
+        #[arg(long)]
+        data: PathBuf,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Seed (default 1; SINEW_SEED overrides the default, --seed overrides both).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Number of identities.
+        #[arg(long, default_value_t = PairsConfig::default().identities)]
+        identities: usize,
+        /// Number of pairs.
+        #[arg(long, default_value_t = PairsConfig::default().pairs)]
+        pairs: usize,
+        /// Most expression shapes combined in one pair.
+        #[arg(long, default_value_t = PairsConfig::default().max_shapes)]
+        max_shapes: usize,
+    },
 }
 
 #[derive(Debug, Subcommand)]
@@ -438,6 +469,36 @@ fn run(cli: Cli) -> Result<()> {
             println!(
                 "{}: vertices per level {sizes:?}, spiral lengths {lens:?}",
                 out.display()
+            );
+        }
+        Command::Data(Data::S2dPairs {
+            data,
+            out,
+            seed,
+            identities,
+            pairs,
+            max_shapes,
+        }) => {
+            let seed = seed
+                .or_else(|| std::env::var("SINEW_SEED").ok()?.parse().ok())
+                .unwrap_or(PairsConfig::default().seed);
+            let config = PairsConfig {
+                seed,
+                identities,
+                pairs,
+                max_shapes,
+            };
+            config.validate()?;
+            eprintln!("seed {seed} (override with --seed or SINEW_SEED)");
+            let set = sinew_host::s2d::data::generate_to(&data, &out, &config)?;
+            println!(
+                "{}: {} pairs of {} identities over {} expression shapes in {} groups, {} vertices",
+                out.display(),
+                set.len(),
+                set.neutrals.len(),
+                set.deltas.len(),
+                set.manifest.shape_groups.len(),
+                set.vertices()
             );
         }
         Command::Edit(Edit::Thickness {
