@@ -53,6 +53,7 @@ pub mod bake;
 pub mod data;
 pub mod decoder;
 pub mod hierarchy;
+pub mod protocol;
 pub mod spirals;
 pub mod synthetic;
 pub mod train;
