@@ -50,6 +50,7 @@ pub struct Hierarchy {
 }
 
 pub mod bake;
+pub mod baseline;
 pub mod data;
 pub mod decoder;
 pub mod hierarchy;
