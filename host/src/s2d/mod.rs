@@ -53,6 +53,7 @@ pub mod bake;
 pub mod baseline;
 pub mod data;
 pub mod decoder;
+pub mod experiment;
 pub mod hierarchy;
 pub mod protocol;
 pub mod spirals;
