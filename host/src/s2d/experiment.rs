@@ -67,7 +67,7 @@ pub struct ErrorStats {
     pub mean_error_mm: f64,
     /// Standard deviation of the per-vertex error (mm).
     pub std_error_mm: f64,
-    /// Components used (PCA baselines only).
+    /// Components used (PCA baselines only; in a pooled entry, only when all folds agree).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub components: Option<usize>,
 }
@@ -319,8 +319,14 @@ fn finish(
 ) -> Result<Report> {
     let (train, objective) = trained.unzip();
     let [s2d, p99, pmax] = &errors;
+    // The pooled entry names a component count only when every fold used the same one.
     let k = |f: fn(&Baselines) -> &ErrorStats| {
-        per_fold.first().and_then(|r| f(&r.baselines).components)
+        let first = per_fold.first().and_then(|r| f(&r.baselines).components);
+        per_fold
+            .iter()
+            .all(|r| f(&r.baselines).components == first)
+            .then_some(first)
+            .flatten()
     };
     let plot = plot_path(report);
     let title = format!("S2D vs PCA baselines: cumulative per-vertex error, {protocol} split");
