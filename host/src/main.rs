@@ -10,7 +10,11 @@ use sinew_host::aim::config::Schedule;
 use sinew_host::aim::run::Outputs;
 use sinew_host::backend::Backend;
 use sinew_host::commands;
+use sinew_host::s2d::data::PairsConfig;
+use sinew_host::s2d::experiment::{self, DEFAULT_EPOCHS, Objective, TrainS2d};
 use sinew_host::s2d::hierarchy::{Config, DEFAULT_FACTORS};
+use sinew_host::s2d::protocol::{FOLDS, Protocol};
+use sinew_host::s2d::train::TrainConfig;
 
 /// Sinew: learn an actor's face from meshes, and play it back anywhere, bit for bit.
 #[derive(Debug, Parser)]
@@ -92,6 +96,36 @@ enum Command {
     /// S2D: sparse-to-dense expression decoding.
     #[command(subcommand)]
     S2d(S2d),
+    /// Generate data sets.
+    #[command(subcommand)]
+    Data(Data),
+}
+
+#[derive(Debug, Subcommand)]
+enum Data {
+    /// S2D training pairs (neutral, expressive) on the ICT-FaceKit face region: random
+    /// identities (N(0, 1) weights of the identity modes) and sparse combinations of expression
+    /// shapes; writes pairs.sinew and manifest.json into the output folder.
+    S2dPairs {
+        /// ICT-FaceKit folder.
+        #[arg(long)]
+        data: PathBuf,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Seed (default 1; SINEW_SEED overrides the default, --seed overrides both).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Number of identities.
+        #[arg(long, default_value_t = PairsConfig::default().identities)]
+        identities: usize,
+        /// Number of pairs.
+        #[arg(long, default_value_t = PairsConfig::default().pairs)]
+        pairs: usize,
+        /// Most expression shapes combined in one pair.
+        #[arg(long, default_value_t = PairsConfig::default().max_shapes)]
+        max_shapes: usize,
+    },
 }
 
 #[derive(Debug, Subcommand)]
@@ -204,6 +238,48 @@ enum Bones {
 enum Train {
     /// Learn an AIM actor from ICT-FaceKit blendshapes.
     Aim(TrainAim),
+    /// Train S2D-Dec on pairs from `sinew data s2d-pairs` under a cross-validation protocol,
+    /// bake each fold's model, and compare it with the PCA baselines on the held-out pairs
+    /// (report JSON, and a cumulative-error PNG beside it).
+    S2d(TrainS2dArgs),
+}
+
+#[derive(Debug, Args)]
+struct TrainS2dArgs {
+    /// Pairs folder (from `sinew data s2d-pairs`).
+    #[arg(long)]
+    pairs: PathBuf,
+    /// Protocol: identity- or expression-independent.
+    #[arg(long, value_enum)]
+    protocol: Protocol,
+    /// Output baked model of fold 0 (.sinew); fold k goes to MODEL.fold<k>.sinew.
+    #[arg(long)]
+    out: PathBuf,
+    /// Output JSON report; the plot goes beside it (REPORT.png).
+    #[arg(long)]
+    report: PathBuf,
+    /// Epochs (the learning rate decays by 0.99^(300/epochs) per epoch).
+    #[arg(long)]
+    epochs: Option<usize>,
+    /// Folds to run, of 4.
+    #[arg(long)]
+    folds: Option<usize>,
+    /// The paper's schedule: 300 epochs on all 4 folds (unless --epochs/--folds say otherwise).
+    #[arg(long)]
+    paper_protocol: bool,
+    /// Objective: the authors' code, the paper's text, or Table 2's ablations (dr: L_dr alone;
+    /// dr-unweighted: L_dr + unweighted L_pr).
+    #[arg(long, value_enum, default_value_t = Objective::Code)]
+    loss: Objective,
+    /// Seed of the weights and the shuffling (SINEW_SEED overrides the default).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// burn backend.
+    #[arg(long, value_enum, default_value_t = Backend::Flex)]
+    backend: Backend,
+    /// Say nothing while training.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Debug, Args)]
@@ -259,6 +335,19 @@ struct TrainAim {
 
 #[derive(Debug, Subcommand)]
 enum Eval {
+    /// Evaluate a model from `sinew train s2d` (through sinew-core) and the PCA baselines on the
+    /// held-out pairs of the fold it was trained for.
+    S2d {
+        /// The baked S2D model.
+        #[arg(long)]
+        model: PathBuf,
+        /// Pairs folder (the one it was trained on).
+        #[arg(long)]
+        pairs: PathBuf,
+        /// Output JSON report; the plot goes beside it (REPORT.png).
+        #[arg(long)]
+        report: PathBuf,
+    },
     /// Per-vertex error of a baked AIM actor on its ICT-FaceKit training shapes.
     Aim {
         /// The baked actor.
@@ -371,6 +460,53 @@ fn run(cli: Cli) -> Result<()> {
                 report.shapes,
                 report.seconds
             );
+        }
+        Command::Train(Train::S2d(args)) => {
+            let mut train = TrainConfig {
+                epochs: if args.paper_protocol {
+                    TrainConfig::default().epochs
+                } else {
+                    DEFAULT_EPOCHS
+                },
+                ..TrainConfig::default()
+            };
+            if let Some(e) = args.epochs {
+                train.epochs = e;
+            }
+            if let Some(s) = std::env::var("SINEW_SEED")
+                .ok()
+                .and_then(|s| s.parse().ok())
+            {
+                train.seed = s;
+            }
+            if let Some(s) = args.seed {
+                train.seed = s;
+            }
+            anyhow::ensure!(train.epochs > 0, "--epochs must be positive");
+            let folds = args
+                .folds
+                .unwrap_or(if args.paper_protocol { FOLDS } else { 1 });
+            eprintln!("seed {} (override with --seed or SINEW_SEED)", train.seed);
+            let job = TrainS2d {
+                pairs: args.pairs,
+                protocol: args.protocol,
+                folds,
+                train,
+                objective: args.loss,
+                out: args.out,
+                report: args.report.clone(),
+                backend: args.backend,
+            };
+            let r = experiment::train_s2d(&job, args.quiet)?;
+            print_s2d(&r, &args.report);
+        }
+        Command::Eval(Eval::S2d {
+            model,
+            pairs,
+            report,
+        }) => {
+            let r = experiment::eval_s2d(&model, &pairs, &report)?;
+            print_s2d(&r, &report);
         }
         Command::Eval(Eval::Aim {
             model,
@@ -494,6 +630,36 @@ fn run(cli: Cli) -> Result<()> {
                 sinew_host::s2d::apply::transfer(&model, &source_neutral, &frames, &target, &out)?;
             println!("{n} frames written to {}", out.display());
         }
+        Command::Data(Data::S2dPairs {
+            data,
+            out,
+            seed,
+            identities,
+            pairs,
+            max_shapes,
+        }) => {
+            let seed = seed
+                .or_else(|| std::env::var("SINEW_SEED").ok()?.parse().ok())
+                .unwrap_or(PairsConfig::default().seed);
+            let config = PairsConfig {
+                seed,
+                identities,
+                pairs,
+                max_shapes,
+            };
+            config.validate()?;
+            eprintln!("seed {seed} (override with --seed or SINEW_SEED)");
+            let set = sinew_host::s2d::data::generate_to(&data, &out, &config)?;
+            println!(
+                "{}: {} pairs of {} identities over {} expression shapes in {} groups, {} vertices",
+                out.display(),
+                set.len(),
+                set.neutrals.len(),
+                set.deltas.len(),
+                set.manifest.shape_groups.len(),
+                set.vertices()
+            );
+        }
         Command::Edit(Edit::Thickness {
             model,
             mask,
@@ -506,6 +672,26 @@ fn run(cli: Cli) -> Result<()> {
         }
     }
     Ok(())
+}
+
+fn print_s2d(r: &experiment::Report, report: &std::path::Path) {
+    println!(
+        "{}: {} split, {} fold(s), {} test pairs: S2D {:.3} ± {:.3} mm, pca99 ({} comp.) {:.3} ± \
+         {:.3} mm, pca_max ({} comp.) {:.3} ± {:.3} mm; plot {}",
+        report.display(),
+        r.protocol,
+        r.folds,
+        r.test_pairs,
+        r.mean_error_mm,
+        r.std_error_mm,
+        r.baselines.pca99.components.unwrap_or(0),
+        r.baselines.pca99.mean_error_mm,
+        r.baselines.pca99.std_error_mm,
+        r.baselines.pca_max.components.unwrap_or(0),
+        r.baselines.pca_max.mean_error_mm,
+        r.baselines.pca_max.std_error_mm,
+        r.plot.display()
+    );
 }
 
 fn main() -> ExitCode {

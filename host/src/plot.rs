@@ -35,6 +35,20 @@ pub fn loss_curves(
     width: u32,
     height: u32,
 ) -> Image {
+    let y_caption = if log_y { "loss (log scale)" } else { "loss" };
+    line_plot(series, title, "iteration", y_caption, log_y, width, height)
+}
+
+/// [`loss_curves`] with other axis captions (e.g. a cumulative error distribution).
+pub fn line_plot(
+    series: &[(&str, &[(f64, f64)])],
+    title: &str,
+    x_caption: &str,
+    y_caption: &str,
+    log_y: bool,
+    width: u32,
+    height: u32,
+) -> Image {
     let mut img = Image::new(width, height, WHITE);
     let fr = layout(series, title, log_y, width, height);
     let s = fr.scale;
@@ -107,7 +121,7 @@ pub fn loss_curves(
         let y = fr.px(fr.x_lo, v).1.round() as i64;
         img.fill_rect(l - tick / 2, y, tick / 2, 1, INK);
     }
-    let xc = "iteration";
+    let xc = x_caption;
     let xw = i64::from(text_width(xc, s));
     img.text(
         (l + r - xw) / 2,
@@ -116,7 +130,7 @@ pub fn loss_curves(
         INK,
         s,
     );
-    let yc = if log_y { "loss (log scale)" } else { "loss" };
+    let yc = y_caption;
     img.text(fr.pad, t - lh - i64::from(s), yc, INK, s);
 
     draw_legend(&mut img, series, &fr);

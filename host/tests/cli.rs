@@ -312,3 +312,106 @@ fn s2d_hierarchy_writes_a_file_and_names_bad_templates() {
     // The earlier output is untouched.
     assert_eq!(std::fs::read(&out).unwrap(), bytes);
 }
+
+#[test]
+fn s2d_pairs_train_and_eval_end_to_end() {
+    let Some(root) = sinew_host::testing::data_dir() else {
+        return;
+    };
+    let kit = root.join("ict-facekit");
+    let dir = tempfile::tempdir().unwrap();
+    let pairs = dir.path().join("pairs");
+    let said = ok(&[
+        "data",
+        "s2d-pairs",
+        "--data",
+        s(&kit),
+        "--out",
+        s(&pairs),
+        "--seed",
+        "5",
+        "--identities",
+        "4",
+        "--pairs",
+        "24",
+    ]);
+    assert!(said.contains("24 pairs of 4 identities"), "{said}");
+    let model = dir.path().join("m.sinew");
+    let report = dir.path().join("r.json");
+    let said = ok(&[
+        "train",
+        "s2d",
+        "--pairs",
+        s(&pairs),
+        "--protocol",
+        "identity",
+        "--out",
+        s(&model),
+        "--report",
+        s(&report),
+        "--epochs",
+        "1",
+        "--quiet",
+    ]);
+    assert!(said.contains("identity split, 1 fold(s)"), "{said}");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(r["protocol"], "identity");
+    assert_eq!(r["folds"], 1);
+    // Identity fold 0 holds out identity 0 of 4: its 6 pairs.
+    assert_eq!(r["test_pairs"], 6);
+    for v in [
+        &r["mean_error_mm"],
+        &r["std_error_mm"],
+        &r["baselines"]["pca99"]["mean_error_mm"],
+        &r["baselines"]["pca_max"]["std_error_mm"],
+    ] {
+        assert!(v.as_f64().unwrap() >= 0.0, "{r}");
+    }
+    assert!(r["mean_error_mm"].as_f64().unwrap() > 0.0);
+    let png = std::fs::read(dir.path().join("r.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+
+    // eval reads the protocol and fold from the model and reproduces the S2D error.
+    let report2 = dir.path().join("e.json");
+    ok(&[
+        "eval",
+        "s2d",
+        "--model",
+        s(&model),
+        "--pairs",
+        s(&pairs),
+        "--report",
+        s(&report2),
+    ]);
+    let e: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report2).unwrap()).unwrap();
+    assert_eq!(e["mean_error_mm"], r["mean_error_mm"]);
+    assert_eq!(e["baselines"], r["baselines"]);
+
+    // Bad input names the file.
+    let e = err(&[
+        "eval",
+        "s2d",
+        "--model",
+        s(&pairs.join("pairs.sinew")),
+        "--pairs",
+        s(&pairs),
+        "--report",
+        s(&report2),
+    ]);
+    assert!(e.contains("pairs.sinew") && e.contains("protocol"), "{e}");
+    let e = err(&[
+        "train",
+        "s2d",
+        "--pairs",
+        s(&dir.path().join("nowhere")),
+        "--protocol",
+        "expression",
+        "--out",
+        s(&model),
+        "--report",
+        s(&report),
+    ]);
+    assert!(e.contains("nowhere") && e.contains("manifest.json"), "{e}");
+}

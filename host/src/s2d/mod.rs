@@ -51,8 +51,12 @@ pub struct Hierarchy {
 
 pub mod apply;
 pub mod bake;
+pub mod baseline;
+pub mod data;
 pub mod decoder;
+pub mod experiment;
 pub mod hierarchy;
+pub mod protocol;
 pub mod spirals;
 pub mod synthetic;
 pub mod train;

@@ -1,0 +1,783 @@
+//! S2D training pairs from ICT-FaceKit (the paper's §4 set-up, with ICT's linear identity and
+//! expression models standing in for CoMA's captured subjects).
+//!
+//! A pair is (neutral, expressive) on the face region ([`FACE_REGION`]): the neutral is the generic
+//! neutral plus Σ_m w_m · identity_m with w_m ~ N(0, 1) over all identity modes; the expressive
+//! face is the neutral plus a sparse combination Σ_j c_j · expression_j of 1 to
+//! [`PairsConfig::max_shapes`] expression deltas with c_j uniform in (0, 1]. The landmarks are the
+//! 68 iBUG vertices of the kit.
+//!
+//! The expression shapes are partitioned (seeded) into [`SHAPE_GROUPS`] groups, and every pair
+//! combines shapes of one group only, so that the expression-independent protocol can hold out a
+//! group and still test on every pair of it (a pair mixing held-out and seen shapes would belong
+//! to neither side). Pairs cycle through identities and groups, so every (identity, group) cell
+//! holds the same number of pairs, ±1.
+//!
+//! On disk a data set is a folder with `pairs.sinew` (the numbers: identities' neutrals,
+//! expression deltas and each pair's weights, as f32 sections; FORMAT.md, "S2D training pairs")
+//! and `manifest.json` (the same combinations by name, for people and for the protocols). A
+//! pair's dense displacement is not stored: it is Σ_j c_j · expression_j, recomputed in a fixed
+//! order on load, which keeps a thousand pairs in a few megabytes.
+
+use std::path::Path;
+
+use anyhow::{Context, Result, bail, ensure};
+use rand_core::RngCore;
+use serde::{Deserialize, Serialize};
+use sinew_core::{ArtifactKind, SinewFile};
+
+use super::train::{Sample, landmark_input};
+use crate::container::SinewWriter;
+use crate::ict::{FACE_REGION, IctFaceKit};
+use crate::mesh::Mesh;
+
+/// Number of expression-shape groups (the expression protocol's folds).
+pub const SHAPE_GROUPS: usize = 4;
+/// The numbers of a data set, inside its folder.
+pub const DATA_FILE: &str = "pairs.sinew";
+/// The manifest of a data set, inside its folder.
+pub const MANIFEST_FILE: &str = "manifest.json";
+/// `format` field of the manifest.
+pub const MANIFEST_FORMAT: &str = "sinew-s2d-pairs";
+/// Version of the manifest and of the `pairs.` sections.
+pub const MANIFEST_VERSION: u32 = 1;
+
+/// What to generate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PairsConfig {
+    /// Seed of every random choice.
+    pub seed: u64,
+    /// Number of identities (random neutrals).
+    pub identities: usize,
+    /// Number of pairs.
+    pub pairs: usize,
+    /// Most expression shapes combined in one pair (each pair takes 1 to this many).
+    pub max_shapes: usize,
+}
+
+impl Default for PairsConfig {
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            // CoMA has 12 subjects; the paper's identity protocol holds out 3 per fold.
+            identities: 12,
+            pairs: 1200,
+            max_shapes: 3,
+        }
+    }
+}
+
+impl PairsConfig {
+    /// Checks the counts.
+    pub fn validate(&self) -> Result<()> {
+        ensure!(
+            self.identities >= 2,
+            "at least 2 identities are needed (one to train, one to test)"
+        );
+        ensure!(self.pairs >= 1, "at least one pair is needed");
+        ensure!(self.max_shapes >= 1, "max_shapes must be at least 1");
+        Ok(())
+    }
+}
+
+/// One shape of a pair's expression.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Component {
+    /// The expression's name (an ICT-FaceKit blendshape).
+    pub shape: String,
+    /// Its weight, in (0, 1].
+    pub weight: f32,
+}
+
+/// One pair: which identity, and which expression combination.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairSpec {
+    /// Index into [`Manifest::identities`].
+    pub identity: usize,
+    /// The shape group all of its shapes belong to.
+    pub group: usize,
+    /// The combination, in the order the shapes were drawn.
+    pub shapes: Vec<Component>,
+}
+
+/// `manifest.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    /// [`MANIFEST_FORMAT`].
+    pub format: String,
+    /// [`MANIFEST_VERSION`].
+    pub version: u32,
+    /// The generation settings.
+    pub config: PairsConfig,
+    /// Length unit of every coordinate (`cm` for ICT).
+    pub units: String,
+    /// Provenance with licence and attribution.
+    pub source: String,
+    /// Vertices of the face region.
+    pub vertices: usize,
+    /// The 68 landmark vertices (iBUG order), indices into the face region.
+    pub landmarks: Vec<u32>,
+    /// Every expression shape, in the order of the `pairs.delta` section.
+    pub expressions: Vec<String>,
+    /// The shape groups, by name; together they hold every expression exactly once.
+    pub shape_groups: Vec<Vec<String>>,
+    /// Each identity's weights, one per identity mode (in standard deviations).
+    pub identities: Vec<Vec<f32>>,
+    /// The pairs.
+    pub pairs: Vec<PairSpec>,
+}
+
+/// A data set in memory.
+#[derive(Clone, Debug)]
+pub struct PairSet {
+    /// The manifest.
+    pub manifest: Manifest,
+    /// The generic neutral's face region, triangulated (the template of the hierarchy).
+    pub template: Mesh,
+    /// Each identity's neutral face region, `[identities][vertices]`.
+    pub neutrals: Vec<Vec<[f32; 3]>>,
+    /// Each expression's delta on the face region, `[expressions][vertices]`.
+    pub deltas: Vec<Vec<[f32; 3]>>,
+    /// Each pair's combination as (expression index, weight), in the manifest's order.
+    pub combinations: Vec<Vec<(usize, f32)>>,
+}
+
+/// A PCG-64 stream for generation (the same generator the trainer shuffles with).
+struct Rng(rand_pcg::Pcg64);
+
+impl Rng {
+    fn new(seed: u64) -> Self {
+        Self(rand_pcg::Pcg64::new(
+            u128::from(seed) << 64 | 0x5d2d_da7a,
+            0x00a0_2bdb_0000_0000_0000_0000_0000_0001,
+        ))
+    }
+
+    /// Uniform in [0, 1) with 53 random bits.
+    fn uniform(&mut self) -> f64 {
+        (self.0.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Uniform integer in 0..n (n > 0), by multiply-shift.
+    fn below(&mut self, n: usize) -> usize {
+        ((u128::from(self.0.next_u64()) * n as u128) >> 64) as usize
+    }
+
+    /// Standard normal by Box–Muller (one value per call; the second is dropped so that the
+    /// stream position does not depend on call parity).
+    fn normal(&mut self) -> f64 {
+        let u1 = 1.0 - self.uniform(); // (0, 1]: ln is finite
+        let u2 = self.uniform();
+        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    }
+
+    fn shuffle<T>(&mut self, v: &mut [T]) {
+        for i in (1..v.len()).rev() {
+            let j = self.below(i + 1);
+            v.swap(i, j);
+        }
+    }
+}
+
+/// Draws the identities, shape groups and pair combinations of `config` over `expressions`
+/// (names, sorted) and `modes` identity modes. Pure: the same inputs give the same manifest.
+fn draw(
+    config: &PairsConfig,
+    expressions: &[String],
+    modes: usize,
+) -> (Vec<Vec<f32>>, Vec<Vec<usize>>, Vec<PairSpec>) {
+    let mut rng = Rng::new(config.seed);
+    let identities: Vec<Vec<f32>> = (0..config.identities)
+        .map(|_| (0..modes).map(|_| rng.normal() as f32).collect())
+        .collect();
+    let mut order: Vec<usize> = (0..expressions.len()).collect();
+    rng.shuffle(&mut order);
+    let groups: Vec<Vec<usize>> = (0..SHAPE_GROUPS)
+        .map(|g| {
+            // Contiguous near-equal chunks of the shuffled order; larger chunks first.
+            let n = expressions.len();
+            let (lo, hi) = (g * n / SHAPE_GROUPS, (g + 1) * n / SHAPE_GROUPS);
+            let mut group = order[lo..hi].to_vec();
+            group.sort_unstable();
+            group
+        })
+        .collect();
+    let pairs = (0..config.pairs)
+        .map(|p| {
+            let identity = p % config.identities;
+            let group = (p / config.identities) % SHAPE_GROUPS;
+            let members = &groups[group];
+            let k = 1 + rng.below(config.max_shapes.min(members.len()));
+            let mut pool = members.clone();
+            let mut shapes = Vec::with_capacity(k);
+            for _ in 0..k {
+                let e = pool.remove(rng.below(pool.len()));
+                // (0, 1]: a zero weight would make the shape's presence a fiction.
+                let weight = (1.0 - rng.uniform()) as f32;
+                shapes.push(Component {
+                    shape: expressions[e].clone(),
+                    weight,
+                });
+            }
+            PairSpec {
+                identity,
+                group,
+                shapes,
+            }
+        })
+        .collect();
+    (identities, groups, pairs)
+}
+
+/// Reads `read(i)` for every `i < n` on up to `threads` threads; results in index order.
+fn read_all(
+    n: usize,
+    threads: usize,
+    read: impl Fn(usize) -> Result<Vec<[f32; 3]>> + Sync,
+) -> Result<Vec<Vec<[f32; 3]>>> {
+    let mut slots: Vec<Option<Result<Vec<[f32; 3]>>>> = Vec::new();
+    slots.resize_with(n, || None);
+    let per = n.div_ceil(threads.max(1)).max(1);
+    std::thread::scope(|s| {
+        for (c, chunk) in slots.chunks_mut(per).enumerate() {
+            let read = &read;
+            s.spawn(move || {
+                for (k, slot) in chunk.iter_mut().enumerate() {
+                    *slot = Some(read(c * per + k));
+                }
+            });
+        }
+    });
+    slots
+        .into_iter()
+        .map(|s| s.unwrap_or_else(|| Err(anyhow::anyhow!("a reader thread did not finish"))))
+        .collect()
+}
+
+/// Generates a data set from the ICT-FaceKit in `kit`.
+pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet> {
+    config.validate()?;
+    let expressions = kit.expression_names();
+    ensure!(
+        expressions.len() >= SHAPE_GROUPS,
+        "{}: {} expressions, at least {SHAPE_GROUPS} needed",
+        kit.dir().display(),
+        expressions.len()
+    );
+    let modes = kit.identity_count();
+    let (identities, groups, pairs) = draw(config, &expressions, modes);
+    let region = FACE_REGION.start as usize..FACE_REGION.end as usize;
+    let full = kit.neutral();
+    ensure!(
+        full.positions.len() >= region.end,
+        "{}: the neutral has {} vertices, the face region needs {}",
+        kit.dir().display(),
+        full.positions.len(),
+        region.end
+    );
+    let (template, old_index) = full.submesh(|v| FACE_REGION.contains(&v));
+    // The face region is a prefix of the topology, so vertex indices are unchanged.
+    ensure!(
+        old_index.iter().enumerate().all(|(i, &o)| i == o as usize),
+        "the face region does not keep vertex order"
+    );
+    let landmarks = kit.landmarks68()?;
+    if let Some(&l) = landmarks.iter().find(|&&l| !FACE_REGION.contains(&l)) {
+        bail!(
+            "{}: landmark vertex {l} lies outside the face region",
+            kit.dir().display()
+        );
+    }
+    let threads = std::thread::available_parallelism().map_or(1, usize::from);
+    let crop = |d: Vec<[f32; 3]>| d[region.clone()].to_vec();
+    let deltas = read_all(expressions.len(), threads, |e| {
+        kit.expression_delta(&expressions[e]).map(crop)
+    })?;
+    let id_deltas = read_all(modes, threads, |m| kit.identity_delta(m).map(crop))?;
+    let base = &template.positions;
+    let neutrals: Vec<Vec<[f32; 3]>> = identities
+        .iter()
+        .map(|w| {
+            let mut p = base.clone();
+            // Mode order, f32: the same sums on every run.
+            for (wm, d) in w.iter().zip(&id_deltas) {
+                for (p, d) in p.iter_mut().zip(d) {
+                    for c in 0..3 {
+                        p[c] += wm * d[c];
+                    }
+                }
+            }
+            p
+        })
+        .collect();
+    let template = Mesh {
+        positions: template.positions.clone(),
+        polygons: template.triangles().iter().map(|t| t.to_vec()).collect(),
+        uvs: Vec::new(),
+        polygon_uvs: Vec::new(),
+    };
+    let manifest = Manifest {
+        format: MANIFEST_FORMAT.to_owned(),
+        version: MANIFEST_VERSION,
+        config: config.clone(),
+        units: "cm".to_owned(),
+        source: format!(
+            "ICT-FaceKit Light face model (github ICT-VGL/ICT-FaceKit), Copyright (c) 2020 USC \
+             Institute for Creative Technologies, MIT licence; face region {}..{}",
+            FACE_REGION.start, FACE_REGION.end
+        ),
+        vertices: region.len(),
+        landmarks,
+        shape_groups: groups
+            .iter()
+            .map(|g| g.iter().map(|&e| expressions[e].clone()).collect())
+            .collect(),
+        expressions,
+        identities,
+        pairs,
+    };
+    let combinations = combinations_of(&manifest)?;
+    Ok(PairSet {
+        manifest,
+        template,
+        neutrals,
+        deltas,
+        combinations,
+    })
+}
+
+/// Each pair's shapes as (expression index, weight), checking names, weights and groups.
+fn combinations_of(m: &Manifest) -> Result<Vec<Vec<(usize, f32)>>> {
+    let index = |name: &str| {
+        m.expressions
+            .iter()
+            .position(|e| e == name)
+            .with_context(|| format!("expression {name:?} is not in the expression list"))
+    };
+    let mut group_of = vec![usize::MAX; m.expressions.len()];
+    for (g, group) in m.shape_groups.iter().enumerate() {
+        for name in group {
+            let e = index(name)?;
+            ensure!(
+                group_of[e] == usize::MAX,
+                "expression {name:?} is in two shape groups"
+            );
+            group_of[e] = g;
+        }
+    }
+    if let Some(e) = group_of.iter().position(|&g| g == usize::MAX) {
+        bail!("expression {:?} is in no shape group", m.expressions[e]);
+    }
+    m.pairs
+        .iter()
+        .enumerate()
+        .map(|(p, spec)| {
+            ensure!(
+                spec.identity < m.identities.len(),
+                "pair {p}: identity {} of {}",
+                spec.identity,
+                m.identities.len()
+            );
+            ensure!(!spec.shapes.is_empty(), "pair {p}: no expression shapes");
+            let mut out: Vec<(usize, f32)> = Vec::with_capacity(spec.shapes.len());
+            for c in &spec.shapes {
+                let e = index(&c.shape).with_context(|| format!("pair {p}"))?;
+                ensure!(
+                    c.weight.is_finite() && c.weight > 0.0 && c.weight <= 1.0,
+                    "pair {p}: weight {} of {:?} is not in (0, 1]",
+                    c.weight,
+                    c.shape
+                );
+                ensure!(
+                    group_of[e] == spec.group,
+                    "pair {p}: {:?} is not in shape group {}",
+                    c.shape,
+                    spec.group
+                );
+                ensure!(
+                    out.iter().all(|&(o, _)| o != e),
+                    "pair {p}: {:?} is listed twice",
+                    c.shape
+                );
+                out.push((e, c.weight));
+            }
+            Ok(out)
+        })
+        .collect()
+}
+
+fn flat(v: &[Vec<[f32; 3]>]) -> Vec<f32> {
+    v.iter().flatten().flatten().copied().collect()
+}
+
+impl PairSet {
+    /// Number of pairs.
+    pub fn len(&self) -> usize {
+        self.manifest.pairs.len()
+    }
+
+    /// Whether there are no pairs.
+    pub fn is_empty(&self) -> bool {
+        self.manifest.pairs.is_empty()
+    }
+
+    /// Vertices of the face region.
+    pub fn vertices(&self) -> usize {
+        self.template.positions.len()
+    }
+
+    /// The neutral of pair `p`.
+    pub fn neutral(&self, p: usize) -> &[[f32; 3]] {
+        &self.neutrals[self.manifest.pairs[p].identity]
+    }
+
+    /// The dense displacement of pair `p`: Σ_j c_j · expression_j, summed in the pair's order.
+    pub fn displacement(&self, p: usize) -> Vec<[f32; 3]> {
+        let mut out = vec![[0.0f32; 3]; self.vertices()];
+        for &(e, w) in &self.combinations[p] {
+            for (o, d) in out.iter_mut().zip(&self.deltas[e]) {
+                for c in 0..3 {
+                    o[c] += w * d[c];
+                }
+            }
+        }
+        out
+    }
+
+    /// The landmark positions of `points` (a face-region vertex array).
+    pub fn landmarks_of(&self, points: &[[f32; 3]]) -> Vec<[f32; 3]> {
+        self.manifest
+            .landmarks
+            .iter()
+            .map(|&l| points[l as usize])
+            .collect()
+    }
+
+    /// Neutral and expressive landmarks of pair `p`.
+    pub fn landmark_pair(&self, p: usize) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+        let n = self.neutral(p);
+        let d = self.displacement(p);
+        let e: Vec<[f32; 3]> = n
+            .iter()
+            .zip(&d)
+            .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
+            .collect();
+        (self.landmarks_of(n), self.landmarks_of(&e))
+    }
+
+    /// Pair `p` as a training sample: the decoder's normalised landmark input and the dense
+    /// displacement, flattened.
+    pub fn sample(&self, p: usize) -> Result<Sample> {
+        let d = self.displacement(p);
+        let n = self.neutral(p);
+        let e: Vec<[f32; 3]> = n
+            .iter()
+            .zip(&d)
+            .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
+            .collect();
+        Ok(Sample {
+            input: landmark_input(&self.landmarks_of(n), &self.landmarks_of(&e))?,
+            displacement: d.iter().flatten().copied().collect(),
+        })
+    }
+
+    /// The `pairs.` sections and metadata, as a `.sinew` file.
+    pub fn to_bytes(&self) -> Result<Vec<u8>> {
+        let m = &self.manifest;
+        let (v, i, e, p) = (
+            self.vertices(),
+            self.neutrals.len(),
+            self.deltas.len(),
+            self.len(),
+        );
+        let mut w = SinewWriter::new(ArtifactKind::S2dDecoder);
+        w.meta("content", "s2d-pairs")
+            .meta("version", MANIFEST_VERSION)
+            .meta("units", &m.units)
+            .meta("seed", m.config.seed)
+            .meta("source", &m.source);
+        let tpl: Vec<f32> = self.template.positions.iter().flatten().copied().collect();
+        w.f32s("pairs.template", &[v, 3], &tpl)?;
+        let tri: Vec<u32> = self.template.polygons.iter().flatten().copied().collect();
+        w.u32s("pairs.tri", &[self.template.polygons.len(), 3], &tri)?;
+        w.u32s("pairs.lmk", &[m.landmarks.len()], &m.landmarks)?;
+        w.f32s("pairs.ident", &[i, v, 3], &flat(&self.neutrals))?;
+        w.f32s("pairs.delta", &[e, v, 3], &flat(&self.deltas))?;
+        let ids: Vec<u32> = m.pairs.iter().map(|s| s.identity as u32).collect();
+        w.u32s("pairs.identity", &[p], &ids)?;
+        let mut weights = vec![0.0f32; p * e];
+        for (k, c) in self.combinations.iter().enumerate() {
+            for &(x, wt) in c {
+                weights[k * e + x] = wt;
+            }
+        }
+        w.f32s("pairs.weights", &[p, e], &weights)?;
+        w.to_bytes()
+    }
+
+    /// Writes `pairs.sinew` and `manifest.json` into `dir` (created if missing), each
+    /// atomically.
+    pub fn write(&self, dir: &Path) -> Result<()> {
+        crate::atomic::write(&dir.join(DATA_FILE), &self.to_bytes()?)?;
+        let json = serde_json::to_string_pretty(&self.manifest)?;
+        crate::atomic::write(&dir.join(MANIFEST_FILE), json.as_bytes())
+    }
+
+    /// Reads a data set written by [`PairSet::write`], checking that the manifest and the
+    /// numbers agree; errors name the offending file.
+    pub fn read(dir: &Path) -> Result<Self> {
+        let mpath = dir.join(MANIFEST_FILE);
+        let text = std::fs::read_to_string(&mpath)
+            .with_context(|| format!("{}: cannot read", mpath.display()))?;
+        let manifest: Manifest = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not an S2D pairs manifest", mpath.display()))?;
+        ensure!(
+            manifest.format == MANIFEST_FORMAT && manifest.version == MANIFEST_VERSION,
+            "{}: format {:?} version {}, expected {MANIFEST_FORMAT:?} version {MANIFEST_VERSION}",
+            mpath.display(),
+            manifest.format,
+            manifest.version
+        );
+        let combinations =
+            combinations_of(&manifest).with_context(|| format!("{}", mpath.display()))?;
+        let dpath = dir.join(DATA_FILE);
+        let bytes = crate::container::read(&dpath)?;
+        Self::from_parts(manifest, combinations, &bytes)
+            .with_context(|| format!("{}", dpath.display()))
+    }
+
+    fn from_parts(
+        manifest: Manifest,
+        combinations: Vec<Vec<(usize, f32)>>,
+        bytes: &[u8],
+    ) -> Result<Self> {
+        let f = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::S2dDecoder)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        ensure!(
+            f.metadata().get("content") == Some("s2d-pairs"),
+            "not an S2D pairs file (metadata content={:?})",
+            f.metadata().get("content")
+        );
+        let u = |x: usize| u32::try_from(x).context("count too large");
+        let (v, i, e, p) = (
+            u(manifest.vertices)?,
+            u(manifest.identities.len())?,
+            u(manifest.expressions.len())?,
+            u(manifest.pairs.len())?,
+        );
+        let points = |s: Vec<f32>| -> Vec<[f32; 3]> {
+            s.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+        };
+        let f32s = |name: &str, dims: &[u32]| -> Result<Vec<f32>> {
+            Ok(f.f32_tensor(name, dims)
+                .map_err(|e| anyhow::anyhow!("{name}: {e}"))?
+                .iter()
+                .collect())
+        };
+        let u32s = |name: &str, dims: &[u32]| -> Result<Vec<u32>> {
+            Ok(f.u32_tensor(name, dims)
+                .map_err(|e| anyhow::anyhow!("{name}: {e}"))?
+                .iter()
+                .collect())
+        };
+        let positions = points(f32s("pairs.template", &[v, 3])?);
+        let (tdims, rank) = f
+            .dims_of("pairs.tri")
+            .map_err(|e| anyhow::anyhow!("pairs.tri: {e}"))?;
+        ensure!(
+            rank == 2 && tdims[1] == 3,
+            "pairs.tri: shape must be [T, 3]"
+        );
+        let tri = u32s("pairs.tri", &tdims[..2])?;
+        ensure!(
+            tri.iter().all(|&x| x < v),
+            "pairs.tri: vertex index out of range"
+        );
+        let lmk = u32s("pairs.lmk", &[u(manifest.landmarks.len())?])?;
+        ensure!(
+            lmk == manifest.landmarks,
+            "pairs.lmk differs from the manifest's landmarks"
+        );
+        ensure!(
+            lmk.len() == 68 && lmk.iter().all(|&x| x < v),
+            "pairs.lmk: 68 landmark vertices below {v} expected"
+        );
+        let split = |s: Vec<f32>, n: u32| -> Vec<Vec<[f32; 3]>> {
+            s.chunks_exact(3 * v as usize)
+                .take(n as usize)
+                .map(|c| points(c.to_vec()))
+                .collect()
+        };
+        let neutrals = split(f32s("pairs.ident", &[i, v, 3])?, i);
+        let deltas = split(f32s("pairs.delta", &[e, v, 3])?, e);
+        let ids = u32s("pairs.identity", &[p])?;
+        let weights = f32s("pairs.weights", &[p, e])?;
+        for (k, spec) in manifest.pairs.iter().enumerate() {
+            ensure!(
+                ids[k] as usize == spec.identity,
+                "pairs.identity: pair {k} is identity {} here, {} in the manifest",
+                ids[k],
+                spec.identity
+            );
+            let mut row = vec![0.0f32; e as usize];
+            for &(x, wt) in &combinations[k] {
+                row[x] = wt;
+            }
+            ensure!(
+                row[..] == weights[k * e as usize..(k + 1) * e as usize],
+                "pairs.weights: pair {k} differs from the manifest's combination"
+            );
+        }
+        let template = Mesh {
+            positions,
+            polygons: tri.chunks_exact(3).map(<[u32]>::to_vec).collect(),
+            uvs: Vec::new(),
+            polygon_uvs: Vec::new(),
+        };
+        Ok(Self {
+            manifest,
+            template,
+            neutrals,
+            deltas,
+            combinations,
+        })
+    }
+}
+
+/// `sinew data s2d-pairs`: generates from the kit in `data` and writes to `out`.
+pub fn generate_to(data: &Path, out: &Path, config: &PairsConfig) -> Result<PairSet> {
+    let kit = IctFaceKit::open(data)?;
+    let set = generate(&kit, config)?;
+    set.write(out)?;
+    Ok(set)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::data_dir;
+
+    fn small() -> PairsConfig {
+        PairsConfig {
+            seed: 7,
+            identities: 4,
+            pairs: 24,
+            max_shapes: 3,
+        }
+    }
+
+    #[test]
+    fn draw_is_seeded_and_groups_partition_the_shapes() {
+        let names: Vec<String> = (0..53).map(|i| format!("s{i:02}")).collect();
+        let a = draw(&small(), &names, 100);
+        assert_eq!(a, draw(&small(), &names, 100));
+        let other = PairsConfig { seed: 8, ..small() };
+        assert_ne!(a.2, draw(&other, &names, 100).2);
+        let (ids, groups, pairs) = a;
+        assert_eq!(ids.len(), 4);
+        assert!(ids.iter().all(|w| w.len() == 100));
+        // N(0, 1): over 400 draws the mean is near 0 and the variance near 1.
+        let all: Vec<f64> = ids.iter().flatten().map(|&w| f64::from(w)).collect();
+        let mean = all.iter().sum::<f64>() / all.len() as f64;
+        let var = all.iter().map(|w| (w - mean).powi(2)).sum::<f64>() / all.len() as f64;
+        assert!(mean.abs() < 0.15 && (var - 1.0).abs() < 0.2, "{mean} {var}");
+        let mut seen: Vec<usize> = groups.iter().flatten().copied().collect();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..53).collect::<Vec<_>>());
+        assert!(groups.iter().all(|g| g.len() == 13 || g.len() == 14));
+        for (p, spec) in pairs.iter().enumerate() {
+            assert_eq!(spec.identity, p % 4);
+            assert!((1..=3).contains(&spec.shapes.len()));
+            for c in &spec.shapes {
+                let e: usize = c.shape[1..].parse().unwrap();
+                assert!(groups[spec.group].contains(&e));
+                assert!(c.weight > 0.0 && c.weight <= 1.0);
+            }
+        }
+        assert!((0..SHAPE_GROUPS).all(|g| pairs.iter().any(|s| s.group == g)));
+    }
+
+    #[test]
+    fn real_pairs_are_deterministic_and_round_trip() {
+        let Some(root) = data_dir() else { return };
+        let kit = IctFaceKit::open(&root.join("ict-facekit")).unwrap();
+        let t = std::time::Instant::now();
+        let set = generate(&kit, &small()).unwrap();
+        eprintln!("{} pairs generated in {:?}", set.len(), t.elapsed());
+        assert_eq!(set.vertices(), 9409);
+        assert_eq!(set.deltas.len(), 53);
+        // The landmarks are ICT's 68, unchanged by the face-region crop.
+        assert_eq!(set.manifest.landmarks, kit.landmarks68().unwrap());
+        let bytes = set.to_bytes().unwrap();
+        let again = generate(&kit, &small()).unwrap();
+        assert_eq!(bytes, again.to_bytes().unwrap(), "same seed, other bytes");
+        let dir = tempfile::tempdir().unwrap();
+        set.write(dir.path()).unwrap();
+        let back = PairSet::read(dir.path()).unwrap();
+        assert_eq!(back.manifest, set.manifest);
+        assert_eq!(back.to_bytes().unwrap(), bytes);
+
+        // The expressive landmarks are the neutral's plus the named deltas at the landmark
+        // vertices.
+        let p = 5;
+        let (n, e) = set.landmark_pair(p);
+        let (l, w) = (set.manifest.landmarks[30] as usize, &set.combinations[p]);
+        let mut expect = set.neutral(p)[l];
+        for &(x, wt) in w {
+            for (e, d) in expect.iter_mut().zip(set.deltas[x][l]) {
+                *e += wt * d;
+            }
+        }
+        assert_eq!((n[30], e[30]), (set.neutral(p)[l], expect));
+        // The identities differ, and the sample matches the decoder's input width.
+        assert_ne!(set.neutrals[0], set.neutrals[1]);
+        let s = set.sample(p).unwrap();
+        assert_eq!((s.input.len(), s.displacement.len()), (204, 3 * 9409));
+        assert!(s.input.iter().any(|v| v.abs() > 1e-4));
+
+        // A manifest that disagrees with the numbers is refused, naming the file.
+        let mpath = dir.path().join(MANIFEST_FILE);
+        let mut m = set.manifest.clone();
+        m.pairs[3].shapes[0].weight *= 0.5;
+        std::fs::write(&mpath, serde_json::to_string(&m).unwrap()).unwrap();
+        let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
+        assert!(
+            msg.contains("pairs.sinew") && msg.contains("pair 3"),
+            "{msg}"
+        );
+        m = set.manifest.clone();
+        m.pairs[2].shapes[0].shape = "smile".into();
+        std::fs::write(&mpath, serde_json::to_string(&m).unwrap()).unwrap();
+        let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
+        assert!(
+            msg.contains("manifest.json") && msg.contains("smile"),
+            "{msg}"
+        );
+        std::fs::write(&mpath, "{").unwrap();
+        let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
+        assert!(msg.contains("manifest.json"), "{msg}");
+        // A truncated data file is refused, naming it.
+        std::fs::write(&mpath, serde_json::to_string(&set.manifest).unwrap()).unwrap();
+        let dpath = dir.path().join(DATA_FILE);
+        std::fs::write(&dpath, &bytes[..bytes.len() / 2]).unwrap();
+        let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
+        assert!(msg.contains("pairs.sinew"), "{msg}");
+    }
+
+    #[test]
+    fn bad_config_is_refused() {
+        let c = PairsConfig {
+            identities: 1,
+            ..small()
+        };
+        assert!(c.validate().is_err());
+        let c = PairsConfig {
+            pairs: 0,
+            ..small()
+        };
+        assert!(c.validate().is_err());
+    }
+}

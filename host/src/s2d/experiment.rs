@@ -1,0 +1,574 @@
+//! `sinew train s2d` and `sinew eval s2d`: S2D-Dec against the PCA baselines on the paper's
+//! protocols (S2D §4.2, Table 1 and Fig. 3; Table 2's loss ablation through [`Objective`]).
+//!
+//! Every error is the per-vertex Euclidean distance between the predicted and the ground-truth
+//! expressive face, in mm (ICT is in cm), over every vertex of every test pair; the report gives
+//! its mean and (population) standard deviation, as Table 1 does.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, ensure};
+use serde::{Deserialize, Serialize};
+
+use super::baseline::{DEFAULT_RIDGE, Pca};
+use super::data::PairSet;
+use super::decoder::{DecoderConfig, S2dDecoder};
+use super::hierarchy::{self, DEFAULT_FACTORS};
+use super::protocol::{FOLDS, Protocol, Split, split};
+use super::train::{LossVariant, TrainConfig, landmark_distances, train, vertex_weights};
+use crate::backend::Backend;
+
+/// Default epochs of `sinew train s2d` (one fold within 45 minutes on the shared 2-core machine;
+/// docs/S2D.md has the measurement).
+pub const DEFAULT_EPOCHS: usize = 22;
+
+/// ICT is in cm; errors are reported in mm.
+const MM_PER_UNIT: f32 = 10.0;
+
+/// The training objective, including Table 2's ablations.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Objective {
+    /// The authors' code (the published numbers): weighted sum + 0.1 · mean (Table 2's S3 as
+    /// the code has it).
+    #[default]
+    Code,
+    /// The paper's text: L_dr + 0.1 · L_pr with the 1/d weights (S3 as the paper writes it).
+    Paper,
+    /// Table 2's S1: L_dr alone (the paper's loss with every vertex weight 0).
+    Dr,
+    /// Table 2's S2: L_dr + 0.1 · L_pr without distance weights (every vertex weight 1).
+    DrUnweighted,
+}
+
+impl Objective {
+    /// The trainer's loss and the vertex weights it takes, from the landmark distances.
+    pub fn loss_and_weights(self, distances: &[f32]) -> (LossVariant, Vec<f32>) {
+        match self {
+            Self::Code => (
+                LossVariant::Code,
+                vertex_weights(LossVariant::Code, distances),
+            ),
+            Self::Paper => (
+                LossVariant::Paper,
+                vertex_weights(LossVariant::Paper, distances),
+            ),
+            Self::Dr => (LossVariant::Paper, vec![0.0; distances.len()]),
+            Self::DrUnweighted => (LossVariant::Paper, vec![1.0; distances.len()]),
+        }
+    }
+}
+
+/// Mean and standard deviation of per-vertex errors.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ErrorStats {
+    /// Mean per-vertex error (mm).
+    pub mean_error_mm: f64,
+    /// Standard deviation of the per-vertex error (mm).
+    pub std_error_mm: f64,
+    /// Components used (PCA baselines only; in a pooled entry, only when all folds agree).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub components: Option<usize>,
+}
+
+impl ErrorStats {
+    fn of(errors: &[f32], components: Option<usize>) -> Self {
+        let n = errors.len().max(1) as f64;
+        let mean = errors.iter().map(|&e| f64::from(e)).sum::<f64>() / n;
+        let var = errors
+            .iter()
+            .map(|&e| (f64::from(e) - mean).powi(2))
+            .sum::<f64>()
+            / n;
+        Self {
+            mean_error_mm: mean,
+            std_error_mm: var.sqrt(),
+            components,
+        }
+    }
+}
+
+/// The two baselines of Table 1.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Baselines {
+    /// PCA with the components that explain 99% of the training variance.
+    pub pca99: ErrorStats,
+    /// PCA with min(220, rank) components.
+    pub pca_max: ErrorStats,
+}
+
+/// One fold's results.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FoldReport {
+    /// The fold.
+    pub fold: usize,
+    /// Held-out identities (indices) or expression shapes (names).
+    pub held_out: Vec<String>,
+    /// Training pairs.
+    pub train_pairs: usize,
+    /// Test pairs.
+    pub test_pairs: usize,
+    /// S2D-Dec on the test pairs.
+    pub s2d: ErrorStats,
+    /// The baselines on the same split.
+    pub baselines: Baselines,
+    /// The baked model of this fold.
+    pub model: PathBuf,
+    /// Mean training loss of each epoch (empty for `eval`).
+    pub losses: Vec<f32>,
+    /// Training time (s).
+    pub train_seconds: f64,
+}
+
+/// The report of `train s2d` / `eval s2d`: the folds pooled (every test vertex of every fold),
+/// then each fold.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// The protocol.
+    pub protocol: Protocol,
+    /// Folds run.
+    pub folds: usize,
+    /// Test pairs over all folds run.
+    pub test_pairs: usize,
+    /// S2D-Dec mean per-vertex error (mm).
+    pub mean_error_mm: f64,
+    /// S2D-Dec standard deviation (mm).
+    pub std_error_mm: f64,
+    /// Baselines, pooled the same way.
+    pub baselines: Baselines,
+    /// Each fold.
+    pub per_fold: Vec<FoldReport>,
+    /// The training configuration (absent for `eval`).
+    pub train: Option<TrainConfig>,
+    /// The objective.
+    pub objective: Option<Objective>,
+    /// The data set folder.
+    pub pairs: PathBuf,
+    /// The cumulative-error plot written beside the report.
+    pub plot: PathBuf,
+    /// Wall time (s).
+    pub seconds: f64,
+}
+
+/// What `train s2d` runs.
+#[derive(Clone, Debug)]
+pub struct TrainS2d {
+    /// Data set folder.
+    pub pairs: PathBuf,
+    /// Protocol.
+    pub protocol: Protocol,
+    /// Folds to run (the first `folds` of [`FOLDS`]).
+    pub folds: usize,
+    /// Trainer settings.
+    pub train: TrainConfig,
+    /// Objective (sets `train.loss` and the vertex weights).
+    pub objective: Objective,
+    /// Output model of fold 0; fold k > 0 goes to `MODEL.fold<k>.sinew`.
+    pub out: PathBuf,
+    /// Output report.
+    pub report: PathBuf,
+    /// burn backend.
+    pub backend: Backend,
+}
+
+/// The hierarchy cache folder: `$SINEW_CACHE`, else `sinew-cache` in the system's temporary
+/// folder.
+pub fn cache_dir() -> PathBuf {
+    std::env::var_os("SINEW_CACHE")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| std::env::temp_dir().join("sinew-cache"))
+}
+
+/// The model path of `fold` for the `--out` path of fold 0.
+pub fn fold_model_path(out: &Path, fold: usize) -> PathBuf {
+    if fold == 0 {
+        return out.to_owned();
+    }
+    let stem = out
+        .file_stem()
+        .map_or_else(|| "model".to_owned(), |s| s.to_string_lossy().into_owned());
+    out.with_file_name(format!("{stem}.fold{fold}.sinew"))
+}
+
+/// The plot path beside a report: `REPORT.png` (the report's extension replaced).
+pub fn plot_path(report: &Path) -> PathBuf {
+    report.with_extension("png")
+}
+
+/// Per-vertex errors (mm) of `predicted` displacements against pair `p`'s ground truth.
+fn vertex_errors(set: &PairSet, p: usize, predicted: &[f32], out: &mut Vec<f32>) {
+    let truth = set.displacement(p);
+    for (t, q) in truth.iter().zip(predicted.chunks_exact(3)) {
+        let d = [q[0] - t[0], q[1] - t[1], q[2] - t[2]];
+        out.push((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() * MM_PER_UNIT);
+    }
+}
+
+/// Per-vertex errors (mm) of pca99 and pca_max on the test pairs of `s`, with their component
+/// counts.
+pub fn baseline_errors(set: &PairSet, s: &Split) -> Result<[(Vec<f32>, usize); 2]> {
+    let train: Vec<Vec<f32>> = s
+        .train
+        .iter()
+        .map(|&p| set.displacement(p).iter().flatten().copied().collect())
+        .collect();
+    let refs: Vec<&[f32]> = train.iter().map(Vec::as_slice).collect();
+    let pca = Pca::fit(&refs)?;
+    let k99 = pca.components_for(0.99);
+    let kmax = pca.rank().min(220);
+    let mut out = [(Vec::new(), k99), (Vec::new(), kmax)];
+    for (errors, k) in &mut out {
+        let fit = pca.fitter(*k, &set.manifest.landmarks, DEFAULT_RIDGE)?;
+        for &p in &s.test {
+            let (n, e) = set.landmark_pair(p);
+            let y: Vec<[f32; 3]> = n
+                .iter()
+                .zip(&e)
+                .map(|(a, b)| [b[0] - a[0], b[1] - a[1], b[2] - a[2]])
+                .collect();
+            vertex_errors(set, p, &fit.predict(&y)?, errors);
+        }
+    }
+    Ok(out)
+}
+
+/// Per-vertex errors (mm) of a baked decoder, run through `sinew_core` (the playback path), on
+/// the test pairs of `s`.
+pub fn decoder_errors(model: &[u8], set: &PairSet, s: &Split) -> Result<Vec<f32>> {
+    let dec = sinew_core::s2d::S2dDecoder::from_bytes(model)
+        .map_err(|e| anyhow::anyhow!("not an S2D decoder: {e}"))?;
+    ensure!(
+        dec.vertex_count() == set.vertices(),
+        "the model decodes {} vertices, the pairs have {}",
+        dec.vertex_count(),
+        set.vertices()
+    );
+    ensure!(
+        dec.landmarks()
+            .iter()
+            .eq(set.manifest.landmarks.iter().copied()),
+        "the model's landmark vertices differ from the pairs'"
+    );
+    let mut scratch = vec![0.0f32; dec.scratch_len()];
+    let mut out = vec![0.0f32; 3 * set.vertices()];
+    let mut errors = Vec::with_capacity(s.test.len() * set.vertices());
+    for &p in &s.test {
+        let sample = set.sample(p)?;
+        dec.displacements(&sample.input, &mut scratch, &mut out)
+            .map_err(|e| anyhow::anyhow!("decoding pair {p}: {e:?}"))?;
+        vertex_errors(set, p, &out, &mut errors);
+    }
+    Ok(errors)
+}
+
+/// The cumulative per-vertex error curves (S2D Fig. 3): for each method, the percentage of
+/// vertices with an error at most x mm, x from 0 to the largest 99th percentile.
+pub fn cumulative_plot(methods: &[(&str, &[f32])], title: &str) -> crate::render::Image {
+    let sorted: Vec<Vec<f32>> = methods
+        .iter()
+        .map(|(_, e)| {
+            let mut v = e.to_vec();
+            v.sort_by(f32::total_cmp);
+            v
+        })
+        .collect();
+    let x_max = sorted
+        .iter()
+        .filter(|v| !v.is_empty())
+        .map(|v| f64::from(v[(v.len() - 1) * 99 / 100]))
+        .fold(0.0f64, f64::max)
+        .max(1e-3);
+    let curves: Vec<Vec<(f64, f64)>> = sorted
+        .iter()
+        .map(|v| {
+            (0..=200)
+                .map(|i| {
+                    let x = x_max * f64::from(i) / 200.0;
+                    let below = v.partition_point(|&e| f64::from(e) <= x);
+                    (x, 100.0 * below as f64 / v.len().max(1) as f64)
+                })
+                .collect()
+        })
+        .collect();
+    let series: Vec<(&str, &[(f64, f64)])> = methods
+        .iter()
+        .zip(&curves)
+        .map(|((name, _), c)| (*name, c.as_slice()))
+        .collect();
+    crate::plot::line_plot(
+        &series,
+        title,
+        "per-vertex error (mm)",
+        "% of vertices",
+        false,
+        720,
+        480,
+    )
+}
+
+/// Pools the folds and writes the report and its plot.
+fn finish(
+    per_fold: Vec<FoldReport>,
+    errors: [Vec<f32>; 3],
+    protocol: Protocol,
+    trained: Option<(TrainConfig, Objective)>,
+    pairs: &Path,
+    report: &Path,
+    started: Instant,
+) -> Result<Report> {
+    let (train, objective) = trained.unzip();
+    let [s2d, p99, pmax] = &errors;
+    // The pooled entry names a component count only when every fold used the same one.
+    let k = |f: fn(&Baselines) -> &ErrorStats| {
+        let first = per_fold.first().and_then(|r| f(&r.baselines).components);
+        per_fold
+            .iter()
+            .all(|r| f(&r.baselines).components == first)
+            .then_some(first)
+            .flatten()
+    };
+    let plot = plot_path(report);
+    let title = format!("S2D vs PCA baselines: cumulative per-vertex error, {protocol} split");
+    cumulative_plot(&[("S2D", s2d), ("PCA 99%", p99), ("PCA max", pmax)], &title)
+        .write_png(&plot)?;
+    let r = Report {
+        protocol,
+        folds: per_fold.len(),
+        test_pairs: per_fold.iter().map(|f| f.test_pairs).sum(),
+        mean_error_mm: ErrorStats::of(s2d, None).mean_error_mm,
+        std_error_mm: ErrorStats::of(s2d, None).std_error_mm,
+        baselines: Baselines {
+            pca99: ErrorStats::of(p99, k(|b| &b.pca99)),
+            pca_max: ErrorStats::of(pmax, k(|b| &b.pca_max)),
+        },
+        per_fold,
+        train,
+        objective,
+        pairs: pairs.to_owned(),
+        plot,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    crate::atomic::write(report, serde_json::to_string_pretty(&r)?.as_bytes())?;
+    Ok(r)
+}
+
+/// `sinew train s2d`: per fold, trains S2D-Dec on the training pairs (the hierarchy of the face
+/// region from [`hierarchy::cached`]), bakes it, evaluates the baked model and the baselines on
+/// the test pairs, then writes the pooled report and the cumulative-error plot.
+pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
+    let started = Instant::now();
+    ensure!(
+        (1..=FOLDS).contains(&args.folds),
+        "--folds {}: between 1 and {FOLDS}",
+        args.folds
+    );
+    let set = PairSet::read(&args.pairs)?;
+    let h = hierarchy::cached(&set.template, &DEFAULT_FACTORS, &cache_dir())
+        .context("building the face region's mesh hierarchy")?;
+    let distances = landmark_distances(&set.template.positions, &set.manifest.landmarks)?;
+    let (loss, weights) = args.objective.loss_and_weights(&distances);
+    let config = TrainConfig {
+        loss,
+        ..args.train.clone()
+    };
+    let mut per_fold = Vec::new();
+    let mut errors: [Vec<f32>; 3] = Default::default();
+    for fold in 0..args.folds {
+        let s = split(&set.manifest, args.protocol, fold)?;
+        let samples = s
+            .train
+            .iter()
+            .map(|&p| set.sample(p))
+            .collect::<Result<Vec<_>>>()?;
+        let device = args.backend.autodiff_device(config.seed)?;
+        let decoder = S2dDecoder::new(&DecoderConfig::default(), &h, &device)?;
+        if !quiet {
+            eprintln!(
+                "{} fold {fold}: {} training pairs, {} test pairs, {} epochs, {} parameters",
+                args.protocol,
+                s.train.len(),
+                s.test.len(),
+                config.epochs,
+                decoder.parameter_count()
+            );
+        }
+        let t = Instant::now();
+        let (decoder, losses) = train(decoder, &samples, &weights, &config, &device)?;
+        let train_seconds = t.elapsed().as_secs_f64();
+        let meta = [
+            ("content", "s2d-decoder".to_owned()),
+            ("units", set.manifest.units.clone()),
+            ("protocol", args.protocol.to_string()),
+            ("fold", fold.to_string()),
+            ("pairs_seed", set.manifest.config.seed.to_string()),
+            ("seed", config.seed.to_string()),
+            ("config", serde_json::to_string(&config)?),
+            ("objective", serde_json::to_string(&args.objective)?),
+            ("source", set.manifest.source.clone()),
+        ]
+        .map(|(k, v)| (k.to_owned(), v));
+        let bytes = super::bake::bake(&decoder, &h, &set.manifest.landmarks, &meta)?;
+        let model = fold_model_path(&args.out, fold);
+        crate::atomic::write(&model, &bytes)?;
+        let fr = evaluate_fold(&bytes, &set, &s, model, losses, train_seconds, &mut errors)?;
+        if !quiet {
+            eprintln!(
+                "fold {fold}: S2D {:.3} ± {:.3} mm, pca99 ({} comp.) {:.3} mm, pca_max ({} comp.) \
+                 {:.3} mm; trained in {train_seconds:.0} s",
+                fr.s2d.mean_error_mm,
+                fr.s2d.std_error_mm,
+                fr.baselines.pca99.components.unwrap_or(0),
+                fr.baselines.pca99.mean_error_mm,
+                fr.baselines.pca_max.components.unwrap_or(0),
+                fr.baselines.pca_max.mean_error_mm
+            );
+        }
+        per_fold.push(fr);
+    }
+    finish(
+        per_fold,
+        errors,
+        args.protocol,
+        Some((config, args.objective)),
+        &args.pairs,
+        &args.report,
+        started,
+    )
+}
+
+/// Evaluates a baked model and the baselines on split `s`, appending the per-vertex errors to
+/// `errors` (S2D, pca99, pca_max).
+fn evaluate_fold(
+    model_bytes: &[u8],
+    set: &PairSet,
+    s: &Split,
+    model: PathBuf,
+    losses: Vec<f32>,
+    train_seconds: f64,
+    errors: &mut [Vec<f32>; 3],
+) -> Result<FoldReport> {
+    let s2d = decoder_errors(model_bytes, set, s)?;
+    let [(p99, k99), (pmax, kmax)] = baseline_errors(set, s)?;
+    let fr = FoldReport {
+        fold: s.fold,
+        held_out: s.held_out.clone(),
+        train_pairs: s.train.len(),
+        test_pairs: s.test.len(),
+        s2d: ErrorStats::of(&s2d, None),
+        baselines: Baselines {
+            pca99: ErrorStats::of(&p99, Some(k99)),
+            pca_max: ErrorStats::of(&pmax, Some(kmax)),
+        },
+        model,
+        losses,
+        train_seconds,
+    };
+    errors[0].extend(s2d);
+    errors[1].extend(p99);
+    errors[2].extend(pmax);
+    Ok(fr)
+}
+
+/// `sinew eval s2d`: evaluates a model from `train s2d` on the test pairs of the fold it was
+/// trained for (its `protocol` and `fold` metadata), with the baselines on the same split.
+pub fn eval_s2d(model: &Path, pairs: &Path, report: &Path) -> Result<Report> {
+    let started = Instant::now();
+    let bytes = crate::container::read(model)?;
+    let file = sinew_core::SinewFile::from_bytes(&bytes)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
+    let meta = file.metadata();
+    let protocol = match meta.get("protocol") {
+        Some("identity") => Protocol::Identity,
+        Some("expression") => Protocol::Expression,
+        other => anyhow::bail!(
+            "{}: no S2D protocol in the metadata (protocol={other:?}); train it with `sinew \
+             train s2d`",
+            model.display()
+        ),
+    };
+    let fold: usize = meta
+        .get("fold")
+        .and_then(|f| f.parse().ok())
+        .with_context(|| format!("{}: no fold in the metadata", model.display()))?;
+    let set = PairSet::read(pairs)?;
+    if let Some(seed) = meta.get("pairs_seed") {
+        ensure!(
+            seed == set.manifest.config.seed.to_string(),
+            "{}: trained on pairs of seed {seed}, but {} has seed {}",
+            model.display(),
+            pairs.display(),
+            set.manifest.config.seed
+        );
+    }
+    let s = split(&set.manifest, protocol, fold)?;
+    let mut errors: [Vec<f32>; 3] = Default::default();
+    let fr = evaluate_fold(
+        &bytes,
+        &set,
+        &s,
+        model.to_owned(),
+        Vec::new(),
+        0.0,
+        &mut errors,
+    )
+    .with_context(|| format!("{}", model.display()))?;
+    finish(vec![fr], errors, protocol, None, pairs, report, started)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stats_and_paths() {
+        let s = ErrorStats::of(&[1.0, 3.0], None);
+        assert_eq!((s.mean_error_mm, s.std_error_mm), (2.0, 1.0));
+        assert_eq!(
+            fold_model_path(Path::new("out/m.sinew"), 2),
+            Path::new("out/m.fold2.sinew")
+        );
+        assert_eq!(
+            fold_model_path(Path::new("out/m.sinew"), 0),
+            Path::new("out/m.sinew")
+        );
+        assert_eq!(plot_path(Path::new("r/rep.json")), Path::new("r/rep.png"));
+        let (l, w) = Objective::Dr.loss_and_weights(&[0.0, 1.0]);
+        assert_eq!((l, w), (LossVariant::Paper, vec![0.0, 0.0]));
+        let (_, w) = Objective::DrUnweighted.loss_and_weights(&[0.0, 1.0]);
+        assert_eq!(w, [1.0, 1.0]);
+        let (_, w) = Objective::Code.loss_and_weights(&[0.0, 1.0]);
+        assert_eq!(w, [1.0, 0.0]);
+    }
+
+    /// On real pairs the larger PCA fits at least as well as pca99, and on the identity split
+    /// (ICT's expression deltas are shared by all identities) it is nearly exact.
+    #[test]
+    fn pca_max_is_no_worse_than_pca99_on_real_pairs() {
+        let Some(root) = crate::testing::data_dir() else {
+            return;
+        };
+        let kit = crate::ict::IctFaceKit::open(&root.join("ict-facekit")).unwrap();
+        let config = super::super::data::PairsConfig {
+            seed: 3,
+            identities: 8,
+            pairs: 160,
+            max_shapes: 3,
+        };
+        let set = super::super::data::generate(&kit, &config).unwrap();
+        for protocol in [Protocol::Identity, Protocol::Expression] {
+            let s = split(&set.manifest, protocol, 0).unwrap();
+            let [(p99, k99), (pmax, kmax)] = baseline_errors(&set, &s).unwrap();
+            let (a, b) = (ErrorStats::of(&p99, None), ErrorStats::of(&pmax, None));
+            eprintln!(
+                "{protocol}: pca99 ({k99}) {:.4} mm, pca_max ({kmax}) {:.4} mm",
+                a.mean_error_mm, b.mean_error_mm
+            );
+            assert!(k99 <= kmax);
+            assert!(b.mean_error_mm <= a.mean_error_mm * 1.001, "{protocol}");
+            if protocol == Protocol::Identity {
+                assert!(b.mean_error_mm < 0.05, "{}", b.mean_error_mm);
+            }
+        }
+    }
+}
