@@ -389,6 +389,66 @@ fn s2d_pairs_train_and_eval_end_to_end() {
     assert_eq!(e["mean_error_mm"], r["mean_error_mm"]);
     assert_eq!(e["baselines"], r["baselines"]);
 
+    // Applications on real faces of the decoder's template (the ICT face region).
+    let ict = sinew_host::ict::IctFaceKit::open(&kit).unwrap();
+    let (face, _) = ict
+        .neutral()
+        .submesh(|v| sinew_host::ict::FACE_REGION.contains(&v));
+    let delta = ict.expression_delta("jawOpen").unwrap();
+    let open: Vec<[f32; 3]> = face
+        .positions
+        .iter()
+        .zip(&delta)
+        .map(|(p, d)| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
+        .collect();
+    let neutral_obj = dir.path().join("neutral.obj");
+    let open_obj = dir.path().join("frames").join("open.obj");
+    face.write(&neutral_obj).unwrap();
+    std::fs::create_dir_all(open_obj.parent().unwrap()).unwrap();
+    face.with_positions(open.clone()).write(&open_obj).unwrap();
+    let out = dir.path().join("neutralised.obj");
+    ok(&[
+        "s2d",
+        "neutralize",
+        "--model",
+        s(&model),
+        "--input",
+        s(&open_obj),
+        "--out",
+        s(&out),
+    ]);
+    let got = sinew_host::mesh::Mesh::read(&out).unwrap();
+    assert_eq!(got.positions.len(), face.positions.len());
+    assert_ne!(got.positions, open, "neutralising moves the face");
+    let frames = dir.path().join("transferred");
+    let said = ok(&[
+        "s2d",
+        "transfer",
+        "--model",
+        s(&model),
+        "--source-neutral",
+        s(&neutral_obj),
+        "--source",
+        s(&open_obj.parent().unwrap().to_path_buf()),
+        "--target",
+        s(&neutral_obj),
+        "--out",
+        s(&frames),
+    ]);
+    assert!(said.contains("1 frames"), "{said}");
+    assert!(frames.join("frame_00000.obj").is_file());
+    let e = err(&[
+        "s2d",
+        "neutralize",
+        "--model",
+        s(&model),
+        "--input",
+        s(&pairs.join("manifest.json")),
+        "--out",
+        s(&out),
+    ]);
+    assert!(e.contains("manifest.json"), "{e}");
+
     // Bad input names the file.
     let e = err(&[
         "eval",
