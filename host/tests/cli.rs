@@ -429,7 +429,7 @@ fn s2d_pairs_train_and_eval_end_to_end() {
         "--source-neutral",
         s(&neutral_obj),
         "--source",
-        s(&open_obj.parent().unwrap().to_path_buf()),
+        s(open_obj.parent().unwrap()),
         "--target",
         s(&neutral_obj),
         "--out",
