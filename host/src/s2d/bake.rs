@@ -109,19 +109,13 @@ fn write_conv(w: &mut SinewWriter, prefix: &str, conv: &SpiralConv) -> Result<()
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::s2d::decoder::DecoderConfig;
     use crate::s2d::synthetic;
 
     #[test]
     fn baked_decoder_loads_and_decodes() {
         let device = crate::backend::Backend::Flex.device(4).unwrap();
         let h = synthetic::hierarchy(&[30, 12, 5], &[5, 4, 3], 6);
-        let config = DecoderConfig {
-            inputs: 6,
-            fc_features: 4,
-            filters: vec![5, 3],
-            outputs: 3,
-        };
+        let config = synthetic::small_config();
         let dec = S2dDecoder::new(&config, &h, &device).unwrap();
         let meta = [("units".to_owned(), "m".to_owned())];
         let bytes = bake(&dec, &h, &[3, 17], &meta).unwrap();

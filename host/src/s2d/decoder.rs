@@ -477,12 +477,7 @@ mod tests {
     fn forward_matches_a_dense_reference() {
         let device = device();
         let h = synthetic::hierarchy(&[30, 12, 5], &[5, 4, 3], 2);
-        let config = DecoderConfig {
-            inputs: 6,
-            fc_features: 4,
-            filters: vec![5, 3],
-            outputs: 3,
-        };
+        let config = synthetic::small_config();
         let dec = S2dDecoder::new(&config, &h, &device).unwrap();
         let mut rng = synthetic::Rng::new(9);
         let batch = 3;

@@ -111,6 +111,17 @@ pub fn hierarchy(sizes: &[usize], spiral_lens: &[usize], seed: u64) -> Hierarchy
     Hierarchy { levels, down, up }
 }
 
+/// The small decoder configuration the tests use on a `[30, 12, 5]` hierarchy: 6 inputs (two
+/// landmarks), 4 FC features, stages of 5 and 3 filters.
+pub fn small_config() -> super::decoder::DecoderConfig {
+    super::decoder::DecoderConfig {
+        inputs: 6,
+        fc_features: 4,
+        filters: vec![5, 3],
+        outputs: 3,
+    }
+}
+
 /// A tiny baked decoder for tests: the synthetic hierarchy of 8 → 3 vertices (spirals 3, 2), a
 /// freshly initialised decoder (6 inputs: landmarks at vertices 1 and 6, 2 FC features, one
 /// 2-filter stage) baked with `units = m`. Returns the hierarchy and the bytes.
