@@ -223,32 +223,29 @@ impl From<BufferError> for ReplayError {
     }
 }
 
-/// Poses `actor` for one frame in `mode` and returns the frame's hash: in the f32 and fast modes
-/// the positions then the normals ([`FrameHasher::write_f32s`]); in Q16 mode the positions' raw
-/// bits ([`FrameHasher::write_u32`] of each). `buf.weights` must hold the frame's coefficients.
+/// Poses `actor` for one frame in `mode` into `buf`: in the f32 and fast modes the positions and
+/// the normals (each mode's normalisation), in Q16 mode the Q16.16 positions.
+/// `buf.weights` must hold the frame's coefficients.
 ///
 /// # Errors
 /// [`ReplayError::NoQ16Cache`] in Q16 mode without the cache; [`ReplayError::Buffer`] if a
 /// buffer has the wrong length.
-pub fn frame_hash(
+pub fn pose_frame(
     actor: &AimActor<'_>,
     mode: Mode,
     head: &[f32; 9],
     jaw: &[f32; 9],
     buf: &mut FrameBuffers<'_>,
-) -> Result<u64, ReplayError> {
+) -> Result<(), ReplayError> {
     let pose = actor.pose_from_9d(jaw, head);
-    let mut h = FrameHasher::new();
     match mode {
-        Mode::F32 | Mode::Fast => {
+        Mode::F32 => {
             actor.pose(&pose, buf.weights, buf.positions)?;
-            if mode == Mode::F32 {
-                actor.normals(buf.positions, buf.normals)?;
-            } else {
-                crate::fast::vertex_normals(actor.triangles(), buf.positions, buf.normals)?;
-            }
-            h.write_f32s(buf.positions);
-            h.write_f32s(buf.normals);
+            actor.normals(buf.positions, buf.normals)?;
+        }
+        Mode::Fast => {
+            actor.pose(&pose, buf.weights, buf.positions)?;
+            crate::fast::vertex_normals(actor.triangles(), buf.positions, buf.normals)?;
         }
         Mode::Q16 => {
             let cache = actor.q16().ok_or(ReplayError::NoQ16Cache)?;
@@ -258,12 +255,61 @@ pub fn frame_hash(
                 buf.weights_q16,
                 buf.positions_q16,
             )?;
-            for v in buf.positions_q16.iter() {
-                h.write_u32(v.to_bits() as u32);
-            }
         }
     }
+    Ok(())
+}
+
+/// Poses `actor` for one frame in `mode` ([`pose_frame`]) and returns the frame's hash: in the
+/// f32 and fast modes the positions then the normals ([`FrameHasher::write_f32s`]); in Q16 mode
+/// the positions' raw bits ([`FrameHasher::write_u32`] of each).
+///
+/// # Errors
+/// As [`pose_frame`].
+pub fn frame_hash(
+    actor: &AimActor<'_>,
+    mode: Mode,
+    head: &[f32; 9],
+    jaw: &[f32; 9],
+    buf: &mut FrameBuffers<'_>,
+) -> Result<u64, ReplayError> {
+    pose_frame(actor, mode, head, jaw, buf)?;
+    let mut h = FrameHasher::new();
+    if mode == Mode::Q16 {
+        for v in buf.positions_q16.iter() {
+            h.write_u32(v.to_bits() as u32);
+        }
+    } else {
+        h.write_f32s(buf.positions);
+        h.write_f32s(buf.normals);
+    }
     Ok(h.finish())
+}
+
+/// Checks that `replay` was recorded with the model whose bytes are `model_bytes` (content hash)
+/// and that its coefficient count is `actor`'s.
+///
+/// # Errors
+/// [`ReplayError::WrongModel`] or [`ReplayError::ShapeCount`].
+pub fn check_model(
+    model_bytes: &[u8],
+    actor: &AimActor<'_>,
+    replay: &AimReplay<'_>,
+) -> Result<(), ReplayError> {
+    let found = model_hash(model_bytes);
+    if found != replay.model_hash() {
+        return Err(ReplayError::WrongModel {
+            expected: replay.model_hash(),
+            found,
+        });
+    }
+    if replay.shape_count() != actor.shape_count() {
+        return Err(ReplayError::ShapeCount {
+            replay: replay.shape_count(),
+            actor: actor.shape_count(),
+        });
+    }
+    Ok(())
 }
 
 /// One verified frame.
@@ -313,19 +359,7 @@ pub fn verify(
     buf: &mut FrameBuffers<'_>,
     mut on_frame: impl FnMut(&FrameCheck),
 ) -> Result<Option<usize>, ReplayError> {
-    let found = model_hash(model_bytes);
-    if found != replay.model_hash() {
-        return Err(ReplayError::WrongModel {
-            expected: replay.model_hash(),
-            found,
-        });
-    }
-    if replay.shape_count() != actor.shape_count() {
-        return Err(ReplayError::ShapeCount {
-            replay: replay.shape_count(),
-            actor: actor.shape_count(),
-        });
-    }
+    check_model(model_bytes, actor, replay)?;
     let mut first_bad = None;
     for f in 0..replay.frames() {
         let (head, jaw) = replay

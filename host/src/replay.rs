@@ -8,7 +8,8 @@ use sinew_core::aim::AimActor;
 use sinew_core::format::ArtifactKind;
 use sinew_core::q16::Q16;
 use sinew_core::replay::{
-    AimReplay, FrameBuffers, FrameCheck, Mode, frame_hash, model_hash, verify as core_verify,
+    AimReplay, FrameBuffers, FrameCheck, Mode, frame_hash, model_hash, pose_frame,
+    verify as core_verify,
 };
 
 use crate::SinewWriter;
@@ -151,7 +152,6 @@ pub fn mm_per_unit(actor: &AimActor<'_>) -> Result<f64> {
 /// # Errors
 /// As [`verify`].
 pub fn deviation(model: &[u8], replay: &[u8]) -> Result<Deviation> {
-    use sinew_core::q16::{PoseQ16, q16_slice};
     let actor = AimActor::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
     let r = AimReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
     let unit = mm_per_unit(&actor)?;
@@ -164,37 +164,17 @@ pub fn deviation(model: &[u8], replay: &[u8]) -> Result<Deviation> {
             .frame(f, &mut reference.weights)
             .ok_or_else(|| anyhow!("replay has another coefficient count than the model"))?;
         mode.weights.copy_from_slice(&reference.weights);
-        let pose = actor.pose_from_9d(&jaw, &head);
-        actor.pose(&pose, &reference.weights, &mut reference.positions)?;
-        actor.normals(&reference.positions, &mut reference.normals)?;
-        match r.mode() {
-            Mode::F32 => {
-                mode.positions.copy_from_slice(&reference.positions);
-                mode.normals.copy_from_slice(&reference.normals);
+        let play = |m, b: &mut Buffers| {
+            pose_frame(&actor, m, &head, &jaw, &mut b.view()).map_err(|e| anyhow!("frame {f}: {e}"))
+        };
+        play(Mode::F32, &mut reference)?;
+        play(r.mode(), &mut mode)?;
+        if r.mode() == Mode::Q16 {
+            // Q16 computes no normals: compare positions only.
+            for (p, q) in mode.positions.iter_mut().zip(&mode.positions_q16) {
+                *p = q.to_num();
             }
-            Mode::Fast => {
-                actor.pose(&pose, &mode.weights, &mut mode.positions)?;
-                sinew_core::fast::vertex_normals(
-                    actor.triangles(),
-                    &mode.positions,
-                    &mut mode.normals,
-                )?;
-            }
-            Mode::Q16 => {
-                let cache = actor
-                    .q16()
-                    .ok_or_else(|| anyhow!("q16 mode needs a model baked with a Q16.16 cache"))?;
-                q16_slice(&mode.weights, &mut mode.weights_q16)?;
-                cache.pose(
-                    &PoseQ16::from_pose(&pose),
-                    &mode.weights_q16,
-                    &mut mode.positions_q16,
-                )?;
-                for (p, q) in mode.positions.iter_mut().zip(&mode.positions_q16) {
-                    *p = q.to_num();
-                }
-                mode.normals.copy_from_slice(&reference.normals);
-            }
+            mode.normals.copy_from_slice(&reference.normals);
         }
         let vec = |a: &[f32], i: usize| [0, 1, 2].map(|k| f64::from(a[3 * i + k]));
         for i in 0..v {

@@ -36,7 +36,7 @@ use sinew_core::FormatError;
 use sinew_core::aim::{AimActor, MAX_SHAPES};
 use sinew_core::q16::Q16;
 use sinew_core::replay::{
-    AimReplay, FrameBuffers, FrameCheck, ReplayError, frame_hash, model_hash,
+    AimReplay, FrameBuffers, FrameCheck, ReplayError, check_model, frame_hash,
 };
 
 /// A golden model and one of its replays.
@@ -197,19 +197,7 @@ impl<'s> Replay<'s> {
     pub fn new(golden: &Golden, scratch: &'s mut Scratch) -> Result<Self, Error> {
         let actor = AimActor::from_bytes(golden.model).map_err(Error::Model)?;
         let replay = AimReplay::from_bytes(golden.replay).map_err(Error::Replay)?;
-        let found = model_hash(golden.model);
-        if found != replay.model_hash() {
-            return Err(Error::Playback(ReplayError::WrongModel {
-                expected: replay.model_hash(),
-                found,
-            }));
-        }
-        if replay.shape_count() != actor.shape_count() {
-            return Err(Error::Playback(ReplayError::ShapeCount {
-                replay: replay.shape_count(),
-                actor: actor.shape_count(),
-            }));
-        }
+        check_model(golden.model, &actor, &replay).map_err(Error::Playback)?;
         if actor.vertex_count() > MAX_VERTICES {
             return Err(Error::TooManyVertices {
                 vertices: actor.vertex_count(),
