@@ -19,6 +19,7 @@ pub mod progress;
 pub mod render;
 pub mod replay;
 pub mod s2d;
+pub mod sine;
 pub mod testing;
 pub mod tolerance;
 

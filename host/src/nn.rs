@@ -29,7 +29,7 @@ pub fn tensor<const D: usize>(values: Vec<f32>, shape: [usize; D], device: &Devi
 pub fn activate<const D: usize>(x: Tensor<D>, act: Activation) -> Tensor<D> {
     match act {
         Activation::Identity => x,
-        Activation::Sine { omega0 } => x.mul_scalar(omega0).sin(),
+        Activation::Sine { omega0 } => crate::sine::siren_sine(x, omega0),
         Activation::Gelu => gelu(x),
         Activation::Elu { alpha } => elu(x, f64::from(alpha)),
         Activation::Relu => relu(x),
