@@ -2,15 +2,20 @@
 //! sequence and the hash of every frame `sinew-core` computes from it, in one numeric mode. The
 //! frames are hashed by `sinew_core::replay::frame_hash`, the same function every firmware target
 //! runs, so a replay recorded here verifies bit for bit anywhere.
+//!
+//! S2D decoders have replays of their own ([`record_s2d`]): per frame the decoder input, and
+//! optionally the neutral face the frames decode onto. [`verify`] tells the kinds apart by the
+//! model artefact and refuses a replay of the other kind by name.
 
 use anyhow::{Result, anyhow, bail};
 use sinew_core::aim::AimActor;
 use sinew_core::format::ArtifactKind;
 use sinew_core::q16::Q16;
 use sinew_core::replay::{
-    AimReplay, FrameBuffers, FrameCheck, Mode, frame_hash, model_hash, pose_frame,
-    verify as core_verify,
+    AimReplay, FrameBuffers, FrameCheck, Mode, S2D_INPUTS, S2D_NEUTRAL, S2dBuffers, S2dReplay,
+    frame_hash, model_hash, pose_frame, s2d_frame_hash, verify as core_verify, verify_s2d,
 };
+use sinew_core::s2d::S2dDecoder;
 
 use crate::SinewWriter;
 use crate::commands::Frame;
@@ -100,14 +105,132 @@ pub struct Verification {
     pub first_mismatch: Option<usize>,
 }
 
-/// Plays the replay in `replay` through the actor in `model` with `sinew-core` and compares every
-/// frame's hash with the recorded one.
+/// Whether `replay` is an S2D replay (it has the `replay.s2d` section) rather than an AIM one.
+fn is_s2d_replay(replay: &[u8]) -> bool {
+    sinew_core::SinewFile::from_bytes(replay).is_ok_and(|f| f.section(S2D_INPUTS).is_some())
+}
+
+/// Whether `model` is an S2D decoder artefact.
+fn is_s2d_model(model: &[u8]) -> bool {
+    sinew_core::SinewFile::from_bytes(model).is_ok_and(|f| f.kind == ArtifactKind::S2dDecoder)
+}
+
+/// Records an S2D replay: each of `inputs` (`[I]` decoder inputs, from
+/// `sinew_core::s2d::landmark_input`) decoded by the decoder in `model` onto `neutral` (`[V, 3]`)
+/// or, without it, onto the decoder's template, and hashed by `s2d_frame_hash`.
 ///
 /// # Errors
-/// If either file is invalid, the replay was recorded with another model, or the mode is
-/// unavailable for this model. A differing frame is not an error: see
+/// If `model` is not an S2D decoder, there are no frames, or a frame's input or the neutral has
+/// the wrong length.
+pub fn record_s2d(model: &[u8], inputs: &[Vec<f32>], neutral: Option<&[f32]>) -> Result<Vec<u8>> {
+    let decoder = S2dDecoder::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
+    if inputs.is_empty() {
+        bail!("a replay needs at least one frame");
+    }
+    let (width, v) = (decoder.input_len(), decoder.vertex_count());
+    if let Some(n) = neutral
+        && n.len() != 3 * v
+    {
+        bail!(
+            "the neutral has {} values, the decoder's template {v} vertices (× 3)",
+            n.len()
+        );
+    }
+    let mut input = vec![0.0f32; width];
+    let mut neutral_buf = neutral.map(<[f32]>::to_vec).unwrap_or_default();
+    let mut scratch = vec![0.0f32; decoder.scratch_len()];
+    let mut vertices = vec![0.0f32; 3 * v];
+    let mut flat = Vec::with_capacity(inputs.len() * width);
+    let mut hashes = Vec::with_capacity(2 * inputs.len());
+    for (i, x) in inputs.iter().enumerate() {
+        if x.len() != width {
+            bail!("frame {i} has {} inputs, the decoder {width}", x.len());
+        }
+        input.copy_from_slice(x);
+        let mut buf = S2dBuffers {
+            input: &mut input,
+            neutral: &mut neutral_buf,
+            scratch: &mut scratch,
+            vertices: &mut vertices,
+        };
+        let h = s2d_frame_hash(&decoder, &mut buf).map_err(|e| anyhow!("frame {i}: {e}"))?;
+        flat.extend_from_slice(x);
+        hashes.extend([h as u32, (h >> 32) as u32]);
+    }
+    let content = model_hash(model);
+    let mut w = SinewWriter::new(ArtifactKind::Replay);
+    w.meta("mode", Mode::F32.name())
+        .meta("model", format!("{content:016x}"))
+        .meta("frames", inputs.len())
+        .meta("content", "s2d-replay");
+    w.u32s(
+        "replay.model",
+        &[2],
+        &[content as u32, (content >> 32) as u32],
+    )?;
+    w.f32s(S2D_INPUTS, &[inputs.len(), width], &flat)?;
+    if let Some(n) = neutral {
+        w.f32s(S2D_NEUTRAL, &[v, 3], n)?;
+    }
+    w.u32s("replay.hash", &[inputs.len(), 2], &hashes)?;
+    w.to_bytes()
+}
+
+/// An S2D replay's frame inputs and neutral, as [`record_s2d`] takes them.
+///
+/// # Errors
+/// If `replay` is not a valid S2D replay.
+pub fn s2d_inputs(replay: &[u8]) -> Result<(Vec<Vec<f32>>, Option<Vec<f32>>)> {
+    let r = S2dReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
+    let mut frames = Vec::with_capacity(r.frames());
+    for f in 0..r.frames() {
+        let mut x = vec![0.0f32; r.input_len()];
+        r.frame(f, &mut x)
+            .ok_or_else(|| anyhow!("replay: frame {f} unreadable"))?;
+        frames.push(x);
+    }
+    Ok((frames, r.neutral().map(|n| n.iter().collect())))
+}
+
+/// Plays an S2D replay through the decoder in `model` (see [`verify`]).
+fn verify_s2d_replay(model: &[u8], replay: &[u8]) -> Result<Verification> {
+    let decoder = S2dDecoder::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
+    let r = S2dReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
+    let v = decoder.vertex_count();
+    let mut input = vec![0.0f32; decoder.input_len()];
+    let mut neutral = vec![0.0f32; if r.neutral().is_some() { 3 * v } else { 0 }];
+    let mut scratch = vec![0.0f32; decoder.scratch_len()];
+    let mut vertices = vec![0.0f32; 3 * v];
+    let mut buf = S2dBuffers {
+        input: &mut input,
+        neutral: &mut neutral,
+        scratch: &mut scratch,
+        vertices: &mut vertices,
+    };
+    let mut frames = Vec::with_capacity(r.frames());
+    let first_mismatch = verify_s2d(model, &decoder, &r, &mut buf, |c| frames.push(*c))
+        .map_err(|e| anyhow!("{e}"))?;
+    Ok(Verification {
+        mode: Mode::F32,
+        frames,
+        first_mismatch,
+    })
+}
+
+/// Plays the replay in `replay` through the model in `model` (an AIM actor or an S2D decoder)
+/// with `sinew-core` and compares every frame's hash with the recorded one.
+///
+/// # Errors
+/// If either file is invalid, the replay is of the other model kind or was recorded with another
+/// model, or the mode is unavailable for this model. A differing frame is not an error: see
 /// [`Verification::first_mismatch`].
 pub fn verify(model: &[u8], replay: &[u8]) -> Result<Verification> {
+    match (is_s2d_model(model), is_s2d_replay(replay)) {
+        (true, true) => return verify_s2d_replay(model, replay),
+        (true, false) => bail!("the model is an S2D decoder, the replay an AIM replay"),
+        (false, true) => bail!("the replay is an S2D replay, the model is not an S2D decoder"),
+        (false, false) => {}
+    }
     let actor = AimActor::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
     let r = AimReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
     let mut buf = Buffers::for_actor(&actor);
