@@ -385,6 +385,80 @@ mod tests {
         assert!(f.max_normal_diff > 0.0 && f.max_normal_diff < 2e-3, "{f:?}");
     }
 
+    /// The tiny synthetic decoder, and 4 frames of inputs.
+    fn s2d_fixture() -> (Vec<u8>, Vec<Vec<f32>>, Vec<f32>) {
+        let model = crate::s2d::synthetic::tiny_baked_decoder().1;
+        let d = S2dDecoder::from_bytes(&model).unwrap();
+        let inputs = (0..4)
+            .map(|f| {
+                (0..d.input_len())
+                    .map(|i| (f * 7 + i) as f32 * 0.01)
+                    .collect()
+            })
+            .collect();
+        let neutral = (0..3 * d.vertex_count()).map(|i| i as f32 * 0.1).collect();
+        (model, inputs, neutral)
+    }
+
+    #[test]
+    fn s2d_record_then_verify_and_refusals() {
+        let (model, inputs, neutral) = s2d_fixture();
+        for n in [None, Some(neutral.as_slice())] {
+            let r = record_s2d(&model, &inputs, n).unwrap();
+            let v = verify(&model, &r).unwrap();
+            assert_eq!((v.frames.len(), v.first_mismatch), (4, None));
+            assert_eq!(s2d_inputs(&r).unwrap(), (inputs.clone(), n.map(<[f32]>::to_vec)));
+        }
+        let with = record_s2d(&model, &inputs, Some(&neutral)).unwrap();
+        let without = record_s2d(&model, &inputs, None).unwrap();
+        // Decoding onto another neutral changes every frame's hash.
+        let (a, b) = (verify(&model, &with).unwrap(), verify(&model, &without).unwrap());
+        assert!(a.frames.iter().zip(&b.frames).all(|(x, y)| x.hash != y.hash));
+        // Another decoder (one metadata entry more) is refused by content hash.
+        let file = sinew_core::SinewFile::from_bytes(&model).unwrap();
+        let mut w = SinewWriter::from_file(&file).unwrap();
+        w.meta("note", "another model");
+        let err = verify(&w.to_bytes().unwrap(), &with).unwrap_err().to_string();
+        assert!(err.contains("recorded with model"), "{err}");
+        // An AIM actor with an S2D replay, and an S2D decoder with an AIM replay.
+        let err = verify(&golden(), &with).unwrap_err().to_string();
+        assert!(err.contains("S2D replay"), "{err}");
+        let aim = golden();
+        let m = AimActor::from_bytes(&aim).unwrap().shape_count();
+        let aim_replay = record(&aim, Mode::F32, &frames(m, 2)).unwrap();
+        let err = verify(&model, &aim_replay).unwrap_err().to_string();
+        assert!(err.contains("AIM replay"), "{err}");
+        // Recording refuses wrong lengths, naming them.
+        let err = record_s2d(&model, &[vec![0.0; 5]], None).unwrap_err().to_string();
+        assert!(err.contains("frame 0 has 5 inputs"), "{err}");
+        let err = record_s2d(&model, &inputs, Some(&neutral[1..])).unwrap_err().to_string();
+        assert!(err.contains("neutral"), "{err}");
+    }
+
+    #[test]
+    fn an_s2d_tampered_frame_is_named() {
+        let (model, inputs, neutral) = s2d_fixture();
+        let good = record_s2d(&model, &inputs, Some(&neutral)).unwrap();
+        // Frame 1's input changed after recording: re-record, then put the good hashes back.
+        let mut changed = inputs.clone();
+        changed[1][0] += 0.25;
+        let bad = record_s2d(&model, &changed, Some(&neutral)).unwrap();
+        let hashes: Vec<u32> = sinew_core::SinewFile::from_bytes(&good)
+            .unwrap()
+            .u32_tensor("replay.hash", &[4, 2])
+            .unwrap()
+            .iter()
+            .collect();
+        let file = sinew_core::SinewFile::from_bytes(&bad).unwrap();
+        let mut w = SinewWriter::from_file(&file).unwrap();
+        w.remove_prefixed("replay.hash");
+        w.u32s("replay.hash", &[4, 2], &hashes).unwrap();
+        let v = verify(&model, &w.to_bytes().unwrap()).unwrap();
+        assert_eq!(v.first_mismatch, Some(1));
+        assert!(v.frames[1].to_string().contains("DIFFERS"));
+        assert!(v.frames.iter().filter(|c| !c.ok()).count() == 1);
+    }
+
     #[test]
     fn a_corrupted_hash_names_its_frame() {
         let model = golden();
