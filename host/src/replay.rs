@@ -388,15 +388,14 @@ mod tests {
     /// The tiny synthetic decoder, and 4 frames of inputs.
     fn s2d_fixture() -> (Vec<u8>, Vec<Vec<f32>>, Vec<f32>) {
         let model = crate::s2d::synthetic::tiny_baked_decoder().1;
-        let d = S2dDecoder::from_bytes(&model).unwrap();
+        let (width, v) = {
+            let d = S2dDecoder::from_bytes(&model).unwrap();
+            (d.input_len(), d.vertex_count())
+        };
         let inputs = (0..4)
-            .map(|f| {
-                (0..d.input_len())
-                    .map(|i| (f * 7 + i) as f32 * 0.01)
-                    .collect()
-            })
+            .map(|f| (0..width).map(|i| (f * 7 + i) as f32 * 0.01).collect())
             .collect();
-        let neutral = (0..3 * d.vertex_count()).map(|i| i as f32 * 0.1).collect();
+        let neutral = (0..3 * v).map(|i| i as f32 * 0.1).collect();
         (model, inputs, neutral)
     }
 
@@ -407,18 +406,31 @@ mod tests {
             let r = record_s2d(&model, &inputs, n).unwrap();
             let v = verify(&model, &r).unwrap();
             assert_eq!((v.frames.len(), v.first_mismatch), (4, None));
-            assert_eq!(s2d_inputs(&r).unwrap(), (inputs.clone(), n.map(<[f32]>::to_vec)));
+            assert_eq!(
+                s2d_inputs(&r).unwrap(),
+                (inputs.clone(), n.map(<[f32]>::to_vec))
+            );
         }
         let with = record_s2d(&model, &inputs, Some(&neutral)).unwrap();
         let without = record_s2d(&model, &inputs, None).unwrap();
         // Decoding onto another neutral changes every frame's hash.
-        let (a, b) = (verify(&model, &with).unwrap(), verify(&model, &without).unwrap());
-        assert!(a.frames.iter().zip(&b.frames).all(|(x, y)| x.hash != y.hash));
+        let (a, b) = (
+            verify(&model, &with).unwrap(),
+            verify(&model, &without).unwrap(),
+        );
+        assert!(
+            a.frames
+                .iter()
+                .zip(&b.frames)
+                .all(|(x, y)| x.hash != y.hash)
+        );
         // Another decoder (one metadata entry more) is refused by content hash.
         let file = sinew_core::SinewFile::from_bytes(&model).unwrap();
         let mut w = SinewWriter::from_file(&file).unwrap();
         w.meta("note", "another model");
-        let err = verify(&w.to_bytes().unwrap(), &with).unwrap_err().to_string();
+        let err = verify(&w.to_bytes().unwrap(), &with)
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("recorded with model"), "{err}");
         // An AIM actor with an S2D replay, and an S2D decoder with an AIM replay.
         let err = verify(&golden(), &with).unwrap_err().to_string();
@@ -429,9 +441,13 @@ mod tests {
         let err = verify(&model, &aim_replay).unwrap_err().to_string();
         assert!(err.contains("AIM replay"), "{err}");
         // Recording refuses wrong lengths, naming them.
-        let err = record_s2d(&model, &[vec![0.0; 5]], None).unwrap_err().to_string();
+        let err = record_s2d(&model, &[vec![0.0; 5]], None)
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("frame 0 has 5 inputs"), "{err}");
-        let err = record_s2d(&model, &inputs, Some(&neutral[1..])).unwrap_err().to_string();
+        let err = record_s2d(&model, &inputs, Some(&neutral[1..]))
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("neutral"), "{err}");
     }
 
