@@ -176,11 +176,15 @@ pub fn record_s2d(model: &[u8], inputs: &[Vec<f32>], neutral: Option<&[f32]>) ->
     w.to_bytes()
 }
 
-/// An S2D replay's frame inputs and neutral, as [`record_s2d`] takes them.
+/// An S2D replay's inputs as [`record_s2d`] takes them: each frame's decoder input, and the
+/// neutral if the replay has one.
+pub type S2dInputs = (Vec<Vec<f32>>, Option<Vec<f32>>);
+
+/// An S2D replay's frame inputs and neutral ([`S2dInputs`]).
 ///
 /// # Errors
 /// If `replay` is not a valid S2D replay.
-pub fn s2d_inputs(replay: &[u8]) -> Result<(Vec<Vec<f32>>, Option<Vec<f32>>)> {
+pub fn s2d_inputs(replay: &[u8]) -> Result<S2dInputs> {
     let r = S2dReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
     let mut frames = Vec::with_capacity(r.frames());
     for f in 0..r.frames() {
