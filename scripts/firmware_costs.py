@@ -25,7 +25,11 @@ DOC = ROOT / "docs" / "BENCHMARKS.md"
 START, END = "<!-- firmware-costs:start -->", "<!-- firmware-costs:end -->"
 
 COST = re.compile(r"^cost (\S+) frame (\d+) \(instructions\): (.*)$")
+S2D_COST = re.compile(r"^s2d cost (\S+) frame (\d+) \(instructions\): (.*)$")
 HEADER = re.compile(r"^sinew-firmware-sim(?:-riscv)?: [^,]+, (\S+): (\d+) vertices, (\d+) shapes")
+S2D_HEADER = re.compile(
+    r"^sinew-firmware-sim(?:-riscv)?: [^,]+, (\S+): (\d+) vertices, (\d+) inputs, \d+ frames, (\d+) buffer values"
+)
 FRAME = re.compile(r"^frame +\d+ [0-9a-f]{16} ok +~?(\d+) instructions")
 STACK = re.compile(r"^stack high-water (\d+) bytes")
 
@@ -48,7 +52,15 @@ def parse(text: str):
     costs, frames, sizes, stack = {}, {}, {}, None
     current = None
     for line in text.splitlines():
-        if m := HEADER.match(line):
+        if m := S2D_HEADER.match(line):
+            current = m.group(1)
+            sizes[current] = (int(m.group(2)), int(m.group(3)), int(m.group(4)))
+            frames[current] = []
+        elif m := S2D_COST.match(line):
+            costs["s2d:" + m.group(1).rsplit(".", 1)[0]] = dict(
+                kv.split("=") for kv in m.group(3).split()
+            )
+        elif m := HEADER.match(line):
             current = m.group(1)
             sizes[current] = (int(m.group(2)), int(m.group(3)))
             frames[current] = []
@@ -89,6 +101,7 @@ def main() -> None:
     rv = run("riscv")
     arm_costs, arm_frames, sizes, stack = parse(arm)
     rv_costs, rv_frames, _, _ = parse(rv)
+    s2d_values = max((s[2] for s in sizes.values() if len(s) == 3), default=0)
     sec, flash, ram = footprint(TARGET / "thumbv7em-none-eabihf/release/sinew-firmware-sim")
     lines = [START, ""]
     lines += [
@@ -105,17 +118,29 @@ def main() -> None:
         "normals_fast": "vertex normals, fast (micromath)",
         "hash": "frame hash (replay check only)",
     }
-    for actor in arm_costs:
+    for actor in (a for a in arm_costs if not a.startswith("s2d:")):
         v, m = sizes[f"{actor}.f32"]
         for key, label in names.items():
             lines.append(
                 f"| {actor} ({v:,} vertices, {m} correctives) | {label} | "
                 f"{mil(int(arm_costs[actor][key]))} | {mil(int(rv_costs[actor][key]))} |"
             )
+    s2d_names = {
+        "decode": "decode (FC, up-samplings, spiral convolutions, + neutral)",
+        "hash": "frame hash (replay check only)",
+    }
+    for key in (a for a in arm_costs if a.startswith("s2d:")):
+        decoder = key.removeprefix("s2d:")
+        v, i, _ = sizes[f"{decoder}.f32"]
+        for phase, label in s2d_names.items():
+            lines.append(
+                f"| {decoder} (S2D decoder, {v:,} vertices, {i} inputs) | {label} | "
+                f"{mil(int(arm_costs[key][phase]))} | {mil(int(rv_costs[key][phase]))} |"
+            )
     lines += [
         "",
         "Whole frames as the replays run them (f32 and fast: pose + normals + hash; q16: pose +",
-        "hash), mean over the 16 frames:",
+        "hash; S2D: decode + hash), mean over the 16 frames:",
         "",
         "| replay | Cortex-M4F | RISC-V |",
         "|---|---|---|",
@@ -126,7 +151,8 @@ def main() -> None:
     lines += [
         "",
         "Cortex-M4F image (`firmware-sim/cortex-m`, release; both golden actors in flash, the ICT one",
-        "with its Q16.16 cache):",
+        "with its Q16.16 cache, and the golden S2D decoder; the S2D replay decodes in the AIM frame",
+        f"buffers, {s2d_values:,} of their {6 * 5120:,} values):",
         "",
         "| | bytes |",
         "|---|---|",

@@ -7,8 +7,14 @@
 //! inputs are `replay.aim`, `[F, 18 + M]` per frame: head `[6D rotation, translation]`, jaw
 //! `[6D rotation, translation]` about the actor's pivot, then the `M` coefficients.
 //!
-//! [`frame_hash`] is the one definition of a frame's hash in each mode; recording (host) and
-//! verification (every target) both call it.
+//! S2D replays ([`S2dReplay`]) carry `replay.s2d` instead, `[F, inputs]`: each frame's decoder
+//! input ([`crate::s2d::landmark_input`] of a neutral and an expressive landmark set), and
+//! optionally `replay.neutral`, `[V, 3]`, the neutral face the displacements are added to
+//! ([`S2dDecoder::decode_onto`]; without it, the decoder's own template, [`S2dDecoder::decode`]).
+//! Their mode is always `f32`.
+//!
+//! [`frame_hash`] (AIM) and [`s2d_frame_hash`] (S2D) are the one definition of a frame's hash;
+//! recording (host) and verification (every target) both call them.
 
 use core::fmt;
 
@@ -17,6 +23,7 @@ use crate::error::{BufferError, FormatError};
 use crate::format::{ArtifactKind, SinewFile};
 use crate::hash::FrameHasher;
 use crate::q16::{PoseQ16, Q16, q16_slice};
+use crate::s2d::S2dDecoder;
 use crate::tensor::{F32s, U32s};
 
 /// Values per AIM frame before the coefficients: head 9, jaw 9.
@@ -194,6 +201,20 @@ pub enum ReplayError {
     },
     /// Q16 mode asked of an actor baked without a Q16.16 cache.
     NoQ16Cache,
+    /// The replay's input width differs from the S2D decoder's.
+    InputCount {
+        /// The replay's.
+        replay: usize,
+        /// The decoder's.
+        model: usize,
+    },
+    /// The replay's neutral has another vertex count than the S2D decoder's template.
+    NeutralVertices {
+        /// Vertices of the replay's neutral.
+        replay: usize,
+        /// Vertices the decoder outputs.
+        model: usize,
+    },
     /// A caller buffer has the wrong length.
     Buffer(BufferError),
 }
@@ -210,6 +231,14 @@ impl fmt::Display for ReplayError {
                 "replay has {replay} coefficients per frame, the actor {actor}"
             ),
             Self::NoQ16Cache => write!(f, "q16 mode needs a model baked with a Q16.16 cache"),
+            Self::InputCount { replay, model } => write!(
+                f,
+                "replay has {replay} inputs per frame, the S2D decoder {model}"
+            ),
+            Self::NeutralVertices { replay, model } => write!(
+                f,
+                "replay's neutral has {replay} vertices, the S2D decoder's template {model}"
+            ),
             Self::Buffer(e) => write!(f, "{e}"),
         }
     }
@@ -366,6 +395,211 @@ pub fn verify(
             .frame(f, buf.weights)
             .ok_or(ReplayError::Buffer(BufferError::Input))?;
         let hash = frame_hash(actor, replay.mode(), &head, &jaw, buf)?;
+        let check = FrameCheck {
+            frame: f,
+            hash,
+            expected: replay.expected(f).unwrap_or(!hash),
+        };
+        if !check.ok() && first_bad.is_none() {
+            first_bad = Some(f);
+        }
+        on_frame(&check);
+    }
+    Ok(first_bad)
+}
+
+/// The section of an S2D replay's per-frame decoder inputs.
+pub const S2D_INPUTS: &str = "replay.s2d";
+/// The section of an S2D replay's optional neutral face.
+pub const S2D_NEUTRAL: &str = "replay.neutral";
+
+/// A validated S2D replay over the artefact's bytes.
+#[derive(Clone, Copy, Debug)]
+pub struct S2dReplay<'a> {
+    model_hash: u64,
+    frames: usize,
+    inputs: usize,
+    data: F32s<'a>,
+    neutral: Option<F32s<'a>>,
+    hashes: U32s<'a>,
+}
+
+impl<'a> S2dReplay<'a> {
+    /// Validates `bytes` as an S2D replay.
+    ///
+    /// # Errors
+    /// A [`FormatError`] for a bad container, a missing or misshapen section, a mode other than
+    /// `f32`, no frames, or a neutral that is not `[V, 3]`.
+    pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
+        let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::Replay)?;
+        let model = file.u32_tensor("replay.model", &[2])?;
+        if file.metadata().get("mode").and_then(Mode::from_name) != Some(Mode::F32) {
+            return Err(FormatError::UnknownCode);
+        }
+        let (shape, rank) = file.dims_of(S2D_INPUTS)?;
+        let [frames, width, ..] = shape;
+        if rank != 2 || frames == 0 || width == 0 {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        let neutral = match file.section(S2D_NEUTRAL) {
+            None => None,
+            Some(_) => {
+                let ([v, three, ..], rank) = file.dims_of(S2D_NEUTRAL)?;
+                if rank != 2 || three != 3 || v == 0 {
+                    return Err(FormatError::IncompatibleShapes);
+                }
+                Some(file.f32_tensor(S2D_NEUTRAL, &[v, 3])?)
+            }
+        };
+        Ok(Self {
+            model_hash: u64::from(model.at(0)) | (u64::from(model.at(1)) << 32),
+            frames: frames as usize,
+            inputs: width as usize,
+            data: file.f32_tensor(S2D_INPUTS, &[frames, width])?,
+            neutral,
+            hashes: file.u32_tensor("replay.hash", &[frames, 2])?,
+        })
+    }
+
+    /// The content hash ([`model_hash`]) of the decoder this replay was recorded with.
+    pub const fn model_hash(&self) -> u64 {
+        self.model_hash
+    }
+
+    /// Number of frames (at least one).
+    pub const fn frames(&self) -> usize {
+        self.frames
+    }
+
+    /// Decoder inputs per frame.
+    pub const fn input_len(&self) -> usize {
+        self.inputs
+    }
+
+    /// The neutral the frames decode onto, `[V, 3]`, if the replay carries one.
+    pub const fn neutral(&self) -> Option<F32s<'a>> {
+        self.neutral
+    }
+
+    /// Copies frame `f`'s decoder input into `input` (`[inputs]`). `None` if `f` is past the
+    /// end or `input` has the wrong length.
+    pub fn frame(&self, f: usize, input: &mut [f32]) -> Option<()> {
+        if f >= self.frames || input.len() != self.inputs {
+            return None;
+        }
+        let row = self.data.slice(f * self.inputs, self.inputs);
+        for (i, x) in input.iter_mut().enumerate() {
+            *x = row.at(i);
+        }
+        Some(())
+    }
+
+    /// The recorded hash of frame `f`.
+    pub fn expected(&self, f: usize) -> Option<u64> {
+        let lo = self.hashes.get(2 * f)?;
+        let hi = self.hashes.get(2 * f + 1)?;
+        Some(u64::from(lo) | (u64::from(hi) << 32))
+    }
+}
+
+/// Caller-owned buffers for one S2D frame of a decoder with `I` inputs and `V` vertices.
+#[derive(Debug)]
+pub struct S2dBuffers<'b> {
+    /// `[I]` the frame's decoder input.
+    pub input: &'b mut [f32],
+    /// `[V, 3]` the neutral to decode onto, or empty to decode onto the decoder's template.
+    pub neutral: &'b mut [f32],
+    /// At least [`S2dDecoder::scratch_len`] values.
+    pub scratch: &'b mut [f32],
+    /// `[V, 3]` the decoded vertices.
+    pub vertices: &'b mut [f32],
+}
+
+/// Decodes one frame (`buf.input`) onto `buf.neutral`, or onto the decoder's template when
+/// `buf.neutral` is empty, into `buf.vertices`, and returns the frame's hash: the decoded
+/// vertices' bits ([`FrameHasher::write_f32s`]).
+///
+/// # Errors
+/// [`ReplayError::Buffer`] if a buffer has the wrong length.
+pub fn s2d_frame_hash(
+    decoder: &S2dDecoder<'_>,
+    buf: &mut S2dBuffers<'_>,
+) -> Result<u64, ReplayError> {
+    if buf.neutral.is_empty() {
+        decoder.decode(buf.input, buf.scratch, buf.vertices)?;
+    } else {
+        decoder.decode_onto(buf.neutral, buf.input, buf.scratch, buf.vertices)?;
+    }
+    let mut h = FrameHasher::new();
+    h.write_f32s(buf.vertices);
+    Ok(h.finish())
+}
+
+/// Checks that `replay` was recorded with the decoder whose bytes are `model_bytes` (content
+/// hash) and that its input width and neutral fit `decoder`.
+///
+/// # Errors
+/// [`ReplayError::WrongModel`], [`ReplayError::InputCount`] or
+/// [`ReplayError::NeutralVertices`].
+pub fn check_s2d_model(
+    model_bytes: &[u8],
+    decoder: &S2dDecoder<'_>,
+    replay: &S2dReplay<'_>,
+) -> Result<(), ReplayError> {
+    let found = model_hash(model_bytes);
+    if found != replay.model_hash() {
+        return Err(ReplayError::WrongModel {
+            expected: replay.model_hash(),
+            found,
+        });
+    }
+    if replay.input_len() != decoder.input_len() {
+        return Err(ReplayError::InputCount {
+            replay: replay.input_len(),
+            model: decoder.input_len(),
+        });
+    }
+    if let Some(n) = replay.neutral()
+        && n.len() != 3 * decoder.vertex_count()
+    {
+        return Err(ReplayError::NeutralVertices {
+            replay: n.len() / 3,
+            model: decoder.vertex_count(),
+        });
+    }
+    Ok(())
+}
+
+/// Plays `replay` through `decoder` frame by frame, calling `on_frame` after each; returns the
+/// first frame whose hash differs, or `None` when every frame matched. `buf.neutral` must be
+/// `[V, 3]` when the replay carries a neutral (it is copied in here) and empty otherwise.
+///
+/// # Errors
+/// [`ReplayError`] if the replay belongs to another decoder, does not fit it, or a buffer has
+/// the wrong length.
+pub fn verify_s2d(
+    model_bytes: &[u8],
+    decoder: &S2dDecoder<'_>,
+    replay: &S2dReplay<'_>,
+    buf: &mut S2dBuffers<'_>,
+    mut on_frame: impl FnMut(&FrameCheck),
+) -> Result<Option<usize>, ReplayError> {
+    check_s2d_model(model_bytes, decoder, replay)?;
+    match replay.neutral() {
+        Some(n) if n.len() == buf.neutral.len() => {
+            for (d, s) in buf.neutral.iter_mut().zip(n.iter()) {
+                *d = s;
+            }
+        }
+        None if buf.neutral.is_empty() => {}
+        _ => return Err(ReplayError::Buffer(BufferError::Input)),
+    }
+    let mut first_bad = None;
+    for f in 0..replay.frames() {
+        replay
+            .frame(f, buf.input)
+            .ok_or(ReplayError::Buffer(BufferError::Input))?;
+        let hash = s2d_frame_hash(decoder, buf)?;
         let check = FrameCheck {
             frame: f,
             hash,

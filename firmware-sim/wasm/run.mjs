@@ -1,4 +1,4 @@
-// Runs the golden AIM replays compiled to wasm32-unknown-unknown under node.
+// Runs the golden AIM and S2D replays compiled to wasm32-unknown-unknown under node.
 //
 // Usage: node run.mjs [path/to/sinew_firmware_wasm.wasm]
 // Without a path it looks in ../target (run.sh's shared target directory), then ./target.
@@ -53,5 +53,18 @@ const bad = frames.filter((f) => !f.ok).length;
 console.log(`sinew-firmware-wasm: ${frames.length - bad}/${frames.length} frames bit-identical to the host`);
 // Cross-check the module's count with what it reported, and refuse a run that checked nothing.
 if (result !== 0 || bad !== 0 || frames.length === 0) {
+  process.exit(1);
+}
+// The S2D decoder (reported as frames 8:0…).
+const aimFrames = frames.length;
+const s2d = instance.exports.sinew_replay_s2d() >>> 0;
+if (s2d === LOAD_ERROR) {
+  console.error("sinew-firmware-wasm: the S2D replay could not load the decoder or the replay");
+  process.exit(1);
+}
+const s2dFrames = frames.slice(aimFrames);
+const s2dBad = s2dFrames.filter((f) => !f.ok).length;
+console.log(`sinew-firmware-wasm: ${s2dFrames.length - s2dBad}/${s2dFrames.length} S2D frames bit-identical to the host`);
+if (s2d !== 0 || s2dBad !== 0 || s2dFrames.length === 0) {
   process.exit(1);
 }

@@ -522,7 +522,26 @@ pub fn bake(
     crate::atomic::write(out, &bytes)
 }
 
-/// `sinew replay record`: returns the number of frames recorded.
+/// One frame of an S2D input file.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct S2dInputFrame {
+    /// The decoder input, `[I]` (`sinew_core::s2d::landmark_input`).
+    input: Vec<f32>,
+}
+
+/// The input file of an S2D replay: the frames, and optionally the neutral to decode onto.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct S2dInputFile {
+    frames: Vec<S2dInputFrame>,
+    #[serde(default)]
+    neutral: Option<Vec<f32>>,
+}
+
+/// `sinew replay record`: returns the number of frames recorded. An AIM actor takes a pose file;
+/// an S2D decoder takes `{"frames": [{"input": [I]}, ...], "neutral": [V·3]}` (neutral
+/// optional).
 pub fn replay_record(
     model: &Path,
     poses: &Path,
@@ -530,6 +549,26 @@ pub fn replay_record(
     mode: sinew_core::replay::Mode,
 ) -> Result<usize> {
     let bytes = crate::container::read(model)?;
+    if sinew_core::SinewFile::from_bytes(&bytes)
+        .is_ok_and(|f| f.kind == sinew_core::ArtifactKind::S2dDecoder)
+    {
+        if mode != sinew_core::replay::Mode::F32 {
+            anyhow::bail!("S2D replays are f32 only (--mode {mode})");
+        }
+        let text = std::fs::read_to_string(poses)
+            .with_context(|| format!("{}: cannot read", poses.display()))?;
+        let file: S2dInputFile = serde_json::from_str(&text).with_context(|| {
+            format!(
+                "{}: not an S2D input file {{\"frames\": [{{\"input\": [I]}}, ...], \"neutral\": [V·3]?}}",
+                poses.display()
+            )
+        })?;
+        let inputs: Vec<Vec<f32>> = file.frames.into_iter().map(|f| f.input).collect();
+        let replay = crate::replay::record_s2d(&bytes, &inputs, file.neutral.as_deref())
+            .with_context(|| format!("recording {} with {}", poses.display(), model.display()))?;
+        crate::atomic::write(out, &replay)?;
+        return Ok(inputs.len());
+    }
     let actor =
         AimActor::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
     let file = PoseFile::read(poses, actor.shape_count())?;

@@ -11,6 +11,7 @@ use sinew_host::aim::run::Outputs;
 use sinew_host::backend::Backend;
 use sinew_host::commands;
 use sinew_host::s2d::data::PairsConfig;
+use sinew_host::s2d::decoder::DecoderConfig;
 use sinew_host::s2d::experiment::{self, DEFAULT_EPOCHS, Objective, TrainS2d};
 use sinew_host::s2d::hierarchy::{Config, DEFAULT_FACTORS};
 use sinew_host::s2d::protocol::{FOLDS, Protocol};
@@ -125,6 +126,10 @@ enum Data {
         /// Most expression shapes combined in one pair.
         #[arg(long, default_value_t = PairsConfig::default().max_shapes)]
         max_shapes: usize,
+        /// Decimate the face region by this factor (quadric decimation; landmarks move to the
+        /// nearest kept vertex): data for decoders small enough for microcontrollers.
+        #[arg(long)]
+        decimate: Option<usize>,
     },
 }
 
@@ -133,10 +138,12 @@ enum Replay {
     /// Play a pose file through sinew-core and record each frame's hash with the model's content
     /// hash into a replay (.sinew).
     Record {
-        /// The baked actor.
+        /// The baked actor, or a baked S2D decoder.
         #[arg(long)]
         model: PathBuf,
-        /// Pose file: {"frames": [{"head": [9], "jaw": [9], "weights": [M]}, ...]}.
+        /// Pose file: {"frames": [{"head": [9], "jaw": [9], "weights": [M]}, ...]}; for an S2D
+        /// decoder {"frames": [{"input": [I]}, ...], "neutral": [V·3]} (neutral optional: without
+        /// it the frames decode onto the decoder's template).
         #[arg(long)]
         poses: PathBuf,
         /// Output replay (.sinew).
@@ -150,7 +157,7 @@ enum Replay {
     /// Play a replay through sinew-core and compare every frame's hash with the recorded one;
     /// fails naming the first frame that differs.
     Verify {
-        /// The baked actor the replay was recorded with.
+        /// The baked actor (or S2D decoder) the replay was recorded with.
         #[arg(long)]
         model: PathBuf,
         /// The replay (.sinew).
@@ -280,6 +287,16 @@ struct TrainS2dArgs {
     /// Say nothing while training.
     #[arg(long)]
     quiet: bool,
+    /// Decimation factor of each hierarchy level, comma-separated (one per stage).
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_FACTORS)]
+    factors: Vec<usize>,
+    /// Features per coarsest-level vertex after the fully connected layer.
+    #[arg(long, default_value_t = DecoderConfig::default().fc_features)]
+    fc_features: usize,
+    /// Filters of each up-sampling stage, coarsest first, comma-separated (one per factor;
+    /// default: the reference's 64,32,32,16).
+    #[arg(long, value_delimiter = ',')]
+    filters: Option<Vec<usize>>,
 }
 
 #[derive(Debug, Args)]
@@ -496,6 +513,12 @@ fn run(cli: Cli) -> Result<()> {
                 out: args.out,
                 report: args.report.clone(),
                 backend: args.backend,
+                decoder: DecoderConfig {
+                    fc_features: args.fc_features,
+                    filters: args.filters.unwrap_or(DecoderConfig::default().filters),
+                    ..DecoderConfig::default()
+                },
+                factors: args.factors,
             };
             let r = experiment::train_s2d(&job, args.quiet)?;
             print_s2d(&r, &args.report);
@@ -637,6 +660,7 @@ fn run(cli: Cli) -> Result<()> {
             identities,
             pairs,
             max_shapes,
+            decimate,
         }) => {
             let seed = seed
                 .or_else(|| std::env::var("SINEW_SEED").ok()?.parse().ok())
@@ -649,7 +673,7 @@ fn run(cli: Cli) -> Result<()> {
             };
             config.validate()?;
             eprintln!("seed {seed} (override with --seed or SINEW_SEED)");
-            let set = sinew_host::s2d::data::generate_to(&data, &out, &config)?;
+            let set = sinew_host::s2d::data::generate_to(&data, &out, &config, decimate)?;
             println!(
                 "{}: {} pairs of {} identities over {} expression shapes in {} groups, {} vertices",
                 out.display(),

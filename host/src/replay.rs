@@ -2,15 +2,20 @@
 //! sequence and the hash of every frame `sinew-core` computes from it, in one numeric mode. The
 //! frames are hashed by `sinew_core::replay::frame_hash`, the same function every firmware target
 //! runs, so a replay recorded here verifies bit for bit anywhere.
+//!
+//! S2D decoders have replays of their own ([`record_s2d`]): per frame the decoder input, and
+//! optionally the neutral face the frames decode onto. [`verify`] tells the kinds apart by the
+//! model artefact and refuses a replay of the other kind by name.
 
 use anyhow::{Result, anyhow, bail};
 use sinew_core::aim::AimActor;
 use sinew_core::format::ArtifactKind;
 use sinew_core::q16::Q16;
 use sinew_core::replay::{
-    AimReplay, FrameBuffers, FrameCheck, Mode, frame_hash, model_hash, pose_frame,
-    verify as core_verify,
+    AimReplay, FrameBuffers, FrameCheck, Mode, S2D_INPUTS, S2D_NEUTRAL, S2dBuffers, S2dReplay,
+    frame_hash, model_hash, pose_frame, s2d_frame_hash, verify as core_verify, verify_s2d,
 };
+use sinew_core::s2d::S2dDecoder;
 
 use crate::SinewWriter;
 use crate::commands::Frame;
@@ -100,14 +105,136 @@ pub struct Verification {
     pub first_mismatch: Option<usize>,
 }
 
-/// Plays the replay in `replay` through the actor in `model` with `sinew-core` and compares every
-/// frame's hash with the recorded one.
+/// Whether `replay` is an S2D replay (it has the `replay.s2d` section) rather than an AIM one.
+fn is_s2d_replay(replay: &[u8]) -> bool {
+    sinew_core::SinewFile::from_bytes(replay).is_ok_and(|f| f.section(S2D_INPUTS).is_some())
+}
+
+/// Whether `model` is an S2D decoder artefact.
+fn is_s2d_model(model: &[u8]) -> bool {
+    sinew_core::SinewFile::from_bytes(model).is_ok_and(|f| f.kind == ArtifactKind::S2dDecoder)
+}
+
+/// Records an S2D replay: each of `inputs` (`[I]` decoder inputs, from
+/// `sinew_core::s2d::landmark_input`) decoded by the decoder in `model` onto `neutral` (`[V, 3]`)
+/// or, without it, onto the decoder's template, and hashed by `s2d_frame_hash`.
 ///
 /// # Errors
-/// If either file is invalid, the replay was recorded with another model, or the mode is
-/// unavailable for this model. A differing frame is not an error: see
+/// If `model` is not an S2D decoder, there are no frames, or a frame's input or the neutral has
+/// the wrong length.
+pub fn record_s2d(model: &[u8], inputs: &[Vec<f32>], neutral: Option<&[f32]>) -> Result<Vec<u8>> {
+    let decoder = S2dDecoder::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
+    if inputs.is_empty() {
+        bail!("a replay needs at least one frame");
+    }
+    let (width, v) = (decoder.input_len(), decoder.vertex_count());
+    if let Some(n) = neutral
+        && n.len() != 3 * v
+    {
+        bail!(
+            "the neutral has {} values, the decoder's template {v} vertices (× 3)",
+            n.len()
+        );
+    }
+    let mut input = vec![0.0f32; width];
+    let mut neutral_buf = neutral.map(<[f32]>::to_vec).unwrap_or_default();
+    let mut scratch = vec![0.0f32; decoder.scratch_len()];
+    let mut vertices = vec![0.0f32; 3 * v];
+    let mut flat = Vec::with_capacity(inputs.len() * width);
+    let mut hashes = Vec::with_capacity(2 * inputs.len());
+    for (i, x) in inputs.iter().enumerate() {
+        if x.len() != width {
+            bail!("frame {i} has {} inputs, the decoder {width}", x.len());
+        }
+        input.copy_from_slice(x);
+        let mut buf = S2dBuffers {
+            input: &mut input,
+            neutral: &mut neutral_buf,
+            scratch: &mut scratch,
+            vertices: &mut vertices,
+        };
+        let h = s2d_frame_hash(&decoder, &mut buf).map_err(|e| anyhow!("frame {i}: {e}"))?;
+        flat.extend_from_slice(x);
+        hashes.extend([h as u32, (h >> 32) as u32]);
+    }
+    let content = model_hash(model);
+    let mut w = SinewWriter::new(ArtifactKind::Replay);
+    w.meta("mode", Mode::F32.name())
+        .meta("model", format!("{content:016x}"))
+        .meta("frames", inputs.len())
+        .meta("content", "s2d-replay");
+    w.u32s(
+        "replay.model",
+        &[2],
+        &[content as u32, (content >> 32) as u32],
+    )?;
+    w.f32s(S2D_INPUTS, &[inputs.len(), width], &flat)?;
+    if let Some(n) = neutral {
+        w.f32s(S2D_NEUTRAL, &[v, 3], n)?;
+    }
+    w.u32s("replay.hash", &[inputs.len(), 2], &hashes)?;
+    w.to_bytes()
+}
+
+/// An S2D replay's inputs as [`record_s2d`] takes them: each frame's decoder input, and the
+/// neutral if the replay has one.
+pub type S2dInputs = (Vec<Vec<f32>>, Option<Vec<f32>>);
+
+/// An S2D replay's frame inputs and neutral ([`S2dInputs`]).
+///
+/// # Errors
+/// If `replay` is not a valid S2D replay.
+pub fn s2d_inputs(replay: &[u8]) -> Result<S2dInputs> {
+    let r = S2dReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
+    let mut frames = Vec::with_capacity(r.frames());
+    for f in 0..r.frames() {
+        let mut x = vec![0.0f32; r.input_len()];
+        r.frame(f, &mut x)
+            .ok_or_else(|| anyhow!("replay: frame {f} unreadable"))?;
+        frames.push(x);
+    }
+    Ok((frames, r.neutral().map(|n| n.iter().collect())))
+}
+
+/// Plays an S2D replay through the decoder in `model` (see [`verify`]).
+fn verify_s2d_replay(model: &[u8], replay: &[u8]) -> Result<Verification> {
+    let decoder = S2dDecoder::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
+    let r = S2dReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
+    let v = decoder.vertex_count();
+    let mut input = vec![0.0f32; decoder.input_len()];
+    let mut neutral = vec![0.0f32; if r.neutral().is_some() { 3 * v } else { 0 }];
+    let mut scratch = vec![0.0f32; decoder.scratch_len()];
+    let mut vertices = vec![0.0f32; 3 * v];
+    let mut buf = S2dBuffers {
+        input: &mut input,
+        neutral: &mut neutral,
+        scratch: &mut scratch,
+        vertices: &mut vertices,
+    };
+    let mut frames = Vec::with_capacity(r.frames());
+    let first_mismatch = verify_s2d(model, &decoder, &r, &mut buf, |c| frames.push(*c))
+        .map_err(|e| anyhow!("{e}"))?;
+    Ok(Verification {
+        mode: Mode::F32,
+        frames,
+        first_mismatch,
+    })
+}
+
+/// Plays the replay in `replay` through the model in `model` (an AIM actor or an S2D decoder)
+/// with `sinew-core` and compares every frame's hash with the recorded one.
+///
+/// # Errors
+/// If either file is invalid, the replay is of the other model kind or was recorded with another
+/// model, or the mode is unavailable for this model. A differing frame is not an error: see
 /// [`Verification::first_mismatch`].
 pub fn verify(model: &[u8], replay: &[u8]) -> Result<Verification> {
+    match (is_s2d_model(model), is_s2d_replay(replay)) {
+        (true, true) => return verify_s2d_replay(model, replay),
+        (true, false) => bail!("the model is an S2D decoder, the replay an AIM replay"),
+        (false, true) => bail!("the replay is an S2D replay, the model is not an S2D decoder"),
+        (false, false) => {}
+    }
     let actor = AimActor::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
     let r = AimReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
     let mut buf = Buffers::for_actor(&actor);
@@ -260,6 +387,96 @@ mod tests {
         let f = dev(Mode::Fast);
         assert_eq!(f.max_mm, 0.0);
         assert!(f.max_normal_diff > 0.0 && f.max_normal_diff < 2e-3, "{f:?}");
+    }
+
+    /// The tiny synthetic decoder, and 4 frames of inputs.
+    fn s2d_fixture() -> (Vec<u8>, Vec<Vec<f32>>, Vec<f32>) {
+        let model = crate::s2d::synthetic::tiny_baked_decoder().1;
+        let (width, v) = {
+            let d = S2dDecoder::from_bytes(&model).unwrap();
+            (d.input_len(), d.vertex_count())
+        };
+        let inputs = (0..4)
+            .map(|f| (0..width).map(|i| (f * 7 + i) as f32 * 0.01).collect())
+            .collect();
+        let neutral = (0..3 * v).map(|i| i as f32 * 0.1).collect();
+        (model, inputs, neutral)
+    }
+
+    #[test]
+    fn s2d_record_then_verify_and_refusals() {
+        let (model, inputs, neutral) = s2d_fixture();
+        for n in [None, Some(neutral.as_slice())] {
+            let r = record_s2d(&model, &inputs, n).unwrap();
+            let v = verify(&model, &r).unwrap();
+            assert_eq!((v.frames.len(), v.first_mismatch), (4, None));
+            assert_eq!(
+                s2d_inputs(&r).unwrap(),
+                (inputs.clone(), n.map(<[f32]>::to_vec))
+            );
+        }
+        let with = record_s2d(&model, &inputs, Some(&neutral)).unwrap();
+        let without = record_s2d(&model, &inputs, None).unwrap();
+        // Decoding onto another neutral changes every frame's hash.
+        let (a, b) = (
+            verify(&model, &with).unwrap(),
+            verify(&model, &without).unwrap(),
+        );
+        assert!(
+            a.frames
+                .iter()
+                .zip(&b.frames)
+                .all(|(x, y)| x.hash != y.hash)
+        );
+        // Another decoder (one metadata entry more) is refused by content hash.
+        let file = sinew_core::SinewFile::from_bytes(&model).unwrap();
+        let mut w = SinewWriter::from_file(&file).unwrap();
+        w.meta("note", "another model");
+        let err = verify(&w.to_bytes().unwrap(), &with)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("recorded with model"), "{err}");
+        // An AIM actor with an S2D replay, and an S2D decoder with an AIM replay.
+        let err = verify(&golden(), &with).unwrap_err().to_string();
+        assert!(err.contains("S2D replay"), "{err}");
+        let aim = golden();
+        let m = AimActor::from_bytes(&aim).unwrap().shape_count();
+        let aim_replay = record(&aim, Mode::F32, &frames(m, 2)).unwrap();
+        let err = verify(&model, &aim_replay).unwrap_err().to_string();
+        assert!(err.contains("AIM replay"), "{err}");
+        // Recording refuses wrong lengths, naming them.
+        let err = record_s2d(&model, &[vec![0.0; 5]], None)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("frame 0 has 5 inputs"), "{err}");
+        let err = record_s2d(&model, &inputs, Some(&neutral[1..]))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("neutral"), "{err}");
+    }
+
+    #[test]
+    fn an_s2d_tampered_frame_is_named() {
+        let (model, inputs, neutral) = s2d_fixture();
+        let good = record_s2d(&model, &inputs, Some(&neutral)).unwrap();
+        // Frame 1's input changed after recording: re-record, then put the good hashes back.
+        let mut changed = inputs.clone();
+        changed[1][0] += 0.25;
+        let bad = record_s2d(&model, &changed, Some(&neutral)).unwrap();
+        let hashes: Vec<u32> = sinew_core::SinewFile::from_bytes(&good)
+            .unwrap()
+            .u32_tensor("replay.hash", &[4, 2])
+            .unwrap()
+            .iter()
+            .collect();
+        let file = sinew_core::SinewFile::from_bytes(&bad).unwrap();
+        let mut w = SinewWriter::from_file(&file).unwrap();
+        w.remove_prefixed("replay.hash");
+        w.u32s("replay.hash", &[4, 2], &hashes).unwrap();
+        let v = verify(&model, &w.to_bytes().unwrap()).unwrap();
+        assert_eq!(v.first_mismatch, Some(1));
+        assert!(v.frames[1].to_string().contains("DIFFERS"));
+        assert!(v.frames.iter().filter(|c| !c.ok()).count() == 1);
     }
 
     #[test]

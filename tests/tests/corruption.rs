@@ -43,6 +43,7 @@ fn load(kind: &str, bytes: &[u8]) -> Result<(), sinew_core::FormatError> {
     match kind {
         "network" => load_mlp(&SinewFile::from_bytes(bytes)?, "mlp").map(|_| ()),
         "replay" => sinew_core::replay::AimReplay::from_bytes(bytes).map(|_| ()),
+        "s2d-replay" => sinew_core::replay::S2dReplay::from_bytes(bytes).map(|_| ()),
         "s2d-decoder" => sinew_core::s2d::S2dDecoder::from_bytes(bytes).map(|_| ()),
         _ => sinew_core::aim::AimActor::from_bytes(bytes).map(|_| ()),
     }
@@ -54,7 +55,10 @@ fn artefacts() -> Vec<(&'static str, Vec<u8>)> {
         .expect("golden AIM actor (tests/data)");
     let replay = std::fs::read(sinew_tests::golden_dir().join("aim-procedural.q16.replay.sinew"))
         .expect("golden replay (tests/data)");
+    let s2d_replay = std::fs::read(sinew_tests::golden_dir().join("s2d-ict.replay.sinew"))
+        .expect("golden S2D replay (tests/data)");
     vec![
+        ("s2d-replay", s2d_replay),
         ("network", small_network()),
         ("aim-actor", aim),
         ("replay", replay),

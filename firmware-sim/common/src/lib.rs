@@ -4,8 +4,14 @@
 //! through `sinew-core` ([`sinew_core::replay::frame_hash`], the function the host recorded with)
 //! and compares hashes.
 //!
+//! The S2D golden ([`S2D_GOLDENS`], [`S2dRun`], [`replay_s2d`]) is a baked S2D decoder and its
+//! replay (each frame's decoder input, the neutral it decodes onto, the host's hash of the decoded
+//! vertices), played with [`sinew_core::replay::s2d_frame_hash`].
+//!
 //! Nothing here allocates: the frame buffers live in a caller-owned [`Scratch`] (a `static` on
-//! the microcontrollers), sized for up to [`MAX_VERTICES`] vertices.
+//! the microcontrollers), sized for up to [`MAX_VERTICES`] vertices. An S2D replay reuses the
+//! same `f32` buffers (the AIM positions and normals, [`S2D_ARENA`] values) for its input,
+//! neutral, decoded vertices and the decoder's activations, so it adds no RAM.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -36,8 +42,10 @@ use sinew_core::FormatError;
 use sinew_core::aim::{AimActor, MAX_SHAPES};
 use sinew_core::q16::Q16;
 use sinew_core::replay::{
-    AimReplay, FrameBuffers, FrameCheck, ReplayError, check_model, frame_hash,
+    AimReplay, FrameBuffers, FrameCheck, ReplayError, S2dBuffers, S2dReplay, check_model,
+    check_s2d_model, frame_hash, s2d_frame_hash,
 };
+use sinew_core::s2d::S2dDecoder;
 
 /// A golden model and one of its replays.
 #[derive(Clone, Copy, Debug)]
@@ -89,15 +97,28 @@ pub const GOLDENS: [Golden; 6] = [
     },
 ];
 
+/// The S2D golden: a decoder trained briefly on real ICT-FaceKit pairs (the face region
+/// decimated to 1,177 vertices) and 16 frames of real ICT expressions decoded onto another
+/// identity's neutral.
+pub const S2D_GOLDENS: [Golden; 1] = [Golden {
+    name: "s2d-ict.f32",
+    model: include_bytes!("../../../tests/data/s2d-ict.sinew"),
+    replay: include_bytes!("../../../tests/data/s2d-ict.replay.sinew"),
+}];
+
 /// Largest vertex count [`Scratch`] holds: the ICT golden actor fits, with the three frame
 /// buffers at 60 KiB each.
 pub const MAX_VERTICES: usize = 5120;
 
+/// `f32` values an S2D replay may use (the AIM positions and normals buffers): input, neutral,
+/// decoded vertices and [`S2dDecoder::scratch_len`] together.
+pub const S2D_ARENA: usize = 6 * MAX_VERTICES;
+
 /// Caller-owned buffers for one frame.
 #[derive(Clone, Debug)]
 pub struct Scratch {
-    positions: [f32; 3 * MAX_VERTICES],
-    normals: [f32; 3 * MAX_VERTICES],
+    /// AIM: positions (first half) and normals (second half); S2D: the arena of [`S2D_ARENA`].
+    frame: [f32; S2D_ARENA],
     positions_q16: [Q16; 3 * MAX_VERTICES],
     weights: [f32; MAX_SHAPES],
     weights_q16: [Q16; MAX_SHAPES],
@@ -107,12 +128,23 @@ impl Scratch {
     /// Zeroed buffers (a `const fn`, so a `static` can hold them).
     pub const fn new() -> Self {
         Self {
-            positions: [0.0; 3 * MAX_VERTICES],
-            normals: [0.0; 3 * MAX_VERTICES],
+            frame: [0.0; S2D_ARENA],
             positions_q16: [Q16::ZERO; 3 * MAX_VERTICES],
             weights: [0.0; MAX_SHAPES],
             weights_q16: [Q16::ZERO; MAX_SHAPES],
         }
+    }
+
+    /// The AIM frame buffers for `n` values each (`3 × vertices`) and `m` coefficients.
+    fn aim(&mut self, n: usize, m: usize) -> Option<FrameBuffers<'_>> {
+        let (positions, normals) = self.frame.split_at_mut_checked(3 * MAX_VERTICES)?;
+        Some(FrameBuffers {
+            positions: positions.get_mut(..n)?,
+            normals: normals.get_mut(..n)?,
+            positions_q16: self.positions_q16.get_mut(..n)?,
+            weights: self.weights.get_mut(..m)?,
+            weights_q16: self.weights_q16.get_mut(..m)?,
+        })
     }
 }
 
@@ -139,6 +171,11 @@ pub enum Error {
     /// The replay does not fit the model (another model's content hash, coefficient count,
     /// mode unavailable), or a buffer length is wrong.
     Playback(ReplayError),
+    /// An S2D decoder needs more buffer values than [`S2D_ARENA`].
+    S2dTooLarge {
+        /// Values needed: input, neutral, decoded vertices and the decoder's scratch.
+        values: usize,
+    },
 }
 
 impl fmt::Display for Error {
@@ -151,6 +188,10 @@ impl fmt::Display for Error {
                 "golden model has {vertices} vertices, more than the {MAX_VERTICES} the firmware holds"
             ),
             Self::Playback(e) => write!(f, "{e}"),
+            Self::S2dTooLarge { values } => write!(
+                f,
+                "golden S2D decoder needs {values} buffer values, more than the {S2D_ARENA} the firmware holds"
+            ),
         }
     }
 }
@@ -225,28 +266,14 @@ impl<'s> Replay<'s> {
     fn play(&mut self, f: usize) -> Result<FrameCheck, Error> {
         let n = 3 * self.actor.vertex_count();
         let m = self.actor.shape_count();
-        let s = &mut *self.scratch;
         // The lengths were checked in `new`; `get_mut` keeps the replay free of panics anyway.
-        let (Some(positions), Some(normals), Some(positions_q16), Some(weights), Some(weights_q16)) = (
-            s.positions.get_mut(..n),
-            s.normals.get_mut(..n),
-            s.positions_q16.get_mut(..n),
-            s.weights.get_mut(..m),
-            s.weights_q16.get_mut(..m),
-        ) else {
+        let Some(mut buf) = self.scratch.aim(n, m) else {
             return Err(Error::TooManyVertices {
                 vertices: self.actor.vertex_count(),
             });
         };
-        let Some((head, jaw)) = self.replay.frame(f, weights) else {
+        let Some((head, jaw)) = self.replay.frame(f, buf.weights) else {
             return Err(Error::Replay(FormatError::IncompatibleShapes));
-        };
-        let mut buf = FrameBuffers {
-            positions,
-            normals,
-            positions_q16,
-            weights,
-            weights_q16,
         };
         let hash = frame_hash(&self.actor, self.replay.mode(), &head, &jaw, &mut buf)
             .map_err(Error::Playback)?;
@@ -284,6 +311,186 @@ pub fn replay(
         summary.add(&r);
     }
     Ok(summary)
+}
+
+/// An S2D replay in progress: an iterator over its frames, so that a firmware can time each
+/// frame on its own.
+#[derive(Debug)]
+pub struct S2dRun<'s> {
+    decoder: S2dDecoder<'static>,
+    replay: S2dReplay<'static>,
+    next: usize,
+    arena: &'s mut [f32; S2D_ARENA],
+}
+
+impl<'s> S2dRun<'s> {
+    /// Validates the golden's decoder and replay, checks that the replay was recorded with this
+    /// decoder (content hash) and fits it, that the buffers fit in `scratch`, and copies the
+    /// replay's neutral into them.
+    pub fn new(golden: &Golden, scratch: &'s mut Scratch) -> Result<Self, Error> {
+        let decoder = S2dDecoder::from_bytes(golden.model).map_err(Error::Model)?;
+        let replay = S2dReplay::from_bytes(golden.replay).map_err(Error::Replay)?;
+        check_s2d_model(golden.model, &decoder, &replay).map_err(Error::Playback)?;
+        let mut run = Self {
+            decoder,
+            replay,
+            next: 0,
+            arena: &mut scratch.frame,
+        };
+        let values = run.needed();
+        let Some(buf) = run.buffers() else {
+            return Err(Error::S2dTooLarge { values });
+        };
+        if let Some(n) = replay.neutral() {
+            for (d, s) in buf.neutral.iter_mut().zip(n.iter()) {
+                *d = s;
+            }
+        }
+        Ok(run)
+    }
+
+    /// The loaded decoder.
+    pub const fn decoder(&self) -> &S2dDecoder<'static> {
+        &self.decoder
+    }
+
+    /// The loaded replay.
+    pub const fn replay(&self) -> &S2dReplay<'static> {
+        &self.replay
+    }
+
+    /// Buffer values the replay needs: input, neutral (if the replay has one), decoded
+    /// vertices, the decoder's scratch.
+    pub fn needed(&self) -> usize {
+        let v = 3 * self.decoder.vertex_count();
+        let neutral = if self.replay.neutral().is_some() {
+            v
+        } else {
+            0
+        };
+        self.decoder.input_len() + neutral + v + self.decoder.scratch_len()
+    }
+
+    /// The arena carved into input | neutral | vertices | scratch (`None` if it is too small).
+    fn buffers(&mut self) -> Option<S2dBuffers<'_>> {
+        let v = 3 * self.decoder.vertex_count();
+        let neutral = if self.replay.neutral().is_some() {
+            v
+        } else {
+            0
+        };
+        let (input, rest) = self.arena.split_at_mut_checked(self.decoder.input_len())?;
+        let (neutral, rest) = rest.split_at_mut_checked(neutral)?;
+        let (vertices, rest) = rest.split_at_mut_checked(v)?;
+        let scratch = rest.get_mut(..self.decoder.scratch_len())?;
+        Some(S2dBuffers {
+            input,
+            neutral,
+            scratch,
+            vertices,
+        })
+    }
+
+    /// Plays frame `f`.
+    fn play(&mut self, f: usize) -> Result<FrameCheck, Error> {
+        let (replay, decoder) = (self.replay, self.decoder.clone());
+        let values = self.needed();
+        let Some(mut buf) = self.buffers() else {
+            return Err(Error::S2dTooLarge { values });
+        };
+        if replay.frame(f, buf.input).is_none() {
+            return Err(Error::Replay(FormatError::IncompatibleShapes));
+        }
+        let hash = s2d_frame_hash(&decoder, &mut buf).map_err(Error::Playback)?;
+        Ok(FrameCheck {
+            frame: f,
+            hash,
+            expected: replay.expected(f).unwrap_or(!hash),
+        })
+    }
+}
+
+impl Iterator for S2dRun<'_> {
+    type Item = Result<FrameCheck, Error>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let f = self.next;
+        if f >= self.replay.frames() {
+            return None;
+        }
+        self.next += 1;
+        Some(self.play(f))
+    }
+}
+
+/// Plays every frame of the S2D `golden`, calling `report` after each one, and returns the
+/// totals.
+pub fn replay_s2d(
+    golden: &Golden,
+    scratch: &mut Scratch,
+    mut report: impl FnMut(&FrameCheck),
+) -> Result<Summary, Error> {
+    let mut summary = Summary::default();
+    for r in S2dRun::new(golden, scratch)? {
+        let r = r?;
+        report(&r);
+        summary.add(&r);
+    }
+    Ok(summary)
+}
+
+/// What one S2D frame costs, in the units of the counter given to [`s2d_costs`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct S2dCosts {
+    /// Decoding: the fully connected layer, up-samplings and spiral convolutions, and adding the
+    /// neutral.
+    pub decode: u64,
+    /// Hashing the decoded vertices (the replay check, not playback).
+    pub hash: u64,
+}
+
+impl fmt::Display for S2dCosts {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "decode={} hash={}", self.decode, self.hash)
+    }
+}
+
+/// Measures decoding and hashing of frame `frame` of the S2D `golden` separately with `now`.
+pub fn s2d_costs(
+    golden: &Golden,
+    frame: usize,
+    scratch: &mut Scratch,
+    mut now: impl FnMut() -> u64,
+) -> Result<S2dCosts, Error> {
+    use sinew_core::hash::FrameHasher;
+    let mut run = S2dRun::new(golden, scratch)?;
+    let (replay, decoder) = (run.replay, run.decoder.clone());
+    let values = run.needed();
+    let Some(buf) = run.buffers() else {
+        return Err(Error::S2dTooLarge { values });
+    };
+    if replay.frame(frame, buf.input).is_none() {
+        return Err(Error::Replay(FormatError::IncompatibleShapes));
+    }
+    let buffer = |e| Error::Playback(ReplayError::Buffer(e));
+    let mut costs = S2dCosts::default();
+    let t = now();
+    if buf.neutral.is_empty() {
+        decoder
+            .decode(buf.input, buf.scratch, buf.vertices)
+            .map_err(buffer)?;
+    } else {
+        decoder
+            .decode_onto(buf.neutral, buf.input, buf.scratch, buf.vertices)
+            .map_err(buffer)?;
+    }
+    costs.decode = now() - t;
+    let t = now();
+    let mut h = FrameHasher::new();
+    h.write_f32s(buf.vertices);
+    core::hint::black_box(h.finish());
+    costs.hash = now() - t;
+    Ok(costs)
 }
 
 /// What one frame of a golden actor costs, phase by phase, in the units of the counter given to
@@ -324,16 +531,16 @@ pub fn phase_costs(
     use sinew_core::q16::{PoseQ16, q16_slice};
     let r = Replay::new(golden, scratch)?;
     let (actor, replay) = (r.actor, r.replay);
-    let s = r.scratch;
     let n = 3 * actor.vertex_count();
     let m = actor.shape_count();
-    let (Some(positions), Some(normals), Some(positions_q16), Some(weights), Some(weights_q16)) = (
-        s.positions.get_mut(..n),
-        s.normals.get_mut(..n),
-        s.positions_q16.get_mut(..n),
-        s.weights.get_mut(..m),
-        s.weights_q16.get_mut(..m),
-    ) else {
+    let Some(FrameBuffers {
+        positions,
+        normals,
+        positions_q16,
+        weights,
+        weights_q16,
+    }) = r.scratch.aim(n, m)
+    else {
         return Err(Error::TooManyVertices {
             vertices: actor.vertex_count(),
         });
@@ -391,6 +598,82 @@ mod tests {
             // Frames differ from each other: the sequence really moves.
             assert_ne!(seen[0].hash, seen[15].hash, "{}", g.name);
         }
+    }
+
+    #[test]
+    fn the_s2d_golden_matches_the_host() {
+        for g in &S2D_GOLDENS {
+            let mut seen = Vec::new();
+            let s = replay_s2d(g, &mut scratch(), |r| seen.push(*r)).unwrap();
+            assert!(s.passed(), "{}", g.name);
+            assert_eq!(s.frames, 16, "{}", g.name);
+            assert_ne!(seen[1].hash, seen[15].hash, "{}", g.name);
+            let mut sc = scratch();
+            let run = S2dRun::new(g, &mut sc).unwrap();
+            assert!(run.needed() <= S2D_ARENA);
+            assert_eq!(run.decoder().vertex_count(), 1177);
+        }
+    }
+
+    #[test]
+    fn s2d_replay_of_another_model_or_kind_is_refused() {
+        // An AIM actor is no S2D decoder.
+        let g = Golden {
+            model: ICT,
+            ..S2D_GOLDENS[0]
+        };
+        let got = S2dRun::new(&g, &mut scratch()).map(|_| ());
+        assert!(matches!(got, Err(Error::Model(_))), "{got:?}");
+        // An AIM replay is no S2D replay.
+        let g = Golden {
+            replay: GOLDENS[3].replay,
+            ..S2D_GOLDENS[0]
+        };
+        let got = S2dRun::new(&g, &mut scratch()).map(|_| ());
+        assert!(matches!(got, Err(Error::Replay(_))), "{got:?}");
+        // The S2D replay against the AIM pipeline.
+        let g = Golden {
+            replay: S2D_GOLDENS[0].replay,
+            ..GOLDENS[3]
+        };
+        let got = Replay::new(&g, &mut scratch()).map(|_| ());
+        assert!(matches!(got, Err(Error::Replay(_))), "{got:?}");
+    }
+
+    #[test]
+    fn s2d_corrupted_recorded_hash_is_a_mismatch() {
+        let g = S2D_GOLDENS[0];
+        let mut bytes = g.replay.to_vec();
+        let file = sinew_core::SinewFile::from_bytes(g.replay).unwrap();
+        let s = file.section("replay.hash").unwrap();
+        let offset = s.data().as_ptr() as usize - g.replay.as_ptr() as usize;
+        bytes[offset + 11 * 8 + 3] ^= 0x40;
+        let fixed = refresh_crcs(bytes, &file, "replay.hash");
+        let leaked: &'static [u8] = Box::leak(fixed.into_boxed_slice());
+        let bad = Golden {
+            replay: leaked,
+            ..g
+        };
+        let mut wrong = Vec::new();
+        let sum = replay_s2d(&bad, &mut scratch(), |r| {
+            if !r.ok() {
+                wrong.push(r.frame);
+            }
+        })
+        .unwrap();
+        assert_eq!((sum.frames, sum.mismatches), (16, 1));
+        assert_eq!(wrong, [11]);
+    }
+
+    #[test]
+    fn s2d_costs_measure_both_phases() {
+        let mut clock = 0u64;
+        let c = s2d_costs(&S2D_GOLDENS[0], 8, &mut scratch(), || {
+            clock += 1;
+            clock
+        })
+        .unwrap();
+        assert_eq!(c, S2dCosts { decode: 1, hash: 1 });
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! Golden AIM replay on a Cortex-M4F (thumbv7em-none-eabihf, hardware single-precision FPU),
+//! Golden AIM and S2D replays on a Cortex-M4F (thumbv7em-none-eabihf, hardware single-precision FPU),
 //! run under `qemu-system-arm -machine mps2-an386` with semihosting.
 //!
 //! Plays the 16-frame golden sequence with `sinew-core`, prints each frame's hash and its cost,
@@ -13,7 +13,9 @@ use cortex_m_rt::{ExceptionFrame, entry, exception};
 use cortex_m_semihosting::{debug, heprintln, hprintln};
 use panic_semihosting as _;
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
-use sinew_firmware_common::{GOLDENS, Replay, Scratch, Summary, phase_costs};
+use sinew_firmware_common::{
+    GOLDENS, Replay, S2D_GOLDENS, S2dRun, Scratch, Summary, phase_costs, s2d_costs,
+};
 
 /// SysTick reload: the counter is 24 bits wide.
 const SYST_MAX: u32 = 0x00FF_FFFF;
@@ -190,6 +192,50 @@ fn run() -> bool {
         total.frames,
         GOLDENS.len()
     );
+    // The S2D decoder, in the same frame buffers.
+    let mut s2d = Summary::default();
+    for golden in &S2D_GOLDENS {
+        let mut run = match S2dRun::new(golden, scratch) {
+            Ok(r) => r,
+            Err(e) => {
+                heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
+                return false;
+            }
+        };
+        hprintln!(
+            "sinew-firmware-sim: cortex-m4f, {}: {} vertices, {} inputs, {} frames, {} buffer values",
+            golden.name,
+            run.decoder().vertex_count(),
+            run.decoder().input_len(),
+            run.replay().frames(),
+            run.needed()
+        );
+        // A frame (~30 M instructions) is far shorter than a SysTick period (671 M), but one in
+        // about twenty spans the counter's reload: the accumulating clock counts across it.
+        let mut clock = Clock {
+            last: SYST::get_current(),
+            total: 0,
+        };
+        loop {
+            let start = clock.now();
+            let Some(result) = run.next() else { break };
+            let instructions = clock.now() - start;
+            let check = match result {
+                Ok(r) => r,
+                Err(e) => {
+                    heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
+                    return false;
+                }
+            };
+            hprintln!("{}  ~{} instructions", check, instructions);
+            s2d.add(&check);
+        }
+    }
+    hprintln!(
+        "sinew-firmware-sim: {}/{} S2D frames bit-identical to the host",
+        s2d.frames - s2d.mismatches,
+        s2d.frames
+    );
     // Cost of each phase of one frame, per golden actor (the f32 replay stands for its model).
     for golden in GOLDENS.iter().filter(|g| g.name.ends_with(".f32")) {
         let mut clock = Clock {
@@ -204,8 +250,21 @@ fn run() -> bool {
             }
         }
     }
+    for golden in &S2D_GOLDENS {
+        let mut clock = Clock {
+            last: SYST::get_current(),
+            total: 0,
+        };
+        match s2d_costs(golden, 8, scratch, || clock.now()) {
+            Ok(c) => hprintln!("s2d cost {} frame 8 (instructions): {}", golden.name, c),
+            Err(e) => {
+                heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
+                return false;
+            }
+        }
+    }
     hprintln!("stack high-water {} bytes", stack_high_water());
-    total.passed()
+    total.passed() && s2d.passed()
 }
 
 /// A fault (bad memory access, undefined instruction, …) ends the run with a failure instead of

@@ -1,4 +1,4 @@
-//! Golden AIM replay on a 32-bit RISC-V core without FPU (riscv32imac-unknown-none-elf: every
+//! Golden AIM and S2D replays on a 32-bit RISC-V core without FPU (riscv32imac-unknown-none-elf: every
 //! `f32` operation in software), run under `qemu-system-riscv32 -machine virt` with semihosting.
 //!
 //! Plays the 16-frame golden sequence with `sinew-core`, prints each frame's hash and the
@@ -10,7 +10,9 @@
 use riscv::register::{mcause, mepc, minstret, mtval};
 use semihosting::{eprintln, println, process};
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
-use sinew_firmware_common::{GOLDENS, Replay, Scratch, Summary, phase_costs};
+use sinew_firmware_common::{
+    GOLDENS, Replay, S2D_GOLDENS, S2dRun, Scratch, Summary, phase_costs, s2d_costs,
+};
 
 #[riscv_rt::entry]
 fn main() -> ! {
@@ -91,6 +93,44 @@ fn run() -> bool {
         total.frames,
         GOLDENS.len()
     );
+    // The S2D decoder, in the same frame buffers.
+    let mut s2d = Summary::default();
+    for golden in &S2D_GOLDENS {
+        let mut run = match S2dRun::new(golden, scratch) {
+            Ok(r) => r,
+            Err(e) => {
+                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
+                return false;
+            }
+        };
+        println!(
+            "sinew-firmware-sim-riscv: rv32imac, {}: {} vertices, {} inputs, {} frames, {} buffer values",
+            golden.name,
+            run.decoder().vertex_count(),
+            run.decoder().input_len(),
+            run.replay().frames(),
+            run.needed()
+        );
+        loop {
+            let start = minstret::read64();
+            let Some(result) = run.next() else { break };
+            let instructions = minstret::read64().wrapping_sub(start);
+            let check = match result {
+                Ok(r) => r,
+                Err(e) => {
+                    eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
+                    return false;
+                }
+            };
+            println!("{check}  {instructions} instructions");
+            s2d.add(&check);
+        }
+    }
+    println!(
+        "sinew-firmware-sim-riscv: {}/{} S2D frames bit-identical to the host",
+        s2d.frames - s2d.mismatches,
+        s2d.frames
+    );
     // Cost of each phase of one frame, per golden actor (the f32 replay stands for its model).
     for golden in GOLDENS.iter().filter(|g| g.name.ends_with(".f32")) {
         match phase_costs(golden, 8, scratch, minstret::read64) {
@@ -101,7 +141,16 @@ fn run() -> bool {
             }
         }
     }
-    total.passed()
+    for golden in &S2D_GOLDENS {
+        match s2d_costs(golden, 8, scratch, minstret::read64) {
+            Ok(c) => println!("s2d cost {} frame 8 (instructions): {c}", golden.name),
+            Err(e) => {
+                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
+                return false;
+            }
+        }
+    }
+    total.passed() && s2d.passed()
 }
 
 /// Any trap (bad memory access, illegal instruction, …) ends the run with a failure instead of

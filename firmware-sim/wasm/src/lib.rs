@@ -1,5 +1,6 @@
-//! Golden AIM replays in WebAssembly (wasm32-unknown-unknown, no_std): the module exports
-//! [`sinew_replay`], which plays every golden replay (`tests/data/*.replay.sinew`) with
+//! Golden AIM and S2D replays in WebAssembly (wasm32-unknown-unknown, no_std): the module
+//! exports [`sinew_replay`], which plays every golden AIM replay, and [`sinew_replay_s2d`], the
+//! golden S2D replay (`tests/data/*.replay.sinew`) with
 //! `sinew-core` and returns how many frames' hashes differ from those recorded on the x86_64
 //! host. Each frame is also handed to the host through the import `sinew.report`, so `run.mjs`
 //! can print it.
@@ -7,7 +8,7 @@
 #![deny(unsafe_code)]
 
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
-use sinew_firmware_common::{GOLDENS, Scratch, Summary, replay};
+use sinew_firmware_common::{GOLDENS, S2D_GOLDENS, Scratch, Summary, replay, replay_s2d};
 
 /// What [`sinew_replay`] returns when the replay could not run (bad model, malformed or empty
 /// hash list).
@@ -56,6 +57,38 @@ pub extern "C" fn sinew_replay() -> u32 {
         return LOAD_ERROR;
     }
     // At most the number of frames, far below LOAD_ERROR.
+    u32::try_from(total.mismatches).unwrap_or(LOAD_ERROR - 1)
+}
+
+/// Plays the golden S2D replay; returns the number of mismatching frames, or [`LOAD_ERROR`].
+/// Frames are reported with 8000 added to the frame number.
+// Safety: `no_mangle` exports the function under its own name; no other symbol in the module
+// is called `sinew_replay_s2d`.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_replay_s2d() -> u32 {
+    // On the stack, as in `sinew_replay`.
+    let mut scratch = Scratch::new();
+    let mut total = Summary::default();
+    for golden in &S2D_GOLDENS {
+        let summary = replay_s2d(golden, &mut scratch, |r| {
+            report(
+                u32::try_from(8000 + r.frame).unwrap_or(u32::MAX),
+                r.hash,
+                r.expected,
+            );
+        });
+        match summary {
+            Ok(s) => {
+                total.frames += s.frames;
+                total.mismatches += s.mismatches;
+            }
+            Err(_) => return LOAD_ERROR,
+        }
+    }
+    if total.frames == 0 {
+        return LOAD_ERROR;
+    }
     u32::try_from(total.mismatches).unwrap_or(LOAD_ERROR - 1)
 }
 

@@ -484,6 +484,70 @@ impl PairSet {
         })
     }
 
+    /// The same pairs on the template decimated by `factor` (Sinew's quadric decimation, the
+    /// hierarchy's first step: every kept vertex is a vertex of the face region, so neutrals and
+    /// expression deltas are exact selections). A landmark whose vertex is not kept moves to the
+    /// nearest kept vertex of the generic neutral; the source string records the decimation.
+    /// Used to train decoders small enough for microcontrollers (the golden S2D model).
+    ///
+    /// # Errors
+    /// If the template cannot be decimated by `factor` (see `hierarchy::build`).
+    pub fn decimated(&self, factor: usize) -> Result<Self> {
+        let h = super::hierarchy::build(&self.template, &[factor])
+            .context("decimating the face region")?;
+        let (level, down) = match (h.levels.get(1), h.down.first()) {
+            (Some(l), Some(d)) => (l, d),
+            _ => bail!("decimation by {factor} gave no coarser level"),
+        };
+        let n = level.positions.len();
+        // Row j of D selects the fine vertex that coarse vertex j is (the last row is the dummy's).
+        let kept: Vec<usize> = (0..n)
+            .map(|j| down.col_idx[down.row_ptr[j] as usize] as usize)
+            .collect();
+        let pick =
+            |points: &[[f32; 3]]| -> Vec<[f32; 3]> { kept.iter().map(|&i| points[i]).collect() };
+        let base = &self.template.positions;
+        let dist2 =
+            |a: [f32; 3], b: [f32; 3]| -> f32 { (0..3).map(|c| (a[c] - b[c]).powi(2)).sum() };
+        let landmarks = self
+            .manifest
+            .landmarks
+            .iter()
+            .map(|&l| {
+                let p = base[l as usize];
+                // Nearest kept vertex; ties go to the lower index, so the choice is reproducible.
+                let (j, _) = kept
+                    .iter()
+                    .enumerate()
+                    .fold((0, f32::INFINITY), |best, (j, &i)| {
+                        let d = dist2(base[i], p);
+                        if d < best.1 { (j, d) } else { best }
+                    });
+                j as u32
+            })
+            .collect();
+        let mut manifest = self.manifest.clone();
+        manifest.vertices = n;
+        manifest.landmarks = landmarks;
+        manifest.source = format!(
+            "{}; decimated by {factor} to {n} vertices (Sinew quadric decimation, landmarks at the \
+             nearest kept vertex)",
+            manifest.source
+        );
+        Ok(Self {
+            manifest,
+            template: Mesh {
+                positions: level.positions.clone(),
+                polygons: level.triangles.iter().map(|t| t.to_vec()).collect(),
+                uvs: Vec::new(),
+                polygon_uvs: Vec::new(),
+            },
+            neutrals: self.neutrals.iter().map(|v| pick(v)).collect(),
+            deltas: self.deltas.iter().map(|v| pick(v)).collect(),
+            combinations: self.combinations.clone(),
+        })
+    }
+
     /// The `pairs.` sections and metadata, as a `.sinew` file.
     pub fn to_bytes(&self) -> Result<Vec<u8>> {
         let m = &self.manifest;
@@ -648,9 +712,19 @@ impl PairSet {
 }
 
 /// `sinew data s2d-pairs`: generates from the kit in `data` and writes to `out`.
-pub fn generate_to(data: &Path, out: &Path, config: &PairsConfig) -> Result<PairSet> {
+/// With `decimate`, the pairs are written on the template decimated by that factor
+/// ([`PairSet::decimated`]).
+pub fn generate_to(
+    data: &Path,
+    out: &Path,
+    config: &PairsConfig,
+    decimate: Option<usize>,
+) -> Result<PairSet> {
     let kit = IctFaceKit::open(data)?;
-    let set = generate(&kit, config)?;
+    let mut set = generate(&kit, config)?;
+    if let Some(factor) = decimate {
+        set = set.decimated(factor)?;
+    }
     set.write(out)?;
     Ok(set)
 }

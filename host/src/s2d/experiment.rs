@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 use super::baseline::{DEFAULT_RIDGE, Pca};
 use super::data::PairSet;
 use super::decoder::{DecoderConfig, S2dDecoder};
-use super::hierarchy::{self, DEFAULT_FACTORS};
+use super::hierarchy;
 use super::protocol::{FOLDS, Protocol, Split, split};
 use super::train::{LossVariant, TrainConfig, landmark_distances, train, vertex_weights};
 use crate::backend::Backend;
@@ -170,6 +170,10 @@ pub struct TrainS2d {
     pub report: PathBuf,
     /// burn backend.
     pub backend: Backend,
+    /// The network's shape (default: the reference configuration).
+    pub decoder: DecoderConfig,
+    /// Decimation factors of the hierarchy (default [`hierarchy::DEFAULT_FACTORS`]; one per stage).
+    pub factors: Vec<usize>,
 }
 
 /// The hierarchy cache folder: `$SINEW_CACHE`, else `sinew-cache` in the system's temporary
@@ -364,7 +368,7 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         args.folds
     );
     let set = PairSet::read(&args.pairs)?;
-    let h = hierarchy::cached(&set.template, &DEFAULT_FACTORS, &cache_dir())
+    let h = hierarchy::cached(&set.template, &args.factors, &cache_dir())
         .context("building the face region's mesh hierarchy")?;
     let distances = landmark_distances(&set.template.positions, &set.manifest.landmarks)?;
     let (loss, weights) = args.objective.loss_and_weights(&distances);
@@ -382,7 +386,7 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
             .map(|&p| set.sample(p))
             .collect::<Result<Vec<_>>>()?;
         let device = args.backend.autodiff_device(config.seed)?;
-        let decoder = S2dDecoder::new(&DecoderConfig::default(), &h, &device)?;
+        let decoder = S2dDecoder::new(&args.decoder, &h, &device)?;
         if !quiet {
             eprintln!(
                 "{} fold {fold}: {} training pairs, {} test pairs, {} epochs, {} parameters",
@@ -405,6 +409,8 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
             ("seed", config.seed.to_string()),
             ("config", serde_json::to_string(&config)?),
             ("objective", serde_json::to_string(&args.objective)?),
+            ("decoder", serde_json::to_string(&args.decoder)?),
+            ("factors", serde_json::to_string(&args.factors)?),
             ("source", set.manifest.source.clone()),
         ]
         .map(|(k, v)| (k.to_owned(), v));
