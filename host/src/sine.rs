@@ -170,7 +170,9 @@ fn sin_cos_chunk(x: &[f32], omega: f32, sin: &mut [f32], cos: &mut [f32]) {
         *s = sv;
         *c = omega * cv;
     }
-    let outside = x.iter().fold(false, |any, &x| any | !within_limit(omega * x));
+    let outside = x
+        .iter()
+        .fold(false, |any, &x| any | !within_limit(omega * x));
     if outside {
         for ((&x, s), c) in x.iter().zip(sin.iter_mut()).zip(cos.iter_mut()) {
             let v = omega * x;
