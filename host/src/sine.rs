@@ -317,7 +317,13 @@ mod tests {
         #[cfg(feature = "ndarray")]
         {
             let nd = crate::nn::to_vec(siren_sine(
-                crate::nn::tensor(values, [10, 100], &Device::ndarray()),
+                crate::nn::tensor(
+                    values,
+                    [10, 100],
+                    &crate::backend::Backend::Ndarray
+                        .device(0)
+                        .expect("ndarray device"),
+                ),
                 3.0,
             ));
             for (a, b) in flex.iter().zip(&nd) {
