@@ -163,14 +163,14 @@ fn run() -> bool {
             replay.actor().shape_count(),
             replay.replay().frames()
         );
+        let mut clock = Clock {
+            last: SYST::get_current(),
+            total: 0,
+        };
         loop {
-            // Clear COUNTFLAG, so that a frame longer than one SysTick period is noticed.
-            let _ = syst.has_wrapped();
-            let start = SYST::get_current();
+            let start = clock.now();
             let Some(result) = replay.next() else { break };
-            let end = SYST::get_current();
-            // SysTick counts down.
-            let ticks = start.wrapping_sub(end) & SYST_MAX;
+            let instructions = clock.now() - start;
             let check = match result {
                 Ok(r) => r,
                 Err(e) => {
@@ -178,11 +178,7 @@ fn run() -> bool {
                     return false;
                 }
             };
-            if syst.has_wrapped() {
-                hprintln!("{}  (over one SysTick period: cost not measured)", check);
-            } else {
-                hprintln!("{}  ~{} instructions", check, ticks * INSTRUCTIONS_PER_TICK);
-            }
+            hprintln!("{}  ~{} instructions", check, instructions);
             total.add(&check);
         }
     }
@@ -210,8 +206,8 @@ fn run() -> bool {
             run.replay().frames(),
             run.needed()
         );
-        // A frame (~30 M instructions) is far shorter than a SysTick period (671 M), but one in
-        // about twenty spans the counter's reload: the accumulating clock counts across it.
+        // A frame is far shorter than a SysTick period (671 M instructions), but some span the
+        // counter's reload: the accumulating clock counts across it.
         let mut clock = Clock {
             last: SYST::get_current(),
             total: 0,
