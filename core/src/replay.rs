@@ -315,6 +315,16 @@ pub fn frame_hash(
     Ok(h.finish())
 }
 
+/// [`ReplayError::WrongModel`] unless `model_bytes` hash to `expected` ([`model_hash`]).
+fn check_content_hash(model_bytes: &[u8], expected: u64) -> Result<(), ReplayError> {
+    let found = model_hash(model_bytes);
+    if found == expected {
+        Ok(())
+    } else {
+        Err(ReplayError::WrongModel { expected, found })
+    }
+}
+
 /// Checks that `replay` was recorded with the model whose bytes are `model_bytes` (content hash)
 /// and that its coefficient count is `actor`'s.
 ///
@@ -325,13 +335,7 @@ pub fn check_model(
     actor: &AimActor<'_>,
     replay: &AimReplay<'_>,
 ) -> Result<(), ReplayError> {
-    let found = model_hash(model_bytes);
-    if found != replay.model_hash() {
-        return Err(ReplayError::WrongModel {
-            expected: replay.model_hash(),
-            found,
-        });
-    }
+    check_content_hash(model_bytes, replay.model_hash())?;
     if replay.shape_count() != actor.shape_count() {
         return Err(ReplayError::ShapeCount {
             replay: replay.shape_count(),
@@ -546,13 +550,7 @@ pub fn check_s2d_model(
     decoder: &S2dDecoder<'_>,
     replay: &S2dReplay<'_>,
 ) -> Result<(), ReplayError> {
-    let found = model_hash(model_bytes);
-    if found != replay.model_hash() {
-        return Err(ReplayError::WrongModel {
-            expected: replay.model_hash(),
-            found,
-        });
-    }
+    check_content_hash(model_bytes, replay.model_hash())?;
     if replay.input_len() != decoder.input_len() {
         return Err(ReplayError::InputCount {
             replay: replay.input_len(),

@@ -302,10 +302,18 @@ impl Iterator for Replay<'_> {
 pub fn replay(
     golden: &Golden,
     scratch: &mut Scratch,
+    report: impl FnMut(&FrameCheck),
+) -> Result<Summary, Error> {
+    summarise(Replay::new(golden, scratch)?, report)
+}
+
+/// Runs `frames` to the end, calling `report` after each one, and returns the totals.
+fn summarise(
+    frames: impl Iterator<Item = Result<FrameCheck, Error>>,
     mut report: impl FnMut(&FrameCheck),
 ) -> Result<Summary, Error> {
     let mut summary = Summary::default();
-    for r in Replay::new(golden, scratch)? {
+    for r in frames {
         let r = r?;
         report(&r);
         summary.add(&r);
@@ -428,15 +436,9 @@ impl Iterator for S2dRun<'_> {
 pub fn replay_s2d(
     golden: &Golden,
     scratch: &mut Scratch,
-    mut report: impl FnMut(&FrameCheck),
+    report: impl FnMut(&FrameCheck),
 ) -> Result<Summary, Error> {
-    let mut summary = Summary::default();
-    for r in S2dRun::new(golden, scratch)? {
-        let r = r?;
-        report(&r);
-        summary.add(&r);
-    }
-    Ok(summary)
+    summarise(S2dRun::new(golden, scratch)?, report)
 }
 
 /// What one S2D frame costs, in the units of the counter given to [`s2d_costs`].
