@@ -213,6 +213,142 @@ impl<'a> SpiralConv<'a> {
     }
 }
 
+/// Vertices per block of [`SpiralConv::forward_blocked`].
+const VB: usize = 4;
+
+/// Output channels per block of [`SpiralConv::forward_blocked`] for layers with more than eight
+/// outputs; narrower layers use 8 or 4 (the S2D output layer has 3), with
+/// [`VB_NARROW`] vertices.
+const OB_WIDE: usize = if cfg!(target_feature = "avx2") { 16 } else { 8 };
+
+impl SpiralConv<'_> {
+    /// Output channels computed together by [`Self::forward_blocked`]: 4, 8 or 16.
+    fn block_outputs(&self) -> usize {
+        if self.out_f <= 4 {
+            4
+        } else if self.out_f <= 8 {
+            8
+        } else {
+            OB_WIDE
+        }
+    }
+
+    /// Scratch length [`Self::forward_blocked`] needs: one block of output channels' weights,
+    /// repacked input-major (`len · in_f` rows of the block width, 16 at most).
+    /// (Saturates instead of overflowing; no buffer that long can exist.)
+    pub fn scratch_len(&self) -> usize {
+        self.spirals
+            .len
+            .saturating_mul(self.in_f)
+            .saturating_mul(self.block_outputs())
+    }
+
+    /// [`Self::forward`], the same bits, computing a block of vertices times a block of output
+    /// channels together.
+    ///
+    /// Each output is still `act((Σ_j W[o, j] · g_v[j]) + b[o])` with the sum over
+    /// `j = p · in_f + c` in increasing order from `0.0`, separate multiply and add: only
+    /// independent sums (other vertices, other channels) are interleaved, which hides the latency
+    /// of the additions and lets the compiler vectorise across channels. The block's weights are
+    /// first copied into `scratch` as `[len · in_f, block]` (zeros past the last channel), so
+    /// that one step reads a contiguous row of weights for all channels of the block.
+    ///
+    /// # Shapes
+    /// As [`Self::forward`]; `scratch`: at least [`Self::scratch_len`] values (contents on entry
+    /// ignored, on exit unspecified).
+    ///
+    /// # Errors
+    /// As [`Self::forward`], and [`BufferError::Scratch`] if `scratch` is too short.
+    pub fn forward_blocked(
+        &self,
+        x: &[f32],
+        out: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<(), BufferError> {
+        if Some(x.len()) != self.spirals.n_source_vertices.checked_mul(self.in_f) {
+            return Err(BufferError::Input);
+        }
+        if Some(out.len()) != self.spirals.n_vertices.checked_mul(self.out_f) {
+            return Err(BufferError::Output);
+        }
+        let packed = scratch
+            .get_mut(..self.scratch_len())
+            .ok_or(BufferError::Scratch)?;
+        match self.block_outputs() {
+            4 => self.blocks::<4>(x, out, packed),
+            8 => self.blocks::<8>(x, out, packed),
+            _ => self.blocks::<OB_WIDE>(x, out, packed),
+        }
+        Ok(())
+    }
+
+    /// The body of [`Self::forward_blocked`] for blocks of `VB` vertices × `OB` channels; the
+    /// caller has checked every length (`packed` holds `len · in_f · OB` values).
+    fn blocks<const OB: usize>(&self, x: &[f32], out: &mut [f32], packed: &mut [f32]) {
+        let (in_f, out_f, len) = (self.in_f, self.out_f, self.spirals.len);
+        let width = len * in_f;
+        let (packed, _) = packed.as_chunks_mut::<OB>();
+        let n = self.spirals.n_vertices;
+        for o0 in (0..out_f).step_by(OB) {
+            // packed[j][k] = W[o0 + k, j], zero for channels past out_f (computed, never stored).
+            packed.fill([0.0; OB]);
+            for k in 0..OB.min(out_f - o0) {
+                let row = self.weight.slice((o0 + k) * width, width);
+                for (dst, w) in packed.iter_mut().zip(row.iter()) {
+                    if let Some(d) = dst.get_mut(k) {
+                        *d = w;
+                    }
+                }
+            }
+            let bias = self.bias.slice(o0, OB);
+            for v0 in (0..n).step_by(VB) {
+                let last = (n - v0).min(VB) - 1;
+                let mut acc = [[0.0f32; OB]; VB];
+                for (p, wp) in packed.chunks_exact(in_f).take(len).enumerate() {
+                    // The block's source rows at spiral position p; a short last block repeats
+                    // its last vertex (those sums are computed and dropped). Indices are
+                    // validated (< n_source_vertices), so every row is whole.
+                    let row = |b: usize| {
+                        let s = self.spirals.indices.at((v0 + b.min(last)) * len + p) as usize;
+                        x.get(s * in_f..s * in_f + in_f).unwrap_or(&[])
+                    };
+                    let [a0, a1, a2, a3] = &mut acc;
+                    // Neural3DMM spiral conv: acc[v][o] += W[o, p · in_f + c] · x[s(v, p), c]
+                    // for c in order, so each output's sum keeps the order of `forward`.
+                    let steps = wp.iter().zip(row(0)).zip(row(1)).zip(row(2)).zip(row(3));
+                    for ((((w, x0), x1), x2), x3) in steps {
+                        axpy(a0, w, *x0);
+                        axpy(a1, w, *x1);
+                        axpy(a2, w, *x2);
+                        axpy(a3, w, *x3);
+                    }
+                }
+                for b in 0..=last {
+                    let start = (v0 + b) * out_f + o0;
+                    let end = (start + OB).min((v0 + b + 1) * out_f);
+                    let Some(dst) = out.get_mut(start..end) else {
+                        continue;
+                    };
+                    let Some(a) = acc.get(b) else {
+                        continue;
+                    };
+                    for ((d, ak), bo) in dst.iter_mut().zip(a).zip(bias.iter()) {
+                        *d = self.activation.apply(*ak + bo);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// `acc[k] += w[k] · x`: one step of `OB` independent sums.
+#[inline(always)]
+fn axpy<const OB: usize>(acc: &mut [f32; OB], w: &[f32; OB], x: f32) {
+    for (a, wk) in acc.iter_mut().zip(w) {
+        *a += *wk * x;
+    }
+}
+
 /// Sets row `row` of a row-major `[_, width]` array to zero: the S2D reference zeroes the dummy
 /// vertex's row (the last one) after every spiral stage, so that it pads short spirals with zeros.
 ///
