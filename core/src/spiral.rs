@@ -367,6 +367,7 @@ pub fn zero_row(out: &mut [f32], row: usize, width: usize) -> Result<(), BufferE
 mod tests {
     use super::*;
     use crate::nn::Dense;
+    use std::vec;
     use std::vec::Vec;
 
     fn fb(v: &[f32]) -> Vec<u8> {
@@ -467,6 +468,142 @@ mod tests {
             assert_eq!(y[0].to_bits(), out[v * 2].to_bits());
             assert_eq!(y[1].to_bits(), out[v * 2 + 1].to_bits());
         }
+    }
+
+    /// A straightforward spiral convolution in the documented order, kept here as the
+    /// definition the optimised kernels must match bit for bit: for each vertex and output,
+    /// `acc = 0.0`, then `acc += W[o, j] · g_v[j]` for `j = p · in_f + c` in increasing order,
+    /// then `act(acc + b[o])`.
+    fn reference(
+        idx: &[u32],
+        len: usize,
+        w: &[f32],
+        b: &[f32],
+        in_f: usize,
+        act: Activation,
+        x: &[f32],
+    ) -> Vec<f32> {
+        let out_f = b.len();
+        let mut out = Vec::new();
+        for spiral in idx.chunks(len) {
+            for o in 0..out_f {
+                let mut acc = 0.0f32;
+                for (p, &s) in spiral.iter().enumerate() {
+                    for c in 0..in_f {
+                        acc += w[o * len * in_f + p * in_f + c] * x[s as usize * in_f + c];
+                    }
+                }
+                out.push(act.apply(acc + b[o]));
+            }
+        }
+        out
+    }
+
+    /// A small xorshift generator: values of mixed sign and magnitude (1e-3 to 1e3), so that
+    /// almost any change of a sum's order changes its rounding.
+    struct Mixed(u64);
+
+    impl Mixed {
+        fn next(&mut self) -> f32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            let u = (self.0 >> 40) as f32 / (1u64 << 24) as f32;
+            let scale = [1e-3, 1.0, 1e3][(self.0 % 3) as usize];
+            (2.0 * u - 1.0) * scale
+        }
+
+        fn vec(&mut self, n: usize) -> Vec<f32> {
+            (0..n).map(|_| self.next()).collect()
+        }
+    }
+
+    #[test]
+    fn blocked_keeps_every_sums_order() {
+        let mut rng = Mixed(0x9e37_79b9_7f4a_7c15);
+        // Vertex counts around the 4-vertex block, channel counts around the 4/8/16 blocks,
+        // odd feature counts and spiral lengths.
+        let shapes = [
+            (1, 1, 1, 1, 1),
+            (3, 5, 2, 3, 3),
+            (5, 7, 3, 1, 4),
+            (6, 4, 5, 7, 5),
+            (9, 11, 4, 2, 8),
+            (7, 13, 2, 5, 9),
+            (13, 8, 3, 3, 16),
+            (10, 17, 5, 2, 17),
+            (4, 6, 1, 33, 33),
+            (2, 3, 7, 4, 64),
+        ];
+        for (vertices, sources, len, in_f, out_f) in shapes {
+            let idx: Vec<u32> = (0..vertices * len)
+                .map(|_| (rng.next().abs() * 1e6) as u32 % sources as u32)
+                .collect();
+            let (w, b, x) = (
+                rng.vec(out_f * len * in_f),
+                rng.vec(out_f),
+                rng.vec(sources * in_f),
+            );
+            let (ib, wb, bb) = (ub(&idx), fb(&w), fb(&b));
+            let spirals = Spirals::new(U32s::new(&ib).unwrap(), vertices, len, sources).unwrap();
+            for act in [Activation::Identity, Activation::Elu { alpha: 1.0 }] {
+                let conv = SpiralConv::new(
+                    spirals,
+                    F32s::new(&wb).unwrap(),
+                    F32s::new(&bb).unwrap(),
+                    in_f,
+                    out_f,
+                    act,
+                )
+                .unwrap();
+                let expected = reference(&idx, len, &w, &b, in_f, act, &x);
+                let mut scratch = vec![f32::NAN; conv.scratch_len()];
+                let mut blocked = vec![f32::NAN; vertices * out_f];
+                conv.forward_blocked(&x, &mut blocked, &mut scratch)
+                    .unwrap();
+                let mut plain = vec![f32::NAN; vertices * out_f];
+                conv.forward(&x, &mut plain).unwrap();
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                let shape = (vertices, sources, len, in_f, out_f);
+                assert_eq!(bits(&blocked), bits(&expected), "blocked, shape {shape:?}");
+                assert_eq!(bits(&plain), bits(&expected), "forward, shape {shape:?}");
+                // A longer scratch is fine, a shorter one is refused before any write.
+                let mut long = vec![0.0; conv.scratch_len() + 3];
+                conv.forward_blocked(&x, &mut blocked, &mut long).unwrap();
+                assert_eq!(bits(&blocked), bits(&expected));
+                let short = conv.scratch_len() - 1;
+                assert_eq!(
+                    conv.forward_blocked(&x, &mut blocked, &mut scratch[..short]),
+                    Err(BufferError::Scratch)
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn blocked_scratch_and_errors() {
+        // One 16-channel block of a 15-position, 32-feature layer (the S2D level-0 stage), and a
+        // 4-channel block for 3 outputs.
+        let sb = ub(&[0, 1]);
+        let spirals = Spirals::new(U32s::new(&sb).unwrap(), 1, 2, 2).unwrap();
+        let wb = fb(&[1.0; 6]);
+        let bb = fb(&[0.0; 3]);
+        let (w, b) = (F32s::new(&wb).unwrap(), F32s::new(&bb).unwrap());
+        let conv = SpiralConv::new(spirals, w, b, 1, 3, Activation::Identity).unwrap();
+        assert_eq!(conv.scratch_len(), 2 * 4);
+        let mut out = [0.0; 3];
+        let mut scratch = [0.0; 8];
+        assert_eq!(
+            conv.forward_blocked(&[1.0], &mut out, &mut scratch),
+            Err(BufferError::Input)
+        );
+        assert_eq!(
+            conv.forward_blocked(&[1.0, 2.0], &mut out[..2], &mut scratch),
+            Err(BufferError::Output)
+        );
+        conv.forward_blocked(&[1.0, 2.0], &mut out, &mut scratch)
+            .unwrap();
+        assert_eq!(out, [3.0; 3]);
     }
 
     #[test]
