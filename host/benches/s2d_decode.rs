@@ -19,8 +19,9 @@
 use burn::tensor::Device;
 use criterion::{Criterion, criterion_group, criterion_main};
 use sinew_host::backend::Backend;
+use sinew_host::s2d::Hierarchy;
 use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
-use sinew_host::s2d::hierarchy::{DEFAULT_FACTORS, Hierarchy};
+use sinew_host::s2d::hierarchy::DEFAULT_FACTORS;
 use sinew_host::s2d::synthetic::{self, REFERENCE_SIZES, REFERENCE_SPIRALS};
 
 /// The ICT face region's level sizes and spiral lengths (docs/S2D.md, "Levels").
