@@ -213,13 +213,27 @@ impl<'a> SpiralConv<'a> {
     }
 }
 
-/// Vertices per block of [`SpiralConv::forward_blocked`].
-const VB: usize = 4;
+/// `f32` lanes of the target's vector registers, as far as the compile-time target features
+/// tell: the blocks below are sized so that their accumulators fill about eight registers. This
+/// chooses a loop shape only: every output's sum runs in the same order whatever the block, so
+/// the bits do not depend on it.
+const LANES: usize = if cfg!(target_feature = "avx512f") {
+    16
+} else if cfg!(target_feature = "avx2") {
+    8
+} else {
+    4
+};
 
 /// Output channels per block of [`SpiralConv::forward_blocked`] for layers with more than eight
-/// outputs; narrower layers use 8 or 4 (the S2D output layer has 3), with
-/// [`VB_NARROW`] vertices.
-const OB_WIDE: usize = if cfg!(target_feature = "avx2") { 16 } else { 8 };
+/// outputs (narrower layers use 8 or 4: the S2D output layer has 3).
+const OB_WIDE: usize = if LANES >= 8 { 16 } else { 8 };
+
+/// Vertices per block for blocks of `ob` channels: 4 or 8, so that `ob × vertices / LANES` is
+/// about eight registers.
+const fn block_vertices(ob: usize) -> usize {
+    if 8 * LANES / ob >= 8 { 8 } else { 4 }
+}
 
 impl SpiralConv<'_> {
     /// Output channels computed together by [`Self::forward_blocked`]: 4, 8 or 16.
@@ -275,16 +289,21 @@ impl SpiralConv<'_> {
             .get_mut(..self.scratch_len())
             .ok_or(BufferError::Scratch)?;
         match self.block_outputs() {
-            4 => self.blocks::<4>(x, out, packed),
-            8 => self.blocks::<8>(x, out, packed),
-            _ => self.blocks::<OB_WIDE>(x, out, packed),
+            4 => self.blocks::<4, { block_vertices(4) }>(x, out, packed),
+            8 => self.blocks::<8, { block_vertices(8) }>(x, out, packed),
+            _ => self.blocks::<OB_WIDE, { block_vertices(OB_WIDE) }>(x, out, packed),
         }
         Ok(())
     }
 
     /// The body of [`Self::forward_blocked`] for blocks of `VB` vertices × `OB` channels; the
     /// caller has checked every length (`packed` holds `len · in_f · OB` values).
-    fn blocks<const OB: usize>(&self, x: &[f32], out: &mut [f32], packed: &mut [f32]) {
+    fn blocks<const OB: usize, const VB: usize>(
+        &self,
+        x: &[f32],
+        out: &mut [f32],
+        packed: &mut [f32],
+    ) {
         let (in_f, out_f, len) = (self.in_f, self.out_f, self.spirals.len);
         let width = len * in_f;
         let (packed, _) = packed.as_chunks_mut::<OB>();
@@ -312,15 +331,19 @@ impl SpiralConv<'_> {
                         let s = self.spirals.indices.at((v0 + b.min(last)) * len + p) as usize;
                         x.get(s * in_f..s * in_f + in_f).unwrap_or(&[])
                     };
-                    let [a0, a1, a2, a3] = &mut acc;
+                    let rows: [&[f32]; VB] = core::array::from_fn(row);
                     // Neural3DMM spiral conv: acc[v][o] += W[o, p · in_f + c] · x[s(v, p), c]
                     // for c in order, so each output's sum keeps the order of `forward`.
-                    let steps = wp.iter().zip(row(0)).zip(row(1)).zip(row(2)).zip(row(3));
-                    for ((((w, x0), x1), x2), x3) in steps {
-                        axpy(a0, w, *x0);
-                        axpy(a1, w, *x1);
-                        axpy(a2, w, *x2);
-                        axpy(a3, w, *x3);
+                    if let (Ok(acc), Ok(rows)) = (
+                        <&mut [[f32; OB]; 8]>::try_from(acc.as_mut_slice()),
+                        <[&[f32]; 8]>::try_from(rows.as_slice()),
+                    ) {
+                        step8(acc, wp, rows);
+                    } else if let (Ok(acc), Ok(rows)) = (
+                        <&mut [[f32; OB]; 4]>::try_from(acc.as_mut_slice()),
+                        <[&[f32]; 4]>::try_from(rows.as_slice()),
+                    ) {
+                        step4(acc, wp, rows);
                     }
                 }
                 for b in 0..=last {
@@ -338,6 +361,40 @@ impl SpiralConv<'_> {
                 }
             }
         }
+    }
+}
+
+/// One spiral position of a block of 4 vertices: `acc[v][k] += w[c][k] · rows[v][c]` for c in
+/// order. The rows advance in lockstep through one iterator (no per-row indexing, which the
+/// compiler would otherwise vectorise across rows with gathers).
+#[inline(always)]
+fn step4<const OB: usize>(acc: &mut [[f32; OB]; 4], w: &[[f32; OB]], rows: [&[f32]; 4]) {
+    let [a0, a1, a2, a3] = acc;
+    let [r0, r1, r2, r3] = rows;
+    for ((((wc, x0), x1), x2), x3) in w.iter().zip(r0).zip(r1).zip(r2).zip(r3) {
+        axpy(a0, wc, *x0);
+        axpy(a1, wc, *x1);
+        axpy(a2, wc, *x2);
+        axpy(a3, wc, *x3);
+    }
+}
+
+/// [`step4`] for a block of 8 vertices.
+#[inline(always)]
+fn step8<const OB: usize>(acc: &mut [[f32; OB]; 8], w: &[[f32; OB]], rows: [&[f32]; 8]) {
+    let [a0, a1, a2, a3, a4, a5, a6, a7] = acc;
+    let [r0, r1, r2, r3, r4, r5, r6, r7] = rows;
+    let steps = w.iter().zip(r0).zip(r1).zip(r2).zip(r3);
+    let steps = steps.zip(r4).zip(r5).zip(r6).zip(r7);
+    for ((((((((wc, x0), x1), x2), x3), x4), x5), x6), x7) in steps {
+        axpy(a0, wc, *x0);
+        axpy(a1, wc, *x1);
+        axpy(a2, wc, *x2);
+        axpy(a3, wc, *x3);
+        axpy(a4, wc, *x4);
+        axpy(a5, wc, *x5);
+        axpy(a6, wc, *x6);
+        axpy(a7, wc, *x7);
     }
 }
 
