@@ -229,12 +229,6 @@ const LANES: usize = if cfg!(target_feature = "avx512f") {
 /// outputs (narrower layers use 8 or 4: the S2D output layer has 3).
 const OB_WIDE: usize = if LANES >= 8 { 16 } else { 8 };
 
-/// Vertices per block for blocks of `ob` channels: 4 or 8, so that `ob × vertices / LANES` is
-/// about eight registers.
-const fn block_vertices(ob: usize) -> usize {
-    if 8 * LANES / ob >= 8 { 8 } else { 4 }
-}
-
 impl SpiralConv<'_> {
     /// Output channels computed together by [`Self::forward_blocked`]: 4, 8 or 16.
     fn block_outputs(&self) -> usize {
@@ -288,113 +282,125 @@ impl SpiralConv<'_> {
         let packed = scratch
             .get_mut(..self.scratch_len())
             .ok_or(BufferError::Scratch)?;
+        // Blocks of 8 vertices only where 8 × 16 accumulators fit the registers (AVX-512).
         match self.block_outputs() {
-            4 => self.blocks::<4, { block_vertices(4) }>(x, out, packed),
-            8 => self.blocks::<8, { block_vertices(8) }>(x, out, packed),
-            _ => self.blocks::<OB_WIDE, { block_vertices(OB_WIDE) }>(x, out, packed),
+            4 => self.blocks4::<4>(x, out, packed),
+            8 => self.blocks4::<8>(x, out, packed),
+            _ if LANES >= 16 => self.blocks8::<OB_WIDE>(x, out, packed),
+            _ => self.blocks4::<OB_WIDE>(x, out, packed),
         }
         Ok(())
     }
 
-    /// The body of [`Self::forward_blocked`] for blocks of `VB` vertices × `OB` channels; the
-    /// caller has checked every length (`packed` holds `len · in_f · OB` values).
-    fn blocks<const OB: usize, const VB: usize>(
-        &self,
-        x: &[f32],
-        out: &mut [f32],
-        packed: &mut [f32],
-    ) {
-        let (in_f, out_f, len) = (self.in_f, self.out_f, self.spirals.len);
-        let width = len * in_f;
-        let (packed, _) = packed.as_chunks_mut::<OB>();
-        let n = self.spirals.n_vertices;
-        for o0 in (0..out_f).step_by(OB) {
-            // packed[j][k] = W[o0 + k, j], zero for channels past out_f (computed, never stored).
-            packed.fill([0.0; OB]);
-            for k in 0..OB.min(out_f - o0) {
-                let row = self.weight.slice((o0 + k) * width, width);
-                for (dst, w) in packed.iter_mut().zip(row.iter()) {
-                    if let Some(d) = dst.get_mut(k) {
-                        *d = w;
-                    }
-                }
-            }
-            let bias = self.bias.slice(o0, OB);
-            for v0 in (0..n).step_by(VB) {
-                let last = (n - v0).min(VB) - 1;
-                let mut acc = [[0.0f32; OB]; VB];
-                for (p, wp) in packed.chunks_exact(in_f).take(len).enumerate() {
-                    // The block's source rows at spiral position p; a short last block repeats
-                    // its last vertex (those sums are computed and dropped). Indices are
-                    // validated (< n_source_vertices), so every row is whole.
-                    let row = |b: usize| {
-                        let s = self.spirals.indices.at((v0 + b.min(last)) * len + p) as usize;
-                        x.get(s * in_f..s * in_f + in_f).unwrap_or(&[])
-                    };
-                    let rows: [&[f32]; VB] = core::array::from_fn(row);
-                    // Neural3DMM spiral conv: acc[v][o] += W[o, p · in_f + c] · x[s(v, p), c]
-                    // for c in order, so each output's sum keeps the order of `forward`.
-                    if let (Ok(acc), Ok(rows)) = (
-                        <&mut [[f32; OB]; 8]>::try_from(acc.as_mut_slice()),
-                        <[&[f32]; 8]>::try_from(rows.as_slice()),
-                    ) {
-                        step8(acc, wp, rows);
-                    } else if let (Ok(acc), Ok(rows)) = (
-                        <&mut [[f32; OB]; 4]>::try_from(acc.as_mut_slice()),
-                        <[&[f32]; 4]>::try_from(rows.as_slice()),
-                    ) {
-                        step4(acc, wp, rows);
-                    }
-                }
-                for b in 0..=last {
-                    let start = (v0 + b) * out_f + o0;
-                    let end = (start + OB).min((v0 + b + 1) * out_f);
-                    let Some(dst) = out.get_mut(start..end) else {
-                        continue;
-                    };
-                    let Some(a) = acc.get(b) else {
-                        continue;
-                    };
-                    for ((d, ak), bo) in dst.iter_mut().zip(a).zip(bias.iter()) {
-                        *d = self.activation.apply(*ak + bo);
-                    }
+    /// Copies the weights of channels `o0..o0 + OB` into `packed` as `packed[j][k] = W[o0 + k, j]`,
+    /// zero for channels past `out_f` (computed, never stored).
+    fn pack<const OB: usize>(&self, o0: usize, packed: &mut [[f32; OB]]) {
+        let width = self.spirals.len * self.in_f;
+        packed.fill([0.0; OB]);
+        for k in 0..OB.min(self.out_f.saturating_sub(o0)) {
+            let row = self.weight.slice((o0 + k) * width, width);
+            for (dst, w) in packed.iter_mut().zip(row.iter()) {
+                if let Some(d) = dst.get_mut(k) {
+                    *d = w;
                 }
             }
         }
     }
-}
 
-/// One spiral position of a block of 4 vertices: `acc[v][k] += w[c][k] · rows[v][c]` for c in
-/// order. The rows advance in lockstep through one iterator (no per-row indexing, which the
-/// compiler would otherwise vectorise across rows with gathers).
-#[inline(always)]
-fn step4<const OB: usize>(acc: &mut [[f32; OB]; 4], w: &[[f32; OB]], rows: [&[f32]; 4]) {
-    let [a0, a1, a2, a3] = acc;
-    let [r0, r1, r2, r3] = rows;
-    for ((((wc, x0), x1), x2), x3) in w.iter().zip(r0).zip(r1).zip(r2).zip(r3) {
-        axpy(a0, wc, *x0);
-        axpy(a1, wc, *x1);
-        axpy(a2, wc, *x2);
-        axpy(a3, wc, *x3);
+    /// The source row of vertex `v` at spiral position `p`. Indices are validated
+    /// (< n_source_vertices) and `x` checked, so the row is whole; the empty fallback cannot
+    /// occur.
+    #[inline(always)]
+    fn row<'x>(&self, x: &'x [f32], v: usize, p: usize) -> &'x [f32] {
+        let s = self.spirals.indices.at(v * self.spirals.len + p) as usize;
+        x.get(s * self.in_f..s * self.in_f + self.in_f)
+            .unwrap_or(&[])
     }
-}
 
-/// [`step4`] for a block of 8 vertices.
-#[inline(always)]
-fn step8<const OB: usize>(acc: &mut [[f32; OB]; 8], w: &[[f32; OB]], rows: [&[f32]; 8]) {
-    let [a0, a1, a2, a3, a4, a5, a6, a7] = acc;
-    let [r0, r1, r2, r3, r4, r5, r6, r7] = rows;
-    let steps = w.iter().zip(r0).zip(r1).zip(r2).zip(r3);
-    let steps = steps.zip(r4).zip(r5).zip(r6).zip(r7);
-    for ((((((((wc, x0), x1), x2), x3), x4), x5), x6), x7) in steps {
-        axpy(a0, wc, *x0);
-        axpy(a1, wc, *x1);
-        axpy(a2, wc, *x2);
-        axpy(a3, wc, *x3);
-        axpy(a4, wc, *x4);
-        axpy(a5, wc, *x5);
-        axpy(a6, wc, *x6);
-        axpy(a7, wc, *x7);
+    /// `out[v, o0 + k] = act(acc[b][k] + bias[o0 + k])` for the block's vertices `v = v0 + b`,
+    /// `b < count`, and its channels below `out_f`.
+    fn store<const OB: usize>(
+        &self,
+        acc: &[[f32; OB]],
+        v0: usize,
+        o0: usize,
+        count: usize,
+        out: &mut [f32],
+    ) {
+        let out_f = self.out_f;
+        let bias = self.bias.slice(o0, OB);
+        for (b, a) in acc.iter().enumerate().take(count) {
+            let start = (v0 + b) * out_f + o0;
+            let end = (start + OB).min((v0 + b + 1) * out_f);
+            if let Some(dst) = out.get_mut(start..end) {
+                for ((d, ak), bo) in dst.iter_mut().zip(a).zip(bias.iter()) {
+                    *d = self.activation.apply(*ak + bo);
+                }
+            }
+        }
+    }
+
+    /// The body of [`Self::forward_blocked`] for blocks of 4 vertices × `OB` channels; the
+    /// caller has checked every length (`packed` holds `len · in_f · OB` values).
+    #[inline(never)]
+    fn blocks4<const OB: usize>(&self, x: &[f32], out: &mut [f32], packed: &mut [f32]) {
+        let (in_f, len, n) = (self.in_f, self.spirals.len, self.spirals.n_vertices);
+        let (packed, _) = packed.as_chunks_mut::<OB>();
+        for o0 in (0..self.out_f).step_by(OB) {
+            self.pack(o0, packed);
+            for v0 in (0..n).step_by(4) {
+                // A short last block repeats its last vertex (those sums are dropped).
+                let last = (n - v0).min(4) - 1;
+                let mut acc = [[0.0f32; OB]; 4];
+                for (p, wp) in packed.chunks_exact(in_f).take(len).enumerate() {
+                    let row = |b: usize| self.row(x, v0 + b.min(last), p);
+                    let [a0, a1, a2, a3] = &mut acc;
+                    // Neural3DMM spiral conv: acc[v][o] += W[o, p · in_f + c] · x[s(v, p), c]
+                    // for c in order, so each output's sum keeps the order of `forward`. The
+                    // rows advance in lockstep through one iterator: indexing each row instead
+                    // lets the compiler vectorise across rows, with gathers.
+                    let steps = wp.iter().zip(row(0)).zip(row(1)).zip(row(2)).zip(row(3));
+                    for ((((w, x0), x1), x2), x3) in steps {
+                        axpy(a0, w, *x0);
+                        axpy(a1, w, *x1);
+                        axpy(a2, w, *x2);
+                        axpy(a3, w, *x3);
+                    }
+                }
+                self.store(&acc, v0, o0, last + 1, out);
+            }
+        }
+    }
+
+    /// [`Self::blocks4`] with blocks of 8 vertices.
+    #[inline(never)]
+    fn blocks8<const OB: usize>(&self, x: &[f32], out: &mut [f32], packed: &mut [f32]) {
+        let (in_f, len, n) = (self.in_f, self.spirals.len, self.spirals.n_vertices);
+        let (packed, _) = packed.as_chunks_mut::<OB>();
+        for o0 in (0..self.out_f).step_by(OB) {
+            self.pack(o0, packed);
+            for v0 in (0..n).step_by(8) {
+                let last = (n - v0).min(8) - 1;
+                let mut acc = [[0.0f32; OB]; 8];
+                for (p, wp) in packed.chunks_exact(in_f).take(len).enumerate() {
+                    let row = |b: usize| self.row(x, v0 + b.min(last), p);
+                    let [a0, a1, a2, a3, a4, a5, a6, a7] = &mut acc;
+                    let steps = wp.iter().zip(row(0)).zip(row(1)).zip(row(2)).zip(row(3));
+                    let steps = steps.zip(row(4)).zip(row(5)).zip(row(6)).zip(row(7));
+                    for ((((((((w, x0), x1), x2), x3), x4), x5), x6), x7) in steps {
+                        axpy(a0, w, *x0);
+                        axpy(a1, w, *x1);
+                        axpy(a2, w, *x2);
+                        axpy(a3, w, *x3);
+                        axpy(a4, w, *x4);
+                        axpy(a5, w, *x5);
+                        axpy(a6, w, *x6);
+                        axpy(a7, w, *x7);
+                    }
+                }
+                self.store(&acc, v0, o0, last + 1, out);
+            }
+        }
     }
 }
 
@@ -624,6 +630,23 @@ mod tests {
                 let shape = (vertices, sources, len, in_f, out_f);
                 assert_eq!(bits(&blocked), bits(&expected), "blocked, shape {shape:?}");
                 assert_eq!(bits(&plain), bits(&expected), "forward, shape {shape:?}");
+                // Every block shape, not only the one this target selects (4 and 8 vertices;
+                // 4, 8 and 16 channels), so that a portable test run covers the AVX-512 path.
+                type Kernel<'k> = fn(&SpiralConv<'k>, &[f32], &mut [f32], &mut [f32]);
+                let kernels: [(Kernel<'_>, usize, &str); 6] = [
+                    (SpiralConv::blocks4::<4>, 4, "4 × 4"),
+                    (SpiralConv::blocks4::<8>, 8, "4 × 8"),
+                    (SpiralConv::blocks4::<16>, 16, "4 × 16"),
+                    (SpiralConv::blocks8::<4>, 4, "8 × 4"),
+                    (SpiralConv::blocks8::<8>, 8, "8 × 8"),
+                    (SpiralConv::blocks8::<16>, 16, "8 × 16"),
+                ];
+                for (kernel, ob, name) in kernels {
+                    let mut packed = vec![f32::NAN; len * in_f * ob];
+                    let mut y = vec![f32::NAN; vertices * out_f];
+                    kernel(&conv, &x, &mut y, &mut packed);
+                    assert_eq!(bits(&y), bits(&expected), "{name}, shape {shape:?}");
+                }
                 // A longer scratch is fine, a shorter one is refused before any write.
                 let mut long = vec![0.0; conv.scratch_len() + 3];
                 conv.forward_blocked(&x, &mut blocked, &mut long).unwrap();
