@@ -242,13 +242,20 @@ impl SpiralConv<'_> {
     }
 
     /// Scratch length [`Self::forward_blocked`] needs: one block of output channels' weights,
-    /// repacked input-major (`len · in_f` rows of the block width, 16 at most).
-    /// (Saturates instead of overflowing; no buffer that long can exist.)
+    /// repacked input-major, `len · in_f` rows of 4 (up to 4 outputs), 8 (up to 8) or 16
+    /// values. The same on every target, although a target whose blocks are narrower (8
+    /// channels without AVX2) uses less of it. (Saturates instead of overflowing; no buffer that
+    /// long can exist.)
     pub fn scratch_len(&self) -> usize {
+        let block = if self.out_f <= 8 {
+            self.block_outputs()
+        } else {
+            16
+        };
         self.spirals
             .len
             .saturating_mul(self.in_f)
-            .saturating_mul(self.block_outputs())
+            .saturating_mul(block)
     }
 
     /// [`Self::forward`], the same bits, computing a block of vertices times a block of output
@@ -279,9 +286,11 @@ impl SpiralConv<'_> {
         if Some(out.len()) != self.spirals.n_vertices.checked_mul(self.out_f) {
             return Err(BufferError::Output);
         }
-        let packed = scratch
-            .get_mut(..self.scratch_len())
-            .ok_or(BufferError::Scratch)?;
+        if scratch.len() < self.scratch_len() {
+            return Err(BufferError::Scratch);
+        }
+        let used = self.spirals.len * self.in_f * self.block_outputs();
+        let packed = scratch.get_mut(..used).ok_or(BufferError::Scratch)?;
         // Blocks of 8 vertices only where 8 × 16 accumulators fit the registers (AVX-512).
         match self.block_outputs() {
             4 => self.blocks4::<4>(x, out, packed),
