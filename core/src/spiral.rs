@@ -225,19 +225,16 @@ const LANES: usize = if cfg!(target_feature = "avx512f") {
     4
 };
 
-/// Output channels per block of [`SpiralConv::forward_blocked`] for layers with more than eight
-/// outputs (narrower layers use 8 or 4: the S2D output layer has 3).
-const OB_WIDE: usize = if LANES >= 8 { 16 } else { 8 };
-
 impl SpiralConv<'_> {
-    /// Output channels computed together by [`Self::forward_blocked`]: 4, 8 or 16.
+    /// Output channels computed together by [`Self::forward_blocked`]: 4, 8 or (128-bit vectors
+    /// only) 16.
     fn block_outputs(&self) -> usize {
         if self.out_f <= 4 {
             4
-        } else if self.out_f <= 8 {
+        } else if self.out_f <= 8 || LANES >= 8 {
             8
         } else {
-            OB_WIDE
+            16
         }
     }
 
@@ -291,12 +288,14 @@ impl SpiralConv<'_> {
         }
         let used = self.spirals.len * self.in_f * self.block_outputs();
         let packed = scratch.get_mut(..used).ok_or(BufferError::Scratch)?;
-        // Blocks of 8 vertices only where 8 × 16 accumulators fit the registers (AVX-512).
+        // Eight accumulator registers: 8 vertices × 8 channels in 256-bit registers (AVX2, and
+        // AVX-512, where 16-channel blocks came out slower: the compiler assembled each weight
+        // row from pieces), 2 × 16 or 4 × 8 in 128-bit ones; 8 × 4 for the 3-output layer.
         match self.block_outputs() {
-            4 => self.blocks4::<4>(x, out, packed),
+            4 => self.blocks8::<4>(x, out, packed),
+            8 if LANES >= 8 => self.blocks8::<8>(x, out, packed),
             8 => self.blocks4::<8>(x, out, packed),
-            _ if LANES >= 16 => self.blocks8::<OB_WIDE>(x, out, packed),
-            _ => self.blocks4::<OB_WIDE>(x, out, packed),
+            _ => self.blocks2::<16>(x, out, packed),
         }
         Ok(())
     }
@@ -374,6 +373,29 @@ impl SpiralConv<'_> {
                         axpy(a1, w, *x1);
                         axpy(a2, w, *x2);
                         axpy(a3, w, *x3);
+                    }
+                }
+                self.store(&acc, v0, o0, last + 1, out);
+            }
+        }
+    }
+
+    /// [`Self::blocks4`] with blocks of 2 vertices.
+    #[inline(never)]
+    fn blocks2<const OB: usize>(&self, x: &[f32], out: &mut [f32], packed: &mut [f32]) {
+        let (in_f, len, n) = (self.in_f, self.spirals.len, self.spirals.n_vertices);
+        let (packed, _) = packed.as_chunks_mut::<OB>();
+        for o0 in (0..self.out_f).step_by(OB) {
+            self.pack(o0, packed);
+            for v0 in (0..n).step_by(2) {
+                let last = (n - v0).min(2) - 1;
+                let mut acc = [[0.0f32; OB]; 2];
+                for (p, wp) in packed.chunks_exact(in_f).take(len).enumerate() {
+                    let row = |b: usize| self.row(x, v0 + b.min(last), p);
+                    let [a0, a1] = &mut acc;
+                    for ((w, x0), x1) in wp.iter().zip(row(0)).zip(row(1)) {
+                        axpy(a0, w, *x0);
+                        axpy(a1, w, *x1);
                     }
                 }
                 self.store(&acc, v0, o0, last + 1, out);
@@ -639,10 +661,13 @@ mod tests {
                 let shape = (vertices, sources, len, in_f, out_f);
                 assert_eq!(bits(&blocked), bits(&expected), "blocked, shape {shape:?}");
                 assert_eq!(bits(&plain), bits(&expected), "forward, shape {shape:?}");
-                // Every block shape, not only the one this target selects (4 and 8 vertices;
-                // 4, 8 and 16 channels), so that a portable test run covers the AVX-512 path.
+                // Every block shape, not only the one this target selects (2, 4 and 8 vertices;
+                // 4, 8 and 16 channels), so that a portable test run covers the AVX2 and AVX-512 paths.
                 type Kernel<'k> = fn(&SpiralConv<'k>, &[f32], &mut [f32], &mut [f32]);
-                let kernels: [(Kernel<'_>, usize, &str); 6] = [
+                let kernels: [(Kernel<'_>, usize, &str); 9] = [
+                    (SpiralConv::blocks2::<4>, 4, "2 × 4"),
+                    (SpiralConv::blocks2::<8>, 8, "2 × 8"),
+                    (SpiralConv::blocks2::<16>, 16, "2 × 16"),
                     (SpiralConv::blocks4::<4>, 4, "4 × 4"),
                     (SpiralConv::blocks4::<8>, 8, "4 × 8"),
                     (SpiralConv::blocks4::<16>, 16, "4 × 16"),
@@ -671,8 +696,7 @@ mod tests {
 
     #[test]
     fn blocked_scratch_and_errors() {
-        // One 16-channel block of a 15-position, 32-feature layer (the S2D level-0 stage), and a
-        // 4-channel block for 3 outputs.
+        // A 4-channel block for 3 outputs: 2 positions × 1 feature × 4.
         let sb = ub(&[0, 1]);
         let spirals = Spirals::new(U32s::new(&sb).unwrap(), 1, 2, 2).unwrap();
         let wb = fb(&[1.0; 6]);
