@@ -240,9 +240,9 @@ impl SpiralConv<'_> {
 
     /// Scratch length [`Self::forward_blocked`] needs: one block of output channels' weights,
     /// repacked input-major, `len · in_f` rows of 4 (up to 4 outputs), 8 (up to 8) or 16
-    /// values. The same on every target, although a target whose blocks are narrower (8
-    /// channels without AVX2) uses less of it. (Saturates instead of overflowing; no buffer that
-    /// long can exist.)
+    /// values. The same on every target, although a target with narrower blocks (8 channels
+    /// with AVX2 or AVX-512) uses half of it for wide layers. (Saturates instead of overflowing;
+    /// no buffer that long can exist.)
     pub fn scratch_len(&self) -> usize {
         let block = if self.out_f <= 8 {
             self.block_outputs()
