@@ -8,9 +8,12 @@ Same shapes as the Rust benchmarks: levels of 5023/1256/314/79/20 vertices (+ on
 spirals [15, 14, 9, 9, 7] with random indices, up-sampling U with three random barycentric
 parents per vertex (torch sparse COO, multiplied with torch.sparse.mm as the reference does),
 FC 204 -> 21*128, stages 64/32/32/16 with ELU and the dummy row zeroed, output conv to 3:
-666,083 parameters. Random values: the cost does not depend on them. Run on demand:
+666,083 parameters. `--ict` uses the ICT-FaceKit face region's level sizes and spiral lengths
+instead (9409/2353/589/148/37, [12, 14, 9, 10, 9]; 1,118,675 parameters), the partner of the
+Rust benchmark's `core_decode_ict_synthetic`. Random values: the cost does not depend on them.
+Run on demand:
 
-    python3 scripts/bench_torch_s2d_decode.py [--threads 1] [--iters 200] [--train]
+    python3 scripts/bench_torch_s2d_decode.py [--threads 1] [--iters 200] [--train] [--ict]
 """
 import argparse
 import time
@@ -19,6 +22,8 @@ import torch
 
 SIZES = [5023, 1256, 314, 79, 20]
 SPIRALS = [15, 14, 9, 9, 7]
+ICT_SIZES = [9409, 2353, 589, 148, 37]
+ICT_SPIRALS = [12, 14, 9, 10, 9]
 FILTERS = [64, 32, 32, 16]
 
 
@@ -90,7 +95,11 @@ def main():
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--iters", type=int, default=200)
     ap.add_argument("--train", action="store_true", help="time a batch-16 Adam step instead")
+    ap.add_argument("--ict", action="store_true", help="the ICT face region's sizes instead of FLAME's")
     args = ap.parse_args()
+    if args.ict:
+        SIZES[:] = ICT_SIZES
+        SPIRALS[:] = ICT_SPIRALS
     torch.set_num_threads(args.threads)
     gen = torch.Generator().manual_seed(1)
     torch.manual_seed(1)
@@ -132,7 +141,7 @@ def main():
             net(x)
             times.append(time.perf_counter() - t)
     times.sort()
-    print(f"decode batch 1, {args.threads} thread(s): median {1e6 * times[len(times) // 2]:.0f} us, "
+    print(f"decode batch 1 ({SIZES[0]} vertices), {args.threads} thread(s): median {1e6 * times[len(times) // 2]:.0f} us, "
           f"min {1e6 * times[0]:.0f} us")
 
 

@@ -55,6 +55,7 @@ pub struct S2dDecoder<'a> {
     neutral: F32s<'a>,
     landmarks: U32s<'a>,
     half: usize,
+    conv_scratch: usize,
 }
 
 fn name(parts: core::fmt::Arguments<'_>) -> Result<heapless::String<NAME_LEN>, FormatError> {
@@ -199,7 +200,16 @@ impl<'a> S2dDecoder<'a> {
             return Err(FormatError::IncompatibleShapes);
         }
         half = grow(half, n0 + 1, outputs)?;
-        half.checked_mul(2).ok_or(FormatError::LimitExceeded)?;
+        // The largest convolution's repacked weight block (`SpiralConv::scratch_len`).
+        let conv_scratch = convs
+            .iter()
+            .chain(core::iter::once(&out))
+            .map(SpiralConv::scratch_len)
+            .max()
+            .unwrap_or(0);
+        half.checked_mul(2)
+            .and_then(|h| h.checked_add(conv_scratch))
+            .ok_or(FormatError::LimitExceeded)?;
         Ok(Self {
             file,
             inputs,
@@ -212,6 +222,7 @@ impl<'a> S2dDecoder<'a> {
             neutral,
             landmarks,
             half,
+            conv_scratch,
         })
     }
 
@@ -251,9 +262,10 @@ impl<'a> S2dDecoder<'a> {
     }
 
     /// Scratch length [`Self::decode`] needs: two buffers of the largest feature map (dummy rows
-    /// included).
+    /// included), then room for the largest convolution's repacked weight block
+    /// ([`SpiralConv::scratch_len`]).
     pub const fn scratch_len(&self) -> usize {
-        2 * self.half
+        2 * self.half + self.conv_scratch
     }
 
     /// Dense displacements from landmark displacements (see the module documentation).
@@ -282,7 +294,10 @@ impl<'a> S2dDecoder<'a> {
         }
         // Every length below was bounded by `half` in `from_file`, so each `get` succeeds and each
         // kernel's own length check passes; the `?`s cannot fire on a validated model.
-        let (a, b) = scratch
+        let (a, rest) = scratch
+            .split_at_mut_checked(self.half)
+            .ok_or(BufferError::Scratch)?;
+        let (b, packed) = rest
             .split_at_mut_checked(self.half)
             .ok_or(BufferError::Scratch)?;
         let fc_out = self.fc.outputs();
@@ -296,14 +311,14 @@ impl<'a> S2dDecoder<'a> {
             up.mul_dense(x, width, fine)?;
             let out_f = conv.out_features();
             let y = a.get_mut(..rows * out_f).ok_or(BufferError::Scratch)?;
-            conv.forward(fine, y)?;
+            conv.forward_blocked(fine, y, packed)?;
             zero_row(y, rows.saturating_sub(1), out_f)?;
             width = out_f;
         }
         let rows = self.vertex_count() + 1;
         let x = a.get(..rows * width).ok_or(BufferError::Scratch)?;
         let y = b.get_mut(..rows * 3).ok_or(BufferError::Scratch)?;
-        self.out.forward(x, y)?;
+        self.out.forward_blocked(x, y, packed)?;
         out.copy_from_slice(y.get(..out.len()).ok_or(BufferError::Scratch)?);
         Ok(())
     }

@@ -213,6 +213,236 @@ impl<'a> SpiralConv<'a> {
     }
 }
 
+/// `f32` lanes of the target's vector registers, as far as the compile-time target features
+/// tell: the blocks below are sized so that their accumulators fill about eight registers. This
+/// chooses a loop shape only: every output's sum runs in the same order whatever the block, so
+/// the bits do not depend on it.
+const LANES: usize = if cfg!(target_feature = "avx512f") {
+    16
+} else if cfg!(target_feature = "avx2") {
+    8
+} else {
+    4
+};
+
+impl SpiralConv<'_> {
+    /// Output channels computed together by [`Self::forward_blocked`]: 4, 8 or (128-bit vectors
+    /// only) 16.
+    fn block_outputs(&self) -> usize {
+        if self.out_f <= 4 {
+            4
+        } else if self.out_f <= 8 || LANES >= 8 {
+            8
+        } else {
+            16
+        }
+    }
+
+    /// Scratch length [`Self::forward_blocked`] needs: one block of output channels' weights,
+    /// repacked input-major, `len · in_f` rows of 4 (up to 4 outputs), 8 (up to 8) or 16
+    /// values. The same on every target, although a target with narrower blocks (8 channels
+    /// with AVX2 or AVX-512) uses half of it for wide layers. (Saturates instead of overflowing;
+    /// no buffer that long can exist.)
+    pub fn scratch_len(&self) -> usize {
+        let block = if self.out_f <= 8 {
+            self.block_outputs()
+        } else {
+            16
+        };
+        self.spirals
+            .len
+            .saturating_mul(self.in_f)
+            .saturating_mul(block)
+    }
+
+    /// [`Self::forward`], the same bits, computing a block of vertices times a block of output
+    /// channels together.
+    ///
+    /// Each output is still `act((Σ_j W[o, j] · g_v[j]) + b[o])` with the sum over
+    /// `j = p · in_f + c` in increasing order from `0.0`, separate multiply and add: only
+    /// independent sums (other vertices, other channels) are interleaved, which hides the latency
+    /// of the additions and lets the compiler vectorise across channels. The block's weights are
+    /// first copied into `scratch` as `[len · in_f, block]` (zeros past the last channel), so
+    /// that one step reads a contiguous row of weights for all channels of the block.
+    ///
+    /// # Shapes
+    /// As [`Self::forward`]; `scratch`: at least [`Self::scratch_len`] values (contents on entry
+    /// ignored, on exit unspecified).
+    ///
+    /// # Errors
+    /// As [`Self::forward`], and [`BufferError::Scratch`] if `scratch` is too short.
+    pub fn forward_blocked(
+        &self,
+        x: &[f32],
+        out: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<(), BufferError> {
+        if Some(x.len()) != self.spirals.n_source_vertices.checked_mul(self.in_f) {
+            return Err(BufferError::Input);
+        }
+        if Some(out.len()) != self.spirals.n_vertices.checked_mul(self.out_f) {
+            return Err(BufferError::Output);
+        }
+        if scratch.len() < self.scratch_len() {
+            return Err(BufferError::Scratch);
+        }
+        let used = self.spirals.len * self.in_f * self.block_outputs();
+        let packed = scratch.get_mut(..used).ok_or(BufferError::Scratch)?;
+        // Eight accumulator registers: 8 vertices × 8 channels in 256-bit registers (AVX2, and
+        // AVX-512, where 16-channel blocks came out slower: the compiler assembled each weight
+        // row from pieces), 2 × 16 or 4 × 8 in 128-bit ones; 8 × 4 for the 3-output layer.
+        match self.block_outputs() {
+            4 => self.blocks8::<4>(x, out, packed),
+            8 if LANES >= 8 => self.blocks8::<8>(x, out, packed),
+            8 => self.blocks4::<8>(x, out, packed),
+            _ => self.blocks2::<16>(x, out, packed),
+        }
+        Ok(())
+    }
+
+    /// Copies the weights of channels `o0..o0 + OB` into `packed` as `packed[j][k] = W[o0 + k, j]`,
+    /// zero for channels past `out_f` (computed, never stored).
+    fn pack<const OB: usize>(&self, o0: usize, packed: &mut [[f32; OB]]) {
+        let width = self.spirals.len * self.in_f;
+        packed.fill([0.0; OB]);
+        for k in 0..OB.min(self.out_f.saturating_sub(o0)) {
+            let row = self.weight.slice((o0 + k) * width, width);
+            for (dst, w) in packed.iter_mut().zip(row.iter()) {
+                if let Some(d) = dst.get_mut(k) {
+                    *d = w;
+                }
+            }
+        }
+    }
+
+    /// The source row of vertex `v` at spiral position `p`. Indices are validated
+    /// (< n_source_vertices) and `x` checked, so the row is whole; the empty fallback cannot
+    /// occur.
+    #[inline(always)]
+    fn row<'x>(&self, x: &'x [f32], v: usize, p: usize) -> &'x [f32] {
+        let s = self.spirals.indices.at(v * self.spirals.len + p) as usize;
+        x.get(s * self.in_f..s * self.in_f + self.in_f)
+            .unwrap_or(&[])
+    }
+
+    /// `out[v, o0 + k] = act(acc[b][k] + bias[o0 + k])` for the block's vertices `v = v0 + b`,
+    /// `b < count`, and its channels below `out_f`.
+    fn store<const OB: usize>(
+        &self,
+        acc: &[[f32; OB]],
+        v0: usize,
+        o0: usize,
+        count: usize,
+        out: &mut [f32],
+    ) {
+        let out_f = self.out_f;
+        let bias = self.bias.slice(o0, OB);
+        for (b, a) in acc.iter().enumerate().take(count) {
+            let start = (v0 + b) * out_f + o0;
+            let end = (start + OB).min((v0 + b + 1) * out_f);
+            if let Some(dst) = out.get_mut(start..end) {
+                for ((d, ak), bo) in dst.iter_mut().zip(a).zip(bias.iter()) {
+                    *d = self.activation.apply(*ak + bo);
+                }
+            }
+        }
+    }
+
+    /// The body of [`Self::forward_blocked`] for blocks of 4 vertices × `OB` channels; the
+    /// caller has checked every length (`packed` holds `len · in_f · OB` values).
+    #[inline(never)]
+    fn blocks4<const OB: usize>(&self, x: &[f32], out: &mut [f32], packed: &mut [f32]) {
+        let (in_f, len, n) = (self.in_f, self.spirals.len, self.spirals.n_vertices);
+        let (packed, _) = packed.as_chunks_mut::<OB>();
+        for o0 in (0..self.out_f).step_by(OB) {
+            self.pack(o0, packed);
+            for v0 in (0..n).step_by(4) {
+                // A short last block repeats its last vertex (those sums are dropped).
+                let last = (n - v0).min(4) - 1;
+                let mut acc = [[0.0f32; OB]; 4];
+                for (p, wp) in packed.chunks_exact(in_f).take(len).enumerate() {
+                    let row = |b: usize| self.row(x, v0 + b.min(last), p);
+                    let [a0, a1, a2, a3] = &mut acc;
+                    // Neural3DMM spiral conv: acc[v][o] += W[o, p · in_f + c] · x[s(v, p), c]
+                    // for c in order, so each output's sum keeps the order of `forward`. The
+                    // rows advance in lockstep through one iterator: indexing each row instead
+                    // lets the compiler vectorise across rows, with gathers.
+                    let steps = wp.iter().zip(row(0)).zip(row(1)).zip(row(2)).zip(row(3));
+                    for ((((w, x0), x1), x2), x3) in steps {
+                        axpy(a0, w, *x0);
+                        axpy(a1, w, *x1);
+                        axpy(a2, w, *x2);
+                        axpy(a3, w, *x3);
+                    }
+                }
+                self.store(&acc, v0, o0, last + 1, out);
+            }
+        }
+    }
+
+    /// [`Self::blocks4`] with blocks of 2 vertices.
+    #[inline(never)]
+    fn blocks2<const OB: usize>(&self, x: &[f32], out: &mut [f32], packed: &mut [f32]) {
+        let (in_f, len, n) = (self.in_f, self.spirals.len, self.spirals.n_vertices);
+        let (packed, _) = packed.as_chunks_mut::<OB>();
+        for o0 in (0..self.out_f).step_by(OB) {
+            self.pack(o0, packed);
+            for v0 in (0..n).step_by(2) {
+                let last = (n - v0).min(2) - 1;
+                let mut acc = [[0.0f32; OB]; 2];
+                for (p, wp) in packed.chunks_exact(in_f).take(len).enumerate() {
+                    let row = |b: usize| self.row(x, v0 + b.min(last), p);
+                    let [a0, a1] = &mut acc;
+                    for ((w, x0), x1) in wp.iter().zip(row(0)).zip(row(1)) {
+                        axpy(a0, w, *x0);
+                        axpy(a1, w, *x1);
+                    }
+                }
+                self.store(&acc, v0, o0, last + 1, out);
+            }
+        }
+    }
+
+    /// [`Self::blocks4`] with blocks of 8 vertices.
+    #[inline(never)]
+    fn blocks8<const OB: usize>(&self, x: &[f32], out: &mut [f32], packed: &mut [f32]) {
+        let (in_f, len, n) = (self.in_f, self.spirals.len, self.spirals.n_vertices);
+        let (packed, _) = packed.as_chunks_mut::<OB>();
+        for o0 in (0..self.out_f).step_by(OB) {
+            self.pack(o0, packed);
+            for v0 in (0..n).step_by(8) {
+                let last = (n - v0).min(8) - 1;
+                let mut acc = [[0.0f32; OB]; 8];
+                for (p, wp) in packed.chunks_exact(in_f).take(len).enumerate() {
+                    let row = |b: usize| self.row(x, v0 + b.min(last), p);
+                    let [a0, a1, a2, a3, a4, a5, a6, a7] = &mut acc;
+                    let steps = wp.iter().zip(row(0)).zip(row(1)).zip(row(2)).zip(row(3));
+                    let steps = steps.zip(row(4)).zip(row(5)).zip(row(6)).zip(row(7));
+                    for ((((((((w, x0), x1), x2), x3), x4), x5), x6), x7) in steps {
+                        axpy(a0, w, *x0);
+                        axpy(a1, w, *x1);
+                        axpy(a2, w, *x2);
+                        axpy(a3, w, *x3);
+                        axpy(a4, w, *x4);
+                        axpy(a5, w, *x5);
+                        axpy(a6, w, *x6);
+                        axpy(a7, w, *x7);
+                    }
+                }
+                self.store(&acc, v0, o0, last + 1, out);
+            }
+        }
+    }
+}
+
+/// `acc[k] += w[k] · x`: one step of `OB` independent sums.
+#[inline(always)]
+fn axpy<const OB: usize>(acc: &mut [f32; OB], w: &[f32; OB], x: f32) {
+    for (a, wk) in acc.iter_mut().zip(w) {
+        *a += *wk * x;
+    }
+}
+
 /// Sets row `row` of a row-major `[_, width]` array to zero: the S2D reference zeroes the dummy
 /// vertex's row (the last one) after every spiral stage, so that it pads short spirals with zeros.
 ///
@@ -231,6 +461,7 @@ pub fn zero_row(out: &mut [f32], row: usize, width: usize) -> Result<(), BufferE
 mod tests {
     use super::*;
     use crate::nn::Dense;
+    use std::vec;
     use std::vec::Vec;
 
     fn fb(v: &[f32]) -> Vec<u8> {
@@ -331,6 +562,161 @@ mod tests {
             assert_eq!(y[0].to_bits(), out[v * 2].to_bits());
             assert_eq!(y[1].to_bits(), out[v * 2 + 1].to_bits());
         }
+    }
+
+    /// A straightforward spiral convolution in the documented order, kept here as the
+    /// definition the optimised kernels must match bit for bit: for each vertex and output,
+    /// `acc = 0.0`, then `acc += W[o, j] · g_v[j]` for `j = p · in_f + c` in increasing order,
+    /// then `act(acc + b[o])`.
+    fn reference(
+        idx: &[u32],
+        len: usize,
+        w: &[f32],
+        b: &[f32],
+        in_f: usize,
+        act: Activation,
+        x: &[f32],
+    ) -> Vec<f32> {
+        let out_f = b.len();
+        let mut out = Vec::new();
+        for spiral in idx.chunks(len) {
+            for o in 0..out_f {
+                let mut acc = 0.0f32;
+                for (p, &s) in spiral.iter().enumerate() {
+                    for c in 0..in_f {
+                        acc += w[o * len * in_f + p * in_f + c] * x[s as usize * in_f + c];
+                    }
+                }
+                out.push(act.apply(acc + b[o]));
+            }
+        }
+        out
+    }
+
+    /// A small xorshift generator: values of mixed sign and magnitude (1e-3 to 1e3), so that
+    /// almost any change of a sum's order changes its rounding.
+    struct Mixed(u64);
+
+    impl Mixed {
+        fn next(&mut self) -> f32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            let u = (self.0 >> 40) as f32 / (1u64 << 24) as f32;
+            let scale = [1e-3, 1.0, 1e3][(self.0 % 3) as usize];
+            (2.0 * u - 1.0) * scale
+        }
+
+        fn vec(&mut self, n: usize) -> Vec<f32> {
+            (0..n).map(|_| self.next()).collect()
+        }
+    }
+
+    #[test]
+    fn blocked_keeps_every_sums_order() {
+        let mut rng = Mixed(0x9e37_79b9_7f4a_7c15);
+        // Vertex counts around the 4-vertex block, channel counts around the 4/8/16 blocks,
+        // odd feature counts and spiral lengths.
+        let shapes = [
+            (1, 1, 1, 1, 1),
+            (3, 5, 2, 3, 3),
+            (5, 7, 3, 1, 4),
+            (6, 4, 5, 7, 5),
+            (9, 11, 4, 2, 8),
+            (7, 13, 2, 5, 9),
+            (13, 8, 3, 3, 16),
+            (10, 17, 5, 2, 17),
+            (4, 6, 1, 33, 33),
+            (2, 3, 7, 4, 64),
+        ];
+        for (vertices, sources, len, in_f, out_f) in shapes {
+            let idx: Vec<u32> = (0..vertices * len)
+                .map(|_| (rng.next().abs() * 1e6) as u32 % sources as u32)
+                .collect();
+            let (w, b, x) = (
+                rng.vec(out_f * len * in_f),
+                rng.vec(out_f),
+                rng.vec(sources * in_f),
+            );
+            let (ib, wb, bb) = (ub(&idx), fb(&w), fb(&b));
+            let spirals = Spirals::new(U32s::new(&ib).unwrap(), vertices, len, sources).unwrap();
+            for act in [Activation::Identity, Activation::Elu { alpha: 1.0 }] {
+                let conv = SpiralConv::new(
+                    spirals,
+                    F32s::new(&wb).unwrap(),
+                    F32s::new(&bb).unwrap(),
+                    in_f,
+                    out_f,
+                    act,
+                )
+                .unwrap();
+                let expected = reference(&idx, len, &w, &b, in_f, act, &x);
+                let mut scratch = vec![f32::NAN; conv.scratch_len()];
+                let mut blocked = vec![f32::NAN; vertices * out_f];
+                conv.forward_blocked(&x, &mut blocked, &mut scratch)
+                    .unwrap();
+                let mut plain = vec![f32::NAN; vertices * out_f];
+                conv.forward(&x, &mut plain).unwrap();
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                let shape = (vertices, sources, len, in_f, out_f);
+                assert_eq!(bits(&blocked), bits(&expected), "blocked, shape {shape:?}");
+                assert_eq!(bits(&plain), bits(&expected), "forward, shape {shape:?}");
+                // Every block shape, not only the one this target selects (2, 4 and 8 vertices;
+                // 4, 8 and 16 channels), so that a portable test run covers the AVX2 and AVX-512 paths.
+                type Kernel<'k> = fn(&SpiralConv<'k>, &[f32], &mut [f32], &mut [f32]);
+                let kernels: [(Kernel<'_>, usize, &str); 9] = [
+                    (SpiralConv::blocks2::<4>, 4, "2 × 4"),
+                    (SpiralConv::blocks2::<8>, 8, "2 × 8"),
+                    (SpiralConv::blocks2::<16>, 16, "2 × 16"),
+                    (SpiralConv::blocks4::<4>, 4, "4 × 4"),
+                    (SpiralConv::blocks4::<8>, 8, "4 × 8"),
+                    (SpiralConv::blocks4::<16>, 16, "4 × 16"),
+                    (SpiralConv::blocks8::<4>, 4, "8 × 4"),
+                    (SpiralConv::blocks8::<8>, 8, "8 × 8"),
+                    (SpiralConv::blocks8::<16>, 16, "8 × 16"),
+                ];
+                for (kernel, ob, name) in kernels {
+                    let mut packed = vec![f32::NAN; len * in_f * ob];
+                    let mut y = vec![f32::NAN; vertices * out_f];
+                    kernel(&conv, &x, &mut y, &mut packed);
+                    assert_eq!(bits(&y), bits(&expected), "{name}, shape {shape:?}");
+                }
+                // A longer scratch is fine, a shorter one is refused before any write.
+                let mut long = vec![0.0; conv.scratch_len() + 3];
+                conv.forward_blocked(&x, &mut blocked, &mut long).unwrap();
+                assert_eq!(bits(&blocked), bits(&expected));
+                let short = conv.scratch_len() - 1;
+                assert_eq!(
+                    conv.forward_blocked(&x, &mut blocked, &mut scratch[..short]),
+                    Err(BufferError::Scratch)
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn blocked_scratch_and_errors() {
+        // A 4-channel block for 3 outputs: 2 positions × 1 feature × 4.
+        let sb = ub(&[0, 1]);
+        let spirals = Spirals::new(U32s::new(&sb).unwrap(), 1, 2, 2).unwrap();
+        let wb = fb(&[1.0; 6]);
+        let bb = fb(&[0.0; 3]);
+        let (w, b) = (F32s::new(&wb).unwrap(), F32s::new(&bb).unwrap());
+        let conv = SpiralConv::new(spirals, w, b, 1, 3, Activation::Identity).unwrap();
+        assert_eq!(conv.scratch_len(), 2 * 4);
+        let mut out = [0.0; 3];
+        let mut scratch = [0.0; 8];
+        assert_eq!(
+            conv.forward_blocked(&[1.0], &mut out, &mut scratch),
+            Err(BufferError::Input)
+        );
+        assert_eq!(
+            conv.forward_blocked(&[1.0, 2.0], &mut out[..2], &mut scratch),
+            Err(BufferError::Output)
+        );
+        conv.forward_blocked(&[1.0, 2.0], &mut out, &mut scratch)
+            .unwrap();
+        assert_eq!(out, [3.0; 3]);
     }
 
     #[test]

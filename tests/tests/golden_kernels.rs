@@ -82,6 +82,13 @@ fn spiral_output() -> Vec<f32> {
     let x = rng.vec(sources * fin, -1.0, 1.0);
     let mut out = vec![0.0; vertices * fout];
     conv.forward(&x, &mut out).unwrap();
+    // The blocked kernel the S2D decoder uses must give the same bits, so this hash pins both.
+    let mut blocked = vec![0.0; vertices * fout];
+    let mut scratch = vec![0.0; conv.scratch_len()];
+    conv.forward_blocked(&x, &mut blocked, &mut scratch)
+        .unwrap();
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&blocked), bits(&out));
     out
 }
 

@@ -141,8 +141,9 @@ fn tiny_decoder_hand_computed() {
     assert!((e1 - (-1.75f32).exp_m1()).abs() < 1e-6);
     // Output: v0 over (0, 1) = [e1, e2, (e1 + e2) + 10]; v1 over (1, dummy) = [e2, 0, e2 + 10].
     let expected = [e1, e2, (e1 + e2) + 10.0, e2, 0.0, e2 + 10.0];
-    // Scratch: two buffers of the largest map, 3 rows × 3 outputs.
-    assert_eq!(dec.scratch_len(), 18);
+    // Scratch: two buffers of the largest map, 3 rows × 3 outputs, then one packed weight block
+    // of the widest convolution (2 positions × 1 feature × a block of 4 channels).
+    assert_eq!(dec.scratch_len(), 18 + 8);
     let mut scratch = vec![f32::NAN; dec.scratch_len()];
     let mut out = [f32::NAN; 6];
     dec.displacements(&[1.0, 2.0, 3.0], &mut scratch, &mut out)
@@ -167,7 +168,7 @@ fn tiny_decoder_hand_computed() {
         Err(BufferError::Output)
     );
     assert_eq!(
-        dec.decode(&[1.0, 2.0, 3.0], &mut scratch[..17], &mut out),
+        dec.decode(&[1.0, 2.0, 3.0], &mut scratch[..25], &mut out),
         Err(BufferError::Scratch)
     );
     assert_eq!(
@@ -385,4 +386,125 @@ fn fix_header_crc(bytes: &mut [u8], sections: usize) {
     digest.update(&bytes[HEADER_LEN..table_end]);
     let crc = digest.finalize();
     bytes[HEADER_CRC_OFFSET..HEADER_CRC_OFFSET + 4].copy_from_slice(&crc.to_le_bytes());
+}
+
+/// A plain S2D decode read straight from the artefact's sections, in the documented order (the
+/// definition the core's blocked kernels must match bit for bit): every dot product from `0.0`
+/// in index order with separate multiply and add, the bias after; CSR rows in stored order; the
+/// dummy row zeroed after each stage.
+fn reference_displacements(bytes: &[u8], input: &[f32]) -> Vec<f32> {
+    let file = sinew_core::SinewFile::from_bytes(bytes).unwrap();
+    let f32s =
+        |name: &str| -> Vec<f32> { file.section(name).unwrap().f32s().unwrap().iter().collect() };
+    let u32s = |name: &str| -> Vec<usize> {
+        let s = file.section(name).unwrap();
+        s.u32s().unwrap().iter().map(|v| v as usize).collect()
+    };
+    let cfg = u32s("s2d.cfg");
+    let (fc_features, outputs) = (cfg[1], cfg[2]);
+    let levels = u32s("s2d.levels");
+    let n_levels = levels.len() / 2;
+    let rows_at = |k: usize| levels[2 * k] + 1;
+    let len_at = |k: usize| levels[2 * k + 1];
+    let dense = |w: &[f32], b: &[f32], x: &[f32]| -> Vec<f32> {
+        let n = x.len();
+        b.iter()
+            .enumerate()
+            .map(|(o, b)| {
+                let mut acc = 0.0f32;
+                for (i, xi) in x.iter().enumerate() {
+                    acc += w[o * n + i] * xi;
+                }
+                acc + b
+            })
+            .collect()
+    };
+    let conv = |k: usize, w: &[f32], b: &[f32], x: &[f32], in_f: usize, elu: bool| -> Vec<f32> {
+        let (rows, len) = (rows_at(k), len_at(k));
+        let spirals = u32s(&format!("s2d.h{k}.spiral"));
+        let mut out = Vec::new();
+        for v in 0..rows {
+            let g: Vec<f32> = spirals[v * len..(v + 1) * len]
+                .iter()
+                .flat_map(|&s| x[s * in_f..(s + 1) * in_f].iter().copied())
+                .collect();
+            for z in dense(w, b, &g) {
+                out.push(if elu && z <= 0.0 { libm_expm1(z) } else { z });
+            }
+        }
+        out
+    };
+    let mut h = dense(&f32s("s2d.fc.w"), &f32s("s2d.fc.b"), input);
+    let mut width = fc_features;
+    for k in (0..n_levels - 1).rev() {
+        let (ptr, col, val) = (
+            u32s(&format!("s2d.u{k}.ptr")),
+            u32s(&format!("s2d.u{k}.col")),
+            f32s(&format!("s2d.u{k}.val")),
+        );
+        let mut fine = vec![0.0f32; rows_at(k) * width];
+        for r in 0..rows_at(k) {
+            for e in ptr[r]..ptr[r + 1] {
+                for f in 0..width {
+                    fine[r * width + f] += val[e] * h[col[e] * width + f];
+                }
+            }
+        }
+        let (w, b) = (
+            f32s(&format!("s2d.conv.{k}.w")),
+            f32s(&format!("s2d.conv.{k}.b")),
+        );
+        h = conv(k, &w, &b, &fine, width, true);
+        width = b.len();
+        let dummy = rows_at(k) - 1;
+        h[dummy * width..].fill(0.0);
+    }
+    let y = conv(0, &f32s("s2d.out.w"), &f32s("s2d.out.b"), &h, width, false);
+    y[..(rows_at(0) - 1) * outputs].to_vec()
+}
+
+/// ELU's negative branch as the core evaluates it (α = 1): `libm::expm1f`, reached through the
+/// core's own activation so that this test needs no `libm` of its own.
+fn libm_expm1(z: f32) -> f32 {
+    sinew_core::nn::Activation::Elu { alpha: 1.0 }.apply(z)
+}
+
+/// The core's decode against [`reference_displacements`], bit for bit, on the tiny baked decoder
+/// and on freshly initialised decoders whose widths straddle the kernels' blocks (4 vertices;
+/// 4, 8 and 16 channels): odd FC widths, filters of 5, 9, 17 and 3, vertex counts that are not
+/// multiples of 4.
+#[test]
+fn decode_bits_match_a_plain_reference() {
+    use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder as Burn};
+    use sinew_host::s2d::synthetic;
+    let device = sinew_host::backend::Backend::Flex.device(1).unwrap();
+    let mut cases = vec![synthetic::tiny_baked_decoder().1];
+    for (sizes, spirals, fc, filters, seed) in [
+        (&[30, 12, 5][..], &[5, 4, 3][..], 4, vec![5, 3], 1),
+        (&[37, 13, 6][..], &[7, 5, 3][..], 7, vec![17, 9], 2),
+        (&[61, 23, 9, 2][..], &[9, 6, 4, 2][..], 5, vec![16, 8, 5], 3),
+    ] {
+        let h = synthetic::hierarchy(sizes, spirals, seed);
+        let config = DecoderConfig {
+            inputs: 6,
+            fc_features: fc,
+            filters,
+            outputs: 3,
+        };
+        let dec = Burn::new(&config, &h, &device).unwrap();
+        cases.push(sinew_host::s2d::bake::bake(&dec, &h, &[1, 2], &[]).unwrap());
+    }
+    let mut rng = sinew_tests::Rng::new(31);
+    for (i, bytes) in cases.iter().enumerate() {
+        let core = S2dDecoder::from_bytes(bytes).unwrap();
+        let mut scratch = vec![f32::NAN; core.scratch_len()];
+        let mut out = vec![f32::NAN; 3 * core.vertex_count()];
+        for _ in 0..3 {
+            let input = rng.vec(core.input_len(), -0.5, 0.5);
+            core.displacements(&input, &mut scratch, &mut out).unwrap();
+            let expected = reference_displacements(bytes, &input);
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&out), bits(&expected), "decoder {i}");
+        }
+    }
 }
