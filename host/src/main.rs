@@ -338,8 +338,8 @@ struct TrainAim {
     /// Seed (overrides the configuration).
     #[arg(long)]
     seed: Option<u64>,
-    /// Thickness activation: identity (the paper) or softplus (positive by construction);
-    /// overrides the configuration.
+    /// Thickness activation: softplus (positive by construction, the default) or identity (the
+    /// paper); overrides the configuration.
     #[arg(long, value_enum)]
     thickness_activation: Option<sinew_host::aim::config::ThicknessActivation>,
     /// Folder for pictures (error heatmaps, anatomy, loss curve) and OBJs.
