@@ -41,9 +41,10 @@ use core::fmt;
 use sinew_core::FormatError;
 use sinew_core::aim::{AimActor, MAX_SHAPES};
 use sinew_core::q16::Q16;
+pub use sinew_core::replay::FrameCheck;
 use sinew_core::replay::{
-    AimReplay, FrameBuffers, FrameCheck, ReplayError, S2dBuffers, S2dReplay, check_model,
-    check_s2d_model, frame_hash, s2d_frame_hash,
+    AimReplay, FrameBuffers, ReplayError, S2dBuffers, S2dReplay, check_model, check_s2d_model,
+    frame_hash, s2d_frame_hash,
 };
 use sinew_core::s2d::S2dDecoder;
 

@@ -14,7 +14,8 @@ use cortex_m_semihosting::{debug, heprintln, hprintln};
 use panic_semihosting as _;
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
 use sinew_firmware_common::{
-    GOLDENS, Replay, S2D_GOLDENS, S2dRun, Scratch, Summary, phase_costs, s2d_costs,
+    Error, FrameCheck, GOLDENS, Replay, S2D_GOLDENS, S2dRun, Scratch, Summary, phase_costs,
+    s2d_costs,
 };
 
 /// SysTick reload: the counter is 24 bits wide.
@@ -75,6 +76,39 @@ impl Clock {
         self.total += u64::from(self.last.wrapping_sub(current) & SYST_MAX);
         self.last = current;
         self.total * u64::from(INSTRUCTIONS_PER_TICK)
+    }
+}
+
+/// Plays `frames` to the end, printing each frame's check and cost in instructions and adding it
+/// to `summary`; false (after saying why) if a frame could not be played.
+///
+/// A frame is far shorter than a SysTick period (671 M instructions), but some span the counter's
+/// reload: the accumulating clock counts across it.
+fn timed_frames(
+    name: &str,
+    frames: &mut impl Iterator<Item = Result<FrameCheck, Error>>,
+    summary: &mut Summary,
+) -> bool {
+    let mut clock = Clock {
+        last: SYST::get_current(),
+        total: 0,
+    };
+    loop {
+        let start = clock.now();
+        let Some(result) = frames.next() else {
+            return true;
+        };
+        let instructions = clock.now() - start;
+        match result {
+            Ok(check) => {
+                hprintln!("{}  ~{} instructions", check, instructions);
+                summary.add(&check);
+            }
+            Err(e) => {
+                heprintln!("sinew-firmware-sim: {}: {}", name, e);
+                return false;
+            }
+        }
     }
 }
 
@@ -163,23 +197,8 @@ fn run() -> bool {
             replay.actor().shape_count(),
             replay.replay().frames()
         );
-        let mut clock = Clock {
-            last: SYST::get_current(),
-            total: 0,
-        };
-        loop {
-            let start = clock.now();
-            let Some(result) = replay.next() else { break };
-            let instructions = clock.now() - start;
-            let check = match result {
-                Ok(r) => r,
-                Err(e) => {
-                    heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
-                    return false;
-                }
-            };
-            hprintln!("{}  ~{} instructions", check, instructions);
-            total.add(&check);
+        if !timed_frames(golden.name, &mut replay, &mut total) {
+            return false;
         }
     }
     hprintln!(
@@ -206,25 +225,8 @@ fn run() -> bool {
             run.replay().frames(),
             run.needed()
         );
-        // A frame is far shorter than a SysTick period (671 M instructions), but some span the
-        // counter's reload: the accumulating clock counts across it.
-        let mut clock = Clock {
-            last: SYST::get_current(),
-            total: 0,
-        };
-        loop {
-            let start = clock.now();
-            let Some(result) = run.next() else { break };
-            let instructions = clock.now() - start;
-            let check = match result {
-                Ok(r) => r,
-                Err(e) => {
-                    heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
-                    return false;
-                }
-            };
-            hprintln!("{}  ~{} instructions", check, instructions);
-            s2d.add(&check);
+        if !timed_frames(golden.name, &mut run, &mut s2d) {
+            return false;
         }
     }
     hprintln!(
