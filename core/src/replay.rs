@@ -67,6 +67,13 @@ impl fmt::Display for Mode {
     }
 }
 
+/// The `i`-th 64-bit value of a section stored as (low, high) 32-bit word pairs.
+fn word_pair(words: &U32s<'_>, i: usize) -> Option<u64> {
+    let lo = words.get(2 * i)?;
+    let hi = words.get(2 * i + 1)?;
+    Some(u64::from(lo) | (u64::from(hi) << 32))
+}
+
 /// The content hash of a model artefact: xxh64 (seed 0) of all its bytes.
 pub fn model_hash(bytes: &[u8]) -> u64 {
     xxhash_rust::xxh64::xxh64(bytes, 0)
@@ -107,7 +114,7 @@ impl<'a> AimReplay<'a> {
             return Err(FormatError::LimitExceeded);
         }
         Ok(Self {
-            model_hash: u64::from(model.at(0)) | (u64::from(model.at(1)) << 32),
+            model_hash: word_pair(&model, 0).ok_or(FormatError::IncompatibleShapes)?,
             mode,
             frames: frames as usize,
             shapes,
@@ -160,9 +167,7 @@ impl<'a> AimReplay<'a> {
 
     /// The recorded hash of frame `f`.
     pub fn expected(&self, f: usize) -> Option<u64> {
-        let lo = self.hashes.get(2 * f)?;
-        let hi = self.hashes.get(2 * f + 1)?;
-        Some(u64::from(lo) | (u64::from(hi) << 32))
+        word_pair(&self.hashes, f)
     }
 }
 
@@ -456,7 +461,7 @@ impl<'a> S2dReplay<'a> {
             }
         };
         Ok(Self {
-            model_hash: u64::from(model.at(0)) | (u64::from(model.at(1)) << 32),
+            model_hash: word_pair(&model, 0).ok_or(FormatError::IncompatibleShapes)?,
             frames: frames as usize,
             inputs: width as usize,
             data: file.f32_tensor(S2D_INPUTS, &[frames, width])?,
@@ -500,9 +505,7 @@ impl<'a> S2dReplay<'a> {
 
     /// The recorded hash of frame `f`.
     pub fn expected(&self, f: usize) -> Option<u64> {
-        let lo = self.hashes.get(2 * f)?;
-        let hi = self.hashes.get(2 * f + 1)?;
-        Some(u64::from(lo) | (u64::from(hi) << 32))
+        word_pair(&self.hashes, f)
     }
 }
 

@@ -11,8 +11,36 @@ use riscv::register::{mcause, mepc, minstret, mtval};
 use semihosting::{eprintln, println, process};
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
 use sinew_firmware_common::{
-    GOLDENS, Replay, S2D_GOLDENS, S2dRun, Scratch, Summary, phase_costs, s2d_costs,
+    Error, FrameCheck, GOLDENS, Replay, S2D_GOLDENS, S2dRun, Scratch, Summary, phase_costs,
+    s2d_costs,
 };
+
+/// Plays `frames` to the end, printing each frame's check and cost in instructions retired (exact
+/// and repeatable under QEMU's -icount) and adding it to `summary`; false (after saying why) if a
+/// frame could not be played.
+fn timed_frames(
+    name: &str,
+    frames: &mut impl Iterator<Item = Result<FrameCheck, Error>>,
+    summary: &mut Summary,
+) -> bool {
+    loop {
+        let start = minstret::read64();
+        let Some(result) = frames.next() else {
+            return true;
+        };
+        let instructions = minstret::read64().wrapping_sub(start);
+        match result {
+            Ok(check) => {
+                println!("{check}  {instructions} instructions");
+                summary.add(&check);
+            }
+            Err(e) => {
+                eprintln!("sinew-firmware-sim-riscv: {name}: {e}");
+                return false;
+            }
+        }
+    }
+}
 
 #[riscv_rt::entry]
 fn main() -> ! {
@@ -71,20 +99,8 @@ fn run() -> bool {
             replay.actor().shape_count(),
             replay.replay().frames()
         );
-        loop {
-            // Instructions retired; exact and repeatable under QEMU's -icount.
-            let start = minstret::read64();
-            let Some(result) = replay.next() else { break };
-            let instructions = minstret::read64().wrapping_sub(start);
-            let check = match result {
-                Ok(r) => r,
-                Err(e) => {
-                    eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
-                    return false;
-                }
-            };
-            println!("{check}  {instructions} instructions");
-            total.add(&check);
+        if !timed_frames(golden.name, &mut replay, &mut total) {
+            return false;
         }
     }
     println!(
@@ -111,19 +127,8 @@ fn run() -> bool {
             run.replay().frames(),
             run.needed()
         );
-        loop {
-            let start = minstret::read64();
-            let Some(result) = run.next() else { break };
-            let instructions = minstret::read64().wrapping_sub(start);
-            let check = match result {
-                Ok(r) => r,
-                Err(e) => {
-                    eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
-                    return false;
-                }
-            };
-            println!("{check}  {instructions} instructions");
-            s2d.add(&check);
+        if !timed_frames(golden.name, &mut run, &mut s2d) {
+            return false;
         }
     }
     println!(

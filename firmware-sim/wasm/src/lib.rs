@@ -53,10 +53,15 @@ pub extern "C" fn sinew_replay() -> u32 {
             Err(_) => return LOAD_ERROR,
         }
     }
+    outcome(&total)
+}
+
+/// What an export returns for `total`: its mismatching frames (at most the number of frames, far
+/// below [`LOAD_ERROR`]), or [`LOAD_ERROR`] if no frame was played.
+fn outcome(total: &Summary) -> u32 {
     if total.frames == 0 {
         return LOAD_ERROR;
     }
-    // At most the number of frames, far below LOAD_ERROR.
     u32::try_from(total.mismatches).unwrap_or(LOAD_ERROR - 1)
 }
 
@@ -86,10 +91,7 @@ pub extern "C" fn sinew_replay_s2d() -> u32 {
             Err(_) => return LOAD_ERROR,
         }
     }
-    if total.frames == 0 {
-        return LOAD_ERROR;
-    }
-    u32::try_from(total.mismatches).unwrap_or(LOAD_ERROR - 1)
+    outcome(&total)
 }
 
 /// Runs the core kernel suite on seeded weights; returns the number of cases whose hash differs
