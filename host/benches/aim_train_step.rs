@@ -6,7 +6,7 @@
 //! Run: `cargo bench -p sinew-host --bench aim_train_step` (add `--features x86-v4` for the
 //! AVX-512 kernels).
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{Criterion, criterion_group};
 use sinew_host::aim::AimConfig;
 use sinew_host::aim::data::training_set;
 use sinew_host::aim::train::{init, normalisation, step_once};
@@ -80,4 +80,9 @@ fn sine(c: &mut Criterion) {
 }
 
 criterion_group!(benches, sine, bench);
-criterion_main!(benches);
+fn main() {
+    // As the `sinew` binary does: keep freed memory mapped (glibc), see `sinew_host::malloc`.
+    sinew_host::malloc::keep_freed_memory();
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}

@@ -9,7 +9,7 @@
 //! Run: `cargo bench -p sinew-host --bench s2d_train_step`.
 
 use burn::tensor::Tensor;
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{Criterion, criterion_group};
 use sinew_host::backend::Backend;
 use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
 use sinew_host::s2d::synthetic::{self, REFERENCE_SIZES, REFERENCE_SPIRALS};
@@ -75,4 +75,9 @@ fn bench(c: &mut Criterion) {
 }
 
 criterion_group!(benches, bench);
-criterion_main!(benches);
+fn main() {
+    // As the `sinew` binary does: keep freed memory mapped (glibc), see `sinew_host::malloc`.
+    sinew_host::malloc::keep_freed_memory();
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}

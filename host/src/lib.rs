@@ -11,6 +11,7 @@ pub mod constraints;
 pub mod container;
 pub mod ict;
 pub mod inspect;
+pub mod malloc;
 pub mod mesh;
 pub mod nn;
 pub mod plot;

@@ -719,6 +719,8 @@ fn print_s2d(r: &experiment::Report, report: &std::path::Path) {
 }
 
 fn main() -> ExitCode {
+    // Before any thread starts: may re-execute this program once (same arguments).
+    sinew_host::malloc::keep_freed_memory();
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
