@@ -259,7 +259,8 @@ struct TrainS2dArgs {
     /// Protocol: identity- or expression-independent.
     #[arg(long, value_enum)]
     protocol: Protocol,
-    /// Output baked model of fold 0 (.sinew); fold k goes to MODEL.fold<k>.sinew.
+    /// Output baked model of fold 0 (.sinew); fold k goes to MODEL.fold<k>.sinew, and each
+    /// fold's checkpoints to MODEL.ckpt/ and MODEL.fold<k>.ckpt/.
     #[arg(long)]
     out: PathBuf,
     /// Output JSON report; the plot goes beside it (REPORT.png).
@@ -297,6 +298,11 @@ struct TrainS2dArgs {
     /// default: the reference's 64,32,32,16).
     #[arg(long, value_delimiter = ',')]
     filters: Option<Vec<usize>>,
+    /// Continue each fold from its checkpoint (MODEL.ckpt/, MODEL.fold<k>.ckpt/ beside the
+    /// models, written after every epoch and on Ctrl-C); give the same other arguments. A fold
+    /// whose checkpoint is complete is only baked and evaluated.
+    #[arg(long)]
+    resume: bool,
 }
 
 #[derive(Debug, Args)]
@@ -519,6 +525,7 @@ fn run(cli: Cli) -> Result<()> {
                     ..DecoderConfig::default()
                 },
                 factors: args.factors,
+                resume: args.resume,
             };
             let r = experiment::train_s2d(&job, args.quiet)?;
             print_s2d(&r, &args.report);

@@ -8,15 +8,18 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, ensure};
+use anyhow::{Context, Result, bail, ensure};
 use serde::{Deserialize, Serialize};
 
 use super::baseline::{DEFAULT_RIDGE, Pca};
+use super::checkpoint::{STATE_FILE, read_state};
 use super::data::PairSet;
 use super::decoder::{DecoderConfig, S2dDecoder};
 use super::hierarchy;
 use super::protocol::{FOLDS, Protocol, Split, split};
-use super::train::{LossVariant, TrainConfig, landmark_distances, train, vertex_weights};
+use super::train::{
+    LossVariant, TrainConfig, TrainOptions, landmark_distances, train, vertex_weights,
+};
 use crate::backend::Backend;
 
 /// Default epochs of `sinew train s2d` (one fold within 45 minutes on the shared 2-core machine;
@@ -117,7 +120,7 @@ pub struct FoldReport {
     pub model: PathBuf,
     /// Mean training loss of each epoch (empty for `eval`).
     pub losses: Vec<f32>,
-    /// Training time (s).
+    /// Training time (s), over every invocation when the fold was resumed.
     pub train_seconds: f64,
 }
 
@@ -174,6 +177,9 @@ pub struct TrainS2d {
     pub decoder: DecoderConfig,
     /// Decimation factors of the hierarchy (default [`hierarchy::DEFAULT_FACTORS`]; one per stage).
     pub factors: Vec<usize>,
+    /// Continue each fold from its checkpoint ([`fold_checkpoint_path`]); a fold without one
+    /// (after fold 0) starts from the beginning, a complete one is only baked and evaluated.
+    pub resume: bool,
 }
 
 /// The hierarchy cache folder: `$SINEW_CACHE`, else `sinew-cache` in the system's temporary
@@ -193,6 +199,12 @@ pub fn fold_model_path(out: &Path, fold: usize) -> PathBuf {
         .file_stem()
         .map_or_else(|| "model".to_owned(), |s| s.to_string_lossy().into_owned());
     out.with_file_name(format!("{stem}.fold{fold}.sinew"))
+}
+
+/// The checkpoint folder of `fold` for the `--out` path of fold 0: beside the fold's model
+/// ([`fold_model_path`]) with the extension `ckpt`, `MODEL.ckpt/` and `MODEL.fold<k>.ckpt/`.
+pub fn fold_checkpoint_path(out: &Path, fold: usize) -> PathBuf {
+    crate::commands::checkpoint_dir_for(&fold_model_path(out, fold))
 }
 
 /// The plot path beside a report: `REPORT.png` (the report's extension replaced).
@@ -358,7 +370,8 @@ fn finish(
 }
 
 /// `sinew train s2d`: per fold, trains S2D-Dec on the training pairs (the hierarchy of the face
-/// region from [`hierarchy::cached`]), bakes it, evaluates the baked model and the baselines on
+/// region from [`hierarchy::cached`]) with a checkpoint folder beside the fold's model (or
+/// continues from it, `args.resume`), bakes it, evaluates the baked model and the baselines on
 /// the test pairs, then writes the pooled report and the cumulative-error plot.
 pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
     let started = Instant::now();
@@ -397,9 +410,45 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
                 decoder.parameter_count()
             );
         }
-        let t = Instant::now();
-        let (decoder, losses) = train(decoder, &samples, &weights, &config, &device)?;
-        let train_seconds = t.elapsed().as_secs_f64();
+        let checkpoint = fold_checkpoint_path(&args.out, fold);
+        let resume = args.resume && checkpoint.join(STATE_FILE).exists();
+        if args.resume && !resume {
+            // Folds run in order, so any earlier run left fold 0's checkpoint.
+            if fold == 0 {
+                bail!(
+                    "{}: no checkpoint to resume (no {STATE_FILE}); run without --resume to \
+                     start, or give the --out of the run to continue",
+                    checkpoint.display()
+                );
+            }
+            if !quiet {
+                eprintln!(
+                    "fold {fold}: no checkpoint in {}, training from the start",
+                    checkpoint.display()
+                );
+            }
+        }
+        if resume
+            && !quiet
+            && let Ok(st) = read_state(&checkpoint)
+        {
+            eprintln!(
+                "fold {fold}: resuming from {} at epoch {} of {}, step {}",
+                checkpoint.display(),
+                st.epochs_done,
+                st.config.epochs,
+                st.steps_in_epoch
+            );
+        }
+        let options = TrainOptions {
+            checkpoint_dir: Some(checkpoint),
+            resume,
+            stop_after: None,
+            context: run_context(args, &set, &s)?,
+        };
+        let trained = train(decoder, &samples, &weights, &config, &device, &options)?;
+        let train_seconds = trained.state.seconds;
+        let (decoder, losses) = (trained.decoder, trained.state.losses);
         let meta = [
             ("content", "s2d-decoder".to_owned()),
             ("units", set.manifest.units.clone()),
@@ -441,6 +490,40 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         &args.report,
         started,
     )
+}
+
+/// What a fold's checkpoint must match besides the configuration, decoder and data (which
+/// [`train`] checks itself): the protocol and fold, the held-out set, the pairs' seed, the
+/// objective and the hierarchy.
+fn run_context(
+    args: &TrainS2d,
+    set: &PairSet,
+    s: &Split,
+) -> Result<std::collections::BTreeMap<String, String>> {
+    let hierarchy = hierarchy::Config {
+        factors: args.factors.clone(),
+        spiral_lengths: None,
+    };
+    Ok([
+        ("protocol", args.protocol.to_string()),
+        ("fold", s.fold.to_string()),
+        ("held_out", s.held_out.join(", ")),
+        ("pairs_seed", set.manifest.config.seed.to_string()),
+        (
+            "objective",
+            serde_json::to_value(args.objective)?
+                .as_str()
+                .unwrap_or_default()
+                .to_owned(),
+        ),
+        (
+            "hierarchy",
+            format!("{:016x}", hierarchy::cache_key(&set.template, &hierarchy)),
+        ),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_owned(), v))
+    .collect())
 }
 
 /// Evaluates a baked model and the baselines on split `s`, appending the per-vertex errors to
@@ -539,6 +622,14 @@ mod tests {
             Path::new("out/m.sinew")
         );
         assert_eq!(plot_path(Path::new("r/rep.json")), Path::new("r/rep.png"));
+        assert_eq!(
+            fold_checkpoint_path(Path::new("out/m.sinew"), 0),
+            Path::new("out/m.ckpt")
+        );
+        assert_eq!(
+            fold_checkpoint_path(Path::new("out/m.sinew"), 3),
+            Path::new("out/m.fold3.ckpt")
+        );
         let (l, w) = Objective::Dr.loss_and_weights(&[0.0, 1.0]);
         assert_eq!((l, w), (LossVariant::Paper, vec![0.0, 0.0]));
         let (_, w) = Objective::DrUnweighted.loss_and_weights(&[0.0, 1.0]);

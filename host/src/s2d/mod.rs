@@ -52,6 +52,7 @@ pub struct Hierarchy {
 pub mod apply;
 pub mod bake;
 pub mod baseline;
+pub mod checkpoint;
 pub mod data;
 pub mod decoder;
 pub mod experiment;

@@ -1,13 +1,23 @@
 //! S2D-Dec training (S2D §3.2 and §4.2): input normalisation, the landmark-distance vertex
 //! weights, both loss variants, and the Adam loop of the reference (lr 1e-3 decayed ×0.99 per
-//! epoch over 300 epochs, L2 weight decay 5e-5 added to the gradient, batch 16).
+//! epoch over 300 epochs, L2 weight decay 5e-5 added to the gradient, batch 16), with
+//! checkpoints and resumption ([`super::checkpoint`]).
 
-use anyhow::{Result, bail, ensure};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::Once;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail, ensure};
 use burn::optim::decay::WeightDecayConfig;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
 
+use super::checkpoint::{
+    CheckpointState, DataFingerprint, STATE_FILE, load_checkpoint, save_checkpoint,
+};
 use super::decoder::S2dDecoder;
 
 /// Centres a landmark set on its mean and scales it to unit Frobenius norm (the reference's
@@ -306,16 +316,83 @@ pub fn epoch_order(n: usize, seed: u64, epoch: usize) -> Vec<usize> {
     order
 }
 
+/// Set by the Ctrl-C handler: a training that checkpoints stops after its current step.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Installs the Ctrl-C handler once per process. The first Ctrl-C asks the training to stop
+/// after its current step (with a checkpoint); a second one ends the process at once, so that
+/// Ctrl-C outside a training step (evaluation, baking) is not swallowed.
+fn watch_ctrl_c() {
+    static INSTALL: Once = Once::new();
+    INSTALL.call_once(|| {
+        // If another handler was registered first (AIM's, in a test process), it keeps Ctrl-C
+        // and this one fails harmlessly: training then just runs on.
+        let _ = ctrlc::set_handler(|| {
+            if INTERRUPTED.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    });
+}
+
+/// Asks the running training to stop after its current step, as Ctrl-C does: with a checkpoint
+/// folder it saves its position there, then [`train`] returns an error that says so. A request
+/// made while no training runs stops the next one after its first step.
+pub fn request_stop() {
+    INTERRUPTED.store(true, Ordering::SeqCst);
+}
+
+/// Options of one training run besides its data and configuration.
+#[derive(Clone, Debug, Default)]
+pub struct TrainOptions {
+    /// Folder for checkpoints (created), written after every epoch, on Ctrl-C after the current
+    /// step, and where `stop_after` stops; `None` trains without checkpoints (and without the
+    /// Ctrl-C handling).
+    pub checkpoint_dir: Option<PathBuf>,
+    /// Continue from the checkpoint in `checkpoint_dir` (an error if there is none, or if it
+    /// belongs to another run).
+    pub resume: bool,
+    /// Stop after this many steps in this invocation (tests of resumption); `None` runs to the
+    /// end.
+    pub stop_after: Option<usize>,
+    /// What else a resumed run must match, recorded in the checkpoint (protocol, fold, …).
+    pub context: BTreeMap<String, String>,
+}
+
+/// A finished (or stopped) training run.
+#[derive(Debug)]
+pub struct Trained {
+    /// The decoder, on the training device.
+    pub decoder: S2dDecoder,
+    /// Where training stands: epochs and steps done, the epoch losses, the seconds spent.
+    pub state: CheckpointState,
+}
+
+impl Trained {
+    /// Whether every configured epoch ran.
+    pub fn complete(&self) -> bool {
+        self.state.complete()
+    }
+}
+
 /// Trains `decoder` on `set` for `config.epochs` epochs (the last batch of an epoch may be short,
-/// as PyTorch's `DataLoader` without `drop_last`). Returns the model and the mean loss of each
-/// epoch (batch losses weighted by batch size).
+/// as PyTorch's `DataLoader` without `drop_last`), or continues a checkpointed run
+/// (`options.resume`). The state's `losses` are the mean loss of each epoch (batch losses
+/// weighted by batch size).
+///
+/// The order of epoch e is a function of (seed, e) alone and the checkpoint holds the weights,
+/// the Adam state and the unfinished epoch's loss sum, so a run stopped after any step and
+/// resumed reaches the same weights and losses bit for bit as an uninterrupted one (in the same
+/// build, with no other training running in the process: see docs/S2D.md). A resumed run whose
+/// checkpoint is complete returns its weights without training.
 pub fn train(
-    mut decoder: S2dDecoder,
+    decoder: S2dDecoder,
     set: &[Sample],
     vertex_weights: &[f32],
     config: &TrainConfig,
     device: &Device,
-) -> Result<(S2dDecoder, Vec<f32>)> {
+    options: &TrainOptions,
+) -> Result<Trained> {
     config.validate()?;
     ensure!(!set.is_empty(), "no training samples");
     let v = decoder.output_vertices();
@@ -334,14 +411,59 @@ pub fn train(
             3 * v
         );
     }
-    let weights = weights_tensor(vertex_weights, device);
+    let batches = set.len().div_ceil(config.batch);
+    let mut state = CheckpointState::start(
+        config,
+        &decoder,
+        DataFingerprint::of(set, vertex_weights),
+        options.context.clone(),
+    );
+    let mut decoder = decoder;
     let mut optim = config.optimizer();
-    let mut losses = Vec::with_capacity(config.epochs);
-    for epoch in 0..config.epochs {
+    // The position of the last checkpoint written or read (none yet on a fresh run).
+    let mut saved = None;
+    let dir = options.checkpoint_dir.as_deref();
+    if options.resume {
+        let Some(dir) = dir else {
+            bail!("resuming needs a checkpoint folder");
+        };
+        let (d, o, s) = load_checkpoint(dir, decoder, optim, &state)?;
+        let path = dir.join(STATE_FILE);
+        ensure!(
+            s.steps_in_epoch < batches
+                && s.steps_done == s.epochs_done * batches + s.steps_in_epoch,
+            "{}: step {} of epoch {} (step {} in all) does not fit {batches} batches an epoch",
+            path.display(),
+            s.steps_in_epoch,
+            s.epochs_done,
+            s.steps_done
+        );
+        (decoder, optim, state) = (d, o, s);
+        saved = Some(state.steps_done);
+    } else if let Some(dir) = dir {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create checkpoint folder", dir.display()))?;
+    }
+    if dir.is_some() {
+        watch_ctrl_c();
+    }
+
+    let weights = weights_tensor(vertex_weights, device);
+    let start = Instant::now();
+    let seconds_before = state.seconds;
+    let first = state.steps_done;
+    let total_steps = config.epochs * batches;
+    let last = options
+        .stop_after
+        .map_or(total_steps, |n| (state.steps_done + n).min(total_steps));
+    'epochs: while state.epochs_done < config.epochs {
+        let epoch = state.epochs_done;
         let lr = config.lr_at(epoch);
         let order = epoch_order(set.len(), config.seed, epoch);
-        let mut total = 0.0f64;
-        for chunk in order.chunks(config.batch) {
+        for chunk in order.chunks(config.batch).skip(state.steps_in_epoch) {
+            if state.steps_done >= last {
+                break 'epochs;
+            }
             let batch = Batch::new(set, chunk, device);
             let l;
             (decoder, l) = step_once(decoder, &mut optim, &batch, &weights, config.loss, lr);
@@ -349,11 +471,51 @@ pub fn train(
             if !value.is_finite() {
                 bail!("training diverged in epoch {epoch} (loss {value})");
             }
-            total += f64::from(value) * chunk.len() as f64;
+            state.epoch_loss_total += f64::from(value) * chunk.len() as f64;
+            state.steps_in_epoch += 1;
+            state.steps_done += 1;
+            // The epoch closes with its last step, before a checkpoint can record its position.
+            if state.steps_in_epoch == batches {
+                state
+                    .losses
+                    .push((state.epoch_loss_total / set.len() as f64) as f32);
+                state.epochs_done += 1;
+                state.steps_in_epoch = 0;
+                state.epoch_loss_total = 0.0;
+                if let Some(dir) = dir {
+                    state.seconds = seconds_before + start.elapsed().as_secs_f64();
+                    save_checkpoint(dir, &decoder, &optim, &mut state)?;
+                    saved = Some(state.steps_done);
+                }
+            }
+            if INTERRUPTED.swap(false, Ordering::SeqCst) {
+                let at = format!(
+                    "epoch {}, step {} ({} steps done)",
+                    state.epochs_done, state.steps_in_epoch, state.steps_done
+                );
+                let Some(dir) = dir else {
+                    bail!("interrupted at {at}");
+                };
+                if saved != Some(state.steps_done) {
+                    state.seconds = seconds_before + start.elapsed().as_secs_f64();
+                    save_checkpoint(dir, &decoder, &optim, &mut state)?;
+                }
+                bail!(
+                    "interrupted at {at}; checkpoint saved in {} (continue with --resume)",
+                    dir.display()
+                );
+            }
         }
-        losses.push((total / set.len() as f64) as f32);
     }
-    Ok((decoder, losses))
+    if state.steps_done != first {
+        state.seconds = seconds_before + start.elapsed().as_secs_f64();
+    }
+    if let Some(dir) = dir
+        && saved != Some(state.steps_done)
+    {
+        save_checkpoint(dir, &decoder, &optim, &mut state)?;
+    }
+    Ok(Trained { decoder, state })
 }
 
 #[cfg(test)]
@@ -476,7 +638,9 @@ mod tests {
             ..TrainConfig::default()
         };
         let w = vec![1.0; 40];
-        let (_, losses) = train(decoder, &set, &w, &tc, &device).unwrap();
+        let trained = train(decoder, &set, &w, &tc, &device, &TrainOptions::default()).unwrap();
+        assert!(trained.complete());
+        let losses = trained.state.losses;
         assert_eq!(losses.len(), 60);
         assert!(
             losses[59] < 0.5 * losses[0],
