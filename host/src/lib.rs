@@ -6,6 +6,7 @@ pub mod atomic;
 pub mod backend;
 pub mod badin;
 pub mod bones;
+pub mod checkpoint;
 pub mod commands;
 pub mod constraints;
 pub mod container;

@@ -76,6 +76,27 @@ fn resumed_training_reaches_the_same_weights() {
     let first = train(&set, &config, &options(b.path(), false, Some(7))).unwrap();
     assert!(!first.complete);
     assert_eq!(first.state.steps_done, 7);
+    // The checkpoint at step 7 replaced the one at step 5.
+    let mut names: Vec<String> = std::fs::read_dir(b.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        ["model-7.bpk", "optim-7.bpk", "state.json", "template.obj"]
+    );
+    // Resume from it in the layout of checkpoints written before the weight files were named
+    // in state.json (model.bpk, optim.bpk, no CRCs): they must keep working.
+    std::fs::rename(b.path().join("model-7.bpk"), b.path().join("model.bpk")).unwrap();
+    std::fs::rename(b.path().join("optim-7.bpk"), b.path().join("optim.bpk")).unwrap();
+    let state_path = b.path().join("state.json");
+    let mut state: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&state_path).unwrap()).unwrap();
+    for field in ["model_file", "model_crc", "optim_file", "optim_crc"] {
+        assert!(state.as_object_mut().unwrap().remove(field).is_some(), "{field}");
+    }
+    std::fs::write(&state_path, serde_json::to_vec(&state).unwrap()).unwrap();
     let rest = train(&set, &config, &options(b.path(), true, None)).unwrap();
     assert!(rest.complete);
     let norm = whole.state.normalisation;

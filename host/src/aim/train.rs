@@ -17,6 +17,7 @@ use serde::{Deserialize, Serialize};
 use super::model::AimNet;
 use super::{AimConfig, TrainingSet};
 use crate::backend::Backend;
+use crate::checkpoint::{STATE_FILE, WeightFiles};
 use crate::nn::to_vec;
 
 /// Names of the logged loss terms, in [`LossRecord::terms`] order.
@@ -59,6 +60,10 @@ pub struct CheckpointState {
     pub jaw_pivot: [f32; 3],
     /// Metadata of the training set (units, source…), for baking from the checkpoint alone.
     pub metadata: Vec<(String, String)>,
+    /// The weight files this state goes with (empty in checkpoints written before them, whose
+    /// weights are `model.bpk` and `optim.bpk`).
+    #[serde(flatten)]
+    pub files: WeightFiles,
 }
 
 /// Options of one training run.
@@ -346,6 +351,7 @@ pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> R
         names: set.names.clone(),
         jaw_pivot: set.jaw_pivot,
         metadata: super::run::metadata(set, config)?,
+        files: WeightFiles::default(),
     };
     if options.resume {
         let (n, o, s) = load_checkpoint(dir, net, optim, &device)?;
@@ -414,7 +420,7 @@ pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> R
             || state.steps_done == last
         {
             state.seconds = seconds_before + start.elapsed().as_secs_f64();
-            save_checkpoint(dir, &net, &optim, &state)?;
+            save_checkpoint(dir, &net, &optim, &mut state)?;
         }
         if interrupt {
             bar.abandon();
@@ -435,12 +441,14 @@ pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> R
     })
 }
 
-/// Writes a checkpoint folder atomically, file by file (`state.json` last).
+/// Writes a checkpoint into `dir`: `model-<step>.bpk`, `optim-<step>.bpk`, then `state.json`
+/// naming them with their CRCs, each atomically; an interruption at any moment leaves the
+/// previous checkpoint whole ([`crate::checkpoint::save`]).
 pub fn save_checkpoint(
     dir: &Path,
     net: &AimNet,
     optim: &burn::optim::ModuleOptimizer,
-    state: &CheckpointState,
+    state: &mut CheckpointState,
 ) -> Result<()> {
     let model = net
         .clone()
@@ -450,13 +458,19 @@ pub fn save_checkpoint(
     let opt = optim
         .into_bytes()
         .map_err(|e| anyhow::anyhow!("{}: cannot serialise the optimiser: {e:?}", dir.display()))?;
-    crate::atomic::write(&dir.join("model.bpk"), &model)?;
-    crate::atomic::write(&dir.join("optim.bpk"), &opt)?;
-    // state.json last: a checkpoint is complete once it names its step.
-    crate::atomic::write(
-        &dir.join("state.json"),
-        serde_json::to_string_pretty(state)?.as_bytes(),
-    )
+    crate::checkpoint::save(dir, state.steps_done, &model, &opt, state, |s, f| {
+        s.files = f;
+    })
+}
+
+/// Reads a checkpoint folder's `state.json`; the error names the file.
+pub fn read_state(dir: &Path) -> Result<CheckpointState> {
+    serde_json::from_value(crate::checkpoint::read_state_value(dir)?).with_context(|| {
+        format!(
+            "{}: not an AIM checkpoint state",
+            dir.join(STATE_FILE).display()
+        )
+    })
 }
 
 /// Loads a checkpoint folder into a model of the right shape.
@@ -466,37 +480,54 @@ pub fn load_checkpoint(
     optim: burn::optim::ModuleOptimizer,
     device: &Device,
 ) -> Result<(AimNet, burn::optim::ModuleOptimizer, CheckpointState)> {
-    let read = |name: &str| {
-        std::fs::read(dir.join(name))
-            .with_context(|| format!("{}: cannot read checkpoint file {name}", dir.display()))
+    let state = read_state(dir)?;
+    let (model_name, optim_name, model, opt) = if state.files.is_legacy() {
+        let read = |name: &str| {
+            std::fs::read(dir.join(name))
+                .with_context(|| format!("{}: cannot read checkpoint file {name}", dir.display()))
+        };
+        (
+            "model.bpk",
+            "optim.bpk",
+            read("model.bpk")?,
+            read("optim.bpk")?,
+        )
+    } else {
+        state.files.validate().with_context(|| {
+            format!(
+                "{}: invalid checkpoint state",
+                dir.join(STATE_FILE).display()
+            )
+        })?;
+        (
+            state.files.model_file.as_str(),
+            state.files.optim_file.as_str(),
+            state.files.read_model(dir)?,
+            state.files.read_optim(dir)?,
+        )
     };
-    let state: CheckpointState = serde_json::from_slice(&read("state.json")?)
-        .with_context(|| format!("{}/state.json: invalid", dir.display()))?;
     let net = if net.corrective_shapes() + 1 == state.names.len() {
         net
     } else {
         AimNet::new(&state.config, state.names.len(), device)
     };
-    let record = burn::store::ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(read(
-        "model.bpk",
-    )?))
-    .map_err(|e| anyhow::anyhow!("{}/model.bpk: invalid: {e:?}", dir.display()))?;
+    let record = burn::store::ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(model))
+        .map_err(|e| anyhow::anyhow!("{}/{model_name}: invalid: {e:?}", dir.display()))?;
     let net = net.try_load_record(record).map_err(|e| {
-        anyhow::anyhow!("{}/model.bpk: does not fit the model: {e:?}", dir.display())
+        anyhow::anyhow!(
+            "{}/{model_name}: does not fit the model: {e:?}",
+            dir.display()
+        )
     })?;
     let optim = optim
-        .from_bytes(burn::tensor::Bytes::from_bytes_vec(read("optim.bpk")?))
-        .map_err(|e| anyhow::anyhow!("{}/optim.bpk: invalid: {e:?}", dir.display()))?;
+        .from_bytes(burn::tensor::Bytes::from_bytes_vec(opt))
+        .map_err(|e| anyhow::anyhow!("{}/{optim_name}: invalid: {e:?}", dir.display()))?;
     Ok((net, optim, state))
 }
 
 /// Loads only the model and state of a checkpoint (for baking), on an inference device.
 pub fn load_model(dir: &Path, backend: Backend) -> Result<(AimNet, CheckpointState)> {
-    let state: CheckpointState =
-        serde_json::from_slice(&std::fs::read(dir.join("state.json")).with_context(|| {
-            format!("{}: not a checkpoint folder (no state.json)", dir.display())
-        })?)
-        .with_context(|| format!("{}/state.json: invalid", dir.display()))?;
+    let state = read_state(dir)?;
     let device = backend.device(state.config.seed)?;
     let net = AimNet::new(&state.config, state.names.len(), &device);
     let (net, _, state) = load_checkpoint(dir, net, AdamConfig::new().init(), &device)?;

@@ -18,9 +18,8 @@ use serde_json::Value;
 
 use super::decoder::{DecoderConfig, S2dDecoder};
 use super::train::{Sample, TrainConfig};
-
-/// The name of the state file inside a checkpoint folder.
-pub const STATE_FILE: &str = "state.json";
+pub use crate::checkpoint::STATE_FILE;
+use crate::checkpoint::{self, WeightFiles};
 
 /// [`CheckpointState::format`] of an S2D checkpoint.
 pub const CHECKPOINT_FORMAT: &str = "sinew-s2d-checkpoint";
@@ -91,14 +90,9 @@ pub struct CheckpointState {
     pub losses: Vec<f32>,
     /// Training seconds so far, over every invocation.
     pub seconds: f64,
-    /// The decoder's burn record in this folder.
-    pub model_file: String,
-    /// CRC-64/XZ of `model_file`, 16 hexadecimal digits.
-    pub model_crc: String,
-    /// The Adam state in this folder.
-    pub optim_file: String,
-    /// CRC-64/XZ of `optim_file`, 16 hexadecimal digits.
-    pub optim_crc: String,
+    /// The decoder's burn record and the Adam state in this folder, with their CRCs.
+    #[serde(flatten)]
+    pub files: WeightFiles,
     /// The training configuration.
     pub config: TrainConfig,
     /// The decoder's shape.
@@ -128,10 +122,7 @@ impl CheckpointState {
             epoch_loss_total: 0.0,
             losses: Vec::new(),
             seconds: 0.0,
-            model_file: String::new(),
-            model_crc: String::new(),
-            optim_file: String::new(),
-            optim_crc: String::new(),
+            files: WeightFiles::default(),
             config: config.clone(),
             decoder: decoder.config.clone(),
             vertices: decoder.vertices.clone(),
@@ -178,30 +169,8 @@ impl CheckpointState {
             self.epoch_loss_total.is_finite() && self.losses.iter().all(|l| l.is_finite()),
             "a loss is not finite"
         );
-        for (what, name) in [("model", &self.model_file), ("optimiser", &self.optim_file)] {
-            ensure!(
-                is_weight_file_name(name),
-                "{what} file {name:?} is not a checkpoint file name"
-            );
-        }
-        Ok(())
+        self.files.validate()
     }
-}
-
-/// `model-<n>.bpk` / `optim-<n>.bpk`: the only names a checkpoint reads or deletes.
-fn is_weight_file_name(name: &str) -> bool {
-    ["model-", "optim-"].iter().any(|prefix| {
-        name.strip_prefix(prefix)
-            .and_then(|rest| rest.strip_suffix(".bpk"))
-            .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
-    })
-}
-
-fn crc_hex(bytes: &[u8]) -> String {
-    format!(
-        "{:016x}",
-        crc::Crc::<u64>::new(&crc::CRC_64_XZ).checksum(bytes)
-    )
 }
 
 /// Writes a checkpoint of `decoder` and `optim` at `state`'s position into `dir` (created):
@@ -220,27 +189,9 @@ pub fn save_checkpoint(
     let opt = optim
         .into_bytes()
         .map_err(|e| anyhow::anyhow!("{}: cannot serialise the optimiser: {e:?}", dir.display()))?;
-    state.model_file = format!("model-{}.bpk", state.steps_done);
-    state.optim_file = format!("optim-{}.bpk", state.steps_done);
-    state.model_crc = crc_hex(&model);
-    state.optim_crc = crc_hex(&opt);
-    crate::atomic::write(&dir.join(&state.model_file), &model)?;
-    crate::atomic::write(&dir.join(&state.optim_file), &opt)?;
-    // state.json last: until it is in place, the previous one still names whole files.
-    crate::atomic::write(
-        &dir.join(STATE_FILE),
-        serde_json::to_string_pretty(state)?.as_bytes(),
-    )?;
-    // The earlier checkpoints' weights; a file that cannot be removed only costs disk space.
-    if let Ok(entries) = std::fs::read_dir(dir) {
-        for entry in entries.flatten() {
-            let name = entry.file_name().to_string_lossy().into_owned();
-            if is_weight_file_name(&name) && name != state.model_file && name != state.optim_file {
-                let _ = std::fs::remove_file(entry.path());
-            }
-        }
-    }
-    Ok(())
+    checkpoint::save(dir, state.steps_done, &model, &opt, state, |s, f| {
+        s.files = f
+    })
 }
 
 /// Reads and checks `dir/state.json`; also returns it as read, for [`check_same_run`].
@@ -250,15 +201,7 @@ pub fn save_checkpoint(
 /// message names the file.
 fn read_state_json(dir: &Path) -> Result<(CheckpointState, Value)> {
     let path = dir.join(STATE_FILE);
-    let bytes = std::fs::read(&path).with_context(|| {
-        format!(
-            "{}: cannot read the checkpoint state (is {} a checkpoint folder?)",
-            path.display(),
-            dir.display()
-        )
-    })?;
-    let value: Value = serde_json::from_slice(&bytes)
-        .with_context(|| format!("{}: not valid JSON (truncated?)", path.display()))?;
+    let value = checkpoint::read_state_value(dir)?;
     let state: CheckpointState = serde_json::from_value(value.clone())
         .with_context(|| format!("{}: not an S2D checkpoint state", path.display()))?;
     state
@@ -272,23 +215,6 @@ pub fn read_state(dir: &Path) -> Result<CheckpointState> {
     Ok(read_state_json(dir)?.0)
 }
 
-/// Reads a checkpoint file named by `state.json` and checks it against its CRC.
-fn read_weights(dir: &Path, name: &str, crc: &str) -> Result<Vec<u8>> {
-    let path = dir.join(name);
-    let bytes = std::fs::read(&path).with_context(|| {
-        format!(
-            "{}: cannot read this file named by {STATE_FILE}",
-            path.display()
-        )
-    })?;
-    ensure!(
-        crc_hex(&bytes) == crc,
-        "{}: its CRC differs from the one {STATE_FILE} records (the file is damaged)",
-        path.display()
-    );
-    Ok(bytes)
-}
-
 /// Loads the checkpoint in `dir` into `decoder` and `optim` (built as for a fresh run), after
 /// checking that it belongs to the run `current` describes ([`check_same_run`]). Returns them
 /// with the checkpoint's state.
@@ -300,15 +226,15 @@ pub fn load_checkpoint(
 ) -> Result<(S2dDecoder, ModuleOptimizer, CheckpointState)> {
     let (state, stored) = read_state_json(dir)?;
     check_same_run(dir, &stored, current)?;
-    let model_path = dir.join(&state.model_file);
-    let model = read_weights(dir, &state.model_file, &state.model_crc)?;
+    let model_path = dir.join(&state.files.model_file);
+    let model = state.files.read_model(dir)?;
     let record = burn::store::ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(model))
         .map_err(|e| anyhow::anyhow!("{}: invalid: {e:?}", model_path.display()))?;
     let decoder = decoder.try_load_record(record).map_err(|e| {
         anyhow::anyhow!("{}: does not fit the decoder: {e:?}", model_path.display())
     })?;
-    let optim_path = dir.join(&state.optim_file);
-    let opt = read_weights(dir, &state.optim_file, &state.optim_crc)?;
+    let optim_path = dir.join(&state.files.optim_file);
+    let opt = state.files.read_optim(dir)?;
     let optim = optim
         .from_bytes(burn::tensor::Bytes::from_bytes_vec(opt))
         .map_err(|e| anyhow::anyhow!("{}: invalid: {e:?}", optim_path.display()))?;
@@ -424,22 +350,6 @@ mod exact {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn weight_file_names() {
-        assert!(is_weight_file_name("model-12.bpk"));
-        assert!(is_weight_file_name("optim-0.bpk"));
-        for bad in [
-            "model-.bpk",
-            "model-1.bpk.tmp",
-            "../model-1.bpk",
-            "model-1/../x.bpk",
-            "state.json",
-            "model-1a.bpk",
-        ] {
-            assert!(!is_weight_file_name(bad), "{bad}");
-        }
-    }
 
     /// Decimal strings give back every bit, including values serde_json's default number reader
     /// may round differently.
