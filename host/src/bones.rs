@@ -1551,10 +1551,11 @@ fn moments(x: &[V3], y: &[V3], w: &[f64]) -> (V3, V3, M3, M3, f64) {
     (mx, my, cyx, cxx, ws)
 }
 
-/// The weighted least-squares similarity `y ≈ s R x + t` (Horn 1987's quaternion solution; it
-/// is the minimiser Umeyama 1991 gives in closed form and always a proper rotation).
-fn fit_similarity(x: &[V3], y: &[V3], w: &[f64]) -> Affine {
-    let (mx, my, cyx, cxx, _) = moments(x, y, w);
+/// The rotation `R` maximising `tr(Rᵀ C_yx)`, i.e. the rotation of the weighted least-squares
+/// fit `y ≈ R x + t` (or `s R x + t`) given the centred cross-covariance `C_yx` of
+/// [`moments`]: Horn 1987's quaternion solution (the minimiser Umeyama 1991 gives in closed
+/// form), always a proper rotation.
+fn horn_rotation(cyx: &M3) -> M3 {
     // Horn's S_ab = Σ x_a y_b = cyx[b][a].
     let s = |a: usize, b: usize| cyx[b][a];
     let n = [
@@ -1585,8 +1586,14 @@ fn fit_similarity(x: &[V3], y: &[V3], w: &[f64]) -> Affine {
     ];
     let (vals, vecs) = jacobi_eigen(n);
     let best = (0..4).fold(0, |b, i| if vals[i] > vals[b] { i } else { b });
-    let q = [vecs[0][best], vecs[1][best], vecs[2][best], vecs[3][best]];
-    let r = quat_to_mat(q);
+    quat_to_mat([vecs[0][best], vecs[1][best], vecs[2][best], vecs[3][best]])
+}
+
+/// The weighted least-squares similarity `y ≈ s R x + t` (Horn 1987's quaternion solution; it
+/// is the minimiser Umeyama 1991 gives in closed form and always a proper rotation).
+fn fit_similarity(x: &[V3], y: &[V3], w: &[f64]) -> Affine {
+    let (mx, my, cyx, cxx, _) = moments(x, y, w);
+    let r = horn_rotation(&cyx);
     let var = cxx[0][0] + cxx[1][1] + cxx[2][2];
     // s = Σ w (y - ȳ)·R(x - x̄) / Σ w |x - x̄|² = tr(Rᵀ C_yx) / tr(C_xx).
     let mut num = 0.0;
@@ -1601,6 +1608,49 @@ fn fit_similarity(x: &[V3], y: &[V3], w: &[f64]) -> Affine {
         a,
         t: sub(my, mat_vec(a, mx)),
     }
+}
+
+/// A rigid transform `x ↦ R x + t` from [`fit_rigid`], in `f64`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RigidFit {
+    /// The rotation `R`, row-major (`rotation[i][j]` is row `i`, column `j`); proper.
+    pub rotation: [[f64; 3]; 3],
+    /// The translation `t`, added after rotating.
+    pub translation: [f64; 3],
+}
+
+impl RigidFit {
+    /// `R p + t`.
+    pub fn apply(&self, p: [f64; 3]) -> [f64; 3] {
+        add(mat_vec(self.rotation, p), self.translation)
+    }
+}
+
+/// The least-squares rigid transform `y ≈ R x + t` taking the points `x` to the corresponding
+/// points `y` (Horn 1987's quaternion rotation, as in the bone fit's similarity, without the
+/// scale). `None` when the two lists differ in length, a coordinate is not finite, or the
+/// points `x` do not determine a rotation: fewer than three, or (nearly) collinear (the second
+/// principal variance under 1e-9 of the first).
+pub fn fit_rigid(x: &[[f32; 3]], y: &[[f32; 3]]) -> Option<RigidFit> {
+    if x.len() != y.len() || x.len() < 3 {
+        return None;
+    }
+    let x: Vec<V3> = x.iter().copied().map(v64).collect();
+    let y: Vec<V3> = y.iter().copied().map(v64).collect();
+    if x.iter().chain(&y).flatten().any(|c| !c.is_finite()) {
+        return None;
+    }
+    let (mx, my, cyx, cxx, _) = moments(&x, &y, &vec![1.0; x.len()]);
+    let (mut spread, _) = jacobi_eigen(cxx);
+    spread.sort_by(|a, b| b.total_cmp(a));
+    if !(spread[0] > 0.0 && spread[1] > 1e-9 * spread[0]) {
+        return None;
+    }
+    let rotation = horn_rotation(&cyx);
+    Some(RigidFit {
+        rotation,
+        translation: sub(my, mat_vec(rotation, mx)),
+    })
 }
 
 /// The weighted least-squares affine map `y ≈ A x + t`: `A = C_yx C_xx⁻¹`. `None` when the

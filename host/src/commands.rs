@@ -383,13 +383,10 @@ pub fn edit_thickness(model: &Path, region: &Path, scale: f32, out: &Path) -> Re
     crate::render::Image::hstack(&[a, b]).write_png(&out.join("edit.png"))
 }
 
-/// `sinew demo`: the procedural actor, trained small, baked, measured, played back and pictured.
-pub fn demo(out: &Path, iterations: Option<usize>, quiet: bool) -> Result<Report> {
+/// `sinew demo`: the procedural actor, trained small with `config` (normally
+/// [`AimConfig::demo`]), baked, measured, played back and pictured.
+pub fn demo(out: &Path, config: &AimConfig, quiet: bool) -> Result<Report> {
     let (actor, bones) = crate::procedural::actor(crate::procedural::DEFAULT_RESOLUTION);
-    let mut config = AimConfig::demo();
-    if let Some(n) = iterations {
-        config.iterations = n;
-    }
     config.validate()?;
     let set = training_set(
         &actor,
@@ -408,7 +405,7 @@ pub fn demo(out: &Path, iterations: Option<usize>, quiet: bool) -> Result<Report
         report: out.join("report.json"),
         pictures: Some(out.to_path_buf()),
     };
-    let report = train_aim(&set, &config, Backend::Flex, &outputs, None, quiet)?;
+    let report = train_aim(&set, config, Backend::Flex, &outputs, None, quiet)?;
 
     // Play a short sequence back through the core: open the jaw, then smile on both sides.
     let bytes = crate::container::read(&model)?;
@@ -466,7 +463,8 @@ pub fn eval_aim(model: &Path, data: &Path, bones: Option<&Path>) -> Result<Repor
     let file = sinew_core::SinewFile::from_bytes(&bytes)
         .map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
     let config: AimConfig = match file.metadata().get("config") {
-        Some(c) => serde_json::from_str(c)
+        Some(c) => serde_json::from_str::<serde_json::Value>(c)
+            .and_then(AimConfig::from_recorded)
             .with_context(|| format!("{}: invalid config metadata", model.display()))?,
         None => AimConfig::default(),
     };

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 use sinew_host::aim::AimConfig;
-use sinew_host::aim::config::Schedule;
+use sinew_host::aim::config::{JawInit, Schedule};
 use sinew_host::aim::run::Outputs;
 use sinew_host::backend::Backend;
 use sinew_host::commands;
@@ -36,6 +36,8 @@ enum Command {
         /// Optimisation steps (default: the demo configuration's).
         #[arg(long)]
         iterations: Option<usize>,
+        #[command(flatten)]
+        jaw: JawArgs,
         /// Hide the progress bar.
         #[arg(long)]
         quiet: bool,
@@ -348,6 +350,8 @@ struct TrainAim {
     /// paper); overrides the configuration.
     #[arg(long, value_enum)]
     thickness_activation: Option<sinew_host::aim::config::ThicknessActivation>,
+    #[command(flatten)]
+    jaw: JawArgs,
     /// Folder for pictures (error heatmaps, anatomy, loss curve) and OBJs.
     #[arg(long)]
     pictures: Option<PathBuf>,
@@ -407,6 +411,30 @@ enum Edit {
     },
 }
 
+/// The jaw options of `train aim` and `demo`.
+#[derive(Debug, Args)]
+struct JawArgs {
+    /// How the jaw transforms start: identity (the paper, the default) or bones (rigid fits of
+    /// the jaw-constrained skin; use with --lambda-jaw 1); overrides the configuration.
+    #[arg(long, value_enum)]
+    jaw_init: Option<JawInit>,
+    /// λ_J of the jaw skinning term (k = 1 on the skin over the jaw; 0 = the paper's objective,
+    /// the default); overrides the configuration.
+    #[arg(long)]
+    lambda_jaw: Option<f32>,
+}
+
+impl JawArgs {
+    fn apply(&self, config: &mut AimConfig) {
+        if let Some(j) = self.jaw_init {
+            config.jaw_init = j;
+        }
+        if let Some(l) = self.lambda_jaw {
+            config.lambda_jaw = l;
+        }
+    }
+}
+
 fn config_for(args: &TrainAim) -> Result<AimConfig> {
     let mut config = match &args.config {
         Some(p) => commands::read_config(p)?,
@@ -427,6 +455,7 @@ fn config_for(args: &TrainAim) -> Result<AimConfig> {
     if let Some(a) = args.thickness_activation {
         config.thickness_activation = a;
     }
+    args.jaw.apply(&mut config);
     if let Some(s) = args.seed {
         config.seed = s;
     }
@@ -445,9 +474,15 @@ fn run(cli: Cli) -> Result<()> {
         Command::Demo {
             out,
             iterations,
+            jaw,
             quiet,
         } => {
-            let report = commands::demo(&out, iterations, quiet)?;
+            let mut config = AimConfig::demo();
+            if let Some(n) = iterations {
+                config.iterations = n;
+            }
+            jaw.apply(&mut config);
+            let report = commands::demo(&out, &config, quiet)?;
             println!("{}", serde_json::to_string_pretty(&report)?);
             eprintln!("demo written to {}", out.display());
         }

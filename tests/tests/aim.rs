@@ -111,6 +111,32 @@ fn resumed_training_reaches_the_same_weights() {
 }
 
 #[test]
+fn resumed_training_with_the_data_initialised_jaw_reaches_the_same_weights() {
+    let _serial = SERIAL
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let set = small_set();
+    // The resumed run must take its jaw transforms from the checkpoint, not fit them again.
+    let config = AimConfig {
+        jaw_init: sinew_host::aim::config::JawInit::Bones,
+        lambda_jaw: 1.0,
+        ..tiny_config(12)
+    };
+    let a = tempfile::tempdir().unwrap();
+    let b = tempfile::tempdir().unwrap();
+    let whole = train(&set, &config, &options(a.path(), false, None)).unwrap();
+    train(&set, &config, &options(b.path(), false, Some(7))).unwrap();
+    let rest = train(&set, &config, &options(b.path(), true, None)).unwrap();
+    assert!(rest.complete);
+    let norm = whole.state.normalisation;
+    assert_eq!(
+        baked(&whole.model, &set, norm),
+        baked(&rest.model, &set, norm),
+        "resumed run differs from the uninterrupted one"
+    );
+}
+
+#[test]
 fn training_learns_the_procedural_actor_and_the_core_agrees() {
     let _serial = SERIAL
         .lock()

@@ -35,6 +35,10 @@ fn bake_golden() -> Vec<u8> {
         iterations: 400,
         lr: 1e-3,
         lr_end: 1e-4,
+        // The golden model was trained with the paper's jaw (identity start, no L_J); keep
+        // regenerating it the same way.
+        jaw_init: sinew_host::aim::config::JawInit::Identity,
+        lambda_jaw: 0.0,
         ..AimConfig::default()
     };
     let dir = tempfile::tempdir().unwrap();

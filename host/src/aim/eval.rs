@@ -102,6 +102,33 @@ pub fn shape_errors(
     })
 }
 
+/// The learned jaw skinning weight k where it should be 1 and where it should be 0.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct SkinningWeightMeans {
+    /// Mean k over the jaw-constrained vertices (the skin over the mandible; ideally near 1).
+    pub jaw: f64,
+    /// Mean k over the forehead region c* of eq. 15 (ideally 0).
+    pub forehead: f64,
+}
+
+impl SkinningWeightMeans {
+    /// The means of `k` (one value per template vertex of `set`; vertices beyond `k` are
+    /// skipped) over the set's jaw-constrained vertices and its forehead; 0 for an empty region.
+    pub fn of(k: &[f32], set: &super::TrainingSet) -> Self {
+        let mean = |idx: &[u32]| {
+            let vals: Vec<f64> = idx
+                .iter()
+                .filter_map(|&i| k.get(i as usize).map(|&v| f64::from(v)))
+                .collect();
+            vals.iter().sum::<f64>() / vals.len().max(1) as f64
+        };
+        Self {
+            jaw: mean(&set.jaw_constrained()),
+            forehead: mean(&set.forehead),
+        }
+    }
+}
+
 /// How far the learned thickness is from the bone constraints, in mm, over constrained vertices.
 pub fn thickness_deviation(
     actor: &AimActor<'_>,

@@ -43,7 +43,7 @@ impl Plane {
 }
 
 /// One sparse anatomical constraint at a skin vertex (Wu et al. 2016): bone point, soft-tissue
-/// thickness and bone normal.
+/// thickness, bone normal and which bone was hit.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct Anchor {
     /// Bone point.
@@ -52,6 +52,11 @@ pub struct Anchor {
     pub thickness: f32,
     /// Unit bone normal (pointing out of the bone, towards the skin).
     pub normal: [f32; 3],
+    /// The bone the constraint lies on: the skin over the jaw ([`Bone::Jaw`]) moves with the jaw
+    /// transform, which is what the jaw initialisation and the jaw skinning term use.
+    ///
+    /// [`Bone::Jaw`]: crate::constraints::Bone::Jaw
+    pub on: crate::constraints::Bone,
 }
 
 /// Everything AIM learns from: template points, the actor's shapes and the anatomy priors.
@@ -83,6 +88,15 @@ impl TrainingSet {
     /// Number of template points V.
     pub fn vertices(&self) -> usize {
         self.template.positions.len()
+    }
+
+    /// Template vertices whose constraint lies on the jaw (the skin over the mandible), ascending.
+    pub fn jaw_constrained(&self) -> Vec<u32> {
+        (0..self.anchors.len() as u32)
+            .filter(|&i| {
+                self.anchors[i as usize].is_some_and(|a| a.on == crate::constraints::Bone::Jaw)
+            })
+            .collect()
     }
 
     /// Fraction of template vertices with a bone constraint.

@@ -49,17 +49,23 @@ pub struct Prediction {
 pub const IDENTITY_9D: [f32; 9] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0];
 
 impl AimNet {
-    /// A freshly initialised model for `shapes` training shapes (neutral included). Seed the
-    /// device first.
+    /// A freshly initialised model for `shapes` training shapes (neutral included), its jaw
+    /// transforms the identity. Seed the device first.
     pub fn new(config: &AimConfig, shapes: usize, device: &Device) -> Self {
+        Self::with_jaw(config, &vec![IDENTITY_9D; shapes.saturating_sub(1)], device)
+    }
+
+    /// A freshly initialised model whose jaw transforms start at `jaw`, one per expression (so
+    /// `jaw.len() + 1` training shapes). Seed the device first.
+    pub fn with_jaw(config: &AimConfig, jaw: &[[f32; 9]], device: &Device) -> Self {
         let widths = |out: usize| {
             let mut w = vec![3];
             w.extend(std::iter::repeat_n(config.hidden, config.layers));
             w.push(out);
             w
         };
-        let m = shapes - 1;
-        let jaw: Vec<f32> = (0..m).flat_map(|_| IDENTITY_9D).collect();
+        let m = jaw.len();
+        let jaw: Vec<f32> = jaw.iter().flatten().copied().collect();
         Self {
             b: Mlp::siren(&widths(3), config.omega0, device),
             d: Mlp::siren(&widths(1), config.omega0, device),

@@ -8,7 +8,7 @@ use serde::Serialize;
 use sinew_core::aim::AimActor;
 
 use super::bake::{BakeInput, bake};
-use super::eval::{shape_errors, thickness_deviation};
+use super::eval::{SkinningWeightMeans, shape_errors, thickness_deviation};
 use super::train::{TERMS, TrainOptions, Trained, train};
 use super::{AimConfig, ErrorStats, TrainingSet};
 use crate::render::{Image, View, render_heatmap};
@@ -42,6 +42,8 @@ pub struct Report {
     pub negative_thickness_count: usize,
     /// |learned − constrained thickness| over constrained vertices, mm.
     pub thickness_deviation_mm: ErrorStats,
+    /// Mean learned jaw skinning weight k over the jaw-constrained vertices and the forehead.
+    pub skinning_weight: SkinningWeightMeans,
     /// Data unit and source.
     pub units: String,
     /// Where the data came from.
@@ -181,6 +183,10 @@ pub fn evaluate(
         constrained_fraction: set.constrained_fraction(),
         negative_thickness_count: thickness.iter().filter(|&d| d < 0.0).count(),
         thickness_deviation_mm: thickness_deviation(&actor, &set.anchors, set.mm_per_unit),
+        skinning_weight: SkinningWeightMeans::of(
+            &actor.skinning_weights().iter().collect::<Vec<_>>(),
+            set,
+        ),
         units: set.units.clone(),
         source: set.source.clone(),
         config: config.clone(),

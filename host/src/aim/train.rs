@@ -14,19 +14,22 @@ use burn::tensor::{Device, Int, Tensor, TensorData};
 use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 
-use super::model::AimNet;
+use super::config::JawInit;
+use super::model::{AimNet, IDENTITY_9D};
 use super::{AimConfig, TrainingSet};
 use crate::backend::Backend;
 use crate::checkpoint::{STATE_FILE, WeightFiles};
 use crate::nn::to_vec;
 
-/// Names of the logged loss terms, in [`LossRecord::terms`] order.
+/// Names of the logged loss terms, in [`LossRecord::terms`] order. "skinning" is eq. 15 (k = 0
+/// on the forehead) plus L_J (k = 1 on the skin over the jaw, `lambda_jaw`); checkpoints written
+/// before L_J existed called it "forehead" and hold eq. 15 alone there.
 pub const TERMS: [&str; 6] = [
     "skin",
     "anatomy",
     "thickness_reg",
     "symmetry",
-    "forehead",
+    "skinning",
     "total",
 ];
 
@@ -37,7 +40,7 @@ pub struct LossRecord {
     pub step: usize,
     /// Learning rate used.
     pub lr: f64,
-    /// L_S, L_A, L_D, L_Sym, L_K and their sum, as weighted in the objective.
+    /// L_S, L_A, L_D, L_Sym, L_K + L_J and their sum, as weighted in the objective.
     pub terms: [f32; 6],
 }
 
@@ -46,7 +49,10 @@ pub struct LossRecord {
 pub struct CheckpointState {
     /// Steps completed.
     pub steps_done: usize,
-    /// The configuration (a resumed run must use the same).
+    /// The configuration (a resumed run must use the same). Read with
+    /// [`AimConfig::from_recorded`]: a checkpoint from before `jaw_init` and `lambda_jaw` keeps
+    /// the paper's objective it was trained with.
+    #[serde(deserialize_with = "super::config::deserialize_recorded")]
     pub config: AimConfig,
     /// Loss history so far.
     pub history: Vec<LossRecord>,
@@ -127,6 +133,8 @@ struct Draw {
     shapes: Vec<u32>,
     symmetry: Vec<u32>,
     forehead: Vec<u32>,
+    /// Jaw-constrained points for L_J (empty when `lambda_jaw` = 0).
+    jaw: Vec<u32>,
 }
 
 fn draw(set: &TrainingSet, config: &AimConfig, step: usize) -> Draw {
@@ -147,11 +155,25 @@ fn draw(set: &TrainingSet, config: &AimConfig, step: usize) -> Draw {
             .map(|_| set.forehead[below(set.forehead.len()) as usize])
             .collect()
     };
+    // Drawn last, and only when used, so the paper's objective draws exactly what it did before.
+    let jaw_vertices = if config.lambda_jaw > 0.0 {
+        set.jaw_constrained()
+    } else {
+        Vec::new()
+    };
+    let jaw = if jaw_vertices.is_empty() {
+        Vec::new()
+    } else {
+        (0..config.forehead_batch)
+            .map(|_| jaw_vertices[below(jaw_vertices.len()) as usize])
+            .collect()
+    };
     Draw {
         points,
         shapes,
         symmetry,
         forehead,
+        jaw,
     }
 }
 
@@ -160,7 +182,8 @@ fn rows(values: Vec<f32>, width: usize, device: &Device) -> Tensor<2> {
     Tensor::from_data(TensorData::new(values, [n, width]), device)
 }
 
-/// One step's objective, eq. 16: L_S + L_A + L_D + L_Sym + L_K. Returns the total and the terms.
+/// One step's objective, eq. 16 plus L_J: L_S + L_A + L_D + L_Sym + (L_K + L_J). Returns the
+/// total and the terms.
 fn objective(
     net: &AimNet,
     set: &TrainingSet,
@@ -279,19 +302,35 @@ fn objective(
             .mean()
             .mul_scalar(config.lambda_forehead)
     };
+    // Not in the paper, its counterpart: L_J = λ_J ||K(c_J) − 1||² on the skin over the jaw.
+    // Without it (and with identity jaw transforms) k = 0 is a stationary point that training
+    // does not leave: the correctives take the jaw's motion.
+    let skinning = if d.jaw.is_empty() {
+        forehead
+    } else {
+        let xj = gather3(&d.jaw, &|i| normalise(tpl[i as usize], norm));
+        forehead
+            + net
+                .k
+                .forward(xj)
+                .sub_scalar(1.0)
+                .square()
+                .mean()
+                .mul_scalar(config.lambda_jaw)
+    };
 
     let total = skin.clone()
         + anatomy.clone()
         + thickness_reg.clone()
         + symmetry.clone()
-        + forehead.clone();
+        + skinning.clone();
     let terms = Tensor::cat(
         vec![
             skin,
             anatomy,
             thickness_reg,
             symmetry,
-            forehead,
+            skinning,
             total.clone(),
         ],
         0,
@@ -317,7 +356,20 @@ pub fn step_once(
     (optim.step(config.lr_at(step), net, grads), terms)
 }
 
-/// A fresh model and Adam optimiser for `set` (for benchmarks and custom loops).
+/// The jaw transforms a fresh run starts from (`config.jaw_init`), one per expression.
+pub fn initial_jaw(set: &TrainingSet, config: &AimConfig) -> Vec<[f32; 9]> {
+    let m = set.shapes.len().saturating_sub(1);
+    match config.jaw_init {
+        JawInit::Identity => vec![IDENTITY_9D; m],
+        JawInit::Bones => super::data::jaw_transforms(set)
+            .into_iter()
+            .map(|t| t.unwrap_or(IDENTITY_9D))
+            .collect(),
+    }
+}
+
+/// A fresh model and Adam optimiser for `set` (for benchmarks and custom loops), its jaw
+/// transforms initialised as `config.jaw_init` says.
 pub fn init(
     set: &TrainingSet,
     config: &AimConfig,
@@ -325,7 +377,7 @@ pub fn init(
 ) -> Result<(AimNet, burn::optim::ModuleOptimizer, Device)> {
     let device = backend.autodiff_device(config.seed)?;
     Ok((
-        AimNet::new(config, set.shapes.len(), &device),
+        AimNet::with_jaw(config, &initial_jaw(set, config), &device),
         AdamConfig::new().with_epsilon(1e-8).init(),
         device,
     ))
@@ -340,7 +392,13 @@ pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> R
     std::fs::create_dir_all(dir)
         .with_context(|| format!("{}: cannot create checkpoint folder", dir.display()))?;
     let norm = normalisation(&set.template.positions);
-    let mut net = AimNet::new(config, set.shapes.len(), &device);
+    // A resumed run replaces the initial jaw transforms with its checkpoint's.
+    let jaw = if options.resume {
+        vec![IDENTITY_9D; set.shapes.len() - 1]
+    } else {
+        initial_jaw(set, config)
+    };
+    let mut net = AimNet::with_jaw(config, &jaw, &device);
     let mut optim = AdamConfig::new().with_epsilon(1e-8).init();
     let mut state = CheckpointState {
         steps_done: 0,
@@ -357,8 +415,9 @@ pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> R
         let (n, o, s) = load_checkpoint(dir, net, optim, &device)?;
         if s.config != *config {
             bail!(
-                "{}: the checkpoint was trained with another configuration; resume with the same config",
-                dir.display()
+                "{}: the checkpoint was trained with another configuration ({}); resume with the same config",
+                dir.display(),
+                s.config.differences(config).join(", ")
             );
         }
         if s.names != set.names {
@@ -532,4 +591,155 @@ pub fn load_model(dir: &Path, backend: Backend) -> Result<(AimNet, CheckpointSta
     let net = AimNet::new(&state.config, state.names.len(), &device);
     let (net, _, state) = load_checkpoint(dir, net, AdamConfig::new().init(), &device)?;
     Ok((net, state))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::aim::config::JawInit;
+    use crate::aim::eval::SkinningWeightMeans;
+
+    /// The procedural actor at a small resolution, as the integration tests use it.
+    fn small_set() -> TrainingSet {
+        let (actor, bones) = crate::procedural::actor(24);
+        super::super::data::training_set(
+            &actor,
+            &bones.skull,
+            &bones.jaw,
+            Some(bones.jaw_pivot),
+            2.5,
+        )
+        .unwrap()
+    }
+
+    /// A short training of `config` on `set`; the learned k's means over the jaw and forehead.
+    fn learned_k(set: &TrainingSet, config: &AimConfig) -> SkinningWeightMeans {
+        let dir = tempfile::tempdir().unwrap();
+        let options = TrainOptions {
+            backend: Backend::Flex,
+            checkpoint_dir: dir.path().to_path_buf(),
+            resume: false,
+            stop_after: None,
+            quiet: true,
+        };
+        let trained = train(set, config, &options).unwrap();
+        let norm = trained.state.normalisation;
+        let x: Vec<f32> = set
+            .template
+            .positions
+            .iter()
+            .flat_map(|&p| normalise(p, norm))
+            .collect();
+        let device = Backend::Flex.device(0).unwrap();
+        let k = to_vec(trained.model.k.forward(rows(x, 3, &device)));
+        SkinningWeightMeans::of(&k, set)
+    }
+
+    fn small_config() -> AimConfig {
+        AimConfig {
+            hidden: 32,
+            layers: 2,
+            batch: 512,
+            symmetry_batch: 64,
+            forehead_batch: 64,
+            iterations: 300,
+            lr: 1e-3,
+            lr_end: 1e-4,
+            checkpoint_every: 1000,
+            ..AimConfig::default()
+        }
+    }
+
+    #[test]
+    fn the_paper_initialisation_is_the_identity() {
+        let set = small_set();
+        let config = AimConfig {
+            jaw_init: JawInit::Identity,
+            ..AimConfig::default()
+        };
+        assert!(initial_jaw(&set, &config).iter().all(|t| *t == IDENTITY_9D));
+        let from_bones = initial_jaw(
+            &set,
+            &AimConfig {
+                jaw_init: JawInit::Bones,
+                ..config
+            },
+        );
+        assert_eq!(from_bones.len(), set.shapes.len() - 1);
+        assert!(from_bones.iter().any(|t| *t != IDENTITY_9D));
+    }
+
+    #[test]
+    fn short_training_learns_a_jaw_skinning_weight() {
+        let set = small_set();
+        // With the paper's jaw_init = identity and lambda_jaw = 0 this fails: k reached 0.171
+        // on the jaw after these 300 steps (docs/AIM.md).
+        let config = AimConfig {
+            jaw_init: JawInit::Bones,
+            lambda_jaw: 1.0,
+            ..small_config()
+        };
+        let start = Instant::now();
+        let k = learned_k(&set, &config);
+        eprintln!(
+            "{:?}, {:?}: mean k {:.3} on the jaw, {:.3} on the forehead ({:.1} s)",
+            config.jaw_init,
+            config.lambda_jaw,
+            k.jaw,
+            k.forehead,
+            start.elapsed().as_secs_f64()
+        );
+        assert!(k.jaw > 0.5, "mean k over the jaw {:.3}", k.jaw);
+        assert!(
+            k.forehead.abs() < 0.2,
+            "mean k over the forehead {:.3}",
+            k.forehead
+        );
+    }
+
+    #[test]
+    fn a_checkpoint_from_before_the_jaw_fields_resumes_with_the_paper_objective() {
+        let set = small_set();
+        let paper = AimConfig {
+            jaw_init: JawInit::Identity,
+            lambda_jaw: 0.0,
+            iterations: 4,
+            ..small_config()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let options = |resume, stop_after| TrainOptions {
+            backend: Backend::Flex,
+            checkpoint_dir: dir.path().to_path_buf(),
+            resume,
+            stop_after,
+            quiet: true,
+        };
+        train(&set, &paper, &options(false, Some(2))).unwrap();
+        // Rewrite state.json as an older build wrote it: no jaw_init, no lambda_jaw.
+        let path = dir.path().join("state.json");
+        let mut state: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+        let config = state["config"].as_object_mut().unwrap();
+        assert!(config.remove("jaw_init").is_some() && config.remove("lambda_jaw").is_some());
+        std::fs::write(&path, serde_json::to_vec(&state).unwrap()).unwrap();
+        // The jaw options would change its objective: refused, naming the fields.
+        let err = train(
+            &set,
+            &AimConfig {
+                jaw_init: JawInit::Bones,
+                lambda_jaw: 1.0,
+                ..paper.clone()
+            },
+            &options(true, None),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("jaw_init") && err.contains("lambda_jaw"),
+            "{err}"
+        );
+        let done = train(&set, &paper, &options(true, None)).unwrap();
+        assert!(done.complete);
+        assert_eq!(done.state.config, paper);
+    }
 }
