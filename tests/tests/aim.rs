@@ -94,7 +94,10 @@ fn resumed_training_reaches_the_same_weights() {
     let mut state: serde_json::Value =
         serde_json::from_slice(&std::fs::read(&state_path).unwrap()).unwrap();
     for field in ["model_file", "model_crc", "optim_file", "optim_crc"] {
-        assert!(state.as_object_mut().unwrap().remove(field).is_some(), "{field}");
+        assert!(
+            state.as_object_mut().unwrap().remove(field).is_some(),
+            "{field}"
+        );
     }
     std::fs::write(&state_path, serde_json::to_vec(&state).unwrap()).unwrap();
     let rest = train(&set, &config, &options(b.path(), true, None)).unwrap();

@@ -39,6 +39,8 @@ fn bake_golden() -> Vec<u8> {
         // regenerating it the same way.
         jaw_init: sinew_host::aim::config::JawInit::Identity,
         lambda_jaw: 0.0,
+        // ... and without the final anneal, which came later still.
+        anneal_fraction: 0.0,
         ..AimConfig::default()
     };
     let dir = tempfile::tempdir().unwrap();

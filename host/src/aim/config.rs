@@ -90,6 +90,11 @@ pub struct AimConfig {
     pub lr_end: f64,
     /// Learning-rate schedule.
     pub schedule: Schedule,
+    /// Fraction of the steps, at the end of the run, that anneal the rate geometrically from
+    /// `lr_end` to `lr_end · anneal_factor`; `schedule` covers the steps before them. 0 = none.
+    pub anneal_fraction: f64,
+    /// Where the anneal ends, as a factor of `lr_end`.
+    pub anneal_factor: f64,
     /// Seed of initialisation and sampling.
     pub seed: u64,
     /// λ_S, skin position (eq. 11).
@@ -132,11 +137,13 @@ impl Default for AimConfig {
             iterations: 10_000,
             // The paper's 2e-3 stalled at a 3.8 mm noise floor in a PyTorch reference on ICT;
             // 1e-4 decaying to 1e-5 worked best there; over a full run here 2e-4 did better
-            // still, and ending at 1e-6 rather than 1e-5 took the residual noise of the fit
-            // down by a third (docs/AIM.md compares the schedules).
+            // still. A last phase annealing 1e-5 → 1e-6 took the residual noise of the fit
+            // down by a quarter, where ending the main decay at 1e-6 did not (docs/AIM.md).
             lr: 2e-4,
-            lr_end: 1e-6,
+            lr_end: 1e-5,
             schedule: Schedule::Exponential,
+            anneal_fraction: 0.1,
+            anneal_factor: 0.1,
             seed: 42,
             lambda_skin: 1.0,
             lambda_bone: 1.0,
@@ -167,6 +174,7 @@ impl AimConfig {
             iterations: 1500,
             lr: 1e-3,
             lr_end: 1e-4,
+            anneal_fraction: 0.0,
             checkpoint_every: 500,
             ..Self::default()
         }
@@ -175,12 +183,14 @@ impl AimConfig {
     /// A configuration recorded by an earlier run (a checkpoint's `state.json`, a baked model's
     /// `config` metadata). Fields that run did not know take the values that reproduce what it
     /// did, not today's defaults: `jaw_init = identity` and `lambda_jaw = 0` (the paper's
-    /// objective, all there was before they existed). Other missing fields take their defaults.
+    /// objective, all there was before they existed) and `anneal_fraction = 0` (no anneal).
+    /// Other missing fields take their defaults.
     pub fn from_recorded(mut value: serde_json::Value) -> serde_json::Result<Self> {
         if let Some(fields) = value.as_object_mut() {
             for (key, before) in [
                 ("jaw_init", serde_json::json!("identity")),
                 ("lambda_jaw", serde_json::json!(0.0)),
+                ("anneal_fraction", serde_json::json!(0.0)),
             ] {
                 fields.entry(key).or_insert(before);
             }
@@ -206,9 +216,20 @@ impl AimConfig {
             .collect()
     }
 
+    /// Steps of the final anneal (`anneal_fraction` of the run, rounded).
+    pub fn anneal_steps(&self) -> usize {
+        ((self.iterations as f64 * self.anneal_fraction).round() as usize).min(self.iterations)
+    }
+
     /// Learning rate at step `t`.
     pub fn lr_at(&self, t: usize) -> f64 {
-        let f = t as f64 / self.iterations.max(1) as f64;
+        let anneal = self.anneal_steps();
+        let main = self.iterations - anneal;
+        if t >= main && anneal > 0 {
+            let f = (t - main) as f64 / anneal as f64;
+            return self.lr_end * self.anneal_factor.powf(f);
+        }
+        let f = t as f64 / main.max(1) as f64;
         match self.schedule {
             Schedule::Constant => self.lr,
             Schedule::Exponential => self.lr * (self.lr_end / self.lr).powf(f),
@@ -243,6 +264,12 @@ impl AimConfig {
             "checkpoint_every must be positive"
         );
         anyhow::ensure!(
+            (0.0..1.0).contains(&self.anneal_fraction) && self.anneal_factor > 0.0,
+            "anneal_fraction must be in [0, 1) and anneal_factor positive, got {} and {}",
+            self.anneal_fraction,
+            self.anneal_factor
+        );
+        anyhow::ensure!(
             self.lambda_jaw >= 0.0 && self.lambda_jaw.is_finite(),
             "lambda_jaw must be a finite number ≥ 0, got {}",
             self.lambda_jaw
@@ -259,16 +286,54 @@ mod tests {
     fn schedules_start_and_end_where_configured() {
         let mut c = AimConfig {
             iterations: 100,
+            anneal_fraction: 0.0,
             ..AimConfig::default()
         };
         for s in [Schedule::Exponential, Schedule::Cosine] {
             c.schedule = s;
             assert!((c.lr_at(0) - 2e-4).abs() < 1e-12);
-            assert!((c.lr_at(100) - 1e-6).abs() < 1e-12);
-            assert!(c.lr_at(50) < 2e-4 && c.lr_at(50) > 1e-6);
+            assert!((c.lr_at(100) - 1e-5).abs() < 1e-12);
+            assert!(c.lr_at(50) < 2e-4 && c.lr_at(50) > 1e-5);
         }
         c.schedule = Schedule::Constant;
         assert_eq!(c.lr_at(77), 2e-4);
+    }
+
+    #[test]
+    fn the_anneal_follows_the_main_schedule() {
+        // The default: 90 steps 2e-4 → 1e-5, then 10 steps 1e-5 → 1e-6.
+        let c = AimConfig {
+            iterations: 100,
+            ..AimConfig::default()
+        };
+        assert_eq!(c.anneal_steps(), 10);
+        assert!((c.lr_at(0) - 2e-4).abs() < 1e-12);
+        assert!((c.lr_at(45) - 2e-4 * 0.05f64.sqrt()).abs() < 1e-12);
+        assert!((c.lr_at(90) - 1e-5).abs() < 1e-15);
+        assert!((c.lr_at(95) - 1e-5 * 0.1f64.sqrt()).abs() < 1e-15);
+        assert!((c.lr_at(100) - 1e-6).abs() < 1e-15);
+        // Step 10,000 of an 11,000-step run annealing its last 1,000 steps is where a
+        // 10,000-step run without the anneal ends (docs/AIM.md's "+1,000 steps" row).
+        let long = AimConfig {
+            iterations: 11_000,
+            anneal_fraction: 1.0 / 11.0,
+            ..AimConfig::default()
+        };
+        let short = AimConfig {
+            anneal_fraction: 0.0,
+            ..AimConfig::default()
+        };
+        for t in [0, 2_500, 9_999] {
+            assert!((long.lr_at(t) - short.lr_at(t)).abs() < 1e-15, "{t}");
+        }
+        assert!(
+            AimConfig {
+                anneal_fraction: 1.0,
+                ..c
+            }
+            .validate()
+            .is_err()
+        );
     }
 
     #[test]
