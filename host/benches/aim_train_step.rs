@@ -1,6 +1,6 @@
 //! One AIM training step at the paper's size: five SIRENs 3→256→256→256→out (ω0 = 30), batch
 //! 4096 (point, shape) samples plus the 512-point symmetry and forehead terms, Adam; 20 shapes
-//! (E has 57 outputs, as on the ICT actor). The comparison with PyTorch is
+//! (E has 57 outputs) on a template of about the ICT face region's size, as on the ICT actor. The comparison with PyTorch is
 //! `scripts/bench_torch_aim_step.py`; results in docs/BENCHMARKS.md.
 //!
 //! Run: `cargo bench -p sinew-host --bench aim_train_step` (add `--features x86-v4` for the
@@ -13,8 +13,9 @@ use sinew_host::aim::train::{init, normalisation, step_once};
 use sinew_host::backend::Backend;
 
 fn bench(c: &mut Criterion) {
-    let (mut actor, bones) =
-        sinew_host::procedural::actor(sinew_host::procedural::DEFAULT_RESOLUTION);
+    // 84 rows of 113 vertices: 9,492, about the ICT face region's 9,409, so that the batch
+    // holds as many distinct points as there (the networks run once per distinct point).
+    let (mut actor, bones) = sinew_host::procedural::actor(84);
     // 20 shapes like the ICT default actor: repeat the procedural expressions.
     while actor.shapes.len() < 20 {
         let i = 1 + (actor.shapes.len() - 1) % 6;

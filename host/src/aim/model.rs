@@ -45,6 +45,25 @@ pub struct Prediction {
     pub correctives: Tensor<3>,
 }
 
+impl Prediction {
+    /// The rows `index` of every field, in that order (a row may repeat): the predictions of a
+    /// batch that holds some points more than once, from one evaluation per distinct point.
+    /// Gradients flowing back through the copies add up at the shared row.
+    ///
+    /// # Shapes
+    /// - `index`: `[B']` rows of this `[B, …]` prediction; output `[B', …]`
+    pub fn select(self, index: Tensor<1, Int>) -> Self {
+        Self {
+            bone: self.bone.select(0, index.clone()),
+            thickness: self.thickness.select(0, index.clone()),
+            normal: self.normal.select(0, index.clone()),
+            skin: self.skin.select(0, index.clone()),
+            k: self.k.select(0, index.clone()),
+            correctives: self.correctives.select(0, index),
+        }
+    }
+}
+
 /// The identity in AIM's 9 jaw parameters.
 pub const IDENTITY_9D: [f32; 9] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0];
 
