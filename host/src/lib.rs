@@ -12,6 +12,7 @@ pub mod constraints;
 pub mod container;
 pub mod ict;
 pub mod inspect;
+pub mod interrupt;
 pub mod malloc;
 pub mod mesh;
 pub mod nn;

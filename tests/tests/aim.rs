@@ -4,7 +4,6 @@
 use sinew_core::aim::AimActor;
 use sinew_host::aim::AimConfig;
 use sinew_host::aim::bake::{BakeInput, bake};
-use sinew_host::aim::data::training_set;
 use sinew_host::aim::eval::shape_errors;
 use sinew_host::aim::train::{TrainOptions, train};
 use sinew_host::backend::Backend;
@@ -15,22 +14,13 @@ use sinew_host::backend::Backend;
 static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 fn small_set() -> sinew_host::aim::TrainingSet {
-    let (actor, bones) = sinew_host::procedural::actor(16);
-    training_set(&actor, &bones.skull, &bones.jaw, Some(bones.jaw_pivot), 2.5).unwrap()
+    sinew_host::testing::procedural_training_set(16)
 }
 
 fn tiny_config(iterations: usize) -> AimConfig {
     AimConfig {
-        hidden: 32,
-        layers: 2,
-        batch: 512,
-        symmetry_batch: 64,
-        forehead_batch: 64,
-        iterations,
-        lr: 1e-3,
-        lr_end: 1e-4,
         checkpoint_every: 5,
-        ..AimConfig::default()
+        ..sinew_host::testing::small_aim_config(iterations)
     }
 }
 
@@ -63,6 +53,32 @@ fn baked(
         .0
 }
 
+/// Trains `config` on `set` straight through and, in another folder, stopped after step 7 and
+/// resumed (`between` sees that folder in between); asserts both runs end at the same weights
+/// and returns the resumed run's folder.
+fn assert_resumed_run_matches(
+    set: &sinew_host::aim::TrainingSet,
+    config: &AimConfig,
+    between: impl FnOnce(&std::path::Path),
+) -> tempfile::TempDir {
+    let a = tempfile::tempdir().unwrap();
+    let b = tempfile::tempdir().unwrap();
+    let whole = train(set, config, &options(a.path(), false, None)).unwrap();
+    let first = train(set, config, &options(b.path(), false, Some(7))).unwrap();
+    assert!(!first.complete);
+    assert_eq!(first.state.steps_done, 7);
+    between(b.path());
+    let rest = train(set, config, &options(b.path(), true, None)).unwrap();
+    assert!(rest.complete);
+    let norm = whole.state.normalisation;
+    assert_eq!(
+        baked(&whole.model, set, norm),
+        baked(&rest.model, set, norm),
+        "resumed run differs from the uninterrupted one"
+    );
+    b
+}
+
 #[test]
 fn resumed_training_reaches_the_same_weights() {
     let _serial = SERIAL
@@ -70,47 +86,35 @@ fn resumed_training_reaches_the_same_weights() {
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     let set = small_set();
     let config = tiny_config(12);
-    let a = tempfile::tempdir().unwrap();
-    let b = tempfile::tempdir().unwrap();
-    let whole = train(&set, &config, &options(a.path(), false, None)).unwrap();
-    let first = train(&set, &config, &options(b.path(), false, Some(7))).unwrap();
-    assert!(!first.complete);
-    assert_eq!(first.state.steps_done, 7);
-    // The checkpoint at step 7 replaced the one at step 5.
-    let mut names: Vec<String> = std::fs::read_dir(b.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    assert_eq!(
-        names,
-        ["model-7.bpk", "optim-7.bpk", "state.json", "template.obj"]
-    );
-    // Resume from it in the layout of checkpoints written before the weight files were named
-    // in state.json (model.bpk, optim.bpk, no CRCs): they must keep working.
-    std::fs::rename(b.path().join("model-7.bpk"), b.path().join("model.bpk")).unwrap();
-    std::fs::rename(b.path().join("optim-7.bpk"), b.path().join("optim.bpk")).unwrap();
-    let state_path = b.path().join("state.json");
-    let mut state: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&state_path).unwrap()).unwrap();
-    for field in ["model_file", "model_crc", "optim_file", "optim_crc"] {
-        assert!(
-            state.as_object_mut().unwrap().remove(field).is_some(),
-            "{field}"
+    let dir = assert_resumed_run_matches(&set, &config, |dir| {
+        // The checkpoint at step 7 replaced the one at step 5.
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(
+            names,
+            ["model-7.bpk", "optim-7.bpk", "state.json", "template.obj"]
         );
-    }
-    std::fs::write(&state_path, serde_json::to_vec(&state).unwrap()).unwrap();
-    let rest = train(&set, &config, &options(b.path(), true, None)).unwrap();
-    assert!(rest.complete);
-    let norm = whole.state.normalisation;
-    assert_eq!(
-        baked(&whole.model, &set, norm),
-        baked(&rest.model, &set, norm),
-        "resumed run differs from the uninterrupted one"
-    );
+        // Resume from it in the layout of checkpoints written before the weight files were
+        // named in state.json (model.bpk, optim.bpk, no CRCs): they must keep working.
+        std::fs::rename(dir.join("model-7.bpk"), dir.join("model.bpk")).unwrap();
+        std::fs::rename(dir.join("optim-7.bpk"), dir.join("optim.bpk")).unwrap();
+        let state_path = dir.join("state.json");
+        let mut state: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&state_path).unwrap()).unwrap();
+        for field in ["model_file", "model_crc", "optim_file", "optim_crc"] {
+            assert!(
+                state.as_object_mut().unwrap().remove(field).is_some(),
+                "{field}"
+            );
+        }
+        std::fs::write(&state_path, serde_json::to_vec(&state).unwrap()).unwrap();
+    });
     // A different configuration must not resume silently.
     let other = AimConfig { seed: 7, ..config };
-    assert!(train(&set, &other, &options(b.path(), true, None)).is_err());
+    assert!(train(&set, &other, &options(dir.path(), true, None)).is_err());
 }
 
 #[test]
@@ -118,25 +122,13 @@ fn resumed_training_with_the_data_initialised_jaw_reaches_the_same_weights() {
     let _serial = SERIAL
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let set = small_set();
     // The resumed run must take its jaw transforms from the checkpoint, not fit them again.
     let config = AimConfig {
         jaw_init: sinew_host::aim::config::JawInit::Bones,
         lambda_jaw: 1.0,
         ..tiny_config(12)
     };
-    let a = tempfile::tempdir().unwrap();
-    let b = tempfile::tempdir().unwrap();
-    let whole = train(&set, &config, &options(a.path(), false, None)).unwrap();
-    train(&set, &config, &options(b.path(), false, Some(7))).unwrap();
-    let rest = train(&set, &config, &options(b.path(), true, None)).unwrap();
-    assert!(rest.complete);
-    let norm = whole.state.normalisation;
-    assert_eq!(
-        baked(&whole.model, &set, norm),
-        baked(&rest.model, &set, norm),
-        "resumed run differs from the uninterrupted one"
-    );
+    assert_resumed_run_matches(&small_set(), &config, |_| {});
 }
 
 #[test]

@@ -21,11 +21,9 @@ const MODEL: &str = "aim-procedural.sinew";
 fn bake_golden() -> Vec<u8> {
     use sinew_host::aim::AimConfig;
     use sinew_host::aim::bake::{BakeInput, bake};
-    use sinew_host::aim::data::training_set;
     use sinew_host::aim::train::{TrainOptions, train};
     use sinew_host::backend::Backend;
-    let (actor, bones) = sinew_host::procedural::actor(16);
-    let set = training_set(&actor, &bones.skull, &bones.jaw, Some(bones.jaw_pivot), 2.5).unwrap();
+    let set = sinew_host::testing::procedural_training_set(16);
     let config = AimConfig {
         hidden: 32,
         layers: 2,

@@ -3,8 +3,6 @@
 //! a progress bar and a loss history.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -457,12 +455,7 @@ pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> R
         set.template.write(&dir.join("template.obj"))?;
     }
 
-    let interrupted = Arc::new(AtomicBool::new(false));
-    {
-        let flag = interrupted.clone();
-        // A second registration (e.g. in tests) fails harmlessly: Ctrl-C then just stops the process.
-        let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
-    }
+    crate::interrupt::watch_ctrl_c();
     let bar = crate::progress::bar(config.iterations as u64, options.quiet);
     bar.set_position(state.steps_done as u64);
     let start = Instant::now();
@@ -497,7 +490,7 @@ pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> R
             state.history.push(record);
         }
         bar.inc(1);
-        let interrupt = interrupted.load(Ordering::SeqCst);
+        let interrupt = crate::interrupt::take_stop_request();
         if state.steps_done.is_multiple_of(config.checkpoint_every)
             || interrupt
             || state.steps_done == last
@@ -624,17 +617,8 @@ mod tests {
     use crate::aim::eval::SkinningWeightMeans;
     use crate::aim::model::Prediction;
 
-    /// The procedural actor at a small resolution, as the integration tests use it.
     fn small_set() -> TrainingSet {
-        let (actor, bones) = crate::procedural::actor(24);
-        super::super::data::training_set(
-            &actor,
-            &bones.skull,
-            &bones.jaw,
-            Some(bones.jaw_pivot),
-            2.5,
-        )
-        .unwrap()
+        crate::testing::procedural_training_set(24)
     }
 
     /// A short training of `config` on `set`; the learned k's means over the jaw and forehead.
@@ -662,16 +646,8 @@ mod tests {
 
     fn small_config() -> AimConfig {
         AimConfig {
-            hidden: 32,
-            layers: 2,
-            batch: 512,
-            symmetry_batch: 64,
-            forehead_batch: 64,
-            iterations: 300,
-            lr: 1e-3,
-            lr_end: 1e-4,
             checkpoint_every: 1000,
-            ..AimConfig::default()
+            ..crate::testing::small_aim_config(300)
         }
     }
 

@@ -5,8 +5,6 @@
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use std::sync::Once;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail, ensure};
@@ -317,30 +315,7 @@ pub fn epoch_order(n: usize, seed: u64, epoch: usize) -> Vec<usize> {
 }
 
 /// Set by the Ctrl-C handler: a training that checkpoints stops after its current step.
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-/// Installs the Ctrl-C handler once per process. The first Ctrl-C asks the training to stop
-/// after its current step (with a checkpoint); a second one ends the process at once, so that
-/// Ctrl-C outside a training step (evaluation, baking) is not swallowed.
-fn watch_ctrl_c() {
-    static INSTALL: Once = Once::new();
-    INSTALL.call_once(|| {
-        // If another handler was registered first (AIM's, in a test process), it keeps Ctrl-C
-        // and this one fails harmlessly: training then just runs on.
-        let _ = ctrlc::set_handler(|| {
-            if INTERRUPTED.swap(true, Ordering::SeqCst) {
-                std::process::exit(130);
-            }
-        });
-    });
-}
-
-/// Asks the running training to stop after its current step, as Ctrl-C does: with a checkpoint
-/// folder it saves its position there, then [`train`] returns an error that says so. A request
-/// made while no training runs stops the next one after its first step.
-pub fn request_stop() {
-    INTERRUPTED.store(true, Ordering::SeqCst);
-}
+pub use crate::interrupt::request_stop;
 
 /// Options of one training run besides its data and configuration.
 #[derive(Clone, Debug, Default)]
@@ -445,7 +420,7 @@ pub fn train(
             .with_context(|| format!("{}: cannot create checkpoint folder", dir.display()))?;
     }
     if dir.is_some() {
-        watch_ctrl_c();
+        crate::interrupt::watch_ctrl_c();
     }
 
     let weights = weights_tensor(vertex_weights, device);
@@ -488,7 +463,7 @@ pub fn train(
                     saved = Some(state.steps_done);
                 }
             }
-            if INTERRUPTED.swap(false, Ordering::SeqCst) {
+            if crate::interrupt::take_stop_request() {
                 let at = format!(
                     "epoch {}, step {} ({} steps done)",
                     state.epochs_done, state.steps_in_epoch, state.steps_done
