@@ -414,12 +414,12 @@ enum Edit {
 /// The jaw options of `train aim` and `demo`.
 #[derive(Debug, Args)]
 struct JawArgs {
-    /// How the jaw transforms start: identity (the paper, the default) or bones (rigid fits of
-    /// the jaw-constrained skin; use with --lambda-jaw 1); overrides the configuration.
+    /// How the jaw transforms start: bones (rigid fits of the jaw-constrained skin, the default)
+    /// or identity (the paper's; use with --lambda-jaw 0); overrides the configuration.
     #[arg(long, value_enum)]
     jaw_init: Option<JawInit>,
-    /// λ_J of the jaw skinning term (k = 1 on the skin over the jaw; 0 = the paper's objective,
-    /// the default); overrides the configuration.
+    /// λ_J of the jaw skinning term (k = 1 on the skin over the jaw; default 1; 0 = the paper's
+    /// objective); overrides the configuration.
     #[arg(long)]
     lambda_jaw: Option<f32>,
 }
