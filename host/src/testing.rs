@@ -53,3 +53,18 @@ pub fn small_aim_config(iterations: usize) -> crate::aim::AimConfig {
         ..crate::aim::AimConfig::default()
     }
 }
+
+/// Options of a quiet AIM training on the flex backend, checkpointing to `dir`.
+pub fn aim_train_options(
+    dir: &Path,
+    resume: bool,
+    stop_after: Option<usize>,
+) -> crate::aim::train::TrainOptions {
+    crate::aim::train::TrainOptions {
+        backend: crate::backend::Backend::Flex,
+        checkpoint_dir: dir.to_path_buf(),
+        resume,
+        stop_after,
+        quiet: true,
+    }
+}

@@ -5,8 +5,9 @@ use sinew_core::aim::AimActor;
 use sinew_host::aim::AimConfig;
 use sinew_host::aim::bake::{BakeInput, bake};
 use sinew_host::aim::eval::shape_errors;
-use sinew_host::aim::train::{TrainOptions, train};
+use sinew_host::aim::train::train;
 use sinew_host::backend::Backend;
+use sinew_host::testing::aim_train_options;
 
 /// Training runs one at a time in this process: burn's CPU kernels split reductions across the
 /// shared thread pool according to the work in flight, so two trainings at once round differently
@@ -21,16 +22,6 @@ fn tiny_config(iterations: usize) -> AimConfig {
     AimConfig {
         checkpoint_every: 5,
         ..sinew_host::testing::small_aim_config(iterations)
-    }
-}
-
-fn options(dir: &std::path::Path, resume: bool, stop_after: Option<usize>) -> TrainOptions {
-    TrainOptions {
-        backend: Backend::Flex,
-        checkpoint_dir: dir.to_path_buf(),
-        resume,
-        stop_after,
-        quiet: true,
     }
 }
 
@@ -63,12 +54,12 @@ fn assert_resumed_run_matches(
 ) -> tempfile::TempDir {
     let a = tempfile::tempdir().unwrap();
     let b = tempfile::tempdir().unwrap();
-    let whole = train(set, config, &options(a.path(), false, None)).unwrap();
-    let first = train(set, config, &options(b.path(), false, Some(7))).unwrap();
+    let whole = train(set, config, &aim_train_options(a.path(), false, None)).unwrap();
+    let first = train(set, config, &aim_train_options(b.path(), false, Some(7))).unwrap();
     assert!(!first.complete);
     assert_eq!(first.state.steps_done, 7);
     between(b.path());
-    let rest = train(set, config, &options(b.path(), true, None)).unwrap();
+    let rest = train(set, config, &aim_train_options(b.path(), true, None)).unwrap();
     assert!(rest.complete);
     let norm = whole.state.normalisation;
     assert_eq!(
@@ -114,7 +105,7 @@ fn resumed_training_reaches_the_same_weights() {
     });
     // A different configuration must not resume silently.
     let other = AimConfig { seed: 7, ..config };
-    assert!(train(&set, &other, &options(dir.path(), true, None)).is_err());
+    assert!(train(&set, &other, &aim_train_options(dir.path(), true, None)).is_err());
 }
 
 #[test]
@@ -146,13 +137,13 @@ fn training_learns_the_procedural_actor_and_the_core_agrees() {
             iterations: 1,
             ..config.clone()
         },
-        &options(&dir.path().join("early"), false, None),
+        &aim_train_options(&dir.path().join("early"), false, None),
     )
     .unwrap();
     let trained = train(
         &set,
         &config,
-        &options(&dir.path().join("full"), false, None),
+        &aim_train_options(&dir.path().join("full"), false, None),
     )
     .unwrap();
     let norm = trained.state.normalisation;
@@ -213,7 +204,7 @@ fn softplus_thickness_is_positive_and_the_core_agrees() {
         ..tiny_config(60)
     };
     let dir = tempfile::tempdir().unwrap();
-    let trained = train(&set, &config, &options(dir.path(), false, None)).unwrap();
+    let trained = train(&set, &config, &aim_train_options(dir.path(), false, None)).unwrap();
     let bytes = baked(&trained.model, &set, trained.state.normalisation);
     let actor = AimActor::from_bytes(&bytes).unwrap();
     assert!(

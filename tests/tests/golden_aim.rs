@@ -21,7 +21,7 @@ const MODEL: &str = "aim-procedural.sinew";
 fn bake_golden() -> Vec<u8> {
     use sinew_host::aim::AimConfig;
     use sinew_host::aim::bake::{BakeInput, bake};
-    use sinew_host::aim::train::{TrainOptions, train};
+    use sinew_host::aim::train::train;
     use sinew_host::backend::Backend;
     let set = sinew_host::testing::procedural_training_set(16);
     let config = AimConfig {
@@ -42,13 +42,7 @@ fn bake_golden() -> Vec<u8> {
         ..AimConfig::default()
     };
     let dir = tempfile::tempdir().unwrap();
-    let options = TrainOptions {
-        backend: Backend::Flex,
-        checkpoint_dir: dir.path().to_path_buf(),
-        resume: false,
-        stop_after: None,
-        quiet: true,
-    };
+    let options = sinew_host::testing::aim_train_options(dir.path(), false, None);
     let trained = train(&set, &config, &options).unwrap();
     let tri = set.template.triangles();
     let input = BakeInput {

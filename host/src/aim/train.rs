@@ -624,13 +624,7 @@ mod tests {
     /// A short training of `config` on `set`; the learned k's means over the jaw and forehead.
     fn learned_k(set: &TrainingSet, config: &AimConfig) -> SkinningWeightMeans {
         let dir = tempfile::tempdir().unwrap();
-        let options = TrainOptions {
-            backend: Backend::Flex,
-            checkpoint_dir: dir.path().to_path_buf(),
-            resume: false,
-            stop_after: None,
-            quiet: true,
-        };
+        let options = crate::testing::aim_train_options(dir.path(), false, None);
         let trained = train(set, config, &options).unwrap();
         let norm = trained.state.normalisation;
         let x: Vec<f32> = set
@@ -796,13 +790,8 @@ mod tests {
             ..small_config()
         };
         let dir = tempfile::tempdir().unwrap();
-        let options = |resume, stop_after| TrainOptions {
-            backend: Backend::Flex,
-            checkpoint_dir: dir.path().to_path_buf(),
-            resume,
-            stop_after,
-            quiet: true,
-        };
+        let options =
+            |resume, stop_after| crate::testing::aim_train_options(dir.path(), resume, stop_after);
         train(&set, &paper, &options(false, Some(2))).unwrap();
         // Rewrite state.json as an older build wrote it: no jaw_init, no lambda_jaw.
         let path = dir.path().join("state.json");
