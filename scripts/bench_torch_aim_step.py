@@ -7,9 +7,14 @@ Same work: five SIRENs 3->256->256->256->{3,1,3,1,57} (omega0 = 30, SIREN init),
 thickness, symmetry (512 points) and forehead (512 points) terms, Adam, on a template of 9,409
 points (the ICT face region). Random data of the same shapes: the step's cost does not depend on
 the values. `--distinct` runs the networks once per distinct point of the batch, as Sinew does
-(about 3,300 of the 4,096 on 9,409 points). Run on demand (not in CI):
+(about 3,300 of the 4,096 on 9,409 points). `--shapes-per-point K` draws the batch as
+4,096 / K points with K different shapes each (Sinew's default `shapes_per_point` is 2; with
+`--distinct`, about 1,850 distinct points). `--jaw-term` adds L_J on 512 more points (K(c) = 1 over
+the jaw, on by default in Sinew since session 5). Sinew's default step is therefore
+`--distinct --shapes-per-point 2 --jaw-term`. Run on demand (not in CI):
 
     python3 scripts/bench_torch_aim_step.py [--threads 2] [--steps 50] [--distinct]
+        [--shapes-per-point K] [--jaw-term]
 """
 import argparse
 import time
@@ -48,6 +53,8 @@ def main():
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--steps", type=int, default=50)
     p.add_argument("--distinct", action="store_true")
+    p.add_argument("--shapes-per-point", type=int, default=1)
+    p.add_argument("--jaw-term", action="store_true")
     args = p.parse_args()
     torch.set_num_threads(args.threads)
     torch.manual_seed(0)
@@ -65,8 +72,13 @@ def main():
     pivot = torch.zeros(1, 3)
 
     def step():
-        v = torch.randint(0, verts, (batch,))
-        s = torch.randint(0, shapes, (batch,))
+        per = args.shapes_per_point
+        if per == 1:
+            v = torch.randint(0, verts, (batch,))
+            s = torch.randint(0, shapes, (batch,))
+        else:
+            v = torch.randint(0, verts, (batch // per,)).repeat_interleave(per)
+            s = torch.rand(batch // per, shapes).argsort(1)[:, :per].flatten()
         if args.distinct:
             u, slot = torch.unique(v, return_inverse=True)
         else:
@@ -94,6 +106,9 @@ def main():
         loss = loss + 1e-4 * (sym ** 2).sum(1).mean()
         xf = tpl[torch.randint(0, verts, (aux,))]
         loss = loss + 1e2 * (forward(nets[3], xf) ** 2).mean()
+        if args.jaw_term:
+            xj = tpl[torch.randint(0, verts, (aux,))]
+            loss = loss + ((forward(nets[3], xj) - 1) ** 2).mean()
         opt.zero_grad()
         loss.backward()
         opt.step()
@@ -107,7 +122,9 @@ def main():
         step()
         times.append(time.perf_counter() - t)
     times.sort()
-    print(f"torch {torch.__version__}, {args.threads} threads{', distinct points' if args.distinct else ''}: median {1e3 * times[len(times) // 2]:.1f} ms/step, "
+    what = (", distinct points" if args.distinct else "") + f", {args.shapes_per_point} shapes per point" \
+        + (", L_J" if args.jaw_term else "")
+    print(f"torch {torch.__version__}, {args.threads} threads{what}: median {1e3 * times[len(times) // 2]:.1f} ms/step, "
           f"min {1e3 * times[0]:.1f} ms over {args.steps} steps")
 
 

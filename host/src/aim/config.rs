@@ -66,6 +66,9 @@ pub fn deserialize_recorded<'de, D: serde::Deserializer<'de>>(
     AimConfig::from_recorded(value).map_err(serde::de::Error::custom)
 }
 
+/// Default [`AimConfig::shapes_per_point`].
+pub const SHAPES_PER_POINT: usize = 2;
+
 /// The AIM training configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -78,6 +81,12 @@ pub struct AimConfig {
     pub omega0: f32,
     /// (point, shape) samples per step.
     pub batch: usize,
+    /// Distinct shapes drawn for each point of a step: `batch / shapes_per_point` points, each
+    /// with that many different shapes. The five networks run once per distinct point (E
+    /// predicts every shape's corrective at once), so a step costs about the points it draws,
+    /// not its samples. Capped at the actor's shape count. 1 = every sample draws its own
+    /// point and shape (recorded runs from before this field).
+    pub shapes_per_point: usize,
     /// Points per step for the symmetry term (eq. 14).
     pub symmetry_batch: usize,
     /// Points per step for each part of the skinning-weight term: forehead points for eq. 15
@@ -134,6 +143,7 @@ impl Default for AimConfig {
             layers: 3,
             omega0: 30.0,
             batch: 4096,
+            shapes_per_point: SHAPES_PER_POINT,
             symmetry_batch: 512,
             forehead_batch: 512,
             iterations: 10_000,
@@ -187,7 +197,8 @@ impl AimConfig {
     /// A configuration recorded by an earlier run (a checkpoint's `state.json`, a baked model's
     /// `config` metadata). Fields that run did not know take the values that reproduce what it
     /// did, not today's defaults: `jaw_init = identity` and `lambda_jaw = 0` (the paper's
-    /// objective, all there was before they existed) and `anneal_fraction = 0` (no anneal).
+    /// objective, all there was before they existed), `anneal_fraction = 0` (no anneal) and
+    /// `shapes_per_point = 1` (a shape per sample).
     /// Other missing fields take their defaults.
     pub fn from_recorded(mut value: serde_json::Value) -> serde_json::Result<Self> {
         if let Some(fields) = value.as_object_mut() {
@@ -195,6 +206,7 @@ impl AimConfig {
                 ("jaw_init", serde_json::json!("identity")),
                 ("lambda_jaw", serde_json::json!(0.0)),
                 ("anneal_fraction", serde_json::json!(0.0)),
+                ("shapes_per_point", serde_json::json!(1)),
             ] {
                 fields.entry(key).or_insert(before);
             }
@@ -258,6 +270,12 @@ impl AimConfig {
         anyhow::ensure!(
             self.batch > 0 && self.iterations > 0,
             "batch and iterations must be positive"
+        );
+        anyhow::ensure!(
+            (1..=self.batch).contains(&self.shapes_per_point),
+            "shapes_per_point must be between 1 and batch ({}), got {}",
+            self.batch,
+            self.shapes_per_point
         );
         anyhow::ensure!(
             self.lr > 0.0 && self.lr_end > 0.0,
@@ -360,15 +378,18 @@ mod tests {
     }
 
     #[test]
-    fn recorded_configurations_without_the_jaw_fields_keep_the_paper_objective() {
+    fn recorded_configurations_without_the_newer_fields_keep_what_their_run_did() {
         // A checkpoint's config from before jaw_init and lambda_jaw existed, read while the
         // defaults are something else.
         let mut old = serde_json::to_value(AimConfig::demo()).unwrap();
         let fields = old.as_object_mut().unwrap();
         fields.remove("jaw_init");
         fields.remove("lambda_jaw");
+        fields.remove("shapes_per_point");
         let c = AimConfig::from_recorded(old).unwrap();
         assert_eq!((c.jaw_init, c.lambda_jaw), (JawInit::Identity, 0.0));
+        // ... and drew a shape per sample.
+        assert_eq!(c.shapes_per_point, 1);
         assert_eq!(c.hidden, AimConfig::demo().hidden);
         // Recorded values are kept.
         let jaw = AimConfig {
@@ -381,21 +402,34 @@ mod tests {
         let paper = AimConfig {
             jaw_init: JawInit::Identity,
             lambda_jaw: 0.0,
+            shapes_per_point: 1,
             ..AimConfig::demo()
         };
         assert!(c.differences(&paper).is_empty());
         assert_eq!(
             c.differences(&jaw),
-            [r#"jaw_init: "identity" → "bones""#, "lambda_jaw: 0.0 → 1.0"]
+            [
+                r#"jaw_init: "identity" → "bones""#,
+                "lambda_jaw: 0.0 → 1.0",
+                "shapes_per_point: 1 → 2"
+            ]
         );
         assert!(AimConfig::from_recorded(serde_json::json!({"hiden": 3})).is_err());
-        assert!(
+        for bad in [
             AimConfig {
                 lambda_jaw: -1.0,
                 ..AimConfig::default()
-            }
-            .validate()
-            .is_err()
-        );
+            },
+            AimConfig {
+                shapes_per_point: 0,
+                ..AimConfig::default()
+            },
+            AimConfig {
+                shapes_per_point: 4097,
+                ..AimConfig::default()
+            },
+        ] {
+            assert!(bad.validate().is_err(), "{bad:?}");
+        }
     }
 }

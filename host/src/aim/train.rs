@@ -143,8 +143,28 @@ fn draw(set: &TrainingSet, config: &AimConfig, step: usize) -> Draw {
     let mut below = |n: usize| ((rng.next_u64() as u128 * n as u128) >> 64) as u32;
     let v = set.vertices();
     let n = set.shapes.len();
-    let points = (0..config.batch).map(|_| below(v)).collect();
-    let shapes = (0..config.batch).map(|_| below(n)).collect();
+    let (points, shapes) = if config.shapes_per_point <= 1 {
+        (
+            (0..config.batch).map(|_| below(v)).collect(),
+            (0..config.batch).map(|_| below(n)).collect(),
+        )
+    } else {
+        // Each point with `shapes_per_point` different shapes: a partial Fisher–Yates shuffle
+        // of `order` per point (uniform over subsets from any starting permutation).
+        let per = config.shapes_per_point.min(n);
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        let mut points = Vec::with_capacity(config.batch);
+        let mut shapes = Vec::with_capacity(config.batch);
+        while points.len() < config.batch {
+            let p = below(v);
+            for j in 0..per.min(config.batch - points.len()) {
+                order.swap(j, j + below(n - j) as usize);
+                points.push(p);
+                shapes.push(order[j]);
+            }
+        }
+        (points, shapes)
+    };
     let symmetry = (0..config.symmetry_batch).map(|_| below(v)).collect();
     let forehead = if set.forehead.is_empty() {
         Vec::new()
@@ -650,6 +670,59 @@ mod tests {
         let (distinct, slot) = distinct_points(&[5, 2, 5, 9, 2, 5], 10);
         assert_eq!(distinct, [5, 2, 9]);
         assert_eq!(slot, [0, 1, 0, 2, 1, 0]);
+    }
+
+    /// `shapes_per_point` draws the batch as runs of one point with that many different shapes,
+    /// each shape equally often over many draws; 1 draws every sample's point and shape apart.
+    #[test]
+    fn a_draw_gives_each_point_distinct_shapes() {
+        let set = small_set();
+        let n = set.shapes.len();
+        for per in [1, 2, 3, n, n + 5] {
+            let config = AimConfig {
+                shapes_per_point: per,
+                ..small_config()
+            };
+            let mut counts = vec![0usize; n];
+            let mut distinct_total = 0;
+            for step in 0..40 {
+                let d = draw(&set, &config, step);
+                assert_eq!(
+                    (d.points.len(), d.shapes.len()),
+                    (config.batch, config.batch)
+                );
+                distinct_total += distinct_points(&d.points, set.vertices()).0.len();
+                for &s in &d.shapes {
+                    counts[s as usize] += 1;
+                }
+                if per == 1 {
+                    continue;
+                }
+                let per = per.min(n);
+                for (run, shapes) in d.points.chunks(per).zip(d.shapes.chunks(per)) {
+                    assert!(run.iter().all(|&p| p == run[0]), "{per}: {run:?}");
+                    let mut s = shapes.to_vec();
+                    s.sort_unstable();
+                    s.dedup();
+                    assert_eq!(s.len(), shapes.len(), "{per}: repeated shape in {shapes:?}");
+                }
+            }
+            // Each shape about 1/n of the samples (40 · 512 draws; 4.5 σ bounds).
+            let expected = (40 * config.batch) as f64 / n as f64;
+            for (s, &c) in counts.iter().enumerate() {
+                assert!(
+                    (c as f64 - expected).abs() < 4.5 * expected.sqrt(),
+                    "{per} per point: shape {s} drawn {c} times, expected {expected:.0}"
+                );
+            }
+            // Fewer points per step, so fewer network evaluations.
+            let points = distinct_total as f64 / 40.0;
+            let per_point = config.batch as f64 / per.min(n) as f64;
+            assert!(
+                points <= per_point,
+                "{per}: {points} distinct points a step"
+            );
+        }
     }
 
     /// The objective's one evaluation per distinct point: predictions and parameter gradients
