@@ -2,11 +2,9 @@
 //! 79/20 vertices, spirals [15, 14, 9, 9, 7], random connectivity: the cost depends on sizes
 //! only), 666,083 parameters, batch 16, the code's loss, Adam with weight decay.
 //!
-//! Three forms of the same network: `vertex_major` (what training uses: vertex-major feature maps,
-//! each spiral convolution one product and one parallel gather-sum, `sinew_host::gather`),
-//! `vertex_major_selects` (the same layout with burn's `select` per spiral position and
-//! up-sampling, single-threaded in burn-flex) and `batch_major` (the straightforward `[batch,
-//! vertices, features]` layout whose gathers select along dimension 1). Results in docs/S2D.md.
+//! Two layouts of the same network: `vertex_major` (what training uses) and `batch_major` (the
+//! straightforward `[batch, vertices, features]` layout whose gathers select along dimension 1).
+//! Results in docs/S2D.md.
 //!
 //! Run: `cargo bench -p sinew-host --bench s2d_train_step`.
 
@@ -55,36 +53,24 @@ fn bench(c: &mut Criterion) {
             net = Some(n);
         })
     });
-    let forms: [(&str, fn(&S2dDecoder, Tensor<2>) -> Tensor<3>); 2] = [
-        (
-            "train_step_batch16_vertex_major_selects",
-            S2dDecoder::forward_with_selects,
-        ),
-        (
-            "train_step_batch16_batch_major",
-            S2dDecoder::forward_batch_major,
-        ),
-    ];
-    for (name, forward) in forms {
-        let mut optim = tc.optimizer();
-        let mut net = Some(S2dDecoder::new(&config, &h, &device).expect("decoder"));
-        group.bench_function(name, |b| {
-            b.iter(|| {
-                let d = net.take().expect("model");
-                let predicted = forward(&d, batch.input.clone());
-                let l: Tensor<1> = loss(
-                    LossVariant::Code,
-                    predicted,
-                    batch.target.clone(),
-                    weights.clone(),
-                );
-                let grads = burn::optim::GradientsParams::from_grads(l.backward(), &d);
-                let d = optim.step(1e-3, d, grads);
-                let _ = sinew_host::nn::to_vec(l.detach());
-                net = Some(d);
-            })
-        });
-    }
+    let mut optim = tc.optimizer();
+    let mut net = Some(S2dDecoder::new(&config, &h, &device).expect("decoder"));
+    group.bench_function("train_step_batch16_batch_major", |b| {
+        b.iter(|| {
+            let d = net.take().expect("model");
+            let predicted = d.forward_batch_major(batch.input.clone());
+            let l: Tensor<1> = loss(
+                LossVariant::Code,
+                predicted,
+                batch.target.clone(),
+                weights.clone(),
+            );
+            let grads = burn::optim::GradientsParams::from_grads(l.backward(), &d);
+            let d = optim.step(1e-3, d, grads);
+            let _ = sinew_host::nn::to_vec(l.detach());
+            net = Some(d);
+        })
+    });
     group.finish();
 }
 

@@ -10,7 +10,6 @@ pub mod checkpoint;
 pub mod commands;
 pub mod constraints;
 pub mod container;
-pub mod gather;
 pub mod ict;
 pub mod inspect;
 pub mod interrupt;

@@ -3,8 +3,6 @@
 //! `sinew_core::network::load_mlp` and `sinew_core::spiral` read, so the host trains and the core
 //! plays back the same weights.
 
-use std::sync::Arc;
-
 use anyhow::{Result, ensure};
 use burn::module::{Module, Param};
 use burn::nn::{Linear, LinearConfig};
@@ -13,7 +11,6 @@ use burn::tensor::{Device, Distribution, Int, Tensor, TensorData};
 use sinew_core::nn::Activation;
 
 use crate::container::SinewWriter;
-use crate::gather::GatherIndex;
 
 /// Reads a float tensor back as a `Vec<f32>`.
 pub fn to_vec<const D: usize>(t: Tensor<D>) -> Vec<f32> {
@@ -216,9 +213,6 @@ pub struct SpiralConv {
     /// Activation after the linear layer.
     #[module(skip)]
     pub activation: Activation,
-    /// The spirals as a gather of `len` terms per vertex, for burn-flex ([`crate::gather`]).
-    #[module(skip)]
-    pub gather: Arc<GatherIndex>,
 }
 
 impl SpiralConv {
@@ -238,7 +232,6 @@ impl SpiralConv {
             spirals: Tensor::from_data(TensorData::new(idx, [spirals.len()]), device),
             len,
             activation,
-            gather: Arc::new(GatherIndex::new(len.max(1), spirals.to_vec(), None)),
         }
     }
 
@@ -266,23 +259,10 @@ impl SpiralConv {
     /// `batch · out` values from a 2-D tensor, which burn-flex copies as rows and whose backward
     /// (`select_add`) adds as rows. docs/S2D.md has the measured steps of each formulation.
     ///
-    /// On burn-flex the `len` products are one, `x · [W_0 … W_{len−1}]`, whose rows hold
-    /// `[batch, len, out]`, and the spiral sum is one parallel gather-sum ([`crate::gather`]).
-    ///
     /// # Shapes
     /// - input: `[source_vertices, batch · in]`
     /// - output: `[vertices, batch · out]`
     pub fn forward_vertex_major(&self, x: Tensor<2>, batch: usize) -> Tensor<2> {
-        if crate::gather::on_flex(&x) {
-            self.forward_gathered(x, batch)
-        } else {
-            self.forward_selected(x, batch)
-        }
-    }
-
-    /// [`SpiralConv::forward_vertex_major`] with burn's operations: a product, `select` and
-    /// add per spiral position (every backend).
-    pub(crate) fn forward_selected(&self, x: Tensor<2>, batch: usize) -> Tensor<2> {
         let [sources, width] = x.dims();
         let features = width / batch.max(1);
         let vertices = self.spirals.dims()[0] / self.len;
@@ -316,31 +296,6 @@ impl SpiralConv {
         let mut z = z
             .unwrap_or_else(|| Tensor::zeros([vertices, batch * outputs], &device))
             .reshape([vertices * batch, outputs]);
-        if let Some(b) = &self.linear.bias {
-            z = z + b.val().reshape([1, outputs]);
-        }
-        activate(z, self.activation).reshape([vertices, batch * outputs])
-    }
-
-    /// [`SpiralConv::forward_vertex_major`] on burn-flex: one product, one gather-sum.
-    fn forward_gathered(&self, x: Tensor<2>, batch: usize) -> Tensor<2> {
-        let [sources, width] = x.dims();
-        let features = width / batch.max(1);
-        let weight = self.linear.weight.val();
-        let outputs = weight.dims()[1];
-        // `[len · in, out]` (position-major rows) → `[in, len · out]`.
-        let weights = weight
-            .reshape([self.len, features, outputs])
-            .swap_dims(0, 1)
-            .reshape([features, self.len * outputs]);
-        let y = x
-            .reshape([sources * batch, features])
-            .matmul(weights)
-            .reshape([sources, batch * self.len * outputs]);
-        let vertices = self.gather.rows();
-        let mut z =
-            crate::gather::gather_sum(y, &self.gather, batch, outputs, self.len * outputs, outputs)
-                .reshape([vertices * batch, outputs]);
         if let Some(b) = &self.linear.bias {
             z = z + b.val().reshape([1, outputs]);
         }

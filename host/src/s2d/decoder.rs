@@ -10,8 +10,6 @@
 //! `[batch, vertices, features]` tensor takes the N-D path, with a division and a modulo per
 //! element in the backward (see `docs/S2D.md` for the measured difference).
 
-use std::sync::Arc;
-
 use anyhow::{Result, ensure};
 use burn::module::Module;
 use burn::nn::Linear;
@@ -20,7 +18,6 @@ use serde::{Deserialize, Serialize};
 use sinew_core::nn::Activation;
 
 use super::{Hierarchy, Sampling};
-use crate::gather::GatherIndex;
 use crate::nn::{SpiralConv, pytorch_linear};
 
 /// Number of landmarks the decoder reads (iBUG-68).
@@ -177,9 +174,6 @@ pub struct Upsample {
     /// Parents per fine vertex (the largest row of `U`).
     #[module(skip)]
     pub arity: usize,
-    /// The same parents and weights as a gather, for burn-flex ([`crate::gather`]).
-    #[module(skip)]
-    pub gather: Arc<GatherIndex>,
 }
 
 impl Upsample {
@@ -198,7 +192,7 @@ impl Upsample {
             let (a, b) = (w[0] as usize, w[1] as usize);
             for k in 0..arity {
                 if a + k < b {
-                    parents.push(u.col_idx[a + k]);
+                    parents.push(i64::from(u.col_idx[a + k]));
                     weights.push(u.values[a + k]);
                 } else {
                     // Padding: any valid row times 0 (every value is finite, so 0 · x = ±0).
@@ -207,15 +201,10 @@ impl Upsample {
                 }
             }
         }
-        let index: Vec<i64> = parents.iter().map(|&p| i64::from(p)).collect();
         Self {
-            parents: Tensor::from_data(TensorData::new(index, [u.rows * arity]), device),
-            weights: Tensor::from_data(
-                TensorData::new(weights.clone(), [u.rows, arity, 1]),
-                device,
-            ),
+            parents: Tensor::from_data(TensorData::new(parents, [u.rows * arity]), device),
+            weights: Tensor::from_data(TensorData::new(weights, [u.rows, arity, 1]), device),
             arity,
-            gather: Arc::new(GatherIndex::new(arity, parents, Some(weights))),
         }
     }
 
@@ -225,17 +214,6 @@ impl Upsample {
     /// - input: `[n_coarse + 1, width]`
     /// - output: `[n_fine + 1, width]`
     pub fn forward(&self, x: Tensor<2>) -> Tensor<2> {
-        let [_, width] = x.dims();
-        if crate::gather::on_flex(&x) {
-            crate::gather::gather_sum(x, &self.gather, 1, width, 0, 0)
-        } else {
-            self.forward_selected(x)
-        }
-    }
-
-    /// [`Upsample::forward`] with burn's operations (every backend): a `select` of every
-    /// parent, weighted, summed.
-    pub(crate) fn forward_selected(&self, x: Tensor<2>) -> Tensor<2> {
         let [_, width] = x.dims();
         let rows = self.weights.dims()[0];
         x.select(0, self.parents.clone())
@@ -341,17 +319,6 @@ impl S2dDecoder {
     /// - input: `[batch, inputs]`
     /// - output: `[batch, n_0, outputs]`
     pub fn forward(&self, x: Tensor<2>) -> Tensor<3> {
-        let gathers = crate::gather::on_flex(&x);
-        self.forward_vertex_major(x, gathers)
-    }
-
-    /// [`S2dDecoder::forward`] with burn's `select`s for every gather, on burn-flex too (there
-    /// `forward` uses [`crate::gather`]): the benchmark's baseline and a check of the gathers.
-    pub fn forward_with_selects(&self, x: Tensor<2>) -> Tensor<3> {
-        self.forward_vertex_major(x, false)
-    }
-
-    fn forward_vertex_major(&self, x: Tensor<2>, gathers: bool) -> Tensor<3> {
         let [batch, _] = x.dims();
         let f = self.config.fc_features;
         let coarsest = self.vertices[self.vertices.len() - 1] + 1;
@@ -361,25 +328,15 @@ impl S2dDecoder {
             .reshape([batch, coarsest, f])
             .swap_dims(0, 1)
             .reshape([coarsest, batch * f]);
-        let convolve = |conv: &SpiralConv, h: Tensor<2>| {
-            if gathers {
-                conv.forward_vertex_major(h, batch)
-            } else {
-                conv.forward_selected(h, batch)
-            }
-        };
         for ((up, conv), mask) in self.ups.iter().zip(&self.convs).zip(&self.masks) {
-            let fine = if gathers {
-                up.forward(h)
-            } else {
-                up.forward_selected(h)
-            };
-            h = convolve(conv, fine).mul(mask.clone());
+            h = conv
+                .forward_vertex_major(up.forward(h), batch)
+                .mul(mask.clone());
         }
         let out = &self.convs[self.convs.len() - 1];
         let n0 = self.vertices[0];
         let o = self.config.outputs;
-        convolve(out, h)
+        out.forward_vertex_major(h, batch)
             .reshape([n0 + 1, batch, o])
             .narrow(0, 0, n0)
             .swap_dims(0, 1)
@@ -542,71 +499,6 @@ mod tests {
             .map(|(a, b)| (a - b).abs())
             .fold(0.0f32, f32::max);
         assert!(max < 1e-5, "batch-major: max difference {max}");
-    }
-
-    /// Largest absolute difference of two equally long slices.
-    fn max_difference(a: &[f32], b: &[f32]) -> f32 {
-        assert_eq!(a.len(), b.len());
-        a.iter()
-            .zip(b)
-            .map(|(p, q)| (p - q).abs())
-            .fold(0.0f32, f32::max)
-    }
-
-    /// burn-flex's gather-sums (`crate::gather`) give the up-samplings' and spiral
-    /// convolutions' values and gradients (to the input and the weights) of burn's selects.
-    #[test]
-    fn flex_gathers_match_burn_selects_with_gradients() {
-        let device = crate::backend::Backend::Flex.autodiff_device(3).unwrap();
-        let h = synthetic::hierarchy(&[30, 12, 5], &[5, 4, 3], 2);
-        let config = synthetic::small_config();
-        let dec = S2dDecoder::new(&config, &h, &device).unwrap();
-        let mut rng = synthetic::Rng::new(4);
-        let batch = 3;
-        let mut random = |rows: usize, width: usize| {
-            let v: Vec<f32> = (0..rows * width).map(|_| rng.uniform(-1.0, 1.0)).collect();
-            tensor(v, [rows, width], &device).require_grad()
-        };
-        // The loss weights every output differently, so each gradient entry is distinct.
-        let loss = |y: Tensor<2>, r: Tensor<2>| y.mul(r).sum();
-        for (level, up) in dec.ups.iter().enumerate() {
-            let coarse = up.gather.min_sources();
-            let x = random(coarse, batch * 4);
-            let r = random(up.gather.rows(), batch * 4);
-            let (a, b) = (up.forward(x.clone()), up.forward_selected(x.clone()));
-            assert!(max_difference(&to_vec(a.clone()), &to_vec(b.clone())) < 1e-6);
-            let ga = x.grad(&loss(a, r.clone()).backward()).unwrap();
-            let gb = x.grad(&loss(b, r).backward()).unwrap();
-            let d = max_difference(&to_vec(ga), &to_vec(gb));
-            assert!(d < 1e-5, "up-sampling {level}: gradient differs by {d}");
-        }
-        for (stage, conv) in dec.convs.iter().enumerate() {
-            let [inputs, outputs] = conv.linear.weight.val().dims();
-            let features = inputs / conv.len;
-            let x = random(conv.gather.min_sources(), batch * features);
-            let r = random(conv.gather.rows(), batch * outputs);
-            let a = conv.forward_vertex_major(x.clone(), batch);
-            let b = conv.forward_selected(x.clone(), batch);
-            let d = max_difference(&to_vec(a.clone()), &to_vec(b.clone()));
-            assert!(d < 1e-5, "convolution {stage}: values differ by {d}");
-            let (ga, gb) = (loss(a, r.clone()).backward(), loss(b, r).backward());
-            for (what, p, q) in [
-                ("input", x.grad(&ga), x.grad(&gb)),
-                (
-                    "weight",
-                    conv.linear.weight.val().grad(&ga),
-                    conv.linear.weight.val().grad(&gb),
-                ),
-            ] {
-                let (p, q) = (to_vec(p.unwrap()), to_vec(q.unwrap()));
-                assert!(q.iter().any(|v| v.abs() > 1e-3), "{what}: no gradient");
-                let d = max_difference(&p, &q);
-                assert!(
-                    d < 1e-4,
-                    "convolution {stage}: {what} gradient differs by {d}"
-                );
-            }
-        }
     }
 
     #[test]
