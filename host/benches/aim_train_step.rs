@@ -1,7 +1,9 @@
-//! One AIM training step at the paper's size: five SIRENs 3→256→256→256→out (ω0 = 30), batch
-//! 4096 (point, shape) samples plus the 512-point symmetry and forehead terms, Adam; 20 shapes
-//! (E has 57 outputs) on a template of about the ICT face region's size, as on the ICT actor. The comparison with PyTorch is
-//! `scripts/bench_torch_aim_step.py`; results in docs/BENCHMARKS.md.
+//! One default AIM training step at the paper's size: five SIRENs 3→256→256→256→out (ω0 = 30),
+//! batch 4096 (point, shape) samples drawn as 2,048 points with two shapes each, plus the
+//! 512-point symmetry, forehead and jaw (L_J) terms, Adam; 20 shapes (E has 57 outputs) on a
+//! template of about the ICT face region's size, as on the ICT actor. The comparison with
+//! PyTorch is `scripts/bench_torch_aim_step.py --distinct --shapes-per-point 2 --jaw-term`;
+//! results in docs/BENCHMARKS.md.
 //!
 //! Run: `cargo bench -p sinew-host --bench aim_train_step` (add `--features x86-v4` for the
 //! AVX-512 kernels).
