@@ -2,9 +2,10 @@
 //! 79/20 vertices, spirals [15, 14, 9, 9, 7], random connectivity: the cost depends on sizes
 //! only), 666,083 parameters, batch 16, the code's loss, Adam with weight decay.
 //!
-//! Two layouts of the same network: `vertex_major` (what training uses) and `batch_major` (the
-//! straightforward `[batch, vertices, features]` layout whose gathers select along dimension 1).
-//! Results in docs/S2D.md.
+//! Two layouts of the same network: `vertex_major` and `batch_major` (the straightforward
+//! `[batch, vertices, features]` layout whose gathers select along dimension 1); and
+//! `vertex_major_halves`, what training runs on the CPU: the vertex-major step with the batch's
+//! two halves at once on two threads (`step_halves`). Results in docs/S2D.md.
 //!
 //! Run: `cargo bench -p sinew-host --bench s2d_train_step`.
 
@@ -14,7 +15,7 @@ use sinew_host::backend::Backend;
 use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
 use sinew_host::s2d::synthetic::{self, REFERENCE_SIZES, REFERENCE_SPIRALS};
 use sinew_host::s2d::train::{
-    Batch, LossVariant, Sample, TrainConfig, loss, step_once, weights_tensor,
+    Batch, Halves, LossVariant, Sample, TrainConfig, loss, step_halves, step_once, weights_tensor,
 };
 
 fn bench(c: &mut Criterion) {
@@ -49,6 +50,24 @@ fn bench(c: &mut Criterion) {
                 1e-3,
             );
             // Reading the loss back forces the step to finish, as the training loop does.
+            let _ = sinew_host::nn::to_vec(l);
+            net = Some(n);
+        })
+    });
+    let halves = Halves::new().expect("threads");
+    let mut optim = tc.optimizer();
+    let mut net = Some(S2dDecoder::new(&config, &h, &device).expect("decoder"));
+    group.bench_function("train_step_batch16_vertex_major_halves", |b| {
+        b.iter(|| {
+            let (n, l) = step_halves(
+                net.take().expect("model"),
+                &mut optim,
+                &batch,
+                &weights,
+                LossVariant::Code,
+                1e-3,
+                &halves,
+            );
             let _ = sinew_host::nn::to_vec(l);
             net = Some(n);
         })

@@ -60,3 +60,16 @@ impl Backend {
         Ok(device)
     }
 }
+
+/// Whether `x` lives on burn-flex, with or without autodiff (the backend Sinew's CPU kernels and
+/// the split training step serve; the others keep burn's own operations).
+pub fn on_flex<const D: usize>(x: &burn::tensor::Tensor<D>) -> bool {
+    use burn::backend::DispatchTensorKind;
+    let x = x.clone().into_dispatch();
+    match &x.kind {
+        DispatchTensorKind::Flex(_) => true,
+        DispatchTensorKind::Autodiff(inner) => matches!(**inner, DispatchTensorKind::Flex(_)),
+        #[allow(unreachable_patterns)]
+        _ => false,
+    }
+}

@@ -23,25 +23,16 @@ use burn::backend::autodiff::ops::{Backward, Ops, OpsKind, unary};
 use burn::backend::flex::FlexTensor;
 use burn::backend::ops::FloatTensorOps;
 use burn::backend::tensor::FloatTensor;
-use burn::backend::{
-    Backend, DType, Dispatch, DispatchTensorKind, Flex, TensorMetadata, backend_extension,
-};
+use burn::backend::{Backend, DType, Dispatch, Flex, TensorMetadata, backend_extension};
 use burn::tensor::Tensor;
 use rayon::prelude::*;
 
 /// sin(ω·x) for a SIREN layer: burn's `sin` on GPU backends, the vectorised kernel on flex.
 pub fn siren_sine<const D: usize>(x: Tensor<D>, omega: f32) -> Tensor<D> {
-    let x = x.into_dispatch();
-    let on_flex = match &x.kind {
-        DispatchTensorKind::Flex(_) => true,
-        DispatchTensorKind::Autodiff(inner) => matches!(**inner, DispatchTensorKind::Flex(_)),
-        #[allow(unreachable_patterns)]
-        _ => false,
-    };
-    if on_flex {
-        Tensor::from_dispatch(Dispatch::scaled_sin(x, omega))
+    if crate::backend::on_flex(&x) {
+        Tensor::from_dispatch(Dispatch::scaled_sin(x.into_dispatch(), omega))
     } else {
-        Tensor::from_dispatch(x).mul_scalar(omega).sin()
+        x.mul_scalar(omega).sin()
     }
 }
 

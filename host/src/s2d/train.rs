@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail, ensure};
+use burn::module::{Module, ModuleMapper, ModuleVisitor, Param};
 use burn::optim::decay::WeightDecayConfig;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Tensor, TensorData};
@@ -298,6 +299,101 @@ pub fn step_once(
     (optim.step(lr, decoder, grads), l.detach())
 }
 
+/// Two single-thread rayon pools, one per half of a batch, for [`step_halves`].
+#[derive(Debug)]
+pub struct Halves {
+    pools: [rayon::ThreadPool; 2],
+}
+
+impl Halves {
+    /// Two pools of one thread each.
+    pub fn new() -> Result<Self> {
+        let pool = |i: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .thread_name(move |_| format!("s2d-half-{i}"))
+                .build()
+                .context("cannot start a training thread")
+        };
+        Ok(Self {
+            pools: [pool(0)?, pool(1)?],
+        })
+    }
+}
+
+/// The same module with every parameter a fresh leaf of the autodiff graph (same values, same
+/// parameter ids), so that two copies differentiate in separate graphs.
+struct FreshLeaves;
+
+impl ModuleMapper for FreshLeaves {
+    fn map_float<const D: usize>(&mut self, param: Param<Tensor<D>>) -> Param<Tensor<D>> {
+        param.map(|t| t.detach().require_grad())
+    }
+}
+
+/// Adds the gradients of `other` into `into`, parameter by parameter.
+struct AddGradients<'a> {
+    into: &'a mut GradientsParams,
+    other: GradientsParams,
+}
+
+impl ModuleVisitor for AddGradients<'_> {
+    fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
+        let id = param.id;
+        let sum = match (self.into.remove::<D>(id), self.other.remove::<D>(id)) {
+            (Some(a), Some(b)) => a + b,
+            (Some(g), None) | (None, Some(g)) => g,
+            (None, None) => return,
+        };
+        self.into.register(id, sum);
+    }
+}
+
+/// [`step_once`] with the batch split in two halves that are evaluated and differentiated at
+/// the same time, each in its own autodiff graph on its own single-thread pool; their
+/// gradients, each weighted by its share of the batch, add up to the whole batch's (the loss
+/// is a mean over samples). burn-flex runs most of an S2D step on one thread (the gathers,
+/// the element-wise operations and the thin matrix products of the spiral convolutions: a
+/// step used 108 % CPU), so this puts a second core to work. Deterministic: the split, the
+/// order of the sum and each half's single-thread arithmetic do not depend on timing or on
+/// the machine's core count. A batch of one sample takes [`step_once`].
+pub fn step_halves(
+    decoder: S2dDecoder,
+    optim: &mut ModuleOptimizer,
+    batch: &Batch,
+    weights: &Tensor<3>,
+    variant: LossVariant,
+    lr: f64,
+    halves: &Halves,
+) -> (S2dDecoder, Tensor<1>) {
+    let [size, _] = batch.input.dims();
+    if size < 2 {
+        return step_once(decoder, optim, batch, weights, variant, lr);
+    }
+    let split = size / 2;
+    let half = |start: usize, len: usize| {
+        let copy = decoder.clone().map(&mut FreshLeaves);
+        let predicted = copy.forward(batch.input.clone().narrow(0, start, len));
+        let target = batch.target.clone().narrow(0, start, len);
+        let l =
+            loss(variant, predicted, target, weights.clone()).mul_scalar(len as f64 / size as f64);
+        (GradientsParams::from_grads(l.backward(), &copy), l.detach())
+    };
+    let ((mut grads, first), (other, second)) = std::thread::scope(|scope| {
+        let second = scope.spawn(|| halves.pools[1].install(|| half(split, size - split)));
+        let first = halves.pools[0].install(|| half(0, split));
+        let second = second
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (first, second)
+    });
+    decoder.visit(&mut AddGradients {
+        into: &mut grads,
+        other,
+    });
+    (optim.step(lr, decoder, grads), first + second)
+}
+
 /// The order of the samples in `epoch`: a Fisher–Yates shuffle from a generator seeded by
 /// (seed, epoch) alone, so any epoch can be reproduced on its own.
 pub fn epoch_order(n: usize, seed: u64, epoch: usize) -> Vec<usize> {
@@ -424,6 +520,12 @@ pub fn train(
     }
 
     let weights = weights_tensor(vertex_weights, device);
+    // On the CPU every batch trains as two halves at once (`step_halves`).
+    let halves = if crate::backend::on_flex(&weights) {
+        Some(Halves::new()?)
+    } else {
+        None
+    };
     let start = Instant::now();
     let seconds_before = state.seconds;
     let first = state.steps_done;
@@ -441,7 +543,10 @@ pub fn train(
             }
             let batch = Batch::new(set, chunk, device);
             let l;
-            (decoder, l) = step_once(decoder, &mut optim, &batch, &weights, config.loss, lr);
+            (decoder, l) = match &halves {
+                Some(h) => step_halves(decoder, &mut optim, &batch, &weights, config.loss, lr, h),
+                None => step_once(decoder, &mut optim, &batch, &weights, config.loss, lr),
+            };
             let value = crate::nn::to_vec(l)[0];
             if !value.is_finite() {
                 bail!("training diverged in epoch {epoch} (loss {value})");
@@ -581,6 +686,88 @@ mod tests {
     }
 
     /// A small decoder learns a fixed linear map from inputs to displacements: the epoch loss falls.
+    /// Every float parameter of `d`, in visiting order.
+    fn parameters(d: &S2dDecoder) -> Vec<f32> {
+        struct Collect(Vec<f32>);
+        impl ModuleVisitor for Collect {
+            fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
+                self.0.extend(to_vec(param.val()));
+            }
+        }
+        let mut c = Collect(Vec::new());
+        d.visit(&mut c);
+        c.0
+    }
+
+    /// Two halves at once take the same Adam step as the whole batch (up to rounding), and the
+    /// same step every time, bit for bit.
+    #[test]
+    fn halves_step_like_the_whole_batch() {
+        let device = crate::backend::Backend::Flex.autodiff_device(6).unwrap();
+        let h = synthetic::hierarchy(&[40, 15, 6], &[6, 5, 4], 3);
+        let config = synthetic::small_config();
+        let decoder = S2dDecoder::new(&config, &h, &device).unwrap();
+        let mut rng = synthetic::Rng::new(8);
+        // An odd batch: halves of 2 and 3 samples.
+        let set: Vec<Sample> = (0..5)
+            .map(|_| Sample {
+                input: (0..6).map(|_| rng.uniform(-1.0, 1.0)).collect(),
+                displacement: (0..120).map(|_| rng.uniform(-0.1, 0.1)).collect(),
+            })
+            .collect();
+        let batch = Batch::new(&set, &[0, 1, 2, 3, 4], &device);
+        let weights = weights_tensor(
+            &(0..40).map(|v| v as f32 / 40.0).collect::<Vec<_>>(),
+            &device,
+        );
+        let tc = TrainConfig::default();
+        let halves = Halves::new().unwrap();
+        let before = parameters(&decoder);
+        let step = |split: bool| {
+            let mut optim = tc.optimizer();
+            let d = decoder.clone();
+            let (d, l) = if split {
+                step_halves(
+                    d,
+                    &mut optim,
+                    &batch,
+                    &weights,
+                    LossVariant::Code,
+                    1e-3,
+                    &halves,
+                )
+            } else {
+                step_once(d, &mut optim, &batch, &weights, LossVariant::Code, 1e-3)
+            };
+            (parameters(&d), to_vec(l)[0])
+        };
+        let (whole, whole_loss) = step(false);
+        let (split, split_loss) = step(true);
+        assert!((whole_loss - split_loss).abs() <= 1e-6 * whole_loss.abs());
+        // Adam's first step moves every parameter by about lr = 1e-3 whatever the gradient's
+        // size, so a wrong gradient shows as a different sign or a missing step.
+        let moved = |p: &[f32]| {
+            p.iter()
+                .zip(&before)
+                .map(|(a, b)| a - b)
+                .collect::<Vec<_>>()
+        };
+        let (a, b) = (moved(&whole), moved(&split));
+        assert!(a.iter().filter(|d| d.abs() > 5e-4).count() > a.len() / 2);
+        let worst = a
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0f32, f32::max);
+        assert!(worst < 1e-5, "the halves' step differs by {worst}");
+        let (again, again_loss) = step(true);
+        assert_eq!(
+            again.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            split.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+        assert_eq!(again_loss.to_bits(), split_loss.to_bits());
+    }
+
     #[test]
     fn training_reduces_the_loss() {
         let device = crate::backend::Backend::Flex.autodiff_device(5).unwrap();
