@@ -37,41 +37,35 @@ fn bench(c: &mut Criterion) {
 
     let mut group = c.benchmark_group("s2d");
     group.sample_size(20);
-    let mut optim = tc.optimizer();
-    let mut net = Some(S2dDecoder::new(&config, &h, &device).expect("decoder"));
-    group.bench_function("train_step_batch16_vertex_major", |b| {
-        b.iter(|| {
-            let (n, l) = step_once(
-                net.take().expect("model"),
-                &mut optim,
-                &batch,
-                &weights,
-                LossVariant::Code,
-                1e-3,
-            );
-            // Reading the loss back forces the step to finish, as the training loop does.
-            let _ = sinew_host::nn::to_vec(l);
-            net = Some(n);
-        })
-    });
     let halves = Halves::new().expect("threads");
-    let mut optim = tc.optimizer();
-    let mut net = Some(S2dDecoder::new(&config, &h, &device).expect("decoder"));
-    group.bench_function("train_step_batch16_vertex_major_halves", |b| {
-        b.iter(|| {
-            let (n, l) = step_halves(
-                net.take().expect("model"),
-                &mut optim,
-                &batch,
-                &weights,
-                LossVariant::Code,
-                1e-3,
-                &halves,
-            );
-            let _ = sinew_host::nn::to_vec(l);
-            net = Some(n);
-        })
-    });
+    for (name, split) in [
+        ("train_step_batch16_vertex_major", false),
+        ("train_step_batch16_vertex_major_halves", true),
+    ] {
+        let mut optim = tc.optimizer();
+        let mut net = Some(S2dDecoder::new(&config, &h, &device).expect("decoder"));
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                let d = net.take().expect("model");
+                let (n, l) = if split {
+                    step_halves(
+                        d,
+                        &mut optim,
+                        &batch,
+                        &weights,
+                        LossVariant::Code,
+                        1e-3,
+                        &halves,
+                    )
+                } else {
+                    step_once(d, &mut optim, &batch, &weights, LossVariant::Code, 1e-3)
+                };
+                // Reading the loss back forces the step to finish, as the training loop does.
+                let _ = sinew_host::nn::to_vec(l);
+                net = Some(n);
+            })
+        });
+    }
     let mut optim = tc.optimizer();
     let mut net = Some(S2dDecoder::new(&config, &h, &device).expect("decoder"));
     group.bench_function("train_step_batch16_batch_major", |b| {
