@@ -5,7 +5,7 @@
 //! Two layouts of the same network: `vertex_major` and `batch_major` (the straightforward
 //! `[batch, vertices, features]` layout whose gathers select along dimension 1); and
 //! `vertex_major_halves`, what training runs on the CPU: the vertex-major step with the batch's
-//! two halves at once on two threads (`step_halves`). Results in docs/S2D.md.
+//! two halves at once on two threads (`step_once` with `Halves`). Results in docs/S2D.md.
 //!
 //! Run: `cargo bench -p sinew-host --bench s2d_train_step`.
 
@@ -15,7 +15,7 @@ use sinew_host::backend::Backend;
 use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
 use sinew_host::s2d::synthetic::{self, REFERENCE_SIZES, REFERENCE_SPIRALS};
 use sinew_host::s2d::train::{
-    Batch, Halves, LossVariant, Sample, TrainConfig, loss, step_halves, step_once, weights_tensor,
+    Batch, Halves, LossVariant, Sample, TrainConfig, loss, step_once, weights_tensor,
 };
 
 fn bench(c: &mut Criterion) {
@@ -47,19 +47,15 @@ fn bench(c: &mut Criterion) {
         group.bench_function(name, |b| {
             b.iter(|| {
                 let d = net.take().expect("model");
-                let (n, l) = if split {
-                    step_halves(
-                        d,
-                        &mut optim,
-                        &batch,
-                        &weights,
-                        LossVariant::Code,
-                        1e-3,
-                        &halves,
-                    )
-                } else {
-                    step_once(d, &mut optim, &batch, &weights, LossVariant::Code, 1e-3)
-                };
+                let (n, l) = step_once(
+                    d,
+                    &mut optim,
+                    &batch,
+                    &weights,
+                    LossVariant::Code,
+                    1e-3,
+                    split.then_some(&halves),
+                );
                 // Reading the loss back forces the step to finish, as the training loop does.
                 let _ = sinew_host::nn::to_vec(l);
                 net = Some(n);

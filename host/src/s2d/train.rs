@@ -284,22 +284,7 @@ pub fn weights_tensor(weights: &[f32], device: &Device) -> Tensor<3> {
     )
 }
 
-/// One Adam step at learning rate `lr`; returns the model and the (detached) loss.
-pub fn step_once(
-    decoder: S2dDecoder,
-    optim: &mut ModuleOptimizer,
-    batch: &Batch,
-    weights: &Tensor<3>,
-    variant: LossVariant,
-    lr: f64,
-) -> (S2dDecoder, Tensor<1>) {
-    let predicted = decoder.forward(batch.input.clone());
-    let l = loss(variant, predicted, batch.target.clone(), weights.clone());
-    let grads = GradientsParams::from_grads(l.backward(), &decoder);
-    (optim.step(lr, decoder, grads), l.detach())
-}
-
-/// Two single-thread rayon pools, one per half of a batch, for [`step_halves`].
+/// Two single-thread rayon pools, one per half of a batch, for [`step_once`].
 #[derive(Debug)]
 pub struct Halves {
     pools: [rayon::ThreadPool; 2],
@@ -349,49 +334,61 @@ impl ModuleVisitor for AddGradients<'_> {
     }
 }
 
-/// [`step_once`] with the batch split in two halves that are evaluated and differentiated at
-/// the same time, each in its own autodiff graph on its own single-thread pool; their
-/// gradients, each weighted by its share of the batch, add up to the whole batch's (the loss
-/// is a mean over samples). burn-flex runs most of an S2D step on one thread (the gathers,
-/// the element-wise operations and the thin matrix products of the spiral convolutions: a
-/// step used 108 % CPU), so this puts a second core to work. Deterministic: the split, the
-/// order of the sum and each half's single-thread arithmetic do not depend on timing or on
-/// the machine's core count. A batch of one sample takes [`step_once`].
-pub fn step_halves(
+/// One Adam step at learning rate `lr`; returns the model and the (detached) loss.
+///
+/// With `halves` (and at least two samples) the batch is split in two halves that are
+/// evaluated and differentiated at the same time, each in its own autodiff graph on its own
+/// single-thread pool; their gradients, each weighted by its share of the batch, add up to the
+/// whole batch's (the loss is a mean over samples). burn-flex runs most of an S2D step on one
+/// thread (the gathers, the element-wise operations and the thin matrix products of the spiral
+/// convolutions: a step used 108 % CPU), so this puts a second core to work. Deterministic: the
+/// split, the order of the sum and each half's single-thread arithmetic do not depend on timing
+/// or on the machine's core count.
+pub fn step_once(
     decoder: S2dDecoder,
     optim: &mut ModuleOptimizer,
     batch: &Batch,
     weights: &Tensor<3>,
     variant: LossVariant,
     lr: f64,
-    halves: &Halves,
+    halves: Option<&Halves>,
 ) -> (S2dDecoder, Tensor<1>) {
     let [size, _] = batch.input.dims();
-    if size < 2 {
-        return step_once(decoder, optim, batch, weights, variant, lr);
-    }
-    let split = size / 2;
-    let half = |start: usize, len: usize| {
-        let copy = decoder.clone().map(&mut FreshLeaves);
-        let predicted = copy.forward(batch.input.clone().narrow(0, start, len));
-        let target = batch.target.clone().narrow(0, start, len);
-        let l =
-            loss(variant, predicted, target, weights.clone()).mul_scalar(len as f64 / size as f64);
-        (GradientsParams::from_grads(l.backward(), &copy), l.detach())
+    let (grads, l) = match halves {
+        Some(halves) if size >= 2 => {
+            let split = size / 2;
+            let half = |start: usize, len: usize| {
+                let copy = decoder.clone().map(&mut FreshLeaves);
+                let predicted = copy.forward(batch.input.clone().narrow(0, start, len));
+                let target = batch.target.clone().narrow(0, start, len);
+                let l = loss(variant, predicted, target, weights.clone())
+                    .mul_scalar(len as f64 / size as f64);
+                (GradientsParams::from_grads(l.backward(), &copy), l.detach())
+            };
+            let ((mut grads, first), (other, second)) = std::thread::scope(|scope| {
+                let second = scope.spawn(|| halves.pools[1].install(|| half(split, size - split)));
+                let first = halves.pools[0].install(|| half(0, split));
+                let second = second
+                    .join()
+                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+                (first, second)
+            });
+            decoder.visit(&mut AddGradients {
+                into: &mut grads,
+                other,
+            });
+            (grads, first + second)
+        }
+        _ => {
+            let predicted = decoder.forward(batch.input.clone());
+            let l = loss(variant, predicted, batch.target.clone(), weights.clone());
+            (
+                GradientsParams::from_grads(l.backward(), &decoder),
+                l.detach(),
+            )
+        }
     };
-    let ((mut grads, first), (other, second)) = std::thread::scope(|scope| {
-        let second = scope.spawn(|| halves.pools[1].install(|| half(split, size - split)));
-        let first = halves.pools[0].install(|| half(0, split));
-        let second = second
-            .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        (first, second)
-    });
-    decoder.visit(&mut AddGradients {
-        into: &mut grads,
-        other,
-    });
-    (optim.step(lr, decoder, grads), first + second)
+    (optim.step(lr, decoder, grads), l)
 }
 
 /// The order of the samples in `epoch`: a Fisher–Yates shuffle from a generator seeded by
@@ -520,7 +517,7 @@ pub fn train(
     }
 
     let weights = weights_tensor(vertex_weights, device);
-    // On the CPU every batch trains as two halves at once (`step_halves`).
+    // On the CPU every batch trains as two halves at once (`step_once`).
     let halves = if crate::backend::on_flex(&weights) {
         Some(Halves::new()?)
     } else {
@@ -543,10 +540,15 @@ pub fn train(
             }
             let batch = Batch::new(set, chunk, device);
             let l;
-            (decoder, l) = match &halves {
-                Some(h) => step_halves(decoder, &mut optim, &batch, &weights, config.loss, lr, h),
-                None => step_once(decoder, &mut optim, &batch, &weights, config.loss, lr),
-            };
+            (decoder, l) = step_once(
+                decoder,
+                &mut optim,
+                &batch,
+                &weights,
+                config.loss,
+                lr,
+                halves.as_ref(),
+            );
             let value = crate::nn::to_vec(l)[0];
             if !value.is_finite() {
                 bail!("training diverged in epoch {epoch} (loss {value})");
@@ -725,20 +727,15 @@ mod tests {
         let before = parameters(&decoder);
         let step = |split: bool| {
             let mut optim = tc.optimizer();
-            let d = decoder.clone();
-            let (d, l) = if split {
-                step_halves(
-                    d,
-                    &mut optim,
-                    &batch,
-                    &weights,
-                    LossVariant::Code,
-                    1e-3,
-                    &halves,
-                )
-            } else {
-                step_once(d, &mut optim, &batch, &weights, LossVariant::Code, 1e-3)
-            };
+            let (d, l) = step_once(
+                decoder.clone(),
+                &mut optim,
+                &batch,
+                &weights,
+                LossVariant::Code,
+                1e-3,
+                split.then_some(&halves),
+            );
             (parameters(&d), to_vec(l)[0])
         };
         let (whole, whole_loss) = step(false);
