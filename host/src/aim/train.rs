@@ -143,6 +143,8 @@ fn draw(set: &TrainingSet, config: &AimConfig, step: usize) -> Draw {
     let mut below = |n: usize| ((rng.next_u64() as u128 * n as u128) >> 64) as u32;
     let v = set.vertices();
     let n = set.shapes.len();
+    // One shape per sample keeps its own order of draws (every point, then every shape), so
+    // that runs recorded before `shapes_per_point` existed resume with the samples they drew.
     let (points, shapes) = if config.shapes_per_point <= 1 {
         (
             (0..config.batch).map(|_| below(v)).collect(),

@@ -687,7 +687,6 @@ mod tests {
         assert_ne!(a, epoch_order(50, 2, 0));
     }
 
-    /// A small decoder learns a fixed linear map from inputs to displacements: the epoch loss falls.
     /// Every float parameter of `d`, in visiting order.
     fn parameters(d: &S2dDecoder) -> Vec<f32> {
         struct Collect(Vec<f32>);
@@ -765,6 +764,7 @@ mod tests {
         assert_eq!(again_loss.to_bits(), split_loss.to_bits());
     }
 
+    /// A small decoder learns a fixed linear map from inputs to displacements: the epoch loss falls.
     #[test]
     fn training_reduces_the_loss() {
         let device = crate::backend::Backend::Flex.autodiff_device(5).unwrap();
