@@ -10,7 +10,7 @@ use sinew_host::aim::config::{JawInit, Schedule};
 use sinew_host::aim::run::Outputs;
 use sinew_host::backend::Backend;
 use sinew_host::commands;
-use sinew_host::s2d::data::PairsConfig;
+use sinew_host::s2d::data::{Expressions, PairsConfig};
 use sinew_host::s2d::decoder::DecoderConfig;
 use sinew_host::s2d::experiment::{self, DEFAULT_EPOCHS, Objective, TrainS2d};
 use sinew_host::s2d::hierarchy::{Config, DEFAULT_FACTORS};
@@ -132,6 +132,11 @@ enum Data {
         /// nearest kept vertex): data for decoders small enough for microcontrollers.
         #[arg(long)]
         decimate: Option<usize>,
+        /// `shared`: the kit's expression deltas, the same for every identity; `transferred`:
+        /// each delta deformation-transferred onto each identity (identity-specific
+        /// expressions, stored per identity).
+        #[arg(long, value_enum, default_value_t = Expressions::Shared)]
+        expressions: Expressions,
     },
 }
 
@@ -703,6 +708,7 @@ fn run(cli: Cli) -> Result<()> {
             pairs,
             max_shapes,
             decimate,
+            expressions,
         }) => {
             let seed = seed
                 .or_else(|| std::env::var("SINEW_SEED").ok()?.parse().ok())
@@ -712,16 +718,19 @@ fn run(cli: Cli) -> Result<()> {
                 identities,
                 pairs,
                 max_shapes,
+                expressions,
             };
             config.validate()?;
             eprintln!("seed {seed} (override with --seed or SINEW_SEED)");
             let set = sinew_host::s2d::data::generate_to(&data, &out, &config, decimate)?;
             println!(
-                "{}: {} pairs of {} identities over {} expression shapes in {} groups, {} vertices",
+                "{}: {} pairs of {} identities over {} expression shapes ({:?}) in {} groups, {} \
+                 vertices",
                 out.display(),
                 set.len(),
                 set.neutrals.len(),
-                set.deltas.len(),
+                set.manifest.expressions.len(),
+                expressions,
                 set.manifest.shape_groups.len(),
                 set.vertices()
             );

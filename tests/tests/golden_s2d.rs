@@ -85,7 +85,7 @@ fn real_sequence(model: &[u8]) -> (Vec<Vec<f32>>, Option<Vec<f32>>) {
         .map(|f| {
             let mut face = source.clone();
             for (name, w) in weights(f) {
-                for (p, d) in face.iter_mut().zip(&set.deltas[index(name)]) {
+                for (p, d) in face.iter_mut().zip(set.delta(0, index(name))) {
                     for c in 0..3 {
                         p[c] += w * d[c];
                     }

@@ -42,6 +42,20 @@ pub const MANIFEST_FORMAT: &str = "sinew-s2d-pairs";
 /// Version of the manifest and of the `pairs.` sections.
 pub const MANIFEST_VERSION: u32 = 1;
 
+/// How a pair's expression deltas relate to its identity.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Expressions {
+    /// ICT-FaceKit's deltas as they are: the same vectors for every identity (the kit's linear
+    /// model).
+    #[default]
+    Shared,
+    /// Each delta transferred onto each identity's neutral by deformation transfer
+    /// ([`super::deformation`]): the expression deforms the identity's own triangles as it
+    /// deforms the generic neutral's, so displacements differ between identities.
+    Transferred,
+}
+
 /// What to generate.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PairsConfig {
@@ -53,6 +67,10 @@ pub struct PairsConfig {
     pub pairs: usize,
     /// Most expression shapes combined in one pair (each pair takes 1 to this many).
     pub max_shapes: usize,
+    /// Shared or identity-specific expression deltas (manifests written before this field
+    /// existed are `shared`).
+    #[serde(default)]
+    pub expressions: Expressions,
 }
 
 impl Default for PairsConfig {
@@ -63,6 +81,7 @@ impl Default for PairsConfig {
             identities: 12,
             pairs: 1200,
             max_shapes: 3,
+            expressions: Expressions::Shared,
         }
     }
 }
@@ -139,7 +158,9 @@ pub struct PairSet {
     pub template: Mesh,
     /// Each identity's neutral face region, `[identities][vertices]`.
     pub neutrals: Vec<Vec<[f32; 3]>>,
-    /// Each expression's delta on the face region, `[expressions][vertices]`.
+    /// Each expression's delta on the face region, `[expressions][vertices]` when shared, or
+    /// `[identities × expressions][vertices]` (identity-major) when transferred; see
+    /// [`PairSet::delta`].
     pub deltas: Vec<Vec<[f32; 3]>>,
     /// Each pair's combination as (expression index, weight), in the manifest's order.
     pub combinations: Vec<Vec<(usize, f32)>>,
@@ -313,9 +334,14 @@ pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet> {
             p
         })
         .collect();
+    let triangles = template.triangles();
+    let deltas = match config.expressions {
+        Expressions::Shared => deltas,
+        Expressions::Transferred => transferred(base, &neutrals, &triangles, &deltas)?,
+    };
     let template = Mesh {
         positions: template.positions.clone(),
-        polygons: template.triangles().iter().map(|t| t.to_vec()).collect(),
+        polygons: triangles.iter().map(|t| t.to_vec()).collect(),
         uvs: Vec::new(),
         polygon_uvs: Vec::new(),
     };
@@ -347,6 +373,28 @@ pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet> {
         deltas,
         combinations,
     })
+}
+
+/// Every delta of `deltas` (on the generic neutral `base`) transferred onto every neutral of
+/// `neutrals`, identity-major; one factorisation per identity, identities in parallel.
+fn transferred(
+    base: &[[f32; 3]],
+    neutrals: &[Vec<[f32; 3]>],
+    triangles: &[[u32; 3]],
+    deltas: &[Vec<[f32; 3]>],
+) -> Result<Vec<Vec<[f32; 3]>>> {
+    use rayon::prelude::*;
+    let sources: Vec<&[[f32; 3]]> = deltas.iter().map(Vec::as_slice).collect();
+    let per_identity: Vec<Vec<Vec<[f32; 3]>>> = neutrals
+        .par_iter()
+        .enumerate()
+        .map(|(i, n)| {
+            super::deformation::Transfer::new(base, n, triangles, &format!("identity {i}"))?
+                .apply(&sources)
+                .with_context(|| format!("transferring the expressions onto identity {i}"))
+        })
+        .collect::<Result<_>>()?;
+    Ok(per_identity.into_iter().flatten().collect())
 }
 
 /// Each pair's shapes as (expression index, weight), checking names, weights and groups.
@@ -434,11 +482,22 @@ impl PairSet {
         &self.neutrals[self.manifest.pairs[p].identity]
     }
 
+    /// Expression `e`'s delta for `identity` (the same for every identity when shared).
+    pub fn delta(&self, identity: usize, e: usize) -> &[[f32; 3]] {
+        match self.manifest.config.expressions {
+            Expressions::Shared => &self.deltas[e],
+            Expressions::Transferred => {
+                &self.deltas[identity * self.manifest.expressions.len() + e]
+            }
+        }
+    }
+
     /// The dense displacement of pair `p`: Σ_j c_j · expression_j, summed in the pair's order.
     pub fn displacement(&self, p: usize) -> Vec<[f32; 3]> {
         let mut out = vec![[0.0f32; 3]; self.vertices()];
+        let identity = self.manifest.pairs[p].identity;
         for &(e, w) in &self.combinations[p] {
-            for (o, d) in out.iter_mut().zip(&self.deltas[e]) {
+            for (o, d) in out.iter_mut().zip(self.delta(identity, e)) {
                 for c in 0..3 {
                     o[c] += w * d[c];
                 }
@@ -554,7 +613,7 @@ impl PairSet {
         let (v, i, e, p) = (
             self.vertices(),
             self.neutrals.len(),
-            self.deltas.len(),
+            m.expressions.len(),
             self.len(),
         );
         let mut w = SinewWriter::new(ArtifactKind::S2dDecoder);
@@ -569,7 +628,12 @@ impl PairSet {
         w.u32s("pairs.tri", &[self.template.polygons.len(), 3], &tri)?;
         w.u32s("pairs.lmk", &[m.landmarks.len()], &m.landmarks)?;
         w.f32s("pairs.ident", &[i, v, 3], &flat(&self.neutrals))?;
-        w.f32s("pairs.delta", &[e, v, 3], &flat(&self.deltas))?;
+        match m.config.expressions {
+            Expressions::Shared => w.f32s("pairs.delta", &[e, v, 3], &flat(&self.deltas))?,
+            Expressions::Transferred => {
+                w.f32s("pairs.delta", &[i, e, v, 3], &flat(&self.deltas))?
+            }
+        };
         let ids: Vec<u32> = m.pairs.iter().map(|s| s.identity as u32).collect();
         w.u32s("pairs.identity", &[p], &ids)?;
         let mut weights = vec![0.0f32; p * e];
@@ -676,7 +740,10 @@ impl PairSet {
                 .collect()
         };
         let neutrals = split(f32s("pairs.ident", &[i, v, 3])?, i);
-        let deltas = split(f32s("pairs.delta", &[e, v, 3])?, e);
+        let deltas = match manifest.config.expressions {
+            Expressions::Shared => split(f32s("pairs.delta", &[e, v, 3])?, e),
+            Expressions::Transferred => split(f32s("pairs.delta", &[i, e, v, 3])?, i * e),
+        };
         let ids = u32s("pairs.identity", &[p])?;
         let weights = f32s("pairs.weights", &[p, e])?;
         for (k, spec) in manifest.pairs.iter().enumerate() {
@@ -740,6 +807,7 @@ mod tests {
             identities: 4,
             pairs: 24,
             max_shapes: 3,
+            expressions: Expressions::Shared,
         }
     }
 
@@ -801,7 +869,10 @@ mod tests {
         let (l, w) = (set.manifest.landmarks[30] as usize, &set.combinations[p]);
         let mut expect = set.neutral(p)[l];
         for &(x, wt) in w {
-            for (e, d) in expect.iter_mut().zip(set.deltas[x][l]) {
+            for (e, d) in expect
+                .iter_mut()
+                .zip(set.delta(set.manifest.pairs[p].identity, x)[l])
+            {
                 *e += wt * d;
             }
         }
@@ -839,6 +910,93 @@ mod tests {
         std::fs::write(&dpath, &bytes[..bytes.len() / 2]).unwrap();
         let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
         assert!(msg.contains("pairs.sinew"), "{msg}");
+    }
+
+    /// Transferred expressions: one delta per identity and shape, close to the kit's shared
+    /// delta but shaped by each identity, stored and read back per identity.
+    #[test]
+    fn transferred_expressions_follow_each_identity() {
+        let Some(root) = data_dir() else { return };
+        let kit = IctFaceKit::open(&root.join("ict-facekit")).unwrap();
+        let shared = generate(&kit, &small()).unwrap();
+        let config = PairsConfig {
+            expressions: Expressions::Transferred,
+            ..small()
+        };
+        let t = std::time::Instant::now();
+        let set = generate(&kit, &config).unwrap();
+        eprintln!(
+            "{} identities transferred in {:?}",
+            set.neutrals.len(),
+            t.elapsed()
+        );
+        let (ids, shapes) = (set.neutrals.len(), set.manifest.expressions.len());
+        assert_eq!(set.deltas.len(), ids * shapes);
+        assert_eq!(set.neutrals, shared.neutrals);
+        let norm = |d: &[[f32; 3]]| -> f64 {
+            d.iter()
+                .flatten()
+                .map(|&c| f64::from(c) * f64::from(c))
+                .sum::<f64>()
+                .sqrt()
+        };
+        let diff = |a: &[[f32; 3]], b: &[[f32; 3]]| -> f64 {
+            let d: Vec<[f32; 3]> = a
+                .iter()
+                .zip(b)
+                .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+                .collect();
+            norm(&d)
+        };
+        let mut relative = Vec::new();
+        for i in 0..ids {
+            for e in 0..shapes {
+                let (d, s) = (set.delta(i, e), shared.delta(i, e));
+                let ratio = norm(d) / norm(s);
+                assert!(
+                    (0.5..2.0).contains(&ratio),
+                    "identity {i} shape {e}: {ratio}"
+                );
+                relative.push(diff(d, s) / norm(s));
+            }
+        }
+        let mean = relative.iter().sum::<f64>() / relative.len() as f64;
+        let max = relative.iter().copied().fold(0.0, f64::max);
+        eprintln!("transferred vs shared deltas: mean relative difference {mean:.3}, max {max:.3}");
+        // The deltas follow the identity (not the kit's vectors copied), but stay the same
+        // expressions.
+        assert!(mean > 0.02 && max < 0.8, "{mean} {max}");
+        assert!(diff(set.delta(0, 7), set.delta(1, 7)) > 0.01 * norm(set.delta(0, 7)));
+        // A pair's displacement sums its identity's own deltas.
+        let p = 5;
+        let identity = set.manifest.pairs[p].identity;
+        let mut expect = vec![[0.0f32; 3]; set.vertices()];
+        for &(e, w) in &set.combinations[p] {
+            for (x, d) in expect.iter_mut().zip(set.delta(identity, e)) {
+                for c in 0..3 {
+                    x[c] += w * d[c];
+                }
+            }
+        }
+        assert_eq!(set.displacement(p), expect);
+        // Same bytes on a second run, and through the files.
+        let bytes = set.to_bytes().unwrap();
+        assert_eq!(generate(&kit, &config).unwrap().to_bytes().unwrap(), bytes);
+        let dir = tempfile::tempdir().unwrap();
+        set.write(dir.path()).unwrap();
+        let back = PairSet::read(dir.path()).unwrap();
+        assert_eq!(back.manifest.config.expressions, Expressions::Transferred);
+        assert_eq!(back.to_bytes().unwrap(), bytes);
+        // A manifest claiming shared deltas does not read a transferred file.
+        let mut m = set.manifest.clone();
+        m.config.expressions = Expressions::Shared;
+        let mpath = dir.path().join(MANIFEST_FILE);
+        std::fs::write(&mpath, serde_json::to_string(&m).unwrap()).unwrap();
+        let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
+        assert!(
+            msg.contains("pairs.sinew") && msg.contains("pairs.delta"),
+            "{msg}"
+        );
     }
 
     #[test]

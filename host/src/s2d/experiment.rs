@@ -651,6 +651,7 @@ mod tests {
             identities: 8,
             pairs: 160,
             max_shapes: 3,
+            expressions: super::super::data::Expressions::Shared,
         };
         let set = super::super::data::generate(&kit, &config).unwrap();
         for protocol in [Protocol::Identity, Protocol::Expression] {
