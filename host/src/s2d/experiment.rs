@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use super::baseline::{DEFAULT_RIDGE, Pca};
 use super::checkpoint::{STATE_FILE, read_state};
-use super::data::PairSet;
+use super::data::{Expressions, PairSet};
 use super::decoder::{DecoderConfig, S2dDecoder};
 use super::hierarchy;
 use super::protocol::{FOLDS, Protocol, Split, split};
@@ -381,6 +381,17 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         args.folds
     );
     let set = PairSet::read(&args.pairs)?;
+    if !quiet
+        && args.protocol == Protocol::Identity
+        && set.manifest.config.expressions == Expressions::Shared
+    {
+        eprintln!(
+            "note: {} has ICT's shared expression deltas, so the training identities' \
+             displacements span the test identities' and this split says little (docs/S2D.md); \
+             `sinew data s2d-pairs --expressions transferred` makes them identity-specific",
+            args.pairs.display()
+        );
+    }
     let h = hierarchy::cached(&set.template, &args.factors, &cache_dir())
         .context("building the face region's mesh hierarchy")?;
     let distances = landmark_distances(&set.template.positions, &set.manifest.landmarks)?;
@@ -651,7 +662,7 @@ mod tests {
             identities: 8,
             pairs: 160,
             max_shapes: 3,
-            expressions: super::super::data::Expressions::Shared,
+            expressions: Expressions::Shared,
         };
         let set = super::super::data::generate(&kit, &config).unwrap();
         for protocol in [Protocol::Identity, Protocol::Expression] {
@@ -668,5 +679,34 @@ mod tests {
                 assert!(b.mean_error_mm < 0.05, "{}", b.mean_error_mm);
             }
         }
+    }
+
+    /// With identity-specific (transferred) expressions the identity split is no longer
+    /// spanned by the training identities: `pca_max` misses the unseen identities' own way of
+    /// performing each expression, by far more than the ridge's bias it had on shared deltas.
+    #[test]
+    fn transferred_expressions_make_the_identity_split_a_test() {
+        let Some(root) = crate::testing::data_dir() else {
+            return;
+        };
+        let kit = crate::ict::IctFaceKit::open(&root.join("ict-facekit")).unwrap();
+        let mut config = super::super::data::PairsConfig {
+            seed: 3,
+            identities: 8,
+            pairs: 160,
+            max_shapes: 3,
+            expressions: Expressions::Shared,
+        };
+        let mut pca_max = Vec::new();
+        for expressions in [Expressions::Shared, Expressions::Transferred] {
+            config.expressions = expressions;
+            let set = super::super::data::generate(&kit, &config).unwrap();
+            let s = split(&set.manifest, Protocol::Identity, 0).unwrap();
+            let [_, (pmax, kmax)] = baseline_errors(&set, &s).unwrap();
+            let e = ErrorStats::of(&pmax, None).mean_error_mm;
+            eprintln!("identity split, {expressions:?} expressions: pca_max ({kmax}) {e:.4} mm");
+            pca_max.push(e);
+        }
+        assert!(pca_max[1] > 5.0 * pca_max[0], "{pca_max:?}");
     }
 }
