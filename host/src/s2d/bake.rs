@@ -38,9 +38,8 @@ pub fn write(
         "a landmark vertex is outside the template"
     );
     let levels = vertices.len();
-    // The hierarchy in its own sections (positions, triangles, spirals, D and U): the decoder
-    // reads the template positions, spirals and U from them, and a viewer gets the triangles.
-    super::hierarchy::write_sections(hierarchy, w, "s2d")?;
+    // The parts of the hierarchy the decoder reads: the template positions, spirals and U.
+    super::hierarchy::write_sections(hierarchy, w, "s2d", super::hierarchy::Sections::Playback)?;
     let u32s = |v: &[usize]| v.iter().map(|&x| x as u32).collect::<Vec<_>>();
     w.u32s(
         "s2d.cfg",
@@ -123,6 +122,18 @@ mod tests {
         assert_eq!(core.level_sizes(), &[30, 12, 5]);
         assert_eq!(core.landmarks().iter().collect::<Vec<_>>(), [3, 17]);
         assert_eq!(core.file().metadata().get("units"), Some("m"));
+        // Only what playback reads: no triangles, coarse positions or down-samplings.
+        let names: Vec<&str> = core.file().sections().map(|s| s.name()).collect();
+        assert!(
+            names.contains(&"s2d.h0.pos") && names.contains(&"s2d.u1.val"),
+            "{names:?}"
+        );
+        assert!(
+            !names
+                .iter()
+                .any(|n| n.ends_with(".tri") || n.starts_with("s2d.d") || *n == "s2d.h1.pos"),
+            "{names:?}"
+        );
         assert!(bake(&dec, &h, &[3], &meta).is_err());
         assert!(bake(&dec, &h, &[3, 30], &meta).is_err());
         let other = synthetic::hierarchy(&[31, 12, 5], &[5, 4, 3], 6);

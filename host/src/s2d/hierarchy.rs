@@ -850,10 +850,28 @@ impl Decimator {
     }
 }
 
+/// Which of a hierarchy's sections to write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sections {
+    /// Everything [`read_sections`] reads back (hierarchy files and the cache).
+    All,
+    /// What `sinew_core::s2d::S2dDecoder` reads (a baked decoder): `p.levels`, `p.h0.pos`,
+    /// every `p.h<i>.spiral` and `p.u<i>.*`, not the triangles, the coarser levels' positions
+    /// or the down-samplings.
+    Playback,
+}
+
 /// Writes `h` as sections under `prefix` (see docs/FORMAT.md, "S2D mesh hierarchy"):
 /// `p.levels`, per level `p.h<i>.pos`, `p.h<i>.tri`, `p.h<i>.spiral`, and per sampling
-/// `p.d<i>.{ptr,col,val}` and `p.u<i>.{ptr,col,val}`.
-pub fn write_sections(h: &Hierarchy, w: &mut SinewWriter, prefix: &str) -> Result<()> {
+/// `p.d<i>.{ptr,col,val}` and `p.u<i>.{ptr,col,val}`; with [`Sections::Playback`] only those the
+/// core's decoder reads.
+pub fn write_sections(
+    h: &Hierarchy,
+    w: &mut SinewWriter,
+    prefix: &str,
+    which: Sections,
+) -> Result<()> {
+    let all = which == Sections::All;
     let table: Vec<u32> = h
         .levels
         .iter()
@@ -862,17 +880,26 @@ pub fn write_sections(h: &Hierarchy, w: &mut SinewWriter, prefix: &str) -> Resul
     w.u32s(&format!("{prefix}.levels"), &[h.levels.len(), 2], &table)?;
     for (i, l) in h.levels.iter().enumerate() {
         let n = l.positions.len();
-        let pos: Vec<f32> = l.positions.iter().flatten().copied().collect();
-        w.f32s(&format!("{prefix}.h{i}.pos"), &[n, 3], &pos)?;
-        let tri: Vec<u32> = l.triangles.iter().flatten().copied().collect();
-        w.u32s(&format!("{prefix}.h{i}.tri"), &[l.triangles.len(), 3], &tri)?;
+        if all || i == 0 {
+            let pos: Vec<f32> = l.positions.iter().flatten().copied().collect();
+            w.f32s(&format!("{prefix}.h{i}.pos"), &[n, 3], &pos)?;
+        }
+        if all {
+            let tri: Vec<u32> = l.triangles.iter().flatten().copied().collect();
+            w.u32s(&format!("{prefix}.h{i}.tri"), &[l.triangles.len(), 3], &tri)?;
+        }
         w.u32s(
             &format!("{prefix}.h{i}.spiral"),
             &[n + 1, l.spiral_len],
             &l.spirals,
         )?;
     }
-    for (tag, list) in [("d", &h.down), ("u", &h.up)] {
+    let samplings: &[(&str, &Vec<Sampling>)] = if all {
+        &[("d", &h.down), ("u", &h.up)]
+    } else {
+        &[("u", &h.up)]
+    };
+    for (tag, list) in samplings {
         for (i, s) in list.iter().enumerate() {
             let p = format!("{prefix}.{tag}{i}");
             w.u32s(&format!("{p}.ptr"), &[s.row_ptr.len()], &s.row_ptr)?;
@@ -1000,7 +1027,7 @@ pub fn to_bytes(h: &Hierarchy, key: u64, config: &Config) -> Result<Vec<u8>> {
     if let Some(lens) = &config.spiral_lengths {
         w.meta("spiral_lengths", list(lens));
     }
-    write_sections(h, &mut w, "s2d")?;
+    write_sections(h, &mut w, "s2d", Sections::All)?;
     w.to_bytes()
 }
 
@@ -1378,7 +1405,7 @@ mod tests {
 
         let rewrite = |h: &Hierarchy| {
             let mut w = SinewWriter::new(ArtifactKind::S2dDecoder);
-            write_sections(h, &mut w, "s2d").unwrap();
+            write_sections(h, &mut w, "s2d", Sections::All).unwrap();
             format!("{:#}", from_bytes(&w.to_bytes().unwrap()).unwrap_err())
         };
         let mut bad = h.clone();
