@@ -176,8 +176,8 @@ pub struct Transfer {
     gradients: Vec<[V3; 3]>,
     /// ε M_ii.
     anchor: Vec<f64>,
-    /// `order[k]`: the vertex at row k of the factorised system.
-    order: Vec<usize>,
+    /// The row of each vertex in the factorised (reordered) system.
+    row_of: Vec<usize>,
     factor: CscCholesky<f64>,
 }
 
@@ -281,7 +281,7 @@ impl Transfer {
             source_inverse,
             gradients,
             anchor,
-            order,
+            row_of,
             factor,
         })
     }
@@ -294,10 +294,7 @@ impl Transfer {
     pub fn apply(&self, deltas: &[&[[f32; 3]]]) -> Result<Vec<Vec<[f32; 3]>>> {
         let n = self.source.len();
         let mut rhs = DMatrix::<f64>::zeros(n, 3 * deltas.len());
-        let mut row_of = vec![0usize; n];
-        for (k, &v) in self.order.iter().enumerate() {
-            row_of[v] = k;
-        }
+        let row_of = &self.row_of;
         for (j, delta) in deltas.iter().enumerate() {
             ensure!(
                 delta.len() == n,
