@@ -13,11 +13,16 @@
 //! to neither side). Pairs cycle through identities and groups, so every (identity, group) cell
 //! holds the same number of pairs, ±1.
 //!
+//! With [`Expressions::Transferred`] every expression delta is first deformation-transferred onto
+//! every identity's neutral ([`super::deformation`]), so each identity performs the expressions
+//! in its own way; the kit's deltas are otherwise shared by all identities.
+//!
 //! On disk a data set is a folder with `pairs.sinew` (the numbers: identities' neutrals,
 //! expression deltas and each pair's weights, as f32 sections; FORMAT.md, "S2D training pairs")
 //! and `manifest.json` (the same combinations by name, for people and for the protocols). A
 //! pair's dense displacement is not stored: it is Σ_j c_j · expression_j, recomputed in a fixed
-//! order on load, which keeps a thousand pairs in a few megabytes.
+//! order on load, which keeps a thousand pairs in a few megabytes (tens with transferred deltas,
+//! which are stored per identity).
 
 use std::path::Path;
 
