@@ -750,19 +750,21 @@ fn run(cli: Cli) -> Result<()> {
 }
 
 fn print_s2d(r: &experiment::Report, report: &std::path::Path) {
+    // A report over several folds has a component count per fold only.
+    let comp = |c: Option<usize>| c.map_or_else(|| "per fold".to_owned(), |k| format!("{k} comp."));
     println!(
-        "{}: {} split, {} fold(s), {} test pairs: S2D {:.3} ± {:.3} mm, pca99 ({} comp.) {:.3} ± \
-         {:.3} mm, pca_max ({} comp.) {:.3} ± {:.3} mm; plot {}",
+        "{}: {} split, {} fold(s), {} test pairs: S2D {:.3} ± {:.3} mm, pca99 ({}) {:.3} ± {:.3} \
+         mm, pca_max ({}) {:.3} ± {:.3} mm; plot {}",
         report.display(),
         r.protocol,
         r.folds,
         r.test_pairs,
         r.mean_error_mm,
         r.std_error_mm,
-        r.baselines.pca99.components.unwrap_or(0),
+        comp(r.baselines.pca99.components),
         r.baselines.pca99.mean_error_mm,
         r.baselines.pca99.std_error_mm,
-        r.baselines.pca_max.components.unwrap_or(0),
+        comp(r.baselines.pca_max.components),
         r.baselines.pca_max.mean_error_mm,
         r.baselines.pca_max.std_error_mm,
         r.plot.display()
