@@ -31,28 +31,12 @@ use anyhow::{Result, bail, ensure};
 use nalgebra::DMatrix;
 use nalgebra_sparse::{CooMatrix, CscMatrix, factorization::CscCholesky};
 
+use crate::constraints::{V3, cross, dot, norm, sub};
+
 /// The pull toward the source displacement, relative to the Laplacian: fixes the translation
 /// the Laplacian leaves free while changing the lowest-frequency shape of the result by about
 /// `ANCHOR / λ₁` (λ₁ ≈ 10⁻² for a face of unit-ish scale): a few parts in 10⁴.
 pub const ANCHOR: f64 = 1e-6;
-
-type V3 = [f64; 3];
-
-fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 
 fn scale(a: V3, s: f64) -> V3 {
     [a[0] * s, a[1] * s, a[2] * s]
@@ -71,7 +55,7 @@ fn corners(points: &[[f32; 3]], t: [u32; 3]) -> [V3; 3] {
 fn frame(c: [V3; 3]) -> ([[f64; 3]; 3], f64) {
     let (e1, e2) = (sub(c[1], c[0]), sub(c[2], c[0]));
     let n = cross(e1, e2);
-    let len = dot(n, n).sqrt();
+    let len = norm(n);
     let n4 = scale(n, 1.0 / len.sqrt());
     (
         [
@@ -236,7 +220,7 @@ impl Transfer {
             let c = corners(target, t);
             let (e1, e2) = (sub(c[1], c[0]), sub(c[2], c[0]));
             let nrm = cross(e1, e2);
-            let len = dot(nrm, nrm).sqrt();
+            let len = norm(nrm);
             if degenerate(c, len) {
                 bail!("{what}: triangle {k} {t:?} is degenerate");
             }
