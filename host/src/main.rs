@@ -751,10 +751,14 @@ fn run(cli: Cli) -> Result<()> {
 
 fn print_s2d(r: &experiment::Report, report: &std::path::Path) {
     // A report over several folds has a component count per fold only.
-    let comp = |c: Option<usize>| c.map_or_else(|| "per fold".to_owned(), |k| format!("{k} comp."));
+    let count = |c: Option<usize>, unit: &str| {
+        c.map_or_else(|| "per fold".to_owned(), |k| format!("{k} {unit}"))
+    };
+    let comp = |c| count(c, "comp.");
+    let atoms = |c| count(c, "atoms");
     println!(
         "{}: {} split, {} fold(s), {} test pairs: S2D {:.3} ± {:.3} mm, pca99 ({}) {:.3} ± {:.3} \
-         mm, pca_max ({}) {:.3} ± {:.3} mm; plot {}",
+         mm, pca_max ({}) {:.3} ± {:.3} mm, DL-3DMM ({}) {:.3} ± {:.3} mm; plot {}",
         report.display(),
         r.protocol,
         r.folds,
@@ -767,6 +771,9 @@ fn print_s2d(r: &experiment::Report, report: &std::path::Path) {
         comp(r.baselines.pca_max.components),
         r.baselines.pca_max.mean_error_mm,
         r.baselines.pca_max.std_error_mm,
+        atoms(r.baselines.dl_3dmm.components),
+        r.baselines.dl_3dmm.mean_error_mm,
+        r.baselines.dl_3dmm.std_error_mm,
         r.plot.display()
     );
 }

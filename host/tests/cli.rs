@@ -354,6 +354,8 @@ fn s2d_pairs_train_and_eval_end_to_end() {
         "--quiet",
     ]);
     assert!(said.contains("identity split, 1 fold(s)"), "{said}");
+    // Identity fold 0 trains on 18 pairs: a dictionary of one atom per sample at most.
+    assert!(said.contains("DL-3DMM (18 atoms)"), "{said}");
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     assert_eq!(r["protocol"], "identity");
@@ -365,6 +367,7 @@ fn s2d_pairs_train_and_eval_end_to_end() {
         &r["std_error_mm"],
         &r["baselines"]["pca99"]["mean_error_mm"],
         &r["baselines"]["pca_max"]["std_error_mm"],
+        &r["baselines"]["dl_3dmm"]["mean_error_mm"],
     ] {
         assert!(v.as_f64().unwrap() >= 0.0, "{r}");
     }

@@ -36,6 +36,9 @@ pub struct Pca {
     pub components: Vec<Vec<f32>>,
     /// Variance along each component (`λ_i / (N − 1)`).
     pub variances: Vec<f64>,
+    /// Each training sample's centred displacement in the components' coordinates,
+    /// `N × rank` (`√λ_i · u_i[n]`: exact, the components span every centred sample).
+    pub scores: Vec<Vec<f64>>,
 }
 
 /// `Σ a_i b_i` in f64, over f32 inputs, in blocks (f32 products summed in f64).
@@ -88,6 +91,7 @@ impl Pca {
         let top = eig.eigenvalues[order[0]].max(0.0);
         let mut components = Vec::new();
         let mut variances = Vec::new();
+        let mut scores = vec![Vec::new(); n];
         for &i in &order {
             let lambda = eig.eigenvalues[i];
             if top == 0.0 || lambda <= RANK_TOLERANCE * top {
@@ -103,11 +107,15 @@ impl Pca {
             let scale = 1.0 / lambda.sqrt();
             components.push(c.iter().map(|v| (v * scale) as f32).collect());
             variances.push(lambda / (n - 1) as f64);
+            for (s, &w) in scores.iter_mut().zip(u.iter()) {
+                s.push(lambda.sqrt() * w);
+            }
         }
         Ok(Self {
             mean,
             components,
             variances,
+            scores,
         })
     }
 
@@ -137,34 +145,33 @@ impl Pca {
             "{k} components asked of a PCA of rank {}",
             self.rank()
         );
+        let b = self.landmark_rows(landmarks)?.columns(0, k).into_owned();
+        Fitter::new(self, landmarks, b, &vec![1.0; k], None, ridge)
+    }
+
+    /// The rows of every component at the vertices `landmarks`, `[3 · landmarks, rank]`.
+    fn landmark_rows(&self, landmarks: &[u32]) -> Result<DMatrix<f64>> {
         let v = self.mean.len() / 3;
         ensure!(
             landmarks.iter().all(|&l| (l as usize) < v),
             "a landmark vertex is outside the {v} modelled vertices"
         );
-        ensure!(ridge >= 0.0, "ridge weight {ridge} is negative");
-        let rows = 3 * landmarks.len();
-        let b = DMatrix::from_fn(rows, k, |r, c| {
-            f64::from(self.components[c][3 * landmarks[r / 3] as usize + r % 3])
-        });
-        let mut normal = b.transpose() * &b;
-        let lambda = ridge * normal.trace() / k as f64;
-        for i in 0..k {
-            normal[(i, i)] += lambda;
+        Ok(DMatrix::from_fn(
+            3 * landmarks.len(),
+            self.rank(),
+            |r, c| f64::from(self.components[c][3 * landmarks[r / 3] as usize + r % 3]),
+        ))
+    }
+
+    /// The dense displacement `μ + Σ w_i e_i`, `[3V]`, of the coordinates `w` (at most `rank`).
+    fn expand(&self, w: &[f64]) -> Vec<f32> {
+        let mut out: Vec<f64> = self.mean.iter().map(|&m| f64::from(m)).collect();
+        for (wi, e) in w.iter().zip(&self.components) {
+            for (o, &x) in out.iter_mut().zip(e) {
+                *o += wi * f64::from(x);
+            }
         }
-        let solve = normal.cholesky().ok_or_else(|| {
-            anyhow::anyhow!(
-                "the landmark rows of the first {k} components are rank-deficient; use a \
-                 positive ridge"
-            )
-        })?;
-        Ok(Fitter {
-            pca: self,
-            k,
-            landmarks: landmarks.to_vec(),
-            b,
-            solve,
-        })
+        out.iter().map(|&v| v as f32).collect()
     }
 }
 
@@ -204,25 +211,60 @@ fn gram(x: &[Vec<f32>]) -> DMatrix<f64> {
     g
 }
 
-/// A PCA model's first `k` components fitted to landmark displacements.
+/// A linear model of dense displacements (a PCA's leading components, or a dictionary's atoms)
+/// fitted to landmark displacements by ridge least squares.
 #[derive(Debug)]
 pub struct Fitter<'a> {
     pca: &'a Pca,
-    k: usize,
     landmarks: Vec<u32>,
-    /// The components' landmark rows, `[3 · landmarks, k]`.
+    /// The model's landmark rows, `[3 · landmarks, k]`.
     b: DMatrix<f64>,
     solve: nalgebra::Cholesky<f64, nalgebra::Dyn>,
+    /// From the fit's coefficients to the PCA's coordinates (`[rank, k]`); none when the
+    /// coefficients are the first `k` PCA coordinates themselves.
+    to_pca: Option<DMatrix<f64>>,
 }
 
-impl Fitter<'_> {
-    /// Components used.
-    pub fn k(&self) -> usize {
-        self.k
+impl<'a> Fitter<'a> {
+    /// Solves `min |B c − y|² + λ Σ_i p_i c_i²` with `λ = ridge · trace(BᵀB) / k` and the
+    /// relative penalties `p` (`1` for a plain ridge).
+    fn new(
+        pca: &'a Pca,
+        landmarks: &[u32],
+        b: DMatrix<f64>,
+        penalty: &[f64],
+        to_pca: Option<DMatrix<f64>>,
+        ridge: f64,
+    ) -> Result<Self> {
+        ensure!(ridge >= 0.0, "ridge weight {ridge} is negative");
+        let k = b.ncols();
+        let mut normal = b.transpose() * &b;
+        let lambda = ridge * normal.trace() / k as f64;
+        for (i, p) in penalty.iter().enumerate() {
+            normal[(i, i)] += lambda * p;
+        }
+        let solve = normal.cholesky().ok_or_else(|| {
+            anyhow::anyhow!(
+                "the landmark rows of the model's {k} components are rank-deficient; use a \
+                 positive ridge"
+            )
+        })?;
+        Ok(Self {
+            pca,
+            landmarks: landmarks.to_vec(),
+            b,
+            solve,
+            to_pca,
+        })
     }
 
-    /// The coefficients `c = argmin |B c − (y − μ_L)|² + λ |c|²` for the landmark displacements
-    /// `y` (one per landmark, template units).
+    /// Components (or atoms) used.
+    pub fn k(&self) -> usize {
+        self.b.ncols()
+    }
+
+    /// The coefficients `c = argmin |B c − (y − μ_L)|² + λ Σ p_i c_i²` for the landmark
+    /// displacements `y` (one per landmark, template units).
     pub fn coefficients(&self, landmark_displacement: &[[f32; 3]]) -> Result<Vec<f64>> {
         ensure!(
             landmark_displacement.len() == self.landmarks.len(),
@@ -242,16 +284,221 @@ impl Fitter<'_> {
             .collect())
     }
 
-    /// The dense displacement `μ + Σ c_i e_i`, `[3V]`, fitted to `landmark_displacement`.
+    /// The dense displacement, `[3V]`, fitted to `landmark_displacement`.
     pub fn predict(&self, landmark_displacement: &[[f32; 3]]) -> Result<Vec<f32>> {
         let c = self.coefficients(landmark_displacement)?;
-        let mut out: Vec<f64> = self.pca.mean.iter().map(|&m| f64::from(m)).collect();
-        for (ci, e) in c.iter().zip(&self.pca.components) {
-            for (o, &x) in out.iter_mut().zip(e) {
-                *o += ci * f64::from(x);
+        Ok(match &self.to_pca {
+            Some(a) => self.pca.expand((a * DVector::from_vec(c)).as_slice()),
+            None => self.pca.expand(&c),
+        })
+    }
+}
+
+/// Settings of the DL-3DMM dictionary ([`Dictionary::learn`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DictionaryConfig {
+    /// Atoms (the paper's DL-3DMM: 220); at most one per training sample is used.
+    pub atoms: usize,
+    /// Weight of the codes' L1 norm, relative to the root-mean-square norm of the centred
+    /// training displacements.
+    pub sparsity: f64,
+    /// Alternations of sparse coding and dictionary update.
+    pub iterations: usize,
+}
+
+impl Default for DictionaryConfig {
+    fn default() -> Self {
+        Self {
+            atoms: 220,
+            sparsity: 0.1,
+            iterations: 30,
+        }
+    }
+}
+
+/// Coordinate-descent sweeps of one sparse code at most.
+const LASSO_SWEEPS: usize = 500;
+
+/// A sparse code has converged when no coefficient moved by more than this share of the
+/// largest correlation in a sweep.
+const LASSO_TOLERANCE: f64 = 1e-10;
+
+/// The DL-3DMM of Ferrari et al. (S2D's reference [20]): a dictionary of displacement atoms
+/// learned with sparse codes, fitted to landmarks by ridge regression weighted by how much each
+/// atom is used.
+///
+/// Learning alternates, as in Mairal et al.'s dictionary learning, the sparse codes
+/// `α_n = argmin ½|z_n − D α|² + λ|α|₁` (coordinate descent over the atoms' Gram matrix) with a
+/// block-coordinate update of the atoms under `|d_j| ≤ 1`; an atom no code uses is re-seeded with
+/// the worst-represented sample's residual. It runs in the PCA's coordinates (`Pca::scores`):
+/// the components are orthonormal and span every centred training displacement, so norms and
+/// products there are those of displacement space, and an atom costs `rank` numbers instead of
+/// `3V`. Everything is in f64 in a fixed order: the same samples give the same dictionary.
+#[derive(Clone, Debug)]
+pub struct Dictionary {
+    /// The atoms in the PCA's coordinates, `[rank, atoms]`, each of norm at most 1.
+    pub atoms: DMatrix<f64>,
+    /// Each atom's mean squared code over the training samples (0 for an unused atom).
+    pub code_power: Vec<f64>,
+    /// Mean number of non-zero codes per training sample.
+    pub mean_nonzeros: f64,
+    /// `Σ_n ½|z_n − D α_n|² + λ|α_n|₁` after each sparse coding.
+    pub objective: Vec<f64>,
+}
+
+/// `sign(x) · max(|x| − t, 0)`.
+fn soft_threshold(x: f64, t: f64) -> f64 {
+    if x > t {
+        x - t
+    } else if x < -t {
+        x + t
+    } else {
+        0.0
+    }
+}
+
+/// `α = argmin ½ αᵀ G α − cᵀ α + λ|α|₁` by cyclic coordinate descent, from the start `alpha`.
+fn lasso(gram: &DMatrix<f64>, c: &[f64], lambda: f64, alpha: &mut [f64]) {
+    let k = c.len();
+    let mut q = vec![0.0f64; k];
+    for (j, &a) in alpha.iter().enumerate() {
+        if a != 0.0 {
+            for (q, &g) in q.iter_mut().zip(gram.column(j).iter()) {
+                *q += a * g;
             }
         }
-        Ok(out.iter().map(|&v| v as f32).collect())
+    }
+    let scale = c.iter().fold(0.0f64, |m, &x| m.max(x.abs()));
+    for _ in 0..LASSO_SWEEPS {
+        let mut moved = 0.0f64;
+        for j in 0..k {
+            let g = gram[(j, j)];
+            let new = if g > 0.0 {
+                soft_threshold(c[j] - q[j] + g * alpha[j], lambda) / g
+            } else {
+                0.0
+            };
+            let delta = new - alpha[j];
+            if delta != 0.0 {
+                for (q, &g) in q.iter_mut().zip(gram.column(j).iter()) {
+                    *q += delta * g;
+                }
+                alpha[j] = new;
+                moved = moved.max(delta.abs());
+            }
+        }
+        if moved <= LASSO_TOLERANCE * scale {
+            break;
+        }
+    }
+}
+
+/// Sparse codes of the samples `z` (columns) over the atoms `d`, warm-started from `codes`;
+/// returns the learning objective.
+fn sparse_codes(d: &DMatrix<f64>, z: &DMatrix<f64>, lambda: f64, codes: &mut DMatrix<f64>) -> f64 {
+    let gram = d.transpose() * d;
+    let c = d.transpose() * z;
+    for i in 0..z.ncols() {
+        let mut alpha: Vec<f64> = codes.column(i).iter().copied().collect();
+        lasso(&gram, c.column(i).as_slice(), lambda, &mut alpha);
+        codes.set_column(i, &DVector::from_vec(alpha));
+    }
+    0.5 * (z - d * &*codes).norm_squared() + lambda * codes.iter().map(|a| a.abs()).sum::<f64>()
+}
+
+impl Dictionary {
+    /// Learns the dictionary of the training samples behind `pca`.
+    pub fn learn(pca: &Pca, config: &DictionaryConfig) -> Result<Self> {
+        let n = pca.scores.len();
+        let r = pca.rank();
+        ensure!(config.atoms >= 1, "a dictionary needs at least one atom");
+        ensure!(
+            config.sparsity.is_finite() && config.sparsity >= 0.0,
+            "sparsity {} is not a non-negative number",
+            config.sparsity
+        );
+        ensure!(r >= 1, "the PCA has no component to learn a dictionary in");
+        let z = DMatrix::from_fn(r, n, |c, i| pca.scores[i][c]);
+        let k = config.atoms.min(n);
+        let lambda = config.sparsity * (z.norm_squared() / n as f64).sqrt();
+        // Start from evenly spaced samples.
+        let mut d = DMatrix::zeros(r, k);
+        for j in 0..k {
+            let s = z.column(j * n / k);
+            let norm = s.norm();
+            if norm > 0.0 {
+                d.set_column(j, &(s / norm));
+            }
+        }
+        let mut codes = DMatrix::zeros(k, n);
+        let mut objective = Vec::with_capacity(config.iterations + 1);
+        for _ in 0..config.iterations {
+            objective.push(sparse_codes(&d, &z, lambda, &mut codes));
+            let a = &codes * codes.transpose();
+            let b = &z * codes.transpose();
+            let mut unused = Vec::new();
+            for j in 0..k {
+                let ajj = a[(j, j)];
+                if ajj <= 0.0 {
+                    unused.push(j);
+                    continue;
+                }
+                let u = d.column(j) + (b.column(j) - &d * a.column(j)) / ajj;
+                let norm = u.norm();
+                d.set_column(j, &(u / norm.max(1.0)));
+            }
+            if !unused.is_empty() {
+                let residual = &z - &d * &codes;
+                let norms: Vec<f64> = residual.column_iter().map(|c| c.norm()).collect();
+                let mut worst: Vec<usize> = (0..n).collect();
+                worst.sort_by(|&a, &b| norms[b].total_cmp(&norms[a]).then(a.cmp(&b)));
+                for (&j, &i) in unused.iter().zip(&worst) {
+                    if norms[i] > 0.0 {
+                        d.set_column(j, &(residual.column(i) / norms[i]));
+                        codes.row_mut(j).fill(0.0);
+                    }
+                }
+            }
+        }
+        objective.push(sparse_codes(&d, &z, lambda, &mut codes));
+        let code_power = codes
+            .row_iter()
+            .map(|row| row.norm_squared() / n as f64)
+            .collect();
+        let mean_nonzeros = codes.iter().filter(|&&a| a != 0.0).count() as f64 / n as f64;
+        Ok(Self {
+            atoms: d,
+            code_power,
+            mean_nonzeros,
+            objective,
+        })
+    }
+
+    /// Atoms the training codes use (the others are left out of the fit).
+    pub fn used(&self) -> usize {
+        self.code_power.iter().filter(|&&p| p > 0.0).count()
+    }
+
+    /// A fitter over the used atoms, reading the displacement at the vertices `landmarks`: the
+    /// coefficients minimise `|B α − (y − μ_L)|² + λ Σ_j (p̄ / p_j) α_j²`, a ridge whose weight
+    /// on atom j is the inverse of its mean squared training code `p_j` (relative to their mean
+    /// `p̄`), so an atom the training samples use little is held near zero.
+    pub fn fitter<'a>(&self, pca: &'a Pca, landmarks: &[u32], ridge: f64) -> Result<Fitter<'a>> {
+        ensure!(
+            self.atoms.nrows() == pca.rank(),
+            "the dictionary was learned in {} coordinates, the PCA has {}",
+            self.atoms.nrows(),
+            pca.rank()
+        );
+        let used: Vec<usize> = (0..self.code_power.len())
+            .filter(|&j| self.code_power[j] > 0.0)
+            .collect();
+        ensure!(!used.is_empty(), "no atom of the dictionary is used");
+        let a = DMatrix::from_fn(pca.rank(), used.len(), |row, c| self.atoms[(row, used[c])]);
+        let b = pca.landmark_rows(landmarks)? * &a;
+        let mean = used.iter().map(|&j| self.code_power[j]).sum::<f64>() / used.len() as f64;
+        let penalty: Vec<f64> = used.iter().map(|&j| mean / self.code_power[j]).collect();
+        Fitter::new(pca, landmarks, b, &penalty, Some(a), ridge)
     }
 }
 
@@ -339,5 +586,129 @@ mod tests {
         assert!(pca.fitter(2, &[40], 1e-3).is_err());
         assert!(fit.predict(&y[1..]).is_err());
         assert!(Pca::fit(&refs[..1]).is_err());
+    }
+
+    /// Samples that each combine one or two of 6 known unit atoms (signed weights of size 0.5
+    /// to 2) over 40 vertices (120 values).
+    fn sparse_samples(n: usize, rng: &mut Rng) -> (Vec<Vec<f32>>, Vec<Vec<f32>>) {
+        let atoms: Vec<Vec<f32>> = (0..6)
+            .map(|_| {
+                let a: Vec<f32> = (0..120).map(|_| rng.uniform(-1.0, 1.0)).collect();
+                let norm = dot(&a, &a).sqrt() as f32;
+                a.iter().map(|x| x / norm).collect()
+            })
+            .collect();
+        let weight = |rng: &mut Rng| {
+            let w = rng.uniform(0.5, 2.0);
+            if rng.uniform(0.0, 1.0) < 0.5 { -w } else { w }
+        };
+        let samples = (0..n)
+            .map(|_| {
+                let mut s = vec![0.0f32; 120];
+                let first = (rng.uniform(0.0, 6.0) as usize).min(5);
+                let mut used = vec![(first, weight(rng))];
+                if rng.uniform(0.0, 1.0) < 0.3 {
+                    used.push((
+                        (first + 1 + (rng.uniform(0.0, 5.0) as usize).min(4)) % 6,
+                        weight(rng),
+                    ));
+                }
+                for (a, w) in used {
+                    for (s, x) in s.iter_mut().zip(&atoms[a]) {
+                        *s += w * x;
+                    }
+                }
+                s
+            })
+            .collect();
+        (samples, atoms)
+    }
+
+    #[test]
+    fn dictionary_recovers_sparse_atoms_and_fits_landmarks() {
+        let mut rng = Rng::new(5);
+        let (samples, truth) = sparse_samples(301, &mut rng);
+        let refs: Vec<&[f32]> = samples[..300].iter().map(Vec::as_slice).collect();
+        let pca = Pca::fit(&refs).unwrap();
+        assert_eq!(pca.rank(), 6);
+        // The scores are the centred samples' coordinates.
+        for (s, z) in refs.iter().zip(&pca.scores).take(5) {
+            let centred: Vec<f32> = s.iter().zip(&pca.mean).map(|(a, m)| a - m).collect();
+            for (c, &zc) in pca.components.iter().zip(z) {
+                assert!((dot(&centred, c) - zc).abs() < 1e-4, "{zc}");
+            }
+        }
+        let config = DictionaryConfig {
+            atoms: 12,
+            ..DictionaryConfig::default()
+        };
+        let dict = Dictionary::learn(&pca, &config).unwrap();
+        assert_eq!(dict.atoms.shape(), (6, 12));
+        assert_eq!(dict.objective.len(), config.iterations + 1);
+        let (first, last) = (dict.objective[0], *dict.objective.last().unwrap());
+        eprintln!(
+            "objective {first:.3} → {last:.3}, {:.2} codes a sample, {} atoms used",
+            dict.mean_nonzeros,
+            dict.used()
+        );
+        assert!(last < 0.7 * first, "objective {first} → {last}");
+        assert!(
+            dict.mean_nonzeros < 3.0,
+            "{} codes a sample",
+            dict.mean_nonzeros
+        );
+        for a in dict.atoms.column_iter() {
+            assert!(a.norm() <= 1.0 + 1e-12);
+        }
+        // Each true atom, in the PCA's coordinates, is one of the learned atoms up to sign.
+        for t in &truth {
+            let coords = DVector::from_iterator(6, pca.components.iter().map(|c| dot(t, c)));
+            let best = dict
+                .atoms
+                .column_iter()
+                .map(|a| a.dot(&coords).abs() / a.norm().max(1e-12))
+                .fold(0.0f64, f64::max);
+            eprintln!("best cosine {best:.4}");
+            assert!(best > 0.95, "best cosine {best}");
+        }
+        // A new sample is recovered from its landmark rows alone, better than by the mean.
+        let target = &samples[300];
+        let landmarks: Vec<u32> = (0..40).step_by(3).map(|v| v as u32).collect();
+        let y: Vec<[f32; 3]> = landmarks
+            .iter()
+            .map(|&l| {
+                let l = 3 * l as usize;
+                [target[l], target[l + 1], target[l + 2]]
+            })
+            .collect();
+        let fit = dict.fitter(&pca, &landmarks, 1e-6).unwrap();
+        assert_eq!(fit.k(), dict.used());
+        let dense = fit.predict(&y).unwrap();
+        let err = |p: &[f32]| {
+            p.iter()
+                .zip(target)
+                .map(|(a, b)| f64::from(a - b).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        };
+        let (e, e_mean) = (err(&dense), err(&pca.mean));
+        eprintln!("fit error {e:.4}, the mean's {e_mean:.4}");
+        assert!(e < 0.05 * e_mean, "fit {e}, mean {e_mean}");
+        // Same samples, same dictionary.
+        let again = Dictionary::learn(&pca, &config).unwrap();
+        assert_eq!(again.atoms, dict.atoms);
+        assert!(Dictionary::learn(&pca, &DictionaryConfig { atoms: 0, ..config }).is_err());
+        assert!(
+            Dictionary::learn(
+                &pca,
+                &DictionaryConfig {
+                    sparsity: -1.0,
+                    ..config
+                }
+            )
+            .is_err()
+        );
+        let other = Pca::fit(&refs[..4]).unwrap();
+        assert!(dict.fitter(&other, &landmarks, 1e-3).is_err());
     }
 }

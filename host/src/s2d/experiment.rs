@@ -11,7 +11,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail, ensure};
 use serde::{Deserialize, Serialize};
 
-use super::baseline::{DEFAULT_RIDGE, Pca};
+use super::baseline::{DEFAULT_RIDGE, Dictionary, DictionaryConfig, Pca};
 use super::checkpoint::{STATE_FILE, read_state};
 use super::data::{Expressions, PairSet};
 use super::decoder::{DecoderConfig, S2dDecoder};
@@ -70,7 +70,8 @@ pub struct ErrorStats {
     pub mean_error_mm: f64,
     /// Standard deviation of the per-vertex error (mm).
     pub std_error_mm: f64,
-    /// Components used (PCA baselines only; in a pooled entry, only when all folds agree).
+    /// Components (PCA) or atoms (DL-3DMM) used, baselines only; in a pooled entry, only when
+    /// all folds agree.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub components: Option<usize>,
 }
@@ -92,13 +93,16 @@ impl ErrorStats {
     }
 }
 
-/// The two baselines of Table 1.
+/// The 3DMM baselines of Table 1.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Baselines {
     /// PCA with the components that explain 99% of the training variance.
     pub pca99: ErrorStats,
     /// PCA with min(220, rank) components.
     pub pca_max: ErrorStats,
+    /// DL-3DMM, a dictionary of 220 sparse-coded atoms ([`Dictionary`]); its count is the atoms
+    /// the training codes use.
+    pub dl_3dmm: ErrorStats,
 }
 
 /// One fold's results.
@@ -221,9 +225,9 @@ fn vertex_errors(set: &PairSet, p: usize, predicted: &[f32], out: &mut Vec<f32>)
     }
 }
 
-/// Per-vertex errors (mm) of pca99 and pca_max on the test pairs of `s`, with their component
-/// counts.
-pub fn baseline_errors(set: &PairSet, s: &Split) -> Result<[(Vec<f32>, usize); 2]> {
+/// Per-vertex errors (mm) of pca99, pca_max and DL-3DMM on the test pairs of `s`, with their
+/// component (atom) counts.
+pub fn baseline_errors(set: &PairSet, s: &Split) -> Result<[(Vec<f32>, usize); 3]> {
     let train: Vec<Vec<f32>> = s
         .train
         .iter()
@@ -233,9 +237,15 @@ pub fn baseline_errors(set: &PairSet, s: &Split) -> Result<[(Vec<f32>, usize); 2
     let pca = Pca::fit(&refs)?;
     let k99 = pca.components_for(0.99);
     let kmax = pca.rank().min(220);
-    let mut out = [(Vec::new(), k99), (Vec::new(), kmax)];
-    for (errors, k) in &mut out {
-        let fit = pca.fitter(*k, &set.manifest.landmarks, DEFAULT_RIDGE)?;
+    let dictionary = Dictionary::learn(&pca, &DictionaryConfig::default())?;
+    let landmarks = &set.manifest.landmarks;
+    let fitters = [
+        pca.fitter(k99, landmarks, DEFAULT_RIDGE)?,
+        pca.fitter(kmax, landmarks, DEFAULT_RIDGE)?,
+        dictionary.fitter(&pca, landmarks, DEFAULT_RIDGE)?,
+    ];
+    let mut out = fitters.map(|f| (f, Vec::new()));
+    for (fit, errors) in &mut out {
         for &p in &s.test {
             let (n, e) = set.landmark_pair(p);
             let y: Vec<[f32; 3]> = n
@@ -246,7 +256,7 @@ pub fn baseline_errors(set: &PairSet, s: &Split) -> Result<[(Vec<f32>, usize); 2
             vertex_errors(set, p, &fit.predict(&y)?, errors);
         }
     }
-    Ok(out)
+    Ok(out.map(|(f, e)| (e, f.k())))
 }
 
 /// Per-vertex errors (mm) of a baked decoder, run through `sinew_core` (the playback path), on
@@ -326,7 +336,7 @@ pub fn cumulative_plot(methods: &[(&str, &[f32])], title: &str) -> crate::render
 /// Pools the folds and writes the report and its plot.
 fn finish(
     per_fold: Vec<FoldReport>,
-    errors: [Vec<f32>; 3],
+    errors: [Vec<f32>; 4],
     protocol: Protocol,
     trained: Option<(TrainConfig, Objective)>,
     pairs: &Path,
@@ -334,7 +344,7 @@ fn finish(
     started: Instant,
 ) -> Result<Report> {
     let (train, objective) = trained.unzip();
-    let [s2d, p99, pmax] = &errors;
+    let [s2d, p99, pmax, dl] = &errors;
     // The pooled entry names a component count only when every fold used the same one.
     let k = |f: fn(&Baselines) -> &ErrorStats| {
         let first = per_fold.first().and_then(|r| f(&r.baselines).components);
@@ -346,8 +356,13 @@ fn finish(
     };
     let plot = plot_path(report);
     let title = format!("S2D vs PCA baselines: cumulative per-vertex error, {protocol} split");
-    cumulative_plot(&[("S2D", s2d), ("PCA 99%", p99), ("PCA max", pmax)], &title)
-        .write_png(&plot)?;
+    let methods = [
+        ("S2D", s2d.as_slice()),
+        ("PCA 99%", p99),
+        ("PCA max", pmax),
+        ("DL-3DMM", dl),
+    ];
+    cumulative_plot(&methods, &title).write_png(&plot)?;
     let r = Report {
         protocol,
         folds: per_fold.len(),
@@ -357,6 +372,7 @@ fn finish(
         baselines: Baselines {
             pca99: ErrorStats::of(p99, k(|b| &b.pca99)),
             pca_max: ErrorStats::of(pmax, k(|b| &b.pca_max)),
+            dl_3dmm: ErrorStats::of(dl, k(|b| &b.dl_3dmm)),
         },
         per_fold,
         train,
@@ -401,7 +417,7 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         ..args.train.clone()
     };
     let mut per_fold = Vec::new();
-    let mut errors: [Vec<f32>; 3] = Default::default();
+    let mut errors: [Vec<f32>; 4] = Default::default();
     for fold in 0..args.folds {
         let s = split(&set.manifest, args.protocol, fold)?;
         let samples = s
@@ -481,13 +497,15 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         if !quiet {
             eprintln!(
                 "fold {fold}: S2D {:.3} ± {:.3} mm, pca99 ({} comp.) {:.3} mm, pca_max ({} comp.) \
-                 {:.3} mm; trained in {train_seconds:.0} s",
+                 {:.3} mm, DL-3DMM ({} atoms) {:.3} mm; trained in {train_seconds:.0} s",
                 fr.s2d.mean_error_mm,
                 fr.s2d.std_error_mm,
                 fr.baselines.pca99.components.unwrap_or(0),
                 fr.baselines.pca99.mean_error_mm,
                 fr.baselines.pca_max.components.unwrap_or(0),
-                fr.baselines.pca_max.mean_error_mm
+                fr.baselines.pca_max.mean_error_mm,
+                fr.baselines.dl_3dmm.components.unwrap_or(0),
+                fr.baselines.dl_3dmm.mean_error_mm
             );
         }
         per_fold.push(fr);
@@ -538,7 +556,7 @@ fn run_context(
 }
 
 /// Evaluates a baked model and the baselines on split `s`, appending the per-vertex errors to
-/// `errors` (S2D, pca99, pca_max).
+/// `errors` (S2D, pca99, pca_max, DL-3DMM).
 fn evaluate_fold(
     model_bytes: &[u8],
     set: &PairSet,
@@ -546,10 +564,10 @@ fn evaluate_fold(
     model: PathBuf,
     losses: Vec<f32>,
     train_seconds: f64,
-    errors: &mut [Vec<f32>; 3],
+    errors: &mut [Vec<f32>; 4],
 ) -> Result<FoldReport> {
     let s2d = decoder_errors(model_bytes, set, s)?;
-    let [(p99, k99), (pmax, kmax)] = baseline_errors(set, s)?;
+    let [(p99, k99), (pmax, kmax), (dl, atoms)] = baseline_errors(set, s)?;
     let fr = FoldReport {
         fold: s.fold,
         held_out: s.held_out.clone(),
@@ -559,6 +577,7 @@ fn evaluate_fold(
         baselines: Baselines {
             pca99: ErrorStats::of(&p99, Some(k99)),
             pca_max: ErrorStats::of(&pmax, Some(kmax)),
+            dl_3dmm: ErrorStats::of(&dl, Some(atoms)),
         },
         model,
         losses,
@@ -567,6 +586,7 @@ fn evaluate_fold(
     errors[0].extend(s2d);
     errors[1].extend(p99);
     errors[2].extend(pmax);
+    errors[3].extend(dl);
     Ok(fr)
 }
 
@@ -602,7 +622,7 @@ pub fn eval_s2d(model: &Path, pairs: &Path, report: &Path) -> Result<Report> {
         );
     }
     let s = split(&set.manifest, protocol, fold)?;
-    let mut errors: [Vec<f32>; 3] = Default::default();
+    let mut errors: [Vec<f32>; 4] = Default::default();
     let fr = evaluate_fold(
         &bytes,
         &set,
@@ -667,17 +687,24 @@ mod tests {
         let set = super::super::data::generate(&kit, &config).unwrap();
         for protocol in [Protocol::Identity, Protocol::Expression] {
             let s = split(&set.manifest, protocol, 0).unwrap();
-            let [(p99, k99), (pmax, kmax)] = baseline_errors(&set, &s).unwrap();
+            let [(p99, k99), (pmax, kmax), (dl, atoms)] = baseline_errors(&set, &s).unwrap();
             let (a, b) = (ErrorStats::of(&p99, None), ErrorStats::of(&pmax, None));
+            let d = ErrorStats::of(&dl, None);
             eprintln!(
-                "{protocol}: pca99 ({k99}) {:.4} mm, pca_max ({kmax}) {:.4} mm",
-                a.mean_error_mm, b.mean_error_mm
+                "{protocol}: pca99 ({k99}) {:.4} mm, pca_max ({kmax}) {:.4} mm, DL-3DMM ({atoms}) \
+                 {:.4} mm",
+                a.mean_error_mm, b.mean_error_mm, d.mean_error_mm
             );
             assert!(k99 <= kmax);
             assert!(b.mean_error_mm <= a.mean_error_mm * 1.001, "{protocol}");
             if protocol == Protocol::Identity {
+                // Both models span the test displacements: only the prior's bias is left.
                 assert!(b.mean_error_mm < 0.05, "{}", b.mean_error_mm);
+                assert!(d.mean_error_mm < 0.1, "{}", d.mean_error_mm);
+            } else {
+                assert!(d.mean_error_mm < 1.1 * b.mean_error_mm, "{protocol}");
             }
+            assert!(atoms > kmax, "an overcomplete dictionary: {atoms} atoms");
         }
     }
 
@@ -702,7 +729,7 @@ mod tests {
             config.expressions = expressions;
             let set = super::super::data::generate(&kit, &config).unwrap();
             let s = split(&set.manifest, Protocol::Identity, 0).unwrap();
-            let [_, (pmax, kmax)] = baseline_errors(&set, &s).unwrap();
+            let [_, (pmax, kmax), _] = baseline_errors(&set, &s).unwrap();
             let e = ErrorStats::of(&pmax, None).mean_error_mm;
             eprintln!("identity split, {expressions:?} expressions: pca_max ({kmax}) {e:.4} mm");
             pca_max.push(e);
