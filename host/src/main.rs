@@ -758,7 +758,8 @@ fn print_s2d(r: &experiment::Report, report: &std::path::Path) {
     let atoms = |c| count(c, "atoms");
     println!(
         "{}: {} split, {} fold(s), {} test pairs: S2D {:.3} ± {:.3} mm, pca99 ({}) {:.3} ± {:.3} \
-         mm, pca_max ({}) {:.3} ± {:.3} mm, DL-3DMM ({}) {:.3} ± {:.3} mm; plot {}",
+         mm, pca_max ({}) {:.3} ± {:.3} mm, DL-3DMM ({}) {:.3} ± {:.3} mm; training-span floor \
+         {:.3} mm; plot {}",
         report.display(),
         r.protocol,
         r.folds,
@@ -774,6 +775,7 @@ fn print_s2d(r: &experiment::Report, report: &std::path::Path) {
         atoms(r.baselines.dl_3dmm.components),
         r.baselines.dl_3dmm.mean_error_mm,
         r.baselines.dl_3dmm.std_error_mm,
+        r.baselines.span_floor.mean_error_mm,
         r.plot.display()
     );
 }

@@ -368,6 +368,7 @@ fn s2d_pairs_train_and_eval_end_to_end() {
         &r["baselines"]["pca99"]["mean_error_mm"],
         &r["baselines"]["pca_max"]["std_error_mm"],
         &r["baselines"]["dl_3dmm"]["mean_error_mm"],
+        &r["baselines"]["span_floor"]["mean_error_mm"],
     ] {
         assert!(v.as_f64().unwrap() >= 0.0, "{r}");
     }

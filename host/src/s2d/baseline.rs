@@ -163,6 +163,21 @@ impl Pca {
         ))
     }
 
+    /// The orthogonal projection of the displacement `sample` (`[3V]`) onto the model's affine
+    /// span, `μ + Σ ((x − μ)·e_i) e_i`: the closest displacement any combination of the
+    /// components can give.
+    pub fn project(&self, sample: &[f32]) -> Result<Vec<f32>> {
+        ensure!(
+            sample.len() == self.mean.len(),
+            "a displacement of {} values for a model of {}",
+            sample.len(),
+            self.mean.len()
+        );
+        let centred: Vec<f32> = sample.iter().zip(&self.mean).map(|(x, m)| x - m).collect();
+        let w: Vec<f64> = self.components.iter().map(|e| dot(&centred, e)).collect();
+        Ok(self.expand(&w))
+    }
+
     /// The dense displacement `μ + Σ w_i e_i`, `[3V]`, of the coordinates `w` (at most `rank`).
     fn expand(&self, w: &[f64]) -> Vec<f32> {
         let mut out: Vec<f64> = self.mean.iter().map(|&m| f64::from(m)).collect();
@@ -580,6 +595,32 @@ mod tests {
             .map(|(a, b)| (a - b).abs())
             .fold(0.0f32, f32::max);
         assert!(err1 > 10.0 * err.max(1e-4), "{err1} vs {err}");
+        // A sample in the span projects onto itself; one off it loses exactly its off-span part.
+        let back = pca.project(target).unwrap();
+        assert!(back.iter().zip(target).all(|(a, b)| (a - b).abs() < 1e-4));
+        let off: Vec<f32> = (0..120).map(|j| if j == 7 { 1.0 } else { 0.0 }).collect();
+        let off_in_span: Vec<f32> = {
+            let p = pca.project(
+                &off.iter()
+                    .zip(&pca.mean)
+                    .map(|(o, m)| o + m)
+                    .collect::<Vec<_>>(),
+            );
+            p.unwrap()
+                .iter()
+                .zip(&pca.mean)
+                .map(|(p, m)| p - m)
+                .collect()
+        };
+        let in_span: f64 = pca.components.iter().map(|c| dot(&off, c).powi(2)).sum();
+        assert!(
+            (dot(&off_in_span, &off_in_span) - in_span).abs() < 1e-5,
+            "{in_span}"
+        );
+        for c in &pca.components {
+            assert!((dot(&off_in_span, c) - dot(&off, c)).abs() < 1e-5);
+        }
+        assert!(pca.project(&target[1..]).is_err());
         assert!(pca.components_for(0.5) <= pca.components_for(0.99));
         assert_eq!(pca.components_for(1.0), 3);
         assert!(pca.fitter(4, &landmarks, 1e-3).is_err());

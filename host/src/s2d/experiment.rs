@@ -103,6 +103,27 @@ pub struct Baselines {
     /// DL-3DMM, a dictionary of 220 sparse-coded atoms ([`Dictionary`]); its count is the atoms
     /// the training codes use.
     pub dl_3dmm: ErrorStats,
+    /// Not a method but a bound: the test displacements' orthogonal projection onto the
+    /// training displacements' affine span ([`Pca::project`], all `rank` components, reading
+    /// the whole dense ground truth). It is the least-squares closest displacement any model
+    /// built from that span (the three above) can give, so their errors do not go below it
+    /// (strictly so for the root-mean-square error; the mean per-vertex error is a different
+    /// norm).
+    pub span_floor: ErrorStats,
+}
+
+/// Per-vertex errors (mm) on a split's test pairs of the baselines, with their component
+/// (atom) counts, and of the training span's floor ([`Baselines::span_floor`]).
+#[derive(Clone, Debug)]
+pub struct BaselineErrors {
+    /// PCA, 99% of the variance.
+    pub pca99: (Vec<f32>, usize),
+    /// PCA, min(220, rank) components.
+    pub pca_max: (Vec<f32>, usize),
+    /// DL-3DMM, atoms used.
+    pub dl_3dmm: (Vec<f32>, usize),
+    /// The training span's floor, and the span's dimension (the PCA's rank).
+    pub span_floor: (Vec<f32>, usize),
 }
 
 /// One fold's results.
@@ -225,9 +246,9 @@ fn vertex_errors(set: &PairSet, p: usize, predicted: &[f32], out: &mut Vec<f32>)
     }
 }
 
-/// Per-vertex errors (mm) of pca99, pca_max and DL-3DMM on the test pairs of `s`, with their
-/// component (atom) counts.
-pub fn baseline_errors(set: &PairSet, s: &Split) -> Result<[(Vec<f32>, usize); 3]> {
+/// Per-vertex errors (mm) of pca99, pca_max and DL-3DMM on the test pairs of `s`, and the
+/// training span's floor.
+pub fn baseline_errors(set: &PairSet, s: &Split) -> Result<BaselineErrors> {
     let train: Vec<Vec<f32>> = s
         .train
         .iter()
@@ -256,7 +277,18 @@ pub fn baseline_errors(set: &PairSet, s: &Split) -> Result<[(Vec<f32>, usize); 3
             vertex_errors(set, p, &fit.predict(&y)?, errors);
         }
     }
-    Ok(out.map(|(f, e)| (e, f.k())))
+    let mut floor = Vec::with_capacity(s.test.len() * set.vertices());
+    for &p in &s.test {
+        let truth: Vec<f32> = set.displacement(p).iter().flatten().copied().collect();
+        vertex_errors(set, p, &pca.project(&truth)?, &mut floor);
+    }
+    let [pca99, pca_max, dl_3dmm] = out.map(|(f, e)| (e, f.k()));
+    Ok(BaselineErrors {
+        pca99,
+        pca_max,
+        dl_3dmm,
+        span_floor: (floor, pca.rank()),
+    })
 }
 
 /// Per-vertex errors (mm) of a baked decoder, run through `sinew_core` (the playback path), on
@@ -336,7 +368,7 @@ pub fn cumulative_plot(methods: &[(&str, &[f32])], title: &str) -> crate::render
 /// Pools the folds and writes the report and its plot.
 fn finish(
     per_fold: Vec<FoldReport>,
-    errors: [Vec<f32>; 4],
+    errors: [Vec<f32>; 5],
     protocol: Protocol,
     trained: Option<(TrainConfig, Objective)>,
     pairs: &Path,
@@ -344,7 +376,7 @@ fn finish(
     started: Instant,
 ) -> Result<Report> {
     let (train, objective) = trained.unzip();
-    let [s2d, p99, pmax, dl] = &errors;
+    let [s2d, p99, pmax, dl, floor] = &errors;
     // The pooled entry names a component count only when every fold used the same one.
     let k = |f: fn(&Baselines) -> &ErrorStats| {
         let first = per_fold.first().and_then(|r| f(&r.baselines).components);
@@ -355,12 +387,13 @@ fn finish(
             .flatten()
     };
     let plot = plot_path(report);
-    let title = format!("S2D vs PCA baselines: cumulative per-vertex error, {protocol} split");
+    let title = format!("S2D vs 3DMM baselines: cumulative per-vertex error, {protocol} split");
     let methods = [
         ("S2D", s2d.as_slice()),
         ("PCA 99%", p99),
         ("PCA max", pmax),
         ("DL-3DMM", dl),
+        ("training span (floor)", floor),
     ];
     cumulative_plot(&methods, &title).write_png(&plot)?;
     let r = Report {
@@ -373,6 +406,7 @@ fn finish(
             pca99: ErrorStats::of(p99, k(|b| &b.pca99)),
             pca_max: ErrorStats::of(pmax, k(|b| &b.pca_max)),
             dl_3dmm: ErrorStats::of(dl, k(|b| &b.dl_3dmm)),
+            span_floor: ErrorStats::of(floor, k(|b| &b.span_floor)),
         },
         per_fold,
         train,
@@ -417,7 +451,7 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         ..args.train.clone()
     };
     let mut per_fold = Vec::new();
-    let mut errors: [Vec<f32>; 4] = Default::default();
+    let mut errors: [Vec<f32>; 5] = Default::default();
     for fold in 0..args.folds {
         let s = split(&set.manifest, args.protocol, fold)?;
         let samples = s
@@ -497,7 +531,8 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         if !quiet {
             eprintln!(
                 "fold {fold}: S2D {:.3} ± {:.3} mm, pca99 ({} comp.) {:.3} mm, pca_max ({} comp.) \
-                 {:.3} mm, DL-3DMM ({} atoms) {:.3} mm; trained in {train_seconds:.0} s",
+                 {:.3} mm, DL-3DMM ({} atoms) {:.3} mm, training-span floor {:.3} mm; trained in \
+                 {train_seconds:.0} s",
                 fr.s2d.mean_error_mm,
                 fr.s2d.std_error_mm,
                 fr.baselines.pca99.components.unwrap_or(0),
@@ -505,7 +540,8 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
                 fr.baselines.pca_max.components.unwrap_or(0),
                 fr.baselines.pca_max.mean_error_mm,
                 fr.baselines.dl_3dmm.components.unwrap_or(0),
-                fr.baselines.dl_3dmm.mean_error_mm
+                fr.baselines.dl_3dmm.mean_error_mm,
+                fr.baselines.span_floor.mean_error_mm
             );
         }
         per_fold.push(fr);
@@ -556,7 +592,7 @@ fn run_context(
 }
 
 /// Evaluates a baked model and the baselines on split `s`, appending the per-vertex errors to
-/// `errors` (S2D, pca99, pca_max, DL-3DMM).
+/// `errors` (S2D, pca99, pca_max, DL-3DMM, the span's floor).
 fn evaluate_fold(
     model_bytes: &[u8],
     set: &PairSet,
@@ -564,10 +600,10 @@ fn evaluate_fold(
     model: PathBuf,
     losses: Vec<f32>,
     train_seconds: f64,
-    errors: &mut [Vec<f32>; 4],
+    errors: &mut [Vec<f32>; 5],
 ) -> Result<FoldReport> {
     let s2d = decoder_errors(model_bytes, set, s)?;
-    let [(p99, k99), (pmax, kmax), (dl, atoms)] = baseline_errors(set, s)?;
+    let b = baseline_errors(set, s)?;
     let fr = FoldReport {
         fold: s.fold,
         held_out: s.held_out.clone(),
@@ -575,18 +611,20 @@ fn evaluate_fold(
         test_pairs: s.test.len(),
         s2d: ErrorStats::of(&s2d, None),
         baselines: Baselines {
-            pca99: ErrorStats::of(&p99, Some(k99)),
-            pca_max: ErrorStats::of(&pmax, Some(kmax)),
-            dl_3dmm: ErrorStats::of(&dl, Some(atoms)),
+            pca99: ErrorStats::of(&b.pca99.0, Some(b.pca99.1)),
+            pca_max: ErrorStats::of(&b.pca_max.0, Some(b.pca_max.1)),
+            dl_3dmm: ErrorStats::of(&b.dl_3dmm.0, Some(b.dl_3dmm.1)),
+            span_floor: ErrorStats::of(&b.span_floor.0, Some(b.span_floor.1)),
         },
         model,
         losses,
         train_seconds,
     };
     errors[0].extend(s2d);
-    errors[1].extend(p99);
-    errors[2].extend(pmax);
-    errors[3].extend(dl);
+    errors[1].extend(b.pca99.0);
+    errors[2].extend(b.pca_max.0);
+    errors[3].extend(b.dl_3dmm.0);
+    errors[4].extend(b.span_floor.0);
     Ok(fr)
 }
 
@@ -622,7 +660,7 @@ pub fn eval_s2d(model: &Path, pairs: &Path, report: &Path) -> Result<Report> {
         );
     }
     let s = split(&set.manifest, protocol, fold)?;
-    let mut errors: [Vec<f32>; 4] = Default::default();
+    let mut errors: [Vec<f32>; 5] = Default::default();
     let fr = evaluate_fold(
         &bytes,
         &set,
@@ -687,13 +725,19 @@ mod tests {
         let set = super::super::data::generate(&kit, &config).unwrap();
         for protocol in [Protocol::Identity, Protocol::Expression] {
             let s = split(&set.manifest, protocol, 0).unwrap();
-            let [(p99, k99), (pmax, kmax), (dl, atoms)] = baseline_errors(&set, &s).unwrap();
+            let all = baseline_errors(&set, &s).unwrap();
+            let [(p99, k99), (pmax, kmax), (dl, atoms)] = [all.pca99, all.pca_max, all.dl_3dmm];
             let (a, b) = (ErrorStats::of(&p99, None), ErrorStats::of(&pmax, None));
             let d = ErrorStats::of(&dl, None);
+            let f = ErrorStats::of(&all.span_floor.0, None);
             eprintln!(
                 "{protocol}: pca99 ({k99}) {:.4} mm, pca_max ({kmax}) {:.4} mm, DL-3DMM ({atoms}) \
-                 {:.4} mm",
-                a.mean_error_mm, b.mean_error_mm, d.mean_error_mm
+                 {:.4} mm, span floor {:.4} mm",
+                a.mean_error_mm, b.mean_error_mm, d.mean_error_mm, f.mean_error_mm
+            );
+            assert!(
+                f.mean_error_mm < d.mean_error_mm.min(b.mean_error_mm),
+                "{protocol}"
             );
             assert!(k99 <= kmax);
             assert!(b.mean_error_mm <= a.mean_error_mm * 1.001, "{protocol}");
@@ -701,6 +745,7 @@ mod tests {
                 // Both models span the test displacements: only the prior's bias is left.
                 assert!(b.mean_error_mm < 0.05, "{}", b.mean_error_mm);
                 assert!(d.mean_error_mm < 0.1, "{}", d.mean_error_mm);
+                assert!(f.mean_error_mm < 0.02, "{}", f.mean_error_mm);
             } else {
                 assert!(d.mean_error_mm < 1.1 * b.mean_error_mm, "{protocol}");
             }
@@ -729,7 +774,7 @@ mod tests {
             config.expressions = expressions;
             let set = super::super::data::generate(&kit, &config).unwrap();
             let s = split(&set.manifest, Protocol::Identity, 0).unwrap();
-            let [_, (pmax, kmax), _] = baseline_errors(&set, &s).unwrap();
+            let (pmax, kmax) = baseline_errors(&set, &s).unwrap().pca_max;
             let e = ErrorStats::of(&pmax, None).mean_error_mm;
             eprintln!("identity split, {expressions:?} expressions: pca_max ({kmax}) {e:.4} mm");
             pca_max.push(e);
