@@ -28,8 +28,9 @@ use std::path::Path;
 use anyhow::{Context, Result, anyhow, bail};
 use serde::{Deserialize, Serialize};
 
-use crate::constraints::{Bone, V3, cross, dot, norm, sub};
+use crate::constraints::Bone;
 use crate::mesh::Mesh;
+use crate::vec3::{V3, cross, dot, norm, sub};
 
 /// The landmark data file, compiled in.
 const LANDMARKS_JSON: &str = include_str!("../data/bone_landmarks.json");

@@ -24,6 +24,7 @@
 //! build sorts with index tie-breaks, ties between equally near hits go to the lower triangle
 //! number, and the optional threads each own a fixed slice of the vertices.
 
+use crate::vec3::{V3, cross, dot, norm, sub, to64};
 use serde::{Deserialize, Serialize};
 
 /// Which bone a constraint lies on. AIM moves the jaw rigidly (eq. 10's `T_b`) and keeps the
@@ -279,28 +280,6 @@ fn map_vertices<T: Send>(n: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
     })
 }
 
-/// A point or vector in `f64`, for the geometry of this module and `bones`.
-pub(crate) type V3 = [f64; 3];
-
-pub(crate) fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-pub(crate) fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-pub(crate) fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-pub(crate) fn norm(a: V3) -> f64 {
-    dot(a, a).sqrt()
-}
-fn to64(a: [f32; 3]) -> V3 {
-    [a[0] as f64, a[1] as f64, a[2] as f64]
-}
 fn finite(a: [f32; 3]) -> bool {
     a.iter().all(|x| x.is_finite())
 }

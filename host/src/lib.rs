@@ -25,5 +25,6 @@ pub mod s2d;
 pub mod sine;
 pub mod testing;
 pub mod tolerance;
+pub(crate) mod vec3;
 
 pub use container::SinewWriter;

@@ -21,6 +21,7 @@ use sinew_core::format::ArtifactKind;
 use super::{Hierarchy, Level, Sampling, spirals};
 use crate::container::SinewWriter;
 use crate::mesh::Mesh;
+use crate::vec3::{add, cross, dot, norm2, scale, sub, to64};
 
 /// The reference's decimation factors: four levels, each a quarter of the one before.
 pub const DEFAULT_FACTORS: [usize; 4] = [4, 4, 4, 4];
@@ -179,7 +180,7 @@ pub fn checked_triangles(mesh: &Mesh) -> Result<Vec<[u32; 3]>> {
         }
         for k in 1..poly.len() - 1 {
             let t = [poly[0], poly[k], poly[k + 1]];
-            let p = t.map(|v| to_f64(mesh.positions[v as usize]));
+            let p = t.map(|v| to64(mesh.positions[v as usize]));
             if norm2(cross(sub(p[1], p[0]), sub(p[2], p[0]))) == 0.0 {
                 bail!(
                     "face {pi} has zero area (vertices {:?}; degenerate face)",
@@ -360,7 +361,7 @@ fn barycentric_upsampling(
     }
     let tris: Vec<[[f64; 3]; 3]> = coarse_tris
         .iter()
-        .map(|t| t.map(|v| to_f64(coarse[v as usize])))
+        .map(|t| t.map(|v| to64(coarse[v as usize])))
         .collect();
     let boxes: Vec<([f64; 3], [f64; 3])> = tris
         .iter()
@@ -385,7 +386,7 @@ fn barycentric_upsampling(
             col_idx.push(coarse_of[i]);
             values.push(1.0f32);
         } else {
-            let p = to_f64(p);
+            let p = to64(p);
             let mut best = (f64::INFINITY, 0usize, [1.0, 0.0, 0.0]);
             for (ti, (t, (lo, hi))) in tris.iter().zip(&boxes).enumerate() {
                 let mut d2 = 0.0;
@@ -586,7 +587,7 @@ fn decimate(
 ) -> Result<(Vec<u32>, Vec<[u32; 3]>)> {
     let n = positions.len();
     let mut d = Decimator {
-        pos: positions.iter().map(|&p| to_f64(p)).collect(),
+        pos: positions.iter().map(|&p| to64(p)).collect(),
         tris: triangles.to_vec(),
         tri_alive: vec![true; triangles.len()],
         incident: incident_triangles(n, triangles),
@@ -1113,32 +1114,6 @@ pub fn cached_with(mesh: &Mesh, config: &Config, cache_dir: &Path) -> Result<Hie
     Ok(h)
 }
 
-fn to_f64(p: [f32; 3]) -> [f64; 3] {
-    p.map(f64::from)
-}
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn norm2(a: [f64; 3]) -> f64 {
-    dot(a, a)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1226,7 +1201,7 @@ mod tests {
                             q[c] += f64::from(u.values[k]) * f64::from(p[c]);
                         }
                     }
-                    total += norm2(sub(q, to_f64(h.levels[i].positions[r]))).sqrt();
+                    total += norm2(sub(q, to64(h.levels[i].positions[r]))).sqrt();
                 }
             }
             mean_dist.push(total / n as f64);
