@@ -540,6 +540,19 @@ mod tests {
         (samples, basis)
     }
 
+    /// Every third of the 40 test vertices as landmarks, and `sample`'s displacement there.
+    fn every_third_vertex(sample: &[f32]) -> (Vec<u32>, Vec<[f32; 3]>) {
+        let landmarks: Vec<u32> = (0..40).step_by(3).map(|v| v as u32).collect();
+        let y = landmarks
+            .iter()
+            .map(|&l| {
+                let l = 3 * l as usize;
+                [sample[l], sample[l + 1], sample[l + 2]]
+            })
+            .collect();
+        (landmarks, y)
+    }
+
     #[test]
     fn known_low_rank_basis_is_recovered() {
         let mut rng = Rng::new(11);
@@ -567,14 +580,7 @@ mod tests {
             low_rank(31, &mut rng2)
         };
         let target = &test[30];
-        let landmarks: Vec<u32> = (0..40).step_by(3).map(|v| v as u32).collect();
-        let y: Vec<[f32; 3]> = landmarks
-            .iter()
-            .map(|&l| {
-                let l = 3 * l as usize;
-                [target[l], target[l + 1], target[l + 2]]
-            })
-            .collect();
+        let (landmarks, y) = every_third_vertex(target);
         let fit = pca.fitter(3, &landmarks, 1e-9).unwrap();
         let dense = fit.predict(&y).unwrap();
         let err = dense
@@ -714,14 +720,7 @@ mod tests {
         }
         // A new sample is recovered from its landmark rows alone, better than by the mean.
         let target = &samples[300];
-        let landmarks: Vec<u32> = (0..40).step_by(3).map(|v| v as u32).collect();
-        let y: Vec<[f32; 3]> = landmarks
-            .iter()
-            .map(|&l| {
-                let l = 3 * l as usize;
-                [target[l], target[l + 1], target[l + 2]]
-            })
-            .collect();
+        let (landmarks, y) = every_third_vertex(target);
         let fit = dict.fitter(&pca, &landmarks, 1e-6).unwrap();
         assert_eq!(fit.k(), dict.used());
         let dense = fit.predict(&y).unwrap();
