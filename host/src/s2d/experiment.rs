@@ -707,25 +707,36 @@ mod tests {
         assert_eq!(w, [1.0, 0.0]);
     }
 
+    /// Small real pair sets (8 identities, 160 pairs, seed 3) of each kind, generated once for
+    /// the tests of this module that use them; none without the data.
+    fn real_pairs(expressions: Expressions) -> Option<&'static PairSet> {
+        static SETS: [std::sync::OnceLock<PairSet>; 2] =
+            [std::sync::OnceLock::new(), std::sync::OnceLock::new()];
+        let root = crate::testing::data_dir()?;
+        let slot = &SETS[usize::from(expressions == Expressions::Transferred)];
+        Some(slot.get_or_init(|| {
+            let kit = crate::ict::IctFaceKit::open(&root.join("ict-facekit")).unwrap();
+            let config = super::super::data::PairsConfig {
+                seed: 3,
+                identities: 8,
+                pairs: 160,
+                max_shapes: 3,
+                expressions,
+            };
+            super::super::data::generate(&kit, &config).unwrap()
+        }))
+    }
+
     /// On real pairs the larger PCA fits at least as well as pca99, and on the identity split
     /// (ICT's expression deltas are shared by all identities) it is nearly exact.
     #[test]
     fn pca_max_is_no_worse_than_pca99_on_real_pairs() {
-        let Some(root) = crate::testing::data_dir() else {
+        let Some(set) = real_pairs(Expressions::Shared) else {
             return;
         };
-        let kit = crate::ict::IctFaceKit::open(&root.join("ict-facekit")).unwrap();
-        let config = super::super::data::PairsConfig {
-            seed: 3,
-            identities: 8,
-            pairs: 160,
-            max_shapes: 3,
-            expressions: Expressions::Shared,
-        };
-        let set = super::super::data::generate(&kit, &config).unwrap();
         for protocol in [Protocol::Identity, Protocol::Expression] {
             let s = split(&set.manifest, protocol, 0).unwrap();
-            let all = baseline_errors(&set, &s).unwrap();
+            let all = baseline_errors(set, &s).unwrap();
             let [(p99, k99), (pmax, kmax), (dl, atoms)] = [all.pca99, all.pca_max, all.dl_3dmm];
             let (a, b) = (ErrorStats::of(&p99, None), ErrorStats::of(&pmax, None));
             let d = ErrorStats::of(&dl, None);
@@ -758,23 +769,13 @@ mod tests {
     /// performing each expression, by far more than the ridge's bias it had on shared deltas.
     #[test]
     fn transferred_expressions_make_the_identity_split_a_test() {
-        let Some(root) = crate::testing::data_dir() else {
-            return;
-        };
-        let kit = crate::ict::IctFaceKit::open(&root.join("ict-facekit")).unwrap();
-        let mut config = super::super::data::PairsConfig {
-            seed: 3,
-            identities: 8,
-            pairs: 160,
-            max_shapes: 3,
-            expressions: Expressions::Shared,
-        };
         let mut pca_max = Vec::new();
         for expressions in [Expressions::Shared, Expressions::Transferred] {
-            config.expressions = expressions;
-            let set = super::super::data::generate(&kit, &config).unwrap();
+            let Some(set) = real_pairs(expressions) else {
+                return;
+            };
             let s = split(&set.manifest, Protocol::Identity, 0).unwrap();
-            let (pmax, kmax) = baseline_errors(&set, &s).unwrap().pca_max;
+            let (pmax, kmax) = baseline_errors(set, &s).unwrap().pca_max;
             let e = ErrorStats::of(&pmax, None).mean_error_mm;
             eprintln!("identity split, {expressions:?} expressions: pca_max ({kmax}) {e:.4} mm");
             pca_max.push(e);
