@@ -1,6 +1,7 @@
-//! The S2D paper's 3DMM baselines (§4.2, Table 1 "PCA-k"): a PCA model of the training pairs'
-//! dense displacements, fitted to a test pair's landmark displacements by ridge least squares,
-//! then expanded to a dense displacement.
+//! The S2D paper's 3DMM baselines (§4.2, Table 1 "PCA-k" and "DL-3DMM"): a PCA model of the
+//! training pairs' dense displacements, or a dictionary of sparse-coded atoms learned in its
+//! coordinates ([`Dictionary`]), fitted to a test pair's landmark displacements by ridge least
+//! squares, then expanded to a dense displacement.
 //!
 //! The model is built from the N × 3V matrix of centred training displacements through its N × N
 //! Gram matrix (N is a few hundred, 3V about 28,000): `G = X Xᵀ = U Λ Uᵀ`, and the principal
