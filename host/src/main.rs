@@ -367,8 +367,8 @@ struct TrainAim {
 
 #[derive(Debug, Subcommand)]
 enum Eval {
-    /// Evaluate a model from `sinew train s2d` (through sinew-core) and the PCA baselines on the
-    /// held-out pairs of the fold it was trained for.
+    /// Evaluate a model from `sinew train s2d` (through sinew-core) and the 3DMM baselines on the
+    /// held-out pairs of the fold it was trained for (or of each of its folds, `--folds`).
     S2d {
         /// The baked S2D model.
         #[arg(long)]
@@ -379,6 +379,10 @@ enum Eval {
         /// Output JSON report; the plot goes beside it (REPORT.png).
         #[arg(long)]
         report: PathBuf,
+        /// Evaluate the first K folds of a `train s2d --folds K` run: MODEL is fold 0's,
+        /// MODEL.fold<k>.sinew beside it the others; the report pools them.
+        #[arg(long, default_value_t = 1)]
+        folds: usize,
     },
     /// Per-vertex error of a baked AIM actor on its ICT-FaceKit training shapes.
     Aim {
@@ -574,8 +578,9 @@ fn run(cli: Cli) -> Result<()> {
             model,
             pairs,
             report,
+            folds,
         }) => {
-            let r = experiment::eval_s2d(&model, &pairs, &report)?;
+            let r = experiment::eval_s2d(&model, &pairs, folds, &report)?;
             print_s2d(&r, &report);
         }
         Command::Eval(Eval::Aim {

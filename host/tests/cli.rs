@@ -393,6 +393,69 @@ fn s2d_pairs_train_and_eval_end_to_end() {
     assert_eq!(e["mean_error_mm"], r["mean_error_mm"]);
     assert_eq!(e["baselines"], r["baselines"]);
 
+    // Two folds trained together, then evaluated together: the same pooled report.
+    let two = dir.path().join("two.sinew");
+    let report_two = dir.path().join("two.json");
+    let args = [
+        "train",
+        "s2d",
+        "--pairs",
+        s(&pairs),
+        "--protocol",
+        "identity",
+        "--out",
+        s(&two),
+        "--report",
+        s(&report_two),
+        "--epochs",
+        "1",
+        "--folds",
+        "2",
+        "--quiet",
+    ];
+    ok(&args);
+    let r2: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report_two).unwrap()).unwrap();
+    let eval_two = dir.path().join("e2.json");
+    // `eval s2d --folds F --model M`, succeeding or failing as `succeeds` says; what it printed.
+    let eval = |folds: &str, model: &Path, succeeds: bool| {
+        let args = [
+            "eval",
+            "s2d",
+            "--model",
+            s(model),
+            "--pairs",
+            s(&pairs),
+            "--report",
+            s(&eval_two),
+            "--folds",
+            folds,
+        ];
+        if succeeds { ok(&args) } else { err(&args) }
+    };
+    let said = eval("2", &two, true);
+    assert!(
+        said.contains("identity split, 2 fold(s), 12 test pairs"),
+        "{said}"
+    );
+    let e2: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&eval_two).unwrap()).unwrap();
+    for key in [
+        "folds",
+        "test_pairs",
+        "mean_error_mm",
+        "std_error_mm",
+        "baselines",
+    ] {
+        assert_eq!(e2[key], r2[key], "{key}");
+    }
+    // A third fold was never trained; fold 0's model is not a fold-1 model.
+    let said = eval("3", &two, false);
+    assert!(said.contains("two.fold2.sinew"), "{said}");
+    std::fs::copy(&model, dir.path().join("m.fold1.sinew")).unwrap();
+    let said = eval("2", &model, false);
+    assert!(said.contains("m.fold1.sinew: a model of fold 0"), "{said}");
+
     // Applications on real faces of the decoder's template (the ICT face region).
     let ict = sinew_host::ict::IctFaceKit::open(&kit).unwrap();
     let (face, _) = ict

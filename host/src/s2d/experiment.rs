@@ -628,12 +628,15 @@ fn evaluate_fold(
     Ok(fr)
 }
 
-/// `sinew eval s2d`: evaluates a model from `train s2d` on the test pairs of the fold it was
-/// trained for (its `protocol` and `fold` metadata), with the baselines on the same split.
-pub fn eval_s2d(model: &Path, pairs: &Path, report: &Path) -> Result<Report> {
-    let started = Instant::now();
-    let bytes = crate::container::read(model)?;
-    let file = sinew_core::SinewFile::from_bytes(&bytes)
+/// The protocol and fold a model from `train s2d` was trained for (its metadata), checked
+/// against the pairs' seed.
+fn trained_split(
+    model: &Path,
+    bytes: &[u8],
+    set: &PairSet,
+    pairs: &Path,
+) -> Result<(Protocol, usize)> {
+    let file = sinew_core::SinewFile::from_bytes(bytes)
         .map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
     let meta = file.metadata();
     let protocol = match meta.get("protocol") {
@@ -649,7 +652,6 @@ pub fn eval_s2d(model: &Path, pairs: &Path, report: &Path) -> Result<Report> {
         .get("fold")
         .and_then(|f| f.parse().ok())
         .with_context(|| format!("{}: no fold in the metadata", model.display()))?;
-    let set = PairSet::read(pairs)?;
     if let Some(seed) = meta.get("pairs_seed") {
         ensure!(
             seed == set.manifest.config.seed.to_string(),
@@ -659,19 +661,50 @@ pub fn eval_s2d(model: &Path, pairs: &Path, report: &Path) -> Result<Report> {
             set.manifest.config.seed
         );
     }
-    let s = split(&set.manifest, protocol, fold)?;
+    Ok((protocol, fold))
+}
+
+/// `sinew eval s2d`: evaluates a model from `train s2d` on the test pairs of the fold it was
+/// trained for (its `protocol` and `fold` metadata), with the baselines on the same split. With
+/// `folds` K > 1, `model` is fold 0's and folds 1 to K − 1 are read beside it
+/// ([`fold_model_path`], as `train s2d --folds K` writes them), each checked to be its fold of the
+/// same protocol, and the report pools them as `train s2d`'s does.
+pub fn eval_s2d(model: &Path, pairs: &Path, folds: usize, report: &Path) -> Result<Report> {
+    ensure!(
+        (1..=FOLDS).contains(&folds),
+        "--folds {folds}: between 1 and {FOLDS}"
+    );
+    let started = Instant::now();
+    let set = PairSet::read(pairs)?;
     let mut errors: [Vec<f32>; 5] = Default::default();
-    let fr = evaluate_fold(
-        &bytes,
-        &set,
-        &s,
-        model.to_owned(),
-        Vec::new(),
-        0.0,
-        &mut errors,
-    )
-    .with_context(|| format!("{}", model.display()))?;
-    finish(vec![fr], errors, protocol, None, pairs, report, started)
+    let mut per_fold = Vec::with_capacity(folds);
+    let mut first = None;
+    for k in 0..folds {
+        let path = fold_model_path(model, k);
+        let bytes = crate::container::read(&path)?;
+        let (protocol, fold) = trained_split(&path, &bytes, &set, pairs)?;
+        if folds > 1 {
+            ensure!(
+                fold == k,
+                "{}: a model of fold {fold}, where `train s2d --folds {folds}` puts fold {k}",
+                path.display()
+            );
+        }
+        if let Some(p) = first {
+            ensure!(
+                protocol == p,
+                "{}: trained on the {protocol} split, fold 0 on the {p} split",
+                path.display()
+            );
+        }
+        first = Some(protocol);
+        let s = split(&set.manifest, protocol, fold)?;
+        let fr = evaluate_fold(&bytes, &set, &s, path.clone(), Vec::new(), 0.0, &mut errors)
+            .with_context(|| format!("{}", path.display()))?;
+        per_fold.push(fr);
+    }
+    let protocol = first.context("no fold evaluated")?;
+    finish(per_fold, errors, protocol, None, pairs, report, started)
 }
 
 #[cfg(test)]
