@@ -338,21 +338,27 @@ fn s2d_pairs_train_and_eval_end_to_end() {
     assert!(said.contains("24 pairs of 4 identities"), "{said}");
     let model = dir.path().join("m.sinew");
     let report = dir.path().join("r.json");
-    let said = ok(&[
-        "train",
-        "s2d",
-        "--pairs",
-        s(&pairs),
-        "--protocol",
-        "identity",
-        "--out",
-        s(&model),
-        "--report",
-        s(&report),
-        "--epochs",
-        "1",
-        "--quiet",
-    ]);
+    // `train s2d` of one epoch on the identity split, `folds` folds; what it printed.
+    let train = |out: &Path, report: &Path, folds: &str| {
+        ok(&[
+            "train",
+            "s2d",
+            "--pairs",
+            s(&pairs),
+            "--protocol",
+            "identity",
+            "--out",
+            s(out),
+            "--report",
+            s(report),
+            "--epochs",
+            "1",
+            "--folds",
+            folds,
+            "--quiet",
+        ])
+    };
+    let said = train(&model, &report, "1");
     assert!(said.contains("identity split, 1 fold(s)"), "{said}");
     // Identity fold 0 trains on 18 pairs: a dictionary of one atom per sample at most.
     assert!(said.contains("DL-3DMM (18 atoms)"), "{said}");
@@ -396,24 +402,7 @@ fn s2d_pairs_train_and_eval_end_to_end() {
     // Two folds trained together, then evaluated together: the same pooled report.
     let two = dir.path().join("two.sinew");
     let report_two = dir.path().join("two.json");
-    let args = [
-        "train",
-        "s2d",
-        "--pairs",
-        s(&pairs),
-        "--protocol",
-        "identity",
-        "--out",
-        s(&two),
-        "--report",
-        s(&report_two),
-        "--epochs",
-        "1",
-        "--folds",
-        "2",
-        "--quiet",
-    ];
-    ok(&args);
+    train(&two, &report_two, "2");
     let r2: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report_two).unwrap()).unwrap();
     let eval_two = dir.path().join("e2.json");
