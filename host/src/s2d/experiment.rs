@@ -265,16 +265,22 @@ pub fn baseline_errors(set: &PairSet, s: &Split) -> Result<BaselineErrors> {
         pca.fitter(kmax, landmarks, DEFAULT_RIDGE)?,
         dictionary.fitter(&pca, landmarks, DEFAULT_RIDGE)?,
     ];
-    let mut out = fitters.map(|f| (f, Vec::new()));
-    for (fit, errors) in &mut out {
-        for &p in &s.test {
+    // Each test pair's landmark displacements, once for all three fits.
+    let inputs: Vec<Vec<[f32; 3]>> = s
+        .test
+        .iter()
+        .map(|&p| {
             let (n, e) = set.landmark_pair(p);
-            let y: Vec<[f32; 3]> = n
-                .iter()
+            n.iter()
                 .zip(&e)
                 .map(|(a, b)| [b[0] - a[0], b[1] - a[1], b[2] - a[2]])
-                .collect();
-            vertex_errors(set, p, &fit.predict(&y)?, errors);
+                .collect()
+        })
+        .collect();
+    let mut out = fitters.map(|f| (f, Vec::new()));
+    for (fit, errors) in &mut out {
+        for (&p, y) in s.test.iter().zip(&inputs) {
+            vertex_errors(set, p, &fit.predict(y)?, errors);
         }
     }
     let mut floor = Vec::with_capacity(s.test.len() * set.vertices());
