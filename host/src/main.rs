@@ -135,7 +135,7 @@ enum Data {
         /// `shared`: the kit's expression deltas, the same for every identity; `transferred`:
         /// each delta deformation-transferred onto each identity (identity-specific
         /// expressions, stored per identity).
-        #[arg(long, value_enum, default_value_t = Expressions::Shared)]
+        #[arg(long, value_enum, default_value_t = PairsConfig::default().expressions)]
         expressions: Expressions,
     },
 }

@@ -56,12 +56,17 @@ fn weights(f: usize) -> Vec<(&'static str, f32)> {
 /// decoder's training set (seed 1) and decimated the same way; identity 0 performs the 16
 /// frames of [`weights`] (landmark inputs as in training), decoded onto identity 1's neutral.
 fn real_sequence(model: &[u8]) -> (Vec<Vec<f32>>, Option<Vec<f32>>) {
-    use sinew_host::s2d::data::{PairsConfig, generate};
+    use sinew_host::s2d::data::{Expressions, PairsConfig, generate};
     use sinew_host::s2d::train::landmark_input;
     let root = sinew_tests::data_dir("ict-facekit")
         .expect("UPDATE_EXPECT=1 for the S2D replay needs the ICT-FaceKit data ($SINEW_DATA)");
     let kit = sinew_host::ict::IctFaceKit::open(&root).unwrap();
-    let set = generate(&kit, &PairsConfig::default())
+    // The kit's shared deltas, the default when the decoder was made.
+    let config = PairsConfig {
+        expressions: Expressions::Shared,
+        ..PairsConfig::default()
+    };
+    let set = generate(&kit, &config)
         .unwrap()
         .decimated(DECIMATE)
         .unwrap();

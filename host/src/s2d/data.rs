@@ -48,17 +48,23 @@ pub const MANIFEST_FORMAT: &str = "sinew-s2d-pairs";
 pub const MANIFEST_VERSION: u32 = 1;
 
 /// How a pair's expression deltas relate to its identity.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Expressions {
     /// ICT-FaceKit's deltas as they are: the same vectors for every identity (the kit's linear
     /// model).
-    #[default]
     Shared,
     /// Each delta transferred onto each identity's neutral by deformation transfer
     /// ([`super::deformation`]): the expression deforms the identity's own triangles as it
     /// deforms the generic neutral's, so displacements differ between identities.
     Transferred,
+}
+
+impl Expressions {
+    /// What a manifest written before the `expressions` field existed holds.
+    fn before_the_field() -> Self {
+        Self::Shared
+    }
 }
 
 /// What to generate.
@@ -74,7 +80,7 @@ pub struct PairsConfig {
     pub max_shapes: usize,
     /// Shared or identity-specific expression deltas (manifests written before this field
     /// existed are `shared`).
-    #[serde(default)]
+    #[serde(default = "Expressions::before_the_field")]
     pub expressions: Expressions,
 }
 
@@ -86,7 +92,10 @@ impl Default for PairsConfig {
             identities: 12,
             pairs: 1200,
             max_shapes: 3,
-            expressions: Expressions::Shared,
+            // Identity-specific, so that both protocols measure something: with the kit's shared
+            // deltas the identity split's test displacements lie in the training span, and the
+            // expression split's `pca_max` is a well-posed low-rank fit (docs/S2D.md).
+            expressions: Expressions::Transferred,
         }
     }
 }
@@ -1002,6 +1011,13 @@ mod tests {
             msg.contains("pairs.sinew") && msg.contains("pairs.delta"),
             "{msg}"
         );
+        // A manifest from before the field (no `expressions`) means shared deltas, whatever the
+        // default is now: it is refused the same way.
+        let mut old = serde_json::to_value(&set.manifest).unwrap();
+        old["config"].as_object_mut().unwrap().remove("expressions");
+        std::fs::write(&mpath, old.to_string()).unwrap();
+        let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
+        assert!(msg.contains("pairs.delta"), "{msg}");
     }
 
     #[test]

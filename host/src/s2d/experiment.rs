@@ -402,12 +402,13 @@ fn finish(
         ("training span (floor)", floor),
     ];
     cumulative_plot(&methods, &title).write_png(&plot)?;
+    let s2d_stats = ErrorStats::of(s2d, None);
     let r = Report {
         protocol,
         folds: per_fold.len(),
         test_pairs: per_fold.iter().map(|f| f.test_pairs).sum(),
-        mean_error_mm: ErrorStats::of(s2d, None).mean_error_mm,
-        std_error_mm: ErrorStats::of(s2d, None).std_error_mm,
+        mean_error_mm: s2d_stats.mean_error_mm,
+        std_error_mm: s2d_stats.std_error_mm,
         baselines: Baselines {
             pca99: ErrorStats::of(p99, k(|b| &b.pca99)),
             pca_max: ErrorStats::of(pmax, k(|b| &b.pca_max)),
