@@ -24,7 +24,7 @@ use crate::backend::Backend;
 
 /// Default epochs of `sinew train s2d` (one fold within 45 minutes on the shared 2-core machine;
 /// docs/S2D.md has the measurement).
-pub const DEFAULT_EPOCHS: usize = 100;
+pub const DEFAULT_EPOCHS: usize = 70;
 
 /// ICT is in cm; errors are reported in mm.
 const MM_PER_UNIT: f32 = 10.0;
