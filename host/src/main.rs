@@ -273,11 +273,13 @@ struct TrainS2dArgs {
     /// Output JSON report; the plot goes beside it (REPORT.png).
     #[arg(long)]
     report: PathBuf,
-    /// Epochs (the learning rate decays by 0.99^(300/epochs) per epoch).
-    #[arg(long)]
+    #[arg(long, help = format!(
+        "Epochs [default: {DEFAULT_EPOCHS}; {} with --paper-protocol] (the learning rate \
+         decays by 0.99^(300/epochs) per epoch)",
+        TrainConfig::default().epochs
+    ))]
     epochs: Option<usize>,
-    /// Folds to run, of 4.
-    #[arg(long)]
+    #[arg(long, help = format!("Folds to run, of {FOLDS} [default: 1; {FOLDS} with --paper-protocol]"))]
     folds: Option<usize>,
     /// The paper's schedule: 300 epochs on all 4 folds (unless --epochs/--folds say otherwise).
     #[arg(long)]

@@ -221,6 +221,24 @@ fn demo_then_every_command_on_its_outputs() {
     );
 }
 
+/// `train s2d --help` gives the default budget that runs without `--epochs`/`--folds`, from the
+/// constants the command uses, so the two cannot drift apart.
+#[test]
+fn train_s2d_help_names_its_defaults() {
+    let help = ok(&["train", "s2d", "--help"]);
+    let epochs = format!(
+        "[default: {}; {} with --paper-protocol]",
+        sinew_host::s2d::experiment::DEFAULT_EPOCHS,
+        sinew_host::s2d::train::TrainConfig::default().epochs
+    );
+    let folds = format!(
+        "[default: 1; {} with --paper-protocol]",
+        sinew_host::s2d::protocol::FOLDS
+    );
+    assert!(help.contains(&epochs), "no {epochs} in:\n{help}");
+    assert!(help.contains(&folds), "no {folds} in:\n{help}");
+}
+
 #[test]
 fn bad_files_are_named_and_fail() {
     let dir = tempfile::tempdir().unwrap();
