@@ -397,6 +397,17 @@ fn s2d_pairs_train_and_eval_end_to_end() {
         assert!(v.as_f64().unwrap() >= 0.0, "{r}");
     }
     assert!(r["mean_error_mm"].as_f64().unwrap() > 0.0);
+    // One held-out identity: every test pair involves it, so its breakdown is the fold's.
+    let fold = &r["per_fold"][0];
+    let held = fold["per_held_out"].as_array().unwrap();
+    assert_eq!(held.len(), 1, "{fold}");
+    assert_eq!(held[0]["held_out"], fold["held_out"][0]);
+    assert_eq!(held[0]["pairs"], fold["test_pairs"]);
+    let (a, b) = (
+        held[0]["s2d_mm"].as_f64().unwrap(),
+        fold["s2d"]["mean_error_mm"].as_f64().unwrap(),
+    );
+    assert!((a - b).abs() <= 1e-9 * b, "{a} against {b}");
     let png = std::fs::read(dir.path().join("r.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
 

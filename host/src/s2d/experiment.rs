@@ -147,6 +147,64 @@ pub struct FoldReport {
     pub losses: Vec<f32>,
     /// Training time (s), over every invocation when the fold was resumed.
     pub train_seconds: f64,
+    /// Each held-out shape (expression split) or identity (identity split), with the errors on
+    /// the test pairs that involve it (absent from reports written before it).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub per_held_out: Vec<HeldOutErrors>,
+}
+
+/// The errors on the test pairs of a fold that involve one held-out expression shape (every pair
+/// that combines it with others of its group) or identity: the mean per-vertex error (mm) over
+/// those pairs' vertices, for S2D-Dec and each baseline.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HeldOutErrors {
+    /// The shape's name or the identity's index.
+    pub held_out: String,
+    /// Test pairs that involve it.
+    pub pairs: usize,
+    /// S2D-Dec.
+    pub s2d_mm: f64,
+    /// PCA, 99% of the variance.
+    pub pca99_mm: f64,
+    /// PCA, min(220, rank) components.
+    pub pca_max_mm: f64,
+    /// DL-3DMM.
+    pub dl_3dmm_mm: f64,
+}
+
+/// [`HeldOutErrors`] of every held-out item of `s`; `involves(p, item)` says whether pair `p`
+/// involves it, and `errors` are per-vertex errors of S2D-Dec, pca99, pca_max and DL-3DMM on
+/// the test pairs in order, `vertices` a pair.
+fn per_held_out(
+    s: &Split,
+    involves: impl Fn(usize, &str) -> bool,
+    vertices: usize,
+    errors: [&[f32]; 4],
+) -> Vec<HeldOutErrors> {
+    s.held_out
+        .iter()
+        .map(|item| {
+            let pairs: Vec<usize> = (0..s.test.len())
+                .filter(|&i| involves(s.test[i], item))
+                .collect();
+            let mean = |e: &[f32]| {
+                let sum: f64 = pairs
+                    .iter()
+                    .flat_map(|&i| &e[i * vertices..(i + 1) * vertices])
+                    .map(|&x| f64::from(x))
+                    .sum();
+                sum / (pairs.len() * vertices).max(1) as f64
+            };
+            HeldOutErrors {
+                held_out: item.clone(),
+                pairs: pairs.len(),
+                s2d_mm: mean(errors[0]),
+                pca99_mm: mean(errors[1]),
+                pca_max_mm: mean(errors[2]),
+                dl_3dmm_mm: mean(errors[3]),
+            }
+        })
+        .collect()
 }
 
 /// The report of `train s2d` / `eval s2d`: the folds pooled (every test vertex of every fold),
@@ -611,6 +669,17 @@ fn evaluate_fold(
 ) -> Result<FoldReport> {
     let s2d = decoder_errors(model_bytes, set, s)?;
     let b = baseline_errors(set, s)?;
+    let pairs = &set.manifest.pairs;
+    let involves = |p: usize, item: &str| match s.protocol {
+        Protocol::Identity => pairs[p].identity.to_string() == item,
+        Protocol::Expression => pairs[p].shapes.iter().any(|c| c.shape == item),
+    };
+    let per_held_out = per_held_out(
+        s,
+        involves,
+        set.vertices(),
+        [&s2d, &b.pca99.0, &b.pca_max.0, &b.dl_3dmm.0],
+    );
     let fr = FoldReport {
         fold: s.fold,
         held_out: s.held_out.clone(),
@@ -626,6 +695,7 @@ fn evaluate_fold(
         model,
         losses,
         train_seconds,
+        per_held_out,
     };
     errors[0].extend(s2d);
     errors[1].extend(b.pca99.0);
@@ -745,6 +815,48 @@ mod tests {
         assert_eq!(w, [1.0, 1.0]);
         let (_, w) = Objective::Code.loss_and_weights(&[0.0, 1.0]);
         assert_eq!(w, [1.0, 0.0]);
+    }
+
+    /// Each held-out item's errors average the vertices of exactly the test pairs that involve
+    /// it, per method; an item no test pair involves gets no pairs and zero error.
+    #[test]
+    fn held_out_errors_average_the_pairs_that_involve_each_item() {
+        let s = Split {
+            protocol: Protocol::Expression,
+            fold: 0,
+            held_out: vec!["a".into(), "b".into(), "c".into()],
+            train: vec![0, 1],
+            test: vec![2, 5, 7],
+        };
+        // Pair 2 uses a, pair 5 a and b, pair 7 b.
+        let involves = |p: usize, item: &str| match item {
+            "a" => p == 2 || p == 5,
+            "b" => p == 5 || p == 7,
+            _ => false,
+        };
+        // Two vertices a pair; method m's errors are (m + 1) × [1, 2 | 3, 4 | 5, 6].
+        let e: Vec<Vec<f32>> = (1..=4)
+            .map(|m| (1..=6).map(|x| (m * x) as f32).collect())
+            .collect();
+        let h = per_held_out(&s, involves, 2, [&e[0], &e[1], &e[2], &e[3]]);
+        let got: Vec<_> = h
+            .iter()
+            .map(|h| {
+                (
+                    h.held_out.as_str(),
+                    h.pairs,
+                    [h.s2d_mm, h.pca99_mm, h.pca_max_mm, h.dl_3dmm_mm],
+                )
+            })
+            .collect();
+        assert_eq!(
+            got,
+            [
+                ("a", 2, [2.5, 5.0, 7.5, 10.0]),
+                ("b", 2, [4.5, 9.0, 13.5, 18.0]),
+                ("c", 0, [0.0; 4]),
+            ]
+        );
     }
 
     /// Small real pair sets (8 identities, 160 pairs, seed 3) of each kind, generated once for
