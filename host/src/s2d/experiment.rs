@@ -155,7 +155,7 @@ pub struct FoldReport {
 
 /// The errors on the test pairs of a fold that involve one held-out expression shape (every pair
 /// that combines it with others of its group) or identity: the mean per-vertex error (mm) over
-/// those pairs' vertices, for S2D-Dec and each baseline.
+/// those pairs' vertices, for S2D-Dec and each baseline (0 when no test pair involves it).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct HeldOutErrors {
     /// The shape's name or the identity's index.
@@ -834,7 +834,7 @@ mod tests {
             "b" => p == 5 || p == 7,
             _ => false,
         };
-        // Two vertices a pair; method m's errors are (m + 1) × [1, 2 | 3, 4 | 5, 6].
+        // Two vertices a pair; method m (1 to 4) has errors m × [1, 2 | 3, 4 | 5, 6].
         let e: Vec<Vec<f32>> = (1..=4)
             .map(|m| (1..=6).map(|x| (m * x) as f32).collect())
             .collect();
