@@ -674,7 +674,7 @@ fn evaluate_fold(
         Protocol::Identity => pairs[p].identity.to_string() == item,
         Protocol::Expression => pairs[p].shapes.iter().any(|c| c.shape == item),
     };
-    let per_held_out = per_held_out(
+    let by_held_out = per_held_out(
         s,
         involves,
         set.vertices(),
@@ -695,7 +695,7 @@ fn evaluate_fold(
         model,
         losses,
         train_seconds,
-        per_held_out,
+        per_held_out: by_held_out,
     };
     errors[0].extend(s2d);
     errors[1].extend(b.pca99.0);
