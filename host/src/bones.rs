@@ -1364,13 +1364,13 @@ fn geodesic_labels(mesh: &Mesh, pos: &[[f64; 3]], sources: &[(u32, f64)]) -> Vec
 // Nearest neighbours.
 
 /// A uniform grid over points for nearest-neighbour queries.
-struct Grid {
+pub(crate) struct Grid {
     cell: f64,
     cells: HashMap<[i64; 3], Vec<u32>>,
 }
 
 impl Grid {
-    fn new(pts: &[[f64; 3]], cell: f64) -> Self {
+    pub(crate) fn new(pts: &[[f64; 3]], cell: f64) -> Self {
         let mut cells: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
         for (i, p) in pts.iter().enumerate() {
             cells.entry(Self::key(p, cell)).or_default().push(i as u32);
@@ -1384,7 +1384,7 @@ impl Grid {
 
     /// The nearest point passing `ok` within the 27 cells around `q` (so anything closer than
     /// one cell is always found): index and distance; ties go to the lower index.
-    fn nearest_where(
+    pub(crate) fn nearest_where(
         &self,
         pts: &[[f64; 3]],
         q: [f64; 3],

@@ -312,6 +312,12 @@ struct TrainS2dArgs {
     /// whose checkpoint is complete is only baked and evaluated.
     #[arg(long)]
     resume: bool,
+    /// Also train on the training pairs mirrored left to right (needs a left-right symmetric
+    /// face region). On the expression split a pair is mirrored only when each of its shapes
+    /// mirrors onto a training shape, so no held-out shape is seen mirrored; the baselines learn
+    /// from the same pairs.
+    #[arg(long)]
+    mirror: bool,
 }
 
 #[derive(Debug, Args)]
@@ -572,6 +578,7 @@ fn run(cli: Cli) -> Result<()> {
                 },
                 factors: args.factors,
                 resume: args.resume,
+                mirror: args.mirror,
             };
             let r = experiment::train_s2d(&job, args.quiet)?;
             print_s2d(&r, &args.report);

@@ -474,6 +474,107 @@ fn s2d_pairs_train_and_eval_end_to_end() {
     let said = eval("2", &model, false);
     assert!(said.contains("m.fold1.sinew: a model of fold 0"), "{said}");
 
+    // `--mirror` on the expression split: fold 0 also trains on the mirror image of each
+    // training pair whose shapes' mirrored twins (`x_L` ↔ `x_R`, `mouthLeft` ↔ `mouthRight`, a
+    // symmetric shape itself) are all training shapes, and so do its baselines.
+    let expression = |out: &Path, report: &Path, mirror: bool| {
+        let mut args = vec![
+            "train",
+            "s2d",
+            "--pairs",
+            s(&pairs),
+            "--protocol",
+            "expression",
+            "--out",
+            s(out),
+            "--report",
+            s(report),
+            "--epochs",
+            "1",
+            "--quiet",
+        ];
+        if mirror {
+            args.push("--mirror");
+        }
+        ok(&args);
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(report).unwrap())
+            .unwrap()
+    };
+    let mirrored = dir.path().join("mir.sinew");
+    let r = expression(&mirrored, &dir.path().join("mir.json"), true);
+    let fold = &r["per_fold"][0];
+    let held: Vec<&str> = fold["held_out"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|h| h.as_str().unwrap())
+        .collect();
+    let twin = |name: &str| {
+        if let Some(stem) = name.strip_suffix("_L") {
+            format!("{stem}_R")
+        } else if let Some(stem) = name.strip_suffix("_R") {
+            format!("{stem}_L")
+        } else if name.contains("Left") {
+            name.replace("Left", "Right")
+        } else {
+            name.replace("Right", "Left")
+        }
+    };
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(pairs.join("manifest.json")).unwrap())
+            .unwrap();
+    let shapes_of = |p: &serde_json::Value| -> Vec<String> {
+        p["shapes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["shape"].as_str().unwrap().to_owned())
+            .collect()
+    };
+    let training: Vec<Vec<String>> = manifest["pairs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(shapes_of)
+        .filter(|shapes| !shapes.iter().any(|x| held.contains(&x.as_str())))
+        .collect();
+    let expected = training
+        .iter()
+        .filter(|shapes| shapes.iter().all(|x| !held.contains(&twin(x).as_str())))
+        .count();
+    assert!(0 < expected && expected < training.len(), "{expected}");
+    assert_eq!(fold["train_pairs"], training.len(), "{fold}");
+    assert_eq!(fold["mirrored_pairs"], expected, "{fold}");
+    // `eval s2d` sees the mirror in the model's metadata and rebuilds the same baselines.
+    let mirror_eval = dir.path().join("mir-e.json");
+    ok(&[
+        "eval",
+        "s2d",
+        "--model",
+        s(&mirrored),
+        "--pairs",
+        s(&pairs),
+        "--report",
+        s(&mirror_eval),
+    ]);
+    let e: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&mirror_eval).unwrap()).unwrap();
+    assert_eq!(e["mean_error_mm"], r["mean_error_mm"]);
+    assert_eq!(e["baselines"], r["baselines"]);
+    assert_eq!(e["per_fold"][0]["mirrored_pairs"], expected);
+    // Without --mirror the baselines learn from the unmirrored pairs alone, and the report
+    // names no mirrored pairs.
+    let plain = expression(
+        &dir.path().join("plain.sinew"),
+        &dir.path().join("plain.json"),
+        false,
+    );
+    assert!(plain["per_fold"][0].get("mirrored_pairs").is_none());
+    assert_ne!(
+        plain["baselines"]["pca_max"]["mean_error_mm"],
+        r["baselines"]["pca_max"]["mean_error_mm"]
+    );
+
     // Applications on real faces of the decoder's template (the ICT face region).
     let ict = sinew_host::ict::IctFaceKit::open(&kit).unwrap();
     let (face, _) = ict

@@ -31,6 +31,7 @@ use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 use sinew_core::{ArtifactKind, SinewFile};
 
+use super::symmetry::Mirror;
 use super::train::{Sample, landmark_input};
 use crate::container::SinewWriter;
 use crate::ict::{FACE_REGION, IctFaceKit};
@@ -544,16 +545,34 @@ impl PairSet {
     /// Pair `p` as a training sample: the decoder's normalised landmark input and the dense
     /// displacement, flattened.
     pub fn sample(&self, p: usize) -> Result<Sample> {
-        let d = self.displacement(p);
-        let n = self.neutral(p);
-        let e: Vec<[f32; 3]> = n
+        self.sample_of(self.neutral(p), &self.displacement(p))
+    }
+
+    /// Pair `p` mirrored left to right as a training sample: the mirrored neutral (a new
+    /// identity) with the mirrored displacement (the mirrored expression).
+    ///
+    /// # Errors
+    /// As [`PairSet::sample`].
+    ///
+    /// # Panics
+    /// If `mirror` is not the symmetry of this set's template (another vertex count).
+    pub fn mirrored_sample(&self, p: usize, mirror: &Mirror) -> Result<Sample> {
+        self.sample_of(
+            &mirror.positions(self.neutral(p)),
+            &mirror.vectors(&self.displacement(p)),
+        )
+    }
+
+    /// The sample of a neutral face region and its displacement.
+    fn sample_of(&self, neutral: &[[f32; 3]], displacement: &[[f32; 3]]) -> Result<Sample> {
+        let e: Vec<[f32; 3]> = neutral
             .iter()
-            .zip(&d)
+            .zip(displacement)
             .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
             .collect();
         Ok(Sample {
-            input: landmark_input(&self.landmarks_of(n), &self.landmarks_of(&e))?,
-            displacement: d.iter().flatten().copied().collect(),
+            input: landmark_input(&self.landmarks_of(neutral), &self.landmarks_of(&e))?,
+            displacement: displacement.iter().flatten().copied().collect(),
         })
     }
 

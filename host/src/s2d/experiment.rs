@@ -17,8 +17,9 @@ use super::data::{Expressions, PairSet};
 use super::decoder::{DecoderConfig, S2dDecoder};
 use super::hierarchy;
 use super::protocol::{FOLDS, Protocol, Split, split};
+use super::symmetry::{Mirror, partners};
 use super::train::{
-    LossVariant, TrainConfig, TrainOptions, landmark_distances, train, vertex_weights,
+    LossVariant, Sample, TrainConfig, TrainOptions, landmark_distances, train, vertex_weights,
 };
 use crate::backend::Backend;
 
@@ -151,6 +152,53 @@ pub struct FoldReport {
     /// the test pairs that involve it (absent from reports written before it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub per_held_out: Vec<HeldOutErrors>,
+    /// Mirror images of training pairs added to the training set, of S2D-Dec and of every
+    /// baseline (`train s2d --mirror`; absent when none).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub mirrored_pairs: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
+/// `train s2d --mirror`: the face region's left–right symmetry, and each expression shape's
+/// mirror image among the shapes.
+struct Mirroring {
+    mirror: Mirror,
+    partners: Vec<Option<usize>>,
+}
+
+impl Mirroring {
+    fn of(set: &PairSet) -> Result<Self> {
+        let mirror = Mirror::of(&set.template).context("mirroring the pairs' face region")?;
+        // On identity 0 (the shapes' images are the same for every identity when shared, and
+        // within 6 % of each other when transferred: `symmetry::PARTNER_RESIDUAL`).
+        let shapes: Vec<&[[f32; 3]]> = (0..set.manifest.expressions.len())
+            .map(|e| set.delta(0, e))
+            .collect();
+        let partners = partners(&mirror, &shapes);
+        Ok(Self { mirror, partners })
+    }
+
+    /// The mirror images of the training pairs of `s` that may train: every pair on the identity
+    /// split (a mirrored identity is a new identity); on the expression split, the pairs whose
+    /// every shape mirrors onto a training shape (or onto no shape), so that no held-out shape is
+    /// seen, not even as a training shape's mirror image (`mouthLeft` mirrored is `mouthRight`).
+    fn training_samples(&self, set: &PairSet, s: &Split) -> Result<Vec<Sample>> {
+        let names = &set.manifest.expressions;
+        let allowed = |p: usize| match s.protocol {
+            Protocol::Identity => true,
+            Protocol::Expression => set.combinations[p]
+                .iter()
+                .all(|&(e, _)| self.partners[e].is_none_or(|b| !s.held_out.contains(&names[b]))),
+        };
+        s.train
+            .iter()
+            .filter(|&&p| allowed(p))
+            .map(|&p| set.mirrored_sample(p, &self.mirror))
+            .collect()
+    }
 }
 
 /// The errors on the test pairs of a fold that involve one held-out expression shape (every pair
@@ -263,6 +311,9 @@ pub struct TrainS2d {
     /// Continue each fold from its checkpoint ([`fold_checkpoint_path`]); a fold without one
     /// (after fold 0) starts from the beginning, a complete one is only baked and evaluated.
     pub resume: bool,
+    /// Add the mirror images of training pairs to the training set, of S2D-Dec and of the
+    /// baselines (`Mirroring::training_samples` says which).
+    pub mirror: bool,
 }
 
 /// The hierarchy cache folder: `$SINEW_CACHE`, else `sinew-cache` in the system's temporary
@@ -305,14 +356,19 @@ fn vertex_errors(set: &PairSet, p: usize, predicted: &[f32], out: &mut Vec<f32>)
 }
 
 /// Per-vertex errors (mm) of pca99, pca_max and DL-3DMM on the test pairs of `s`, and the
-/// training span's floor.
-pub fn baseline_errors(set: &PairSet, s: &Split) -> Result<BaselineErrors> {
+/// training span's floor; the models learn from the training pairs' displacements and `extra`
+/// ones (flattened, as [`Sample::displacement`]: the mirrored pairs of `train s2d --mirror`).
+pub fn baseline_errors(set: &PairSet, s: &Split, extra: &[&[f32]]) -> Result<BaselineErrors> {
     let train: Vec<Vec<f32>> = s
         .train
         .iter()
         .map(|&p| set.displacement(p).iter().flatten().copied().collect())
         .collect();
-    let refs: Vec<&[f32]> = train.iter().map(Vec::as_slice).collect();
+    let refs: Vec<&[f32]> = train
+        .iter()
+        .map(Vec::as_slice)
+        .chain(extra.iter().copied())
+        .collect();
     let pca = Pca::fit(&refs)?;
     let k99 = pca.components_for(0.99);
     let kmax = pca.rank().min(220);
@@ -515,22 +571,28 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         loss,
         ..args.train.clone()
     };
+    let mirroring = args.mirror.then(|| Mirroring::of(&set)).transpose()?;
     let mut per_fold = Vec::new();
     let mut errors: [Vec<f32>; 5] = Default::default();
     for fold in 0..args.folds {
         let s = split(&set.manifest, args.protocol, fold)?;
-        let samples = s
+        let mut samples = s
             .train
             .iter()
             .map(|&p| set.sample(p))
             .collect::<Result<Vec<_>>>()?;
+        if let Some(m) = &mirroring {
+            samples.extend(m.training_samples(&set, &s)?);
+        }
         let device = args.backend.autodiff_device(config.seed)?;
         let decoder = S2dDecoder::new(&args.decoder, &h, &device)?;
         if !quiet {
             eprintln!(
-                "{} fold {fold}: {} training pairs, {} test pairs, {} epochs, {} parameters",
+                "{} fold {fold}: {} training pairs ({} of them mirrored), {} test pairs, {} \
+                 epochs, {} parameters",
                 args.protocol,
-                s.train.len(),
+                samples.len(),
+                samples.len() - s.train.len(),
                 s.test.len(),
                 config.epochs,
                 decoder.parameter_count()
@@ -575,7 +637,7 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         let trained = train(decoder, &samples, &weights, &config, &device, &options)?;
         let train_seconds = trained.state.seconds;
         let (decoder, losses) = (trained.decoder, trained.state.losses);
-        let meta = [
+        let mut meta = vec![
             ("content", "s2d-decoder".to_owned()),
             ("units", set.manifest.units.clone()),
             ("protocol", args.protocol.to_string()),
@@ -587,12 +649,25 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
             ("decoder", serde_json::to_string(&args.decoder)?),
             ("factors", serde_json::to_string(&args.factors)?),
             ("source", set.manifest.source.clone()),
-        ]
-        .map(|(k, v)| (k.to_owned(), v));
+        ];
+        if args.mirror {
+            meta.push(("mirror", "true".to_owned()));
+        }
+        let meta: Vec<(String, String)> =
+            meta.into_iter().map(|(k, v)| (k.to_owned(), v)).collect();
         let bytes = super::bake::bake(&decoder, &h, &set.manifest.landmarks, &meta)?;
         let model = fold_model_path(&args.out, fold);
         crate::atomic::write(&model, &bytes)?;
-        let fr = evaluate_fold(&bytes, &set, &s, model, losses, train_seconds, &mut errors)?;
+        let mirrored: Vec<&[f32]> = samples[s.train.len()..]
+            .iter()
+            .map(|m| m.displacement.as_slice())
+            .collect();
+        let fr = FoldReport {
+            model,
+            losses,
+            train_seconds,
+            ..evaluate_fold(&bytes, &set, &s, &mirrored, &mut errors)?
+        };
         if !quiet {
             eprintln!(
                 "fold {fold}: S2D {:.3} ± {:.3} mm, pca99 ({} comp.) {:.3} mm, pca_max ({} comp.) \
@@ -634,6 +709,9 @@ fn run_context(
         factors: args.factors.clone(),
         spiral_lengths: None,
     };
+    let mirror = args
+        .mirror
+        .then(|| ("mirror".to_owned(), "true".to_owned()));
     Ok([
         ("protocol", args.protocol.to_string()),
         ("fold", s.fold.to_string()),
@@ -653,22 +731,23 @@ fn run_context(
     ]
     .into_iter()
     .map(|(k, v)| (k.to_owned(), v))
+    .chain(mirror)
     .collect())
 }
 
-/// Evaluates a baked model and the baselines on split `s`, appending the per-vertex errors to
-/// `errors` (S2D, pca99, pca_max, DL-3DMM, the span's floor).
+/// Evaluates a baked model and the baselines on split `s` (the baselines learning from the
+/// training pairs and the `mirrored` displacements), appending the per-vertex errors to `errors`
+/// (S2D, pca99, pca_max, DL-3DMM, the span's floor). The report's model path, losses and
+/// training time are left empty for the caller.
 fn evaluate_fold(
     model_bytes: &[u8],
     set: &PairSet,
     s: &Split,
-    model: PathBuf,
-    losses: Vec<f32>,
-    train_seconds: f64,
+    mirrored: &[&[f32]],
     errors: &mut [Vec<f32>; 5],
 ) -> Result<FoldReport> {
     let s2d = decoder_errors(model_bytes, set, s)?;
-    let b = baseline_errors(set, s)?;
+    let b = baseline_errors(set, s, mirrored)?;
     let pairs = &set.manifest.pairs;
     let involves = |p: usize, item: &str| match s.protocol {
         Protocol::Identity => pairs[p].identity.to_string() == item,
@@ -692,10 +771,11 @@ fn evaluate_fold(
             dl_3dmm: ErrorStats::of(&b.dl_3dmm.0, Some(b.dl_3dmm.1)),
             span_floor: ErrorStats::of(&b.span_floor.0, Some(b.span_floor.1)),
         },
-        model,
-        losses,
-        train_seconds,
+        model: PathBuf::new(),
+        losses: Vec::new(),
+        train_seconds: 0.0,
         per_held_out: by_held_out,
+        mirrored_pairs: mirrored.len(),
     };
     errors[0].extend(s2d);
     errors[1].extend(b.pca99.0);
@@ -741,6 +821,12 @@ fn trained_split(
     Ok((protocol, fold))
 }
 
+/// Whether a model from `train s2d` was trained with `--mirror` (its `mirror` metadata).
+fn mirrored_model(bytes: &[u8]) -> bool {
+    sinew_core::SinewFile::from_bytes(bytes)
+        .is_ok_and(|f| f.metadata().get("mirror") == Some("true"))
+}
+
 /// `sinew eval s2d`: evaluates a model from `train s2d` on the test pairs of the fold it was
 /// trained for (its `protocol` and `fold` metadata), with the baselines on the same split. With
 /// `folds` K > 1, `model` is fold 0's and folds 1 to K − 1 are read beside it
@@ -756,6 +842,7 @@ pub fn eval_s2d(model: &Path, pairs: &Path, folds: usize, report: &Path) -> Resu
     let mut errors: [Vec<f32>; 5] = Default::default();
     let mut per_fold = Vec::with_capacity(folds);
     let mut first = None;
+    let mut mirroring = None;
     for k in 0..folds {
         let path = fold_model_path(model, k);
         let bytes = crate::container::read(&path)?;
@@ -776,8 +863,23 @@ pub fn eval_s2d(model: &Path, pairs: &Path, folds: usize, report: &Path) -> Resu
         }
         first = Some(protocol);
         let s = split(&set.manifest, protocol, fold)?;
-        let fr = evaluate_fold(&bytes, &set, &s, path.clone(), Vec::new(), 0.0, &mut errors)
-            .with_context(|| format!("{}", path.display()))?;
+        // A model trained with --mirror is compared with baselines that learnt from the same
+        // mirrored pairs.
+        let mirrored = if mirrored_model(&bytes) {
+            let m = match &mirroring {
+                Some(m) => m,
+                None => mirroring.insert(Mirroring::of(&set)?),
+            };
+            m.training_samples(&set, &s)?
+        } else {
+            Vec::new()
+        };
+        let extra: Vec<&[f32]> = mirrored.iter().map(|m| m.displacement.as_slice()).collect();
+        let fr = FoldReport {
+            model: path.clone(),
+            ..evaluate_fold(&bytes, &set, &s, &extra, &mut errors)
+                .with_context(|| format!("{}", path.display()))?
+        };
         per_fold.push(fr);
     }
     let protocol = first.context("no fold evaluated")?;
@@ -888,7 +990,7 @@ mod tests {
         };
         for protocol in [Protocol::Identity, Protocol::Expression] {
             let s = split(&set.manifest, protocol, 0).unwrap();
-            let all = baseline_errors(set, &s).unwrap();
+            let all = baseline_errors(set, &s, &[]).unwrap();
             let [(p99, k99), (pmax, kmax), (dl, atoms)] = [all.pca99, all.pca_max, all.dl_3dmm];
             let (a, b) = (ErrorStats::of(&p99, None), ErrorStats::of(&pmax, None));
             let d = ErrorStats::of(&dl, None);
@@ -927,7 +1029,7 @@ mod tests {
                 return;
             };
             let s = split(&set.manifest, Protocol::Identity, 0).unwrap();
-            let (pmax, kmax) = baseline_errors(set, &s).unwrap().pca_max;
+            let (pmax, kmax) = baseline_errors(set, &s, &[]).unwrap().pca_max;
             let e = ErrorStats::of(&pmax, None).mean_error_mm;
             eprintln!("identity split, {expressions:?} expressions: pca_max ({kmax}) {e:.4} mm");
             pca_max.push(e);

@@ -60,5 +60,6 @@ pub mod experiment;
 pub mod hierarchy;
 pub mod protocol;
 pub mod spirals;
+pub mod symmetry;
 pub mod synthetic;
 pub mod train;
