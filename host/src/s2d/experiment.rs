@@ -785,14 +785,14 @@ fn evaluate_fold(
     Ok(fr)
 }
 
-/// The protocol and fold a model from `train s2d` was trained for (its metadata), checked
-/// against the pairs' seed.
+/// The protocol and fold a model from `train s2d` was trained for, and whether with `--mirror`
+/// (its metadata), checked against the pairs' seed.
 fn trained_split(
     model: &Path,
     bytes: &[u8],
     set: &PairSet,
     pairs: &Path,
-) -> Result<(Protocol, usize)> {
+) -> Result<(Protocol, usize, bool)> {
     let file = sinew_core::SinewFile::from_bytes(bytes)
         .map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
     let meta = file.metadata();
@@ -818,13 +818,7 @@ fn trained_split(
             set.manifest.config.seed
         );
     }
-    Ok((protocol, fold))
-}
-
-/// Whether a model from `train s2d` was trained with `--mirror` (its `mirror` metadata).
-fn mirrored_model(bytes: &[u8]) -> bool {
-    sinew_core::SinewFile::from_bytes(bytes)
-        .is_ok_and(|f| f.metadata().get("mirror") == Some("true"))
+    Ok((protocol, fold, meta.get("mirror") == Some("true")))
 }
 
 /// `sinew eval s2d`: evaluates a model from `train s2d` on the test pairs of the fold it was
@@ -846,7 +840,7 @@ pub fn eval_s2d(model: &Path, pairs: &Path, folds: usize, report: &Path) -> Resu
     for k in 0..folds {
         let path = fold_model_path(model, k);
         let bytes = crate::container::read(&path)?;
-        let (protocol, fold) = trained_split(&path, &bytes, &set, pairs)?;
+        let (protocol, fold, mirrored) = trained_split(&path, &bytes, &set, pairs)?;
         if folds > 1 {
             ensure!(
                 fold == k,
@@ -865,7 +859,7 @@ pub fn eval_s2d(model: &Path, pairs: &Path, folds: usize, report: &Path) -> Resu
         let s = split(&set.manifest, protocol, fold)?;
         // A model trained with --mirror is compared with baselines that learnt from the same
         // mirrored pairs.
-        let mirrored = if mirrored_model(&bytes) {
+        let mirrored = if mirrored {
             let m = match &mirroring {
                 Some(m) => m,
                 None => mirroring.insert(Mirroring::of(&set)?),
