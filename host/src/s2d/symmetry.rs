@@ -53,13 +53,8 @@ impl Mirror {
             .map(|p| p.map(f64::from))
             .collect();
         ensure!(!points.is_empty(), "the template has no vertices");
-        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-        for p in &points {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let (lo, hi) = template.bounds();
+        let (lo, hi) = (lo.map(f64::from), hi.map(f64::from));
         let diagonal = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
         ensure!(
             diagonal > 0.0,
