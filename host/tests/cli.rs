@@ -546,19 +546,9 @@ fn s2d_pairs_train_and_eval_end_to_end() {
     assert_eq!(fold["train_pairs"], training.len(), "{fold}");
     assert_eq!(fold["mirrored_pairs"], expected, "{fold}");
     // `eval s2d` sees the mirror in the model's metadata and rebuilds the same baselines.
-    let mirror_eval = dir.path().join("mir-e.json");
-    ok(&[
-        "eval",
-        "s2d",
-        "--model",
-        s(&mirrored),
-        "--pairs",
-        s(&pairs),
-        "--report",
-        s(&mirror_eval),
-    ]);
+    eval("1", &mirrored, true);
     let e: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&mirror_eval).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(&eval_two).unwrap()).unwrap();
     assert_eq!(e["mean_error_mm"], r["mean_error_mm"]);
     assert_eq!(e["baselines"], r["baselines"]);
     assert_eq!(e["per_fold"][0]["mirrored_pairs"], expected);
