@@ -32,6 +32,12 @@ pub enum Activation {
     },
     /// ReLU, `0` if `x < 0`, else `x` (so `−0.0` and NaN pass through unchanged). Code 4.
     Relu,
+    /// Leaky ReLU, `slope · x` if `x < 0`, else `x` (NaN passes through). Code 5; parameter
+    /// `slope`.
+    LeakyRelu {
+        /// Gradient of the negative branch.
+        slope: f32,
+    },
 }
 
 impl Activation {
@@ -40,7 +46,7 @@ impl Activation {
     /// Variants without a parameter ignore `param`, which must still be finite.
     ///
     /// # Errors
-    /// [`FormatError::UnknownCode`] for a code above 4; [`FormatError::NonFinite`] if `param` is
+    /// [`FormatError::UnknownCode`] for a code above 5; [`FormatError::NonFinite`] if `param` is
     /// NaN or infinite.
     pub fn from_code(code: u32, param: f32) -> Result<Self, FormatError> {
         let act = match code {
@@ -49,6 +55,7 @@ impl Activation {
             2 => Self::Gelu,
             3 => Self::Elu { alpha: param },
             4 => Self::Relu,
+            5 => Self::LeakyRelu { slope: param },
             _ => return Err(FormatError::UnknownCode),
         };
         if !param.is_finite() {
@@ -57,7 +64,8 @@ impl Activation {
         Ok(act)
     }
 
-    /// The code of this activation in the format: 0 Identity, 1 Sine, 2 Gelu, 3 Elu, 4 Relu.
+    /// The code of this activation in the format: 0 Identity, 1 Sine, 2 Gelu, 3 Elu, 4 Relu,
+    /// 5 LeakyRelu.
     pub const fn code(&self) -> u32 {
         match self {
             Self::Identity => 0,
@@ -65,14 +73,17 @@ impl Activation {
             Self::Gelu => 2,
             Self::Elu { .. } => 3,
             Self::Relu => 4,
+            Self::LeakyRelu { .. } => 5,
         }
     }
 
-    /// The parameter stored with the code: `ω0` for Sine, `α` for Elu, `0.0` otherwise.
+    /// The parameter stored with the code: `ω0` for Sine, `α` for Elu, the slope for LeakyRelu,
+    /// `0.0` otherwise.
     pub const fn param(&self) -> f32 {
         match *self {
             Self::Sine { omega0 } => omega0,
             Self::Elu { alpha } => alpha,
+            Self::LeakyRelu { slope } => slope,
             Self::Identity | Self::Gelu | Self::Relu => 0.0,
         }
     }
@@ -96,6 +107,13 @@ impl Activation {
             Self::Relu => {
                 if z < 0.0 {
                     0.0
+                } else {
+                    z
+                }
+            }
+            Self::LeakyRelu { slope } => {
+                if z < 0.0 {
+                    slope * z
                 } else {
                     z
                 }
@@ -372,10 +390,11 @@ mod tests {
             Activation::Gelu,
             Activation::Elu { alpha: 1.0 },
             Activation::Relu,
+            Activation::LeakyRelu { slope: 0.2 },
         ] {
             assert_eq!(Activation::from_code(a.code(), a.param()), Ok(a));
         }
-        assert_eq!(Activation::from_code(5, 0.0), Err(FormatError::UnknownCode));
+        assert_eq!(Activation::from_code(6, 0.0), Err(FormatError::UnknownCode));
         assert_eq!(
             Activation::from_code(1, f32::NAN),
             Err(FormatError::NonFinite)
@@ -420,6 +439,10 @@ mod tests {
         assert_eq!(Activation::Relu.apply(-2.0), 0.0);
         assert_eq!(Activation::Relu.apply(2.5), 2.5);
         assert!(Activation::Relu.apply(f32::NAN).is_nan());
+        let leaky = Activation::LeakyRelu { slope: 0.25 };
+        assert_eq!(leaky.apply(-2.0), -0.5);
+        assert_eq!(leaky.apply(2.5), 2.5);
+        assert!(leaky.apply(f32::NAN).is_nan());
     }
 
     #[test]

@@ -19,10 +19,11 @@
 //! | `s2d.h<k>.spiral` | u32 | [n_k + 1, len_k] | spirals of level k (indices ≤ n_k) |
 //! | `s2d.u<k>.ptr`, `.col`, `.val` | u32, u32, f32 | [n_k + 2], [nnz], [nnz] | U_k: level k+1 → k, CSR `(n_k + 1) × (n_{k+1} + 1)` |
 //! | `s2d.cfg` | u32 | [3] | inputs, F (features after the FC), outputs (3) |
-//! | `s2d.input` | u32 | [1] | input normalisation code ([`INPUT_FROBENIUS`]) |
+//! | `s2d.input` | u32 | [1] | input normalisation code ([`INPUT_FROBENIUS`] or [`INPUT_NEUTRAL_SCALE`]) |
 //! | `s2d.lmk` | u32 | [inputs / 3] | landmark vertex of each input landmark (< n_0) |
 //! | `s2d.fc.w`, `s2d.fc.b` | f32 | [(n_L + 1) · F, inputs], [(n_L + 1) · F] | the FC layer |
-//! | `s2d.conv.<k>.w`, `.b` | f32 | [out, len_k · in], [out] | the stage convolution at level k < L (ELU) |
+//! | `s2d.conv.<k>.w`, `.b` | f32 | [out, len_k · in], [out] | the stage convolution at level k < L |
+//! | `s2d.act`, `s2d.par` | u32, f32 | [1], [1] | optional: the stages' activation code and parameter ([`Activation::from_code`]); absent: ELU, α = 1 |
 //! | `s2d.out.w`, `s2d.out.b` | f32 | [outputs, len_0 · in], [outputs] | the output convolution (identity) |
 
 use core::fmt::Write;
@@ -41,6 +42,11 @@ pub const MAX_LEVELS: usize = 8;
 /// the input is `normalised(expressive) − normalised(neutral)` ([`landmark_input`]).
 pub const INPUT_FROBENIUS: u32 = 1;
 
+/// `s2d.input` code: each landmark set is centred on its mean and both are divided by the
+/// neutral set's Frobenius norm, so the input is linear in the landmark displacement
+/// ([`landmark_input_neutral_scale`]).
+pub const INPUT_NEUTRAL_SCALE: u32 = 2;
+
 /// A validated S2D decoder over the artefact's bytes.
 #[derive(Clone, Debug)]
 pub struct S2dDecoder<'a> {
@@ -54,6 +60,7 @@ pub struct S2dDecoder<'a> {
     out: SpiralConv<'a>,
     neutral: F32s<'a>,
     landmarks: U32s<'a>,
+    input_code: u32,
     half: usize,
     conv_scratch: usize,
 }
@@ -95,7 +102,8 @@ impl<'a> S2dDecoder<'a> {
         if inputs == 0 || fc_features == 0 || outputs != 3 || !inputs.is_multiple_of(3) {
             return Err(FormatError::IncompatibleShapes);
         }
-        if file.u32_tensor("s2d.input", &[1])?.get(0) != Some(INPUT_FROBENIUS) {
+        let input_code = file.u32_tensor("s2d.input", &[1])?.at(0);
+        if input_code != INPUT_FROBENIUS && input_code != INPUT_NEUTRAL_SCALE {
             return Err(FormatError::UnknownCode);
         }
         let [levels, two] = dims2(&file, "s2d.levels")?;
@@ -168,6 +176,15 @@ impl<'a> S2dDecoder<'a> {
             SpiralConv::new(spirals, w, b, inputs, out as usize, act)
         };
 
+        // The stages' activation: ELU (α = 1) as in the reference, or the one the artefact names.
+        let stage_act = match file.section("s2d.act") {
+            None => Activation::Elu { alpha: 1.0 },
+            Some(_) => Activation::from_code(
+                file.u32_tensor("s2d.act", &[1])?.at(0),
+                file.f32_tensor("s2d.par", &[1])?.at(0),
+            )?,
+        };
+
         let mut half = fc_out;
         let grow = |half: usize, rows: usize, width: usize| -> Result<usize, FormatError> {
             let n = rows.checked_mul(width).ok_or(FormatError::LimitExceeded)?;
@@ -190,7 +207,7 @@ impl<'a> S2dDecoder<'a> {
             ups.push(Csr::new(rows, cols, ptr, col, val)?)
                 .map_err(|_| FormatError::LimitExceeded)?;
             half = grow(half, rows, width)?;
-            let conv = conv_at("s2d.conv", Some(k), width, Activation::Elu { alpha: 1.0 })?;
+            let conv = conv_at("s2d.conv", Some(k), width, stage_act)?;
             width = conv.out_features();
             half = grow(half, rows, width)?;
             convs.push(conv).map_err(|_| FormatError::LimitExceeded)?;
@@ -221,6 +238,7 @@ impl<'a> S2dDecoder<'a> {
             out,
             neutral,
             landmarks,
+            input_code,
             half,
             conv_scratch,
         })
@@ -259,6 +277,30 @@ impl<'a> S2dDecoder<'a> {
     /// The landmark vertex indices, `[inputs / 3]`.
     pub const fn landmarks(&self) -> U32s<'a> {
         self.landmarks
+    }
+
+    /// The `s2d.input` code: how [`Self::input`] normalises landmarks ([`INPUT_FROBENIUS`] or
+    /// [`INPUT_NEUTRAL_SCALE`]).
+    pub const fn input_normalisation(&self) -> u32 {
+        self.input_code
+    }
+
+    /// This decoder's input from a neutral and an expressive landmark set, normalised as it was
+    /// trained ([`landmark_input`] or [`landmark_input_neutral_scale`]).
+    ///
+    /// # Errors
+    /// As [`landmark_input`].
+    pub fn input(
+        &self,
+        neutral: &[f32],
+        expressive: &[f32],
+        out: &mut [f32],
+    ) -> Result<(), BufferError> {
+        if self.input_code == INPUT_NEUTRAL_SCALE {
+            landmark_input_neutral_scale(neutral, expressive, out)
+        } else {
+            landmark_input(neutral, expressive, out)
+        }
     }
 
     /// Scratch length [`Self::decode`] needs: two buffers of the largest feature map (dummy rows
@@ -375,6 +417,32 @@ pub fn landmark_input(
     expressive: &[f32],
     out: &mut [f32],
 ) -> Result<(), BufferError> {
+    centred_difference(neutral, expressive, out, |e, n, se, sn| e * se - n * sn)
+}
+
+/// The decoder's input from two landmark sets ([`INPUT_NEUTRAL_SCALE`]): each set, `[K, 3]`, is
+/// centred on its mean, and `out = (centred(expressive) − centred(neutral)) / ‖centred(neutral)‖`
+/// (not scaled if that norm is 0), `[K · 3]`: the landmark displacement, less its mean, in units
+/// of the neutral's size.
+///
+/// # Errors
+/// As [`landmark_input`].
+pub fn landmark_input_neutral_scale(
+    neutral: &[f32],
+    expressive: &[f32],
+    out: &mut [f32],
+) -> Result<(), BufferError> {
+    centred_difference(neutral, expressive, out, |e, n, _, sn| (e - n) * sn)
+}
+
+/// Centres both `[K, 3]` sets and writes `combine(e, n, se, sn)` for each coordinate, with `e`, `n`
+/// the centred coordinates and `se`, `sn` the reciprocal norms of the expressive and neutral sets.
+fn centred_difference(
+    neutral: &[f32],
+    expressive: &[f32],
+    out: &mut [f32],
+    combine: impl Fn(f32, f32, f32, f32) -> f32,
+) -> Result<(), BufferError> {
     if neutral.len() != expressive.len() || !neutral.len().is_multiple_of(3) {
         return Err(BufferError::Input);
     }
@@ -389,7 +457,7 @@ pub fn landmark_input(
         .zip(expressive.chunks_exact(3))
     {
         for (((o, n), e), (a, b)) in o.iter_mut().zip(n).zip(e).zip(cn.iter().zip(&ce)) {
-            *o = (*e - b) * se - (*n - a) * sn;
+            *o = combine(*e - b, *n - a, se, sn);
         }
     }
     Ok(())
@@ -465,5 +533,44 @@ mod tests {
         let mut z = [9.0; 6];
         landmark_input(&[1.0; 6], &[1.0; 6], &mut z).unwrap();
         assert_eq!(z, [0.0; 6]);
+    }
+
+    #[test]
+    fn neutral_scale_input_hand_computed() {
+        // Neutral (0,0,0), (2,0,0): centre (1,0,0), norm √2. Expressive (0,0,0), (0,4,0): centre
+        // (0,2,0), centred (0,−2,0), (0,2,0). Displacement of the centred sets: (1,−2,0),
+        // (−1,2,0), divided by √2.
+        let neutral = [0.0, 0.0, 0.0, 2.0, 0.0, 0.0];
+        let expressive = [0.0, 0.0, 0.0, 0.0, 4.0, 0.0];
+        let mut out = [0.0; 6];
+        landmark_input_neutral_scale(&neutral, &expressive, &mut out).unwrap();
+        let s = core::f32::consts::FRAC_1_SQRT_2;
+        let expected = [s, -2.0 * s, 0.0, -s, 2.0 * s, 0.0];
+        for (o, e) in out.iter().zip(expected) {
+            assert!((o - e).abs() < 1e-6, "{out:?}");
+        }
+        // A translated expressive set gives the same input; a scaled one a scaled input
+        // (unlike `landmark_input`, whose sets are each scaled to unit norm).
+        let moved = [5.0, 1.0, 1.0, 5.0, 5.0, 1.0];
+        let mut again = [0.0; 6];
+        landmark_input_neutral_scale(&neutral, &moved, &mut again).unwrap();
+        for (a, b) in out.iter().zip(again) {
+            assert!((a - b).abs() < 1e-6, "{again:?}");
+        }
+        // Twice the displacement, twice the input.
+        let twice = [0.0, 0.0, 0.0, -2.0, 8.0, 0.0];
+        landmark_input_neutral_scale(&neutral, &twice, &mut again).unwrap();
+        let centred_twice = [2.0 * s, -4.0 * s, 0.0, -2.0 * s, 4.0 * s, 0.0];
+        for (a, b) in again.iter().zip(centred_twice) {
+            assert!((a - b).abs() < 1e-6, "{again:?}");
+        }
+        assert_eq!(
+            landmark_input_neutral_scale(&neutral, &expressive[..3], &mut out),
+            Err(BufferError::Input)
+        );
+        assert_eq!(
+            landmark_input_neutral_scale(&neutral, &expressive, &mut out[..5]),
+            Err(BufferError::Output)
+        );
     }
 }

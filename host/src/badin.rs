@@ -346,12 +346,10 @@ impl Badin {
     /// The outer skin and its constraints (ray depth up to `params.max_depth`).
     pub fn skin(&self, params: &ConstraintParams) -> BadinSkin {
         let scene = self.bone_scene();
-        let all = Mesh {
-            positions: self.fem.nodes.clone(),
-            polygons: self.fem.outer_skin(&scene, self.bone_centroid()),
-            uvs: Vec::new(),
-            polygon_uvs: Vec::new(),
-        };
+        let all = Mesh::new(
+            self.fem.nodes.clone(),
+            self.fem.outer_skin(&scene, self.bone_centroid()),
+        );
         let mut on_skin = vec![false; all.positions.len()];
         for f in &all.polygons {
             for &v in f {

@@ -886,11 +886,11 @@ pub fn fit(
             }
         })
         .collect();
-    let moved = |m: &Mesh, tf: &Affine| Mesh {
-        positions: m.positions.iter().map(|p| v32(tf.apply(v64(*p)))).collect(),
-        polygons: m.polygons.clone(),
-        uvs: Vec::new(),
-        polygon_uvs: Vec::new(),
+    let moved = |m: &Mesh, tf: &Affine| {
+        Mesh::new(
+            m.positions.iter().map(|p| v32(tf.apply(v64(*p)))).collect(),
+            m.polygons.clone(),
+        )
     };
     let skull_tf = tf_of(Bone::Skull);
     let mut skull = moved(&templates.maxilla, &skull_tf);
@@ -1927,12 +1927,7 @@ mod tests {
                 polygons.push(vec![v, v + 1, v + n + 2, v + n + 1]);
             }
         }
-        Mesh {
-            positions,
-            polygons,
-            uvs: Vec::new(),
-            polygon_uvs: Vec::new(),
-        }
+        Mesh::new(positions, polygons)
     }
 
     #[test]
@@ -1973,12 +1968,7 @@ mod tests {
             [0, 4, 6, 2],
             [1, 3, 7, 5],
         ];
-        let skin = Mesh {
-            positions: p,
-            polygons: quads.iter().map(|q| q.to_vec()).collect(),
-            uvs: Vec::new(),
-            polygon_uvs: Vec::new(),
-        };
+        let skin = Mesh::new(p, quads.iter().map(|q| q.to_vec()).collect());
         let frame = FaceFrame {
             left: [1.0, 0.0, 0.0],
             up: [0.0, 1.0, 0.0],

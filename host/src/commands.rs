@@ -270,12 +270,7 @@ pub fn mesh_of(actor: &AimActor<'_>) -> Mesh {
         .chunks_exact(3)
         .map(<[u32]>::to_vec)
         .collect();
-    Mesh {
-        positions,
-        polygons,
-        uvs: Vec::new(),
-        polygon_uvs: Vec::new(),
-    }
+    Mesh::new(positions, polygons)
 }
 
 /// Reads a region file: JSON, either a list of vertex indices (weight 1) or an object
@@ -524,7 +519,7 @@ pub fn bake(
 #[derive(Debug, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct S2dInputFrame {
-    /// The decoder input, `[I]` (`sinew_core::s2d::landmark_input`).
+    /// The decoder input, `[I]` (`sinew_core::s2d::S2dDecoder::input`).
     input: Vec<f32>,
 }
 

@@ -11,7 +11,7 @@ use sinew_host::aim::run::Outputs;
 use sinew_host::backend::Backend;
 use sinew_host::commands;
 use sinew_host::s2d::data::{Expressions, PairsConfig};
-use sinew_host::s2d::decoder::DecoderConfig;
+use sinew_host::s2d::decoder::{DecoderConfig, InputNormalisation, StageActivation};
 use sinew_host::s2d::experiment::{self, DEFAULT_EPOCHS, Objective, TrainS2d};
 use sinew_host::s2d::hierarchy::{Config, DEFAULT_FACTORS};
 use sinew_host::s2d::protocol::{FOLDS, Protocol};
@@ -307,6 +307,13 @@ struct TrainS2dArgs {
     /// default: the reference's 64,32,32,16).
     #[arg(long, value_delimiter = ',')]
     filters: Option<Vec<usize>>,
+    /// Activation after each stage's spiral convolution (the reference's is ELU).
+    #[arg(long, value_enum, default_value_t = StageActivation::Elu)]
+    activation: StageActivation,
+    /// How the decoder's input is made from the neutral and expressive landmarks (the
+    /// reference's is `frobenius`).
+    #[arg(long, value_enum, default_value_t = InputNormalisation::Frobenius)]
+    input: InputNormalisation,
     /// Continue each fold from its checkpoint (MODEL.ckpt/, MODEL.fold<k>.ckpt/ beside the
     /// models, written after every epoch and on Ctrl-C); give the same other arguments. A fold
     /// whose checkpoint is complete is only baked and evaluated.
@@ -574,6 +581,8 @@ fn run(cli: Cli) -> Result<()> {
                 decoder: DecoderConfig {
                     fc_features: args.fc_features,
                     filters: args.filters.unwrap_or(DecoderConfig::default().filters),
+                    activation: args.activation,
+                    input: args.input,
                     ..DecoderConfig::default()
                 },
                 factors: args.factors,

@@ -68,6 +68,15 @@ fn format_of(path: &Path) -> Result<(Format, bool)> {
 }
 
 impl Mesh {
+    /// A mesh without texture coordinates.
+    pub fn new(positions: Vec<[f32; 3]>, polygons: Vec<Vec<u32>>) -> Self {
+        Self {
+            positions,
+            polygons,
+            ..Self::default()
+        }
+    }
+
     /// Reads a mesh from `.obj`, `.obj.gz`, `.ply` (ASCII or binary) or `.ply.gz`.
     ///
     /// OBJ: `v`, `vt` and `f` statements are read (`f` corners as `v`, `v/vt`, `v//vn` or

@@ -6,7 +6,7 @@
 use anyhow::{Result, ensure};
 use burn::module::{Module, Param};
 use burn::nn::{Linear, LinearConfig};
-use burn::tensor::activation::{elu, gelu, relu};
+use burn::tensor::activation::{elu, gelu, leaky_relu, relu};
 use burn::tensor::{Device, Distribution, Int, Tensor, TensorData};
 use sinew_core::nn::Activation;
 
@@ -33,6 +33,7 @@ pub fn activate<const D: usize>(x: Tensor<D>, act: Activation) -> Tensor<D> {
         Activation::Gelu => gelu(x),
         Activation::Elu { alpha } => elu(x, f64::from(alpha)),
         Activation::Relu => relu(x),
+        Activation::LeakyRelu { slope } => leaky_relu(x, f64::from(slope)),
     }
 }
 

@@ -116,7 +116,7 @@ fn is_s2d_model(model: &[u8]) -> bool {
 }
 
 /// Records an S2D replay: each of `inputs` (`[I]` decoder inputs, from
-/// `sinew_core::s2d::landmark_input`) decoded by the decoder in `model` onto `neutral` (`[V, 3]`)
+/// `sinew_core::s2d::S2dDecoder::input`) decoded by the decoder in `model` onto `neutral` (`[V, 3]`)
 /// or, without it, onto the decoder's template, and hashed by `s2d_frame_hash`.
 ///
 /// # Errors

@@ -477,7 +477,7 @@ fn s2d_pairs_train_and_eval_end_to_end() {
     // `--mirror` on the expression split: fold 0 also trains on the mirror image of each
     // training pair whose shapes' mirrored twins (`x_L` ↔ `x_R`, `mouthLeft` ↔ `mouthRight`, a
     // symmetric shape itself) are all training shapes, and so do its baselines.
-    let expression = |out: &Path, report: &Path, mirror: bool| {
+    let expression = |out: &Path, report: &Path, extra: &[&str]| {
         let mut args = vec![
             "train",
             "s2d",
@@ -493,15 +493,13 @@ fn s2d_pairs_train_and_eval_end_to_end() {
             "1",
             "--quiet",
         ];
-        if mirror {
-            args.push("--mirror");
-        }
+        args.extend_from_slice(extra);
         ok(&args);
         serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(report).unwrap())
             .unwrap()
     };
     let mirrored = dir.path().join("mir.sinew");
-    let r = expression(&mirrored, &dir.path().join("mir.json"), true);
+    let r = expression(&mirrored, &dir.path().join("mir.json"), &["--mirror"]);
     let fold = &r["per_fold"][0];
     let held: Vec<&str> = fold["held_out"]
         .as_array()
@@ -557,13 +555,37 @@ fn s2d_pairs_train_and_eval_end_to_end() {
     let plain = expression(
         &dir.path().join("plain.sinew"),
         &dir.path().join("plain.json"),
-        false,
+        &[],
     );
     assert!(plain["per_fold"][0].get("mirrored_pairs").is_none());
     assert_ne!(
         plain["baselines"]["pca_max"]["mean_error_mm"],
         r["baselines"]["pca_max"]["mean_error_mm"]
     );
+    // A linear decoder on neutral-scaled input: the artefact names both, and `eval s2d` feeds
+    // it the input it was trained on (the same errors as training reported).
+    let linear = dir.path().join("linear.sinew");
+    let lr = expression(
+        &linear,
+        &dir.path().join("linear.json"),
+        &["--activation", "identity", "--input", "neutral-scale"],
+    );
+    let bytes = std::fs::read(&linear).unwrap();
+    let file = sinew_core::SinewFile::from_bytes(&bytes).unwrap();
+    let code = |name: &str| file.section(name).unwrap().u32s().unwrap().iter().next();
+    assert_eq!(
+        code("s2d.act"),
+        Some(sinew_core::nn::Activation::Identity.code())
+    );
+    assert_eq!(
+        code("s2d.input"),
+        Some(sinew_core::s2d::INPUT_NEUTRAL_SCALE)
+    );
+    eval("1", &linear, true);
+    let e: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&eval_two).unwrap()).unwrap();
+    assert_eq!(e["mean_error_mm"], lr["mean_error_mm"]);
+    assert_ne!(lr["mean_error_mm"], plain["mean_error_mm"]);
 
     // Applications on real faces of the decoder's template (the ICT face region).
     let ict = sinew_host::ict::IctFaceKit::open(&kit).unwrap();

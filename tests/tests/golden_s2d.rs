@@ -57,6 +57,7 @@ fn weights(f: usize) -> Vec<(&'static str, f32)> {
 /// frames of [`weights`] (landmark inputs as in training), decoded onto identity 1's neutral.
 fn real_sequence(model: &[u8]) -> (Vec<Vec<f32>>, Option<Vec<f32>>) {
     use sinew_host::s2d::data::{Expressions, PairsConfig, generate};
+    use sinew_host::s2d::decoder::InputNormalisation::Frobenius;
     use sinew_host::s2d::train::landmark_input;
     let root = sinew_tests::data_dir("ict-facekit")
         .expect("UPDATE_EXPECT=1 for the S2D replay needs the ICT-FaceKit data ($SINEW_DATA)");
@@ -96,7 +97,12 @@ fn real_sequence(model: &[u8]) -> (Vec<Vec<f32>>, Option<Vec<f32>>) {
                     }
                 }
             }
-            landmark_input(&set.landmarks_of(source), &set.landmarks_of(&face)).unwrap()
+            landmark_input(
+                Frobenius,
+                &set.landmarks_of(source),
+                &set.landmarks_of(&face),
+            )
+            .unwrap()
         })
         .collect();
     let target = set.neutrals[1].iter().flatten().copied().collect();

@@ -64,9 +64,10 @@ fn mlp_matches_burn() {
         Activation::Gelu,
         Activation::Elu { alpha: 1.0 },
         Activation::Relu,
+        Activation::LeakyRelu { slope: 0.2 },
         Activation::Identity,
     ];
-    let mlp = Mlp::new(&[3, 64, 64, 32, 5], &acts, &device);
+    let mlp = Mlp::new(&[3, 64, 64, 32, 16, 5], &acts, &device);
     let input = Rng::new(11).vec(256 * 3, -2.0, 2.0);
     let burn = to_vec(mlp.forward(tensor(input.clone(), [256, 3], &device)));
     assert_within(&tolerance::MLP, &core_mlp(&export(&mlp), &input, 3), &burn);
@@ -132,28 +133,39 @@ fn spiral_conv_matches_burn() {
 }
 
 /// The whole decoder at the reference size (random weights, synthetic connectivity with the
-/// FLAME hierarchy's sizes): burn's training forward against the core's baked decode.
+/// FLAME hierarchy's sizes): burn's training forward against the core's baked decode, with each
+/// stage activation.
 #[test]
 fn s2d_decoder_matches_burn() {
-    use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
+    use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder, StageActivation};
     use sinew_host::s2d::synthetic::{self, REFERENCE_SIZES, REFERENCE_SPIRALS};
     let device = device();
     let h = synthetic::hierarchy(&REFERENCE_SIZES, &REFERENCE_SPIRALS, 21);
-    let dec = S2dDecoder::new(&DecoderConfig::default(), &h, &device).unwrap();
-    let landmarks: Vec<u32> = (0..68).map(|i| i * 70).collect();
-    let bytes = sinew_host::s2d::bake::bake(&dec, &h, &landmarks, &[]).unwrap();
-    let core = sinew_core::s2d::S2dDecoder::from_bytes(&bytes).unwrap();
-    let batch = 3;
-    // Landmark displacements of the size normalisation gives (a few hundredths).
-    let input = Rng::new(22).vec(batch * 204, -0.05, 0.05);
-    let burn = to_vec(dec.forward(tensor(input.clone(), [batch, 204], &device)));
-    let v = REFERENCE_SIZES[0];
-    let mut out = vec![0.0; batch * v * 3];
-    let mut scratch = vec![0.0; core.scratch_len()];
-    for (x, y) in input.chunks(204).zip(out.chunks_mut(v * 3)) {
-        core.displacements(x, &mut scratch, y).unwrap();
+    for activation in [
+        StageActivation::Elu,
+        StageActivation::LeakyRelu,
+        StageActivation::Identity,
+    ] {
+        let config = DecoderConfig {
+            activation,
+            ..DecoderConfig::default()
+        };
+        let dec = S2dDecoder::new(&config, &h, &device).unwrap();
+        let landmarks: Vec<u32> = (0..68).map(|i| i * 70).collect();
+        let bytes = sinew_host::s2d::bake::bake(&dec, &h, &landmarks, &[]).unwrap();
+        let core = sinew_core::s2d::S2dDecoder::from_bytes(&bytes).unwrap();
+        let batch = 3;
+        // Landmark displacements of the size normalisation gives (a few hundredths).
+        let input = Rng::new(22).vec(batch * 204, -0.05, 0.05);
+        let burn = to_vec(dec.forward(tensor(input.clone(), [batch, 204], &device)));
+        let v = REFERENCE_SIZES[0];
+        let mut out = vec![0.0; batch * v * 3];
+        let mut scratch = vec![0.0; core.scratch_len()];
+        for (x, y) in input.chunks(204).zip(out.chunks_mut(v * 3)) {
+            core.displacements(x, &mut scratch, y).unwrap();
+        }
+        assert_within(&tolerance::S2D_DECODER, &out, &burn);
     }
-    assert_within(&tolerance::S2D_DECODER, &out, &burn);
 }
 
 /// The same on the real FLAME hierarchy built with the reference's spiral lengths: the reference

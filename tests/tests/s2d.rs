@@ -24,6 +24,8 @@ struct Tiny {
     conv_b: Vec<f32>,
     out_w: Vec<f32>,
     out_b: Vec<f32>,
+    /// The optional `s2d.act` and `s2d.par` (absent: ELU).
+    act: Option<(Vec<u32>, Vec<f32>)>,
 }
 
 /// Two levels: 2 vertices (+ dummy) and 1 vertex (+ dummy); one landmark; F = 1; one stage of
@@ -52,6 +54,7 @@ fn tiny() -> Tiny {
         // Output convolution 1 → 3 over 2 positions: [h(s0), h(s1), h(s0) + h(s1) + 10].
         out_w: vec![1.0, 0.0, 0.0, 1.0, 1.0, 1.0],
         out_b: vec![0.0, 0.0, 10.0],
+        act: None,
     }
 }
 
@@ -112,6 +115,10 @@ impl Tiny {
             &self.out_w,
         );
         f32s(&mut w, "s2d.out.b", &[self.out_b.len()], &self.out_b);
+        if let Some((code, param)) = &self.act {
+            w.u32s("s2d.act", &[code.len()], code).unwrap();
+            f32s(&mut w, "s2d.par", &[param.len()], param);
+        }
         let mut bytes = w.to_bytes().unwrap();
         for (name, i, x) in patches {
             patch_f32(&mut bytes, &name, i, x);
@@ -177,6 +184,62 @@ fn tiny_decoder_hand_computed() {
     );
 }
 
+/// The same decoder with the stages' activation named in the artefact: Leaky ReLU with slope
+/// 0.25 (code 5) turns the stage's −1.75 and −1.5 into −0.4375 and −0.375, exactly; code 0
+/// leaves them as they are.
+#[test]
+fn tiny_decoder_with_a_named_stage_activation() {
+    for (code, param, e1, e2) in [(5, 0.25, -0.4375, -0.375), (0, 0.0, -1.75, -1.5)] {
+        let mut t = tiny();
+        t.act = Some((vec![code], vec![param]));
+        let bytes = t.bytes();
+        let dec = S2dDecoder::from_bytes(&bytes).unwrap();
+        let mut scratch = vec![f32::NAN; dec.scratch_len()];
+        let mut out = [f32::NAN; 6];
+        dec.displacements(&[1.0, 2.0, 3.0], &mut scratch, &mut out)
+            .unwrap();
+        assert_eq!(out, [e1, e2, (e1 + e2) + 10.0, e2, 0.0, e2 + 10.0]);
+    }
+}
+
+/// `S2dDecoder::input` normalises as the artefact's `s2d.input` says.
+#[test]
+fn input_follows_the_artefacts_normalisation() {
+    use sinew_core::s2d::{
+        INPUT_FROBENIUS, INPUT_NEUTRAL_SCALE, landmark_input, landmark_input_neutral_scale,
+    };
+    let (neutral, expressive) = ([0.0, 0.0, 0.0], [0.5, 1.0, 2.0]);
+    let mut t = tiny();
+    // One landmark is a degenerate set; two points make the normalisations differ.
+    t.cfg[0] = 6;
+    t.lmk = vec![0, 1];
+    t.fc_w = vec![0.0; 12];
+    let (n, e) = (
+        [neutral, [2.0, 0.0, 0.0]].concat(),
+        [expressive, [2.0, 4.0, 0.0]].concat(),
+    );
+    for (code, f) in [
+        (
+            INPUT_FROBENIUS,
+            landmark_input as fn(&[f32], &[f32], &mut [f32]) -> _,
+        ),
+        (INPUT_NEUTRAL_SCALE, landmark_input_neutral_scale),
+    ] {
+        t.input = vec![code];
+        let bytes = t.bytes();
+        let dec = S2dDecoder::from_bytes(&bytes).unwrap();
+        assert_eq!(dec.input_normalisation(), code);
+        let (mut got, mut want) = ([f32::NAN; 6], [f32::NAN; 6]);
+        dec.input(&n, &e, &mut got).unwrap();
+        f(&n, &e, &mut want).unwrap();
+        assert_eq!(got, want);
+    }
+    let (mut a, mut b) = ([0.0; 6], [0.0; 6]);
+    landmark_input(&n, &e, &mut a).unwrap();
+    landmark_input_neutral_scale(&n, &e, &mut b).unwrap();
+    assert_ne!(a, b);
+}
+
 /// A change to the tiny decoder's sections.
 type Edit = Box<dyn Fn(&mut Tiny)>;
 
@@ -221,8 +284,23 @@ fn every_shape_and_bound_is_validated() {
         ),
         (
             "unknown input normalisation",
-            Box::new(|t| t.input[0] = 2),
+            Box::new(|t| t.input[0] = 3),
             FormatError::UnknownCode,
+        ),
+        (
+            "unknown stage activation",
+            Box::new(|t| t.act = Some((vec![9], vec![0.0]))),
+            FormatError::UnknownCode,
+        ),
+        (
+            "non-finite stage activation parameter",
+            Box::new(|t| t.act = Some((vec![5], vec![f32::NAN]))),
+            FormatError::NonFinite,
+        ),
+        (
+            "stage activation without its parameter",
+            Box::new(|t| t.act = Some((vec![5], vec![]))),
+            FormatError::IncompatibleShapes,
         ),
         (
             "landmark outside the mesh",
@@ -419,7 +497,20 @@ fn reference_displacements(bytes: &[u8], input: &[f32]) -> Vec<f32> {
             })
             .collect()
     };
-    let conv = |k: usize, w: &[f32], b: &[f32], x: &[f32], in_f: usize, elu: bool| -> Vec<f32> {
+    // The stages' activation: ELU (α = 1) unless the artefact names another.
+    let (act, param) = match file.section("s2d.act") {
+        Some(_) => (u32s("s2d.act")[0], f32s("s2d.par")[0]),
+        None => (3, 1.0),
+    };
+    let activate = |z: f32| match act {
+        0 => z,
+        3 if z <= 0.0 => libm_expm1(z),
+        3 => z,
+        5 if z < 0.0 => param * z,
+        5 => z,
+        _ => panic!("activation code {act} in a test decoder"),
+    };
+    let conv = |k: usize, w: &[f32], b: &[f32], x: &[f32], in_f: usize, stage: bool| -> Vec<f32> {
         let (rows, len) = (rows_at(k), len_at(k));
         let spirals = u32s(&format!("s2d.h{k}.spiral"));
         let mut out = Vec::new();
@@ -429,7 +520,7 @@ fn reference_displacements(bytes: &[u8], input: &[f32]) -> Vec<f32> {
                 .flat_map(|&s| x[s * in_f..(s + 1) * in_f].iter().copied())
                 .collect();
             for z in dense(w, b, &g) {
-                out.push(if elu && z <= 0.0 { libm_expm1(z) } else { z });
+                out.push(if stage { activate(z) } else { z });
             }
         }
         out
@@ -472,24 +563,49 @@ fn libm_expm1(z: f32) -> f32 {
 /// The core's decode against [`reference_displacements`], bit for bit, on the tiny baked decoder
 /// and on freshly initialised decoders whose widths straddle the kernels' blocks (4 vertices;
 /// 4, 8 and 16 channels): odd FC widths, filters of 5, 9, 17 and 3, vertex counts that are not
-/// multiples of 4.
+/// multiples of 4, and each stage activation.
 #[test]
 fn decode_bits_match_a_plain_reference() {
+    use sinew_host::s2d::decoder::StageActivation::{Elu, Identity, LeakyRelu};
     use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder as Burn};
     use sinew_host::s2d::synthetic;
     let device = sinew_host::backend::Backend::Flex.device(1).unwrap();
     let mut cases = vec![synthetic::tiny_baked_decoder().1];
-    for (sizes, spirals, fc, filters, seed) in [
-        (&[30, 12, 5][..], &[5, 4, 3][..], 4, vec![5, 3], 1),
-        (&[37, 13, 6][..], &[7, 5, 3][..], 7, vec![17, 9], 2),
-        (&[61, 23, 9, 2][..], &[9, 6, 4, 2][..], 5, vec![16, 8, 5], 3),
+    for (sizes, spirals, fc, filters, activation, seed) in [
+        (&[30, 12, 5][..], &[5, 4, 3][..], 4, vec![5, 3], Elu, 1),
+        (&[37, 13, 6][..], &[7, 5, 3][..], 7, vec![17, 9], Elu, 2),
+        (
+            &[61, 23, 9, 2][..],
+            &[9, 6, 4, 2][..],
+            5,
+            vec![16, 8, 5],
+            Elu,
+            3,
+        ),
+        (
+            &[37, 13, 6][..],
+            &[7, 5, 3][..],
+            7,
+            vec![17, 9],
+            LeakyRelu,
+            4,
+        ),
+        (
+            &[37, 13, 6][..],
+            &[7, 5, 3][..],
+            7,
+            vec![17, 9],
+            Identity,
+            5,
+        ),
     ] {
         let h = synthetic::hierarchy(sizes, spirals, seed);
         let config = DecoderConfig {
             inputs: 6,
             fc_features: fc,
             filters,
-            outputs: 3,
+            activation,
+            ..DecoderConfig::default()
         };
         let dec = Burn::new(&config, &h, &device).unwrap();
         cases.push(sinew_host::s2d::bake::bake(&dec, &h, &[1, 2], &[]).unwrap());

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
-use sinew_core::s2d::{S2dDecoder, landmark_input};
+use sinew_core::s2d::S2dDecoder;
 
 use crate::mesh::Mesh;
 
@@ -49,10 +49,13 @@ impl<'a> Decoder<'a> {
             .collect()
     }
 
-    /// `base + decode(norm(to) − norm(from))` for landmark sets `from`, `to`.
+    /// `base + decode(input(from, to))` for landmark sets `from`, `to`, the input normalised as
+    /// the decoder was trained ([`S2dDecoder::input`]).
     fn apply(&mut self, base: &[f32], from: &[f32], to: &[f32]) -> Result<Vec<f32>> {
         let mut input = vec![0.0; from.len()];
-        landmark_input(from, to, &mut input).map_err(|e| anyhow!("landmarks: {e}"))?;
+        self.core
+            .input(from, to, &mut input)
+            .map_err(|e| anyhow!("landmarks: {e}"))?;
         let mut out = vec![0.0; base.len()];
         self.core
             .decode_onto(base, &input, &mut self.scratch, &mut out)
@@ -149,12 +152,7 @@ mod tests {
         std::fs::write(&model, bytes).unwrap();
         let positions = h.levels[0].positions.clone();
         let polygons = h.levels[0].triangles.iter().map(|t| t.to_vec()).collect();
-        let mesh = Mesh {
-            positions,
-            polygons,
-            uvs: vec![],
-            polygon_uvs: vec![],
-        };
+        let mesh = Mesh::new(positions, polygons);
         (model, mesh)
     }
 
@@ -218,14 +216,9 @@ mod tests {
         );
         // A mesh of another topology is named.
         let small = dir.path().join("small.obj");
-        Mesh {
-            positions: mesh.positions[..4].to_vec(),
-            polygons: vec![vec![0, 1, 2]],
-            uvs: vec![],
-            polygon_uvs: vec![],
-        }
-        .write(&small)
-        .unwrap();
+        Mesh::new(mesh.positions[..4].to_vec(), vec![vec![0, 1, 2]])
+            .write(&small)
+            .unwrap();
         let e = transfer(&model, &src, &files, &small, &out)
             .unwrap_err()
             .to_string();

@@ -4,7 +4,6 @@
 
 use anyhow::{Result, ensure};
 use sinew_core::ArtifactKind;
-use sinew_core::s2d::INPUT_FROBENIUS;
 
 use super::Hierarchy;
 use super::decoder::S2dDecoder;
@@ -46,8 +45,11 @@ pub fn write(
         &[3],
         &u32s(&[c.inputs, c.fc_features, c.outputs]),
     )?;
-    w.u32s("s2d.input", &[1], &[INPUT_FROBENIUS])?;
+    w.u32s("s2d.input", &[1], &[c.input.code()])?;
     w.u32s("s2d.lmk", &[landmarks.len()], landmarks)?;
+    let act = c.activation.activation();
+    w.u32s("s2d.act", &[1], &[act.code()])?;
+    w.f32s("s2d.par", &[1], &[act.param()])?;
 
     // burn stores [in, out]; the core reads one row per output.
     let fc_w = decoder.fc.weight.val().transpose();

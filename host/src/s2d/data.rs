@@ -31,6 +31,7 @@ use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 use sinew_core::{ArtifactKind, SinewFile};
 
+use super::decoder::InputNormalisation;
 use super::symmetry::Mirror;
 use super::train::{Sample, landmark_input};
 use crate::container::SinewWriter;
@@ -354,12 +355,10 @@ pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet> {
         Expressions::Shared => deltas,
         Expressions::Transferred => transferred(base, &neutrals, &triangles, &deltas)?,
     };
-    let template = Mesh {
-        positions: template.positions.clone(),
-        polygons: triangles.iter().map(|t| t.to_vec()).collect(),
-        uvs: Vec::new(),
-        polygon_uvs: Vec::new(),
-    };
+    let template = Mesh::new(
+        template.positions.clone(),
+        triangles.iter().map(|t| t.to_vec()).collect(),
+    );
     let manifest = Manifest {
         format: MANIFEST_FORMAT.to_owned(),
         version: MANIFEST_VERSION,
@@ -542,10 +541,10 @@ impl PairSet {
         (self.landmarks_of(n), self.landmarks_of(&e))
     }
 
-    /// Pair `p` as a training sample: the decoder's normalised landmark input and the dense
-    /// displacement, flattened.
-    pub fn sample(&self, p: usize) -> Result<Sample> {
-        self.sample_of(self.neutral(p), &self.displacement(p))
+    /// Pair `p` as a training sample: the decoder's landmark input, normalised by
+    /// `normalisation`, and the dense displacement, flattened.
+    pub fn sample(&self, p: usize, normalisation: InputNormalisation) -> Result<Sample> {
+        self.sample_of(self.neutral(p), &self.displacement(p), normalisation)
     }
 
     /// Pair `p` mirrored left to right as a training sample: the mirrored neutral (a new
@@ -556,22 +555,37 @@ impl PairSet {
     ///
     /// # Panics
     /// If `mirror` is not the symmetry of this set's template (another vertex count).
-    pub fn mirrored_sample(&self, p: usize, mirror: &Mirror) -> Result<Sample> {
+    pub fn mirrored_sample(
+        &self,
+        p: usize,
+        mirror: &Mirror,
+        normalisation: InputNormalisation,
+    ) -> Result<Sample> {
         self.sample_of(
             &mirror.positions(self.neutral(p)),
             &mirror.vectors(&self.displacement(p)),
+            normalisation,
         )
     }
 
     /// The sample of a neutral face region and its displacement.
-    fn sample_of(&self, neutral: &[[f32; 3]], displacement: &[[f32; 3]]) -> Result<Sample> {
+    fn sample_of(
+        &self,
+        neutral: &[[f32; 3]],
+        displacement: &[[f32; 3]],
+        normalisation: InputNormalisation,
+    ) -> Result<Sample> {
         let e: Vec<[f32; 3]> = neutral
             .iter()
             .zip(displacement)
             .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
             .collect();
         Ok(Sample {
-            input: landmark_input(&self.landmarks_of(neutral), &self.landmarks_of(&e))?,
+            input: landmark_input(
+                normalisation,
+                &self.landmarks_of(neutral),
+                &self.landmarks_of(&e),
+            )?,
             displacement: displacement.iter().flatten().copied().collect(),
         })
     }
@@ -628,12 +642,10 @@ impl PairSet {
         );
         Ok(Self {
             manifest,
-            template: Mesh {
-                positions: level.positions.clone(),
-                polygons: level.triangles.iter().map(|t| t.to_vec()).collect(),
-                uvs: Vec::new(),
-                polygon_uvs: Vec::new(),
-            },
+            template: Mesh::new(
+                level.positions.clone(),
+                level.triangles.iter().map(|t| t.to_vec()).collect(),
+            ),
             neutrals: self.neutrals.iter().map(|v| pick(v)).collect(),
             deltas: self.deltas.iter().map(|v| pick(v)).collect(),
             combinations: self.combinations.clone(),
@@ -795,12 +807,10 @@ impl PairSet {
                 "pairs.weights: pair {k} differs from the manifest's combination"
             );
         }
-        let template = Mesh {
+        let template = Mesh::new(
             positions,
-            polygons: tri.chunks_exact(3).map(<[u32]>::to_vec).collect(),
-            uvs: Vec::new(),
-            polygon_uvs: Vec::new(),
-        };
+            tri.chunks_exact(3).map(<[u32]>::to_vec).collect(),
+        );
         Ok(Self {
             manifest,
             template,
@@ -912,7 +922,7 @@ mod tests {
         assert_eq!((n[30], e[30]), (set.neutral(p)[l], expect));
         // The identities differ, and the sample matches the decoder's input width.
         assert_ne!(set.neutrals[0], set.neutrals[1]);
-        let s = set.sample(p).unwrap();
+        let s = set.sample(p, InputNormalisation::Frobenius).unwrap();
         assert_eq!((s.input.len(), s.displacement.len()), (204, 3 * 9409));
         assert!(s.input.iter().any(|v| v.abs() > 1e-4));
 

@@ -10,7 +10,7 @@
 //! `[batch, vertices, features]` tensor takes the N-D path, with a division and a modulo per
 //! element in the backward (see `docs/S2D.md` for the measured difference).
 
-use anyhow::{Result, ensure};
+use anyhow::{Result, bail, ensure};
 use burn::module::Module;
 use burn::nn::Linear;
 use burn::tensor::{Device, Int, Tensor, TensorData};
@@ -35,6 +35,72 @@ pub struct DecoderConfig {
     pub filters: Vec<usize>,
     /// Features of the output (3: a displacement).
     pub outputs: usize,
+    /// The activation after each stage's spiral convolution (ELU in the reference).
+    #[serde(default)]
+    pub activation: StageActivation,
+    /// How the input is made from the landmark sets (the reference's Frobenius normalisation).
+    #[serde(default)]
+    pub input: InputNormalisation,
+}
+
+/// How the decoder's input is made from a neutral and an expressive landmark set.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum InputNormalisation {
+    /// The reference's (S2D §3.2): each set centred and scaled to unit Frobenius norm, then
+    /// `normalised(expressive) − normalised(neutral)`.
+    #[default]
+    Frobenius,
+    /// Each set centred, both divided by the neutral set's Frobenius norm: the landmark
+    /// displacement less its mean, in units of the face's size, linear in the displacement.
+    NeutralScale,
+}
+
+impl InputNormalisation {
+    /// The `s2d.input` code the core reads.
+    pub const fn code(self) -> u32 {
+        match self {
+            Self::Frobenius => sinew_core::s2d::INPUT_FROBENIUS,
+            Self::NeutralScale => sinew_core::s2d::INPUT_NEUTRAL_SCALE,
+        }
+    }
+
+    /// The normalisation of an `s2d.input` code.
+    pub fn from_code(code: u32) -> Result<Self> {
+        match code {
+            sinew_core::s2d::INPUT_FROBENIUS => Ok(Self::Frobenius),
+            sinew_core::s2d::INPUT_NEUTRAL_SCALE => Ok(Self::NeutralScale),
+            _ => bail!("unknown input normalisation code {code}"),
+        }
+    }
+}
+
+/// The activation after each up-sampling stage's spiral convolution.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum StageActivation {
+    /// ELU with α = 1, the reference's.
+    #[default]
+    Elu,
+    /// Leaky ReLU, negative slope 0.2: piecewise linear, so it does not flatten large negative
+    /// pre-activations as ELU does (ELU tends to −1).
+    LeakyRelu,
+    /// None: the whole decoder is a linear map of its input.
+    Identity,
+}
+
+/// Negative slope of [`StageActivation::LeakyRelu`].
+pub const LEAKY_SLOPE: f32 = 0.2;
+
+impl StageActivation {
+    /// The core's activation.
+    pub const fn activation(self) -> Activation {
+        match self {
+            Self::Elu => Activation::Elu { alpha: 1.0 },
+            Self::LeakyRelu => Activation::LeakyRelu { slope: LEAKY_SLOPE },
+            Self::Identity => Activation::Identity,
+        }
+    }
 }
 
 impl Default for DecoderConfig {
@@ -45,6 +111,8 @@ impl Default for DecoderConfig {
             fc_features: 128,
             filters: vec![64, 32, 32, 16],
             outputs: 3,
+            activation: StageActivation::Elu,
+            input: InputNormalisation::Frobenius,
         }
     }
 }
@@ -278,7 +346,7 @@ impl S2dDecoder {
             let activation = if last {
                 Activation::Identity
             } else {
-                Activation::Elu { alpha: 1.0 }
+                config.activation.activation()
             };
             convs.push(SpiralConv::new(
                 &l.spirals, len, inputs, outputs, activation, device,

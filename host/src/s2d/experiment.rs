@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 use super::baseline::{DEFAULT_RIDGE, Dictionary, DictionaryConfig, Pca};
 use super::checkpoint::{STATE_FILE, read_state};
 use super::data::{Expressions, PairSet};
-use super::decoder::{DecoderConfig, S2dDecoder};
+use super::decoder::{DecoderConfig, InputNormalisation, S2dDecoder};
 use super::hierarchy;
 use super::protocol::{FOLDS, Protocol, Split, split};
 use super::symmetry::{Mirror, partners};
@@ -185,7 +185,12 @@ impl Mirroring {
     /// split (a mirrored identity is a new identity); on the expression split, the pairs whose
     /// every shape mirrors onto a training shape (or onto no shape), so that no held-out shape is
     /// seen, not even as a training shape's mirror image (`mouthLeft` mirrored is `mouthRight`).
-    fn training_samples(&self, set: &PairSet, s: &Split) -> Result<Vec<Sample>> {
+    fn training_samples(
+        &self,
+        set: &PairSet,
+        s: &Split,
+        input: InputNormalisation,
+    ) -> Result<Vec<Sample>> {
         let names = &set.manifest.expressions;
         let allowed = |p: usize| match s.protocol {
             Protocol::Identity => true,
@@ -196,7 +201,7 @@ impl Mirroring {
         s.train
             .iter()
             .filter(|&&p| allowed(p))
-            .map(|&p| set.mirrored_sample(p, &self.mirror))
+            .map(|&p| set.mirrored_sample(p, &self.mirror, input))
             .collect()
     }
 }
@@ -428,11 +433,12 @@ pub fn decoder_errors(model: &[u8], set: &PairSet, s: &Split) -> Result<Vec<f32>
             .eq(set.manifest.landmarks.iter().copied()),
         "the model's landmark vertices differ from the pairs'"
     );
+    let input = InputNormalisation::from_code(dec.input_normalisation())?;
     let mut scratch = vec![0.0f32; dec.scratch_len()];
     let mut out = vec![0.0f32; 3 * set.vertices()];
     let mut errors = Vec::with_capacity(s.test.len() * set.vertices());
     for &p in &s.test {
-        let sample = set.sample(p)?;
+        let sample = set.sample(p, input)?;
         dec.displacements(&sample.input, &mut scratch, &mut out)
             .map_err(|e| anyhow::anyhow!("decoding pair {p}: {e:?}"))?;
         vertex_errors(set, p, &out, &mut errors);
@@ -579,10 +585,10 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         let mut samples = s
             .train
             .iter()
-            .map(|&p| set.sample(p))
+            .map(|&p| set.sample(p, args.decoder.input))
             .collect::<Result<Vec<_>>>()?;
         if let Some(m) = &mirroring {
-            samples.extend(m.training_samples(&set, &s)?);
+            samples.extend(m.training_samples(&set, &s, args.decoder.input)?);
         }
         let device = args.backend.autodiff_device(config.seed)?;
         let decoder = S2dDecoder::new(&args.decoder, &h, &device)?;
@@ -864,7 +870,10 @@ pub fn eval_s2d(model: &Path, pairs: &Path, folds: usize, report: &Path) -> Resu
                 Some(m) => m,
                 None => mirroring.insert(Mirroring::of(&set)?),
             };
-            m.training_samples(&set, &s)?
+            let input = sinew_core::s2d::S2dDecoder::from_bytes(&bytes)
+                .map_err(|e| anyhow::anyhow!("{}: not an S2D decoder: {e}", path.display()))?
+                .input_normalisation();
+            m.training_samples(&set, &s, InputNormalisation::from_code(input)?)?
         } else {
             Vec::new()
         };

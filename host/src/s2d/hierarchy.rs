@@ -1121,11 +1121,7 @@ mod tests {
     use std::time::Instant;
 
     fn tri_mesh(positions: Vec<[f32; 3]>, faces: &[&[u32]]) -> Mesh {
-        Mesh {
-            positions,
-            polygons: faces.iter().map(|f| f.to_vec()).collect(),
-            ..Mesh::default()
-        }
+        Mesh::new(positions, faces.iter().map(|f| f.to_vec()).collect())
     }
 
     /// Checks every structural promise of a hierarchy and returns the mean distance of each
@@ -1149,11 +1145,10 @@ mod tests {
             }
             assert!(l.triangles.iter().flatten().all(|&v| (v as usize) < n));
             // Every level stays a valid manifold mesh.
-            let m = Mesh {
-                positions: l.positions.clone(),
-                polygons: l.triangles.iter().map(|t| t.to_vec()).collect(),
-                ..Mesh::default()
-            };
+            let m = Mesh::new(
+                l.positions.clone(),
+                l.triangles.iter().map(|t| t.to_vec()).collect(),
+            );
             checked_triangles(&m).unwrap_or_else(|e| panic!("level {i}: {e:#}"));
         }
         for (i, (d, u)) in h.down.iter().zip(&h.up).enumerate() {
@@ -1341,11 +1336,7 @@ mod tests {
                 polygons.push(vec![id(x, y), id(x + 1, y), id(x + 1, y + 1), id(x, y + 1)]);
             }
         }
-        Mesh {
-            positions,
-            polygons,
-            ..Mesh::default()
-        }
+        Mesh::new(positions, polygons)
     }
 
     #[test]

@@ -186,6 +186,7 @@ fn nearest_images(mirror: &Mirror, shapes: &[&[[f32; 3]]]) -> Vec<Option<(usize,
 mod tests {
     use super::*;
     use crate::ict::IctFaceKit;
+    use crate::s2d::decoder::InputNormalisation;
     use crate::testing::data_dir;
 
     /// A strip of quads symmetric about x = 1: columns x = 0, 1, 2 (the middle column maps to
@@ -200,12 +201,7 @@ mod tests {
                 (0..2).map(move |x| vec![at(x, y), at(x + 1, y), at(x + 1, y + 1), at(x, y + 1)])
             })
             .collect();
-        Mesh {
-            positions,
-            polygons,
-            uvs: Vec::new(),
-            polygon_uvs: Vec::new(),
-        }
+        Mesh::new(positions, polygons)
     }
 
     #[test]
@@ -384,7 +380,11 @@ mod tests {
         set.manifest.pairs[1].identity = 0;
         set.combinations[0] = vec![(index("mouthLeft"), 0.8)];
         set.combinations[1] = vec![(index("mouthRight"), 0.8)];
-        let (mirrored, twin) = (set.mirrored_sample(0, &m).unwrap(), set.sample(1).unwrap());
+        let (mirrored, twin) = (
+            set.mirrored_sample(0, &m, InputNormalisation::Frobenius)
+                .unwrap(),
+            set.sample(1, InputNormalisation::Frobenius).unwrap(),
+        );
         let relative = |a: &[f32], b: &[f32]| {
             let d: f32 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum();
             let n: f32 = b.iter().map(|y| y * y).sum();

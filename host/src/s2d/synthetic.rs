@@ -118,7 +118,7 @@ pub fn small_config() -> super::decoder::DecoderConfig {
         inputs: 6,
         fc_features: 4,
         filters: vec![5, 3],
-        outputs: 3,
+        ..super::decoder::DecoderConfig::default()
     }
 }
 
@@ -135,7 +135,7 @@ pub fn tiny_baked_decoder() -> (Hierarchy, Vec<u8>) {
         inputs: 6,
         fc_features: 2,
         filters: vec![2],
-        outputs: 3,
+        ..super::decoder::DecoderConfig::default()
     };
     let dec = S2dDecoder::new(&config, &h, &device).expect("a valid configuration");
     let meta = [("units".to_owned(), "m".to_owned())];

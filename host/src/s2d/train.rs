@@ -17,11 +17,13 @@ use serde::{Deserialize, Serialize};
 use super::checkpoint::{
     CheckpointState, DataFingerprint, STATE_FILE, load_checkpoint, save_checkpoint,
 };
-use super::decoder::S2dDecoder;
+use super::decoder::{InputNormalisation, S2dDecoder};
 
 /// Centres a landmark set on its mean and scales it to unit Frobenius norm (the reference's
 /// per-set normalisation). A set with zero norm (all points equal) is only centred.
 pub fn normalise_landmarks(points: &[[f32; 3]]) -> Vec<[f32; 3]> {
+    // The mean as a sum of p / n (not [`centred`]'s sum / n): the rounding every decoder
+    // trained with this normalisation has seen, so that earlier runs reproduce bit for bit.
     let n = points.len().max(1) as f64;
     let mut centre = [0.0f64; 3];
     for p in points {
@@ -41,15 +43,41 @@ pub fn normalise_landmarks(points: &[[f32; 3]]) -> Vec<[f32; 3]> {
         .collect()
 }
 
-/// The decoder's input (S2D §3.2): `normalise(expressive) − normalise(neutral)`, flattened
-/// `x1, y1, z1, x2, …`.
-pub fn landmark_input(neutral: &[[f32; 3]], expressive: &[[f32; 3]]) -> Result<Vec<f32>> {
+/// A landmark set less its mean (the sum over n), in f64.
+fn centred(points: &[[f32; 3]]) -> Vec<[f64; 3]> {
+    let n = points.len().max(1) as f64;
+    let centre = [0, 1, 2].map(|i| points.iter().map(|p| f64::from(p[i])).sum::<f64>() / n);
+    points
+        .iter()
+        .map(|p| [0, 1, 2].map(|i| f64::from(p[i]) - centre[i]))
+        .collect()
+}
+
+/// The decoder's input, flattened `x1, y1, z1, x2, …`: with [`InputNormalisation::Frobenius`]
+/// `normalise(expressive) − normalise(neutral)` (S2D §3.2), with
+/// [`InputNormalisation::NeutralScale`] `(centred(expressive) − centred(neutral)) /
+/// ‖centred(neutral)‖`. Computed in f64.
+pub fn landmark_input(
+    normalisation: InputNormalisation,
+    neutral: &[[f32; 3]],
+    expressive: &[[f32; 3]],
+) -> Result<Vec<f32>> {
     ensure!(
         neutral.len() == expressive.len(),
         "{} neutral landmarks but {} expressive ones",
         neutral.len(),
         expressive.len()
     );
+    if normalisation == InputNormalisation::NeutralScale {
+        let (n, e) = (centred(neutral), centred(expressive));
+        let norm = n.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
+        let scale = if norm > 0.0 { norm } else { 1.0 };
+        return Ok(n
+            .iter()
+            .zip(&e)
+            .flat_map(|(a, b)| [0, 1, 2].map(|i| ((b[i] - a[i]) / scale) as f32))
+            .collect());
+    }
     let (n, e) = (
         normalise_landmarks(neutral),
         normalise_landmarks(expressive),
@@ -605,6 +633,7 @@ mod tests {
     use super::*;
     use crate::nn::{tensor, to_vec};
     use crate::s2d::decoder::DecoderConfig;
+    use crate::s2d::decoder::InputNormalisation::{Frobenius, NeutralScale};
     use crate::s2d::synthetic;
 
     #[test]
@@ -618,16 +647,72 @@ mod tests {
         let neutral = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let moved = neutral.map(|p| [p[0] * 3.0 + 5.0, p[1] * 3.0 - 1.0, p[2] * 3.0]);
         assert!(
-            landmark_input(&neutral, &moved)
+            landmark_input(Frobenius, &neutral, &moved)
                 .unwrap()
                 .iter()
                 .all(|v| v.abs() < 1e-6)
         );
         let open = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.5, 0.0]];
-        let d = landmark_input(&neutral, &open).unwrap();
+        let d = landmark_input(Frobenius, &neutral, &open).unwrap();
         assert_eq!(d.len(), 9);
         assert!(d.iter().any(|v| v.abs() > 0.05));
-        assert!(landmark_input(&neutral, &open[..2]).is_err());
+        assert!(landmark_input(Frobenius, &neutral, &open[..2]).is_err());
+    }
+
+    #[test]
+    fn neutral_scale_input_is_linear_in_the_displacement() {
+        let neutral = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let open = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.5, 0.0]];
+        let at = |k: f32, shift: f32| -> Vec<f32> {
+            let e: Vec<[f32; 3]> = neutral
+                .iter()
+                .zip(&open)
+                .map(|(n, o)| [0, 1, 2].map(|i| n[i] + k * (o[i] - n[i]) + shift))
+                .collect();
+            landmark_input(NeutralScale, &neutral, &e).unwrap()
+        };
+        let one = at(1.0, 0.0);
+        // The displacement (0, 0.5, 0) at the third point, less its mean (0, 1/6, 0), over the
+        // neutral's centred norm √(4/3).
+        let norm = (4.0f32 / 3.0).sqrt();
+        let expected = [
+            0.0,
+            -1.0 / 6.0,
+            0.0,
+            0.0,
+            -1.0 / 6.0,
+            0.0,
+            0.0,
+            1.0 / 3.0,
+            0.0,
+        ];
+        for (a, b) in one.iter().zip(expected) {
+            assert!((a - b / norm).abs() < 1e-6, "{one:?}");
+        }
+        // Twice the displacement, twice the input; a translation changes nothing.
+        for (a, b) in at(2.0, 0.0).iter().zip(&one) {
+            assert!((a - 2.0 * b).abs() < 1e-6);
+        }
+        for (a, b) in at(1.0, 7.0).iter().zip(&one) {
+            assert!((a - b).abs() < 1e-6);
+        }
+        // The core computes the same in f32.
+        let flat = |p: &[[f32; 3]]| p.iter().flatten().copied().collect::<Vec<f32>>();
+        let mut core = vec![0.0; 9];
+        sinew_core::s2d::landmark_input_neutral_scale(&flat(&neutral), &flat(&open), &mut core)
+            .unwrap();
+        for (a, b) in core.iter().zip(&one) {
+            assert!((a - b).abs() < 1e-6);
+        }
+        assert_eq!(
+            InputNormalisation::from_code(NeutralScale.code()).unwrap(),
+            NeutralScale
+        );
+        assert_eq!(
+            InputNormalisation::from_code(Frobenius.code()).unwrap(),
+            Frobenius
+        );
+        assert!(InputNormalisation::from_code(0).is_err());
     }
 
     #[test]
@@ -773,7 +858,7 @@ mod tests {
             inputs: 6,
             fc_features: 8,
             filters: vec![8, 8],
-            outputs: 3,
+            ..DecoderConfig::default()
         };
         let decoder = S2dDecoder::new(&config, &h, &device).unwrap();
         let mut rng = synthetic::Rng::new(4);
