@@ -181,16 +181,11 @@ impl Mirroring {
         Ok(Self { mirror, partners })
     }
 
-    /// The mirror images of the training pairs of `s` that may train: every pair on the identity
-    /// split (a mirrored identity is a new identity); on the expression split, the pairs whose
-    /// every shape mirrors onto a training shape (or onto no shape), so that no held-out shape is
-    /// seen, not even as a training shape's mirror image (`mouthLeft` mirrored is `mouthRight`).
-    fn training_samples(
-        &self,
-        set: &PairSet,
-        s: &Split,
-        input: InputNormalisation,
-    ) -> Result<Vec<Sample>> {
+    /// The training pairs of `s` whose mirror images may train: every pair on the identity split
+    /// (a mirrored identity is a new identity); on the expression split, the pairs whose every
+    /// shape mirrors onto a training shape (or onto no shape), so that no held-out shape is seen,
+    /// not even as a training shape's mirror image (`mouthLeft` mirrored is `mouthRight`).
+    fn mirrorable(&self, set: &PairSet, s: &Split) -> Vec<usize> {
         let names = &set.manifest.expressions;
         let allowed = |p: usize| match s.protocol {
             Protocol::Identity => true,
@@ -198,10 +193,31 @@ impl Mirroring {
                 .iter()
                 .all(|&(e, _)| self.partners[e].is_none_or(|b| !s.held_out.contains(&names[b]))),
         };
-        s.train
-            .iter()
-            .filter(|&&p| allowed(p))
-            .map(|&p| set.mirrored_sample(p, &self.mirror, input))
+        s.train.iter().copied().filter(|&p| allowed(p)).collect()
+    }
+
+    /// The mirror images of [`Self::mirrorable`] pairs as training samples.
+    fn training_samples(
+        &self,
+        set: &PairSet,
+        s: &Split,
+        input: InputNormalisation,
+    ) -> Result<Vec<Sample>> {
+        self.mirrorable(set, s)
+            .into_iter()
+            .map(|p| set.mirrored_sample(p, &self.mirror, input))
+            .collect()
+    }
+
+    /// The mirrored dense displacements of [`Self::mirrorable`] pairs, flattened (what the
+    /// baselines learn from besides the training pairs).
+    fn displacements(&self, set: &PairSet, s: &Split) -> Vec<Vec<f32>> {
+        self.mirrorable(set, s)
+            .into_iter()
+            .map(|p| {
+                let d = self.mirror.vectors(&set.displacement(p));
+                d.into_iter().flatten().collect()
+            })
             .collect()
     }
 }
@@ -317,7 +333,7 @@ pub struct TrainS2d {
     /// (after fold 0) starts from the beginning, a complete one is only baked and evaluated.
     pub resume: bool,
     /// Add the mirror images of training pairs to the training set, of S2D-Dec and of the
-    /// baselines (`Mirroring::training_samples` says which).
+    /// baselines (`Mirroring::mirrorable` says which).
     pub mirror: bool,
 }
 
@@ -870,14 +886,11 @@ pub fn eval_s2d(model: &Path, pairs: &Path, folds: usize, report: &Path) -> Resu
                 Some(m) => m,
                 None => mirroring.insert(Mirroring::of(&set)?),
             };
-            let input = sinew_core::s2d::S2dDecoder::from_bytes(&bytes)
-                .map_err(|e| anyhow::anyhow!("{}: not an S2D decoder: {e}", path.display()))?
-                .input_normalisation();
-            m.training_samples(&set, &s, InputNormalisation::from_code(input)?)?
+            m.displacements(&set, &s)
         } else {
             Vec::new()
         };
-        let extra: Vec<&[f32]> = mirrored.iter().map(|m| m.displacement.as_slice()).collect();
+        let extra: Vec<&[f32]> = mirrored.iter().map(Vec::as_slice).collect();
         let fr = FoldReport {
             model: path.clone(),
             ..evaluate_fold(&bytes, &set, &s, &extra, &mut errors)
