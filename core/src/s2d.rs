@@ -501,6 +501,14 @@ mod tests {
         assert!(name(format_args!("{}", "x".repeat(NAME_LEN + 1).as_str())).is_err());
     }
 
+    /// Each value of `got` within 1e-6 of `want`'s, and as many.
+    fn assert_close(got: &[f32], want: &[f32]) {
+        assert_eq!(got.len(), want.len());
+        for (g, w) in got.iter().zip(want) {
+            assert!((g - w).abs() < 1e-6, "{got:?} against {want:?}");
+        }
+    }
+
     #[test]
     fn landmark_input_hand_computed() {
         // Neutral (0,0,0), (2,0,0): centre (1,0,0), norm √2 → ±(1/√2, 0, 0).
@@ -510,17 +518,12 @@ mod tests {
         let mut out = [0.0; 6];
         landmark_input(&neutral, &expressive, &mut out).unwrap();
         let s = core::f32::consts::FRAC_1_SQRT_2;
-        let expected = [s, -s, 0.0, -s, s, 0.0];
-        for (o, e) in out.iter().zip(expected) {
-            assert!((o - e).abs() < 1e-6, "{out:?}");
-        }
+        assert_close(&out, &[s, -s, 0.0, -s, s, 0.0]);
         // Scale and translation of a set do not matter.
         let moved = [5.0, 1.0, 1.0, 5.0, 9.0, 1.0];
         let mut again = [0.0; 6];
         landmark_input(&neutral, &moved, &mut again).unwrap();
-        for (a, b) in out.iter().zip(again) {
-            assert!((a - b).abs() < 1e-6);
-        }
+        assert_close(&again, &out);
         assert_eq!(
             landmark_input(&neutral, &expressive[..3], &mut out),
             Err(BufferError::Input)
@@ -545,25 +548,17 @@ mod tests {
         let mut out = [0.0; 6];
         landmark_input_neutral_scale(&neutral, &expressive, &mut out).unwrap();
         let s = core::f32::consts::FRAC_1_SQRT_2;
-        let expected = [s, -2.0 * s, 0.0, -s, 2.0 * s, 0.0];
-        for (o, e) in out.iter().zip(expected) {
-            assert!((o - e).abs() < 1e-6, "{out:?}");
-        }
+        assert_close(&out, &[s, -2.0 * s, 0.0, -s, 2.0 * s, 0.0]);
         // A translated expressive set gives the same input; a scaled one a scaled input
         // (unlike `landmark_input`, whose sets are each scaled to unit norm).
         let moved = [5.0, 1.0, 1.0, 5.0, 5.0, 1.0];
         let mut again = [0.0; 6];
         landmark_input_neutral_scale(&neutral, &moved, &mut again).unwrap();
-        for (a, b) in out.iter().zip(again) {
-            assert!((a - b).abs() < 1e-6, "{again:?}");
-        }
+        assert_close(&again, &out);
         // Twice the displacement, twice the input.
         let twice = [0.0, 0.0, 0.0, -2.0, 8.0, 0.0];
         landmark_input_neutral_scale(&neutral, &twice, &mut again).unwrap();
-        let centred_twice = [2.0 * s, -4.0 * s, 0.0, -2.0 * s, 4.0 * s, 0.0];
-        for (a, b) in again.iter().zip(centred_twice) {
-            assert!((a - b).abs() < 1e-6, "{again:?}");
-        }
+        assert_close(&again, &[2.0 * s, -4.0 * s, 0.0, -2.0 * s, 4.0 * s, 0.0]);
         assert_eq!(
             landmark_input_neutral_scale(&neutral, &expressive[..3], &mut out),
             Err(BufferError::Input)
