@@ -11,13 +11,14 @@
 use criterion::{Criterion, criterion_group};
 use sinew_host::aim::AimConfig;
 use sinew_host::aim::data::training_set;
-use sinew_host::aim::train::{init, normalisation, step_once};
-use sinew_host::backend::Backend;
+use sinew_host::aim::model::normalisation;
+use sinew_host::aim::train::{init, step_once};
+use sinew_host::training::backend::Backend;
 
 fn bench(c: &mut Criterion) {
     // 84 rows of 113 vertices: 9,492, about the ICT face region's 9,409, so that the batch
     // holds as many distinct points as there (the networks run once per distinct point).
-    let (mut actor, bones) = sinew_host::procedural::actor(84);
+    let (mut actor, bones) = sinew_host::aim::procedural::actor(84);
     // 20 shapes like the ICT default actor: repeat the procedural expressions.
     while actor.shapes.len() < 20 {
         let i = 1 + (actor.shapes.len() - 1) % 6;
@@ -47,7 +48,7 @@ fn bench(c: &mut Criterion) {
                 &device,
             );
             // Reading the loss back forces the step to finish, as the training loop does.
-            let _ = sinew_host::nn::to_vec(terms);
+            let _ = sinew_host::training::nn::to_vec(terms);
             net = Some(n);
             step += 1;
         })
@@ -56,27 +57,27 @@ fn bench(c: &mut Criterion) {
 }
 
 /// The activation alone, forward and backward over one 4096×256 layer: burn's element-wise `sin`
-/// against Sinew's vectorised sine (`sinew_host::sine`), the cost the step above pays 15 times.
+/// against Sinew's vectorised sine (`sinew_host::training::sine`), the cost the step above pays 15 times.
 fn sine(c: &mut Criterion) {
     let device = burn::tensor::Device::flex().autodiff();
     let values: Vec<f32> = (0..4096 * 256)
         .map(|i| ((i * 7919) % 20011) as f32 * 1e-4 - 1.0)
         .collect();
-    let x = sinew_host::nn::tensor(values, [4096, 256], &device).require_grad();
+    let x = sinew_host::training::nn::tensor(values, [4096, 256], &device).require_grad();
     let mut group = c.benchmark_group("aim/sine_4096x256_forward_backward");
     group.sample_size(30);
     group.bench_function("burn_sin", |b| {
         b.iter(|| {
             let y = x.clone().mul_scalar(30.0).sin();
             let g = y.sum().backward();
-            let _ = sinew_host::nn::to_vec(x.grad(&g).expect("gradient"));
+            let _ = sinew_host::training::nn::to_vec(x.grad(&g).expect("gradient"));
         })
     });
     group.bench_function("sinew_sine", |b| {
         b.iter(|| {
-            let y = sinew_host::sine::siren_sine(x.clone(), 30.0);
+            let y = sinew_host::training::sine::siren_sine(x.clone(), 30.0);
             let g = y.sum().backward();
-            let _ = sinew_host::nn::to_vec(x.grad(&g).expect("gradient"));
+            let _ = sinew_host::training::nn::to_vec(x.grad(&g).expect("gradient"));
         })
     });
     group.finish();
@@ -84,8 +85,8 @@ fn sine(c: &mut Criterion) {
 
 criterion_group!(benches, sine, bench);
 fn main() {
-    // As the `sinew` binary does: keep freed memory mapped (glibc), see `sinew_host::malloc`.
-    sinew_host::malloc::keep_freed_memory();
+    // As the `sinew` binary does: keep freed memory mapped (glibc), see `sinew_host::training::malloc`.
+    sinew_host::training::malloc::keep_freed_memory();
     benches();
     Criterion::default().configure_from_args().final_summary();
 }

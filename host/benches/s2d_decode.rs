@@ -18,11 +18,11 @@
 
 use burn::tensor::Device;
 use criterion::{Criterion, criterion_group, criterion_main};
-use sinew_host::backend::Backend;
 use sinew_host::s2d::Hierarchy;
 use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
 use sinew_host::s2d::hierarchy::DEFAULT_FACTORS;
 use sinew_host::s2d::synthetic::{self, REFERENCE_SIZES, REFERENCE_SPIRALS};
+use sinew_host::training::backend::Backend;
 
 /// The ICT face region's level sizes and spiral lengths (docs/S2D.md, "Levels").
 const ICT_SIZES: [usize; 5] = [9409, 2353, 589, 148, 37];
@@ -36,9 +36,10 @@ fn baked(h: &Hierarchy, landmarks: &[u32], device: &Device) -> Vec<u8> {
 
 /// The ICT face region's hierarchy and landmarks, or `None` without the data.
 fn ict() -> Option<(Hierarchy, Vec<u32>)> {
-    let root = sinew_host::testing::data_dir()?;
-    let kit = sinew_host::ict::IctFaceKit::open(&root.join("ict-facekit")).expect("ICT-FaceKit");
-    let region = sinew_host::ict::FACE_REGION;
+    let root = sinew_host::io::data::data_dir()?;
+    let kit =
+        sinew_host::io::ict::IctFaceKit::open(&root.join("ict-facekit")).expect("ICT-FaceKit");
+    let region = sinew_host::io::ict::FACE_REGION;
     let (face, _) = kit.neutral().submesh(|v| region.contains(&v));
     let h = sinew_host::s2d::hierarchy::build(&face, &DEFAULT_FACTORS).expect("hierarchy");
     Some((h, kit.landmarks68().expect("landmarks")))

@@ -11,12 +11,12 @@
 
 use burn::tensor::Tensor;
 use criterion::{Criterion, criterion_group};
-use sinew_host::backend::Backend;
 use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
 use sinew_host::s2d::synthetic::{self, REFERENCE_SIZES, REFERENCE_SPIRALS};
 use sinew_host::s2d::train::{
     Batch, Halves, LossVariant, Sample, TrainConfig, loss, step_once, weights_tensor,
 };
+use sinew_host::training::backend::Backend;
 
 fn bench(c: &mut Criterion) {
     let device = Backend::Flex.autodiff_device(1).expect("flex backend");
@@ -57,7 +57,7 @@ fn bench(c: &mut Criterion) {
                     split.then_some(&halves),
                 );
                 // Reading the loss back forces the step to finish, as the training loop does.
-                let _ = sinew_host::nn::to_vec(l);
+                let _ = sinew_host::training::nn::to_vec(l);
                 net = Some(n);
             })
         });
@@ -76,7 +76,7 @@ fn bench(c: &mut Criterion) {
             );
             let grads = burn::optim::GradientsParams::from_grads(l.backward(), &d);
             let d = optim.step(1e-3, d, grads);
-            let _ = sinew_host::nn::to_vec(l.detach());
+            let _ = sinew_host::training::nn::to_vec(l.detach());
             net = Some(d);
         })
     });
@@ -85,8 +85,8 @@ fn bench(c: &mut Criterion) {
 
 criterion_group!(benches, bench);
 fn main() {
-    // As the `sinew` binary does: keep freed memory mapped (glibc), see `sinew_host::malloc`.
-    sinew_host::malloc::keep_freed_memory();
+    // As the `sinew` binary does: keep freed memory mapped (glibc), see `sinew_host::training::malloc`.
+    sinew_host::training::malloc::keep_freed_memory();
     benches();
     Criterion::default().configure_from_args().final_summary();
 }

@@ -7,7 +7,9 @@
 //! optionally the neutral face the frames decode onto. [`verify`] tells the kinds apart by the
 //! model artefact and refuses a replay of the other kind by name.
 
-use anyhow::{Result, anyhow, bail};
+use std::path::Path;
+
+use anyhow::{Context, Result, anyhow, bail};
 use sinew_core::aim::AimActor;
 use sinew_core::format::ArtifactKind;
 use sinew_core::q16::Q16;
@@ -17,8 +19,8 @@ use sinew_core::replay::{
 };
 use sinew_core::s2d::S2dDecoder;
 
-use crate::SinewWriter;
-use crate::commands::Frame;
+use crate::aim::play::{Frame, PoseFile};
+use crate::io::container::SinewWriter;
 
 /// Buffers for one frame of `actor` in every mode.
 struct Buffers {
@@ -265,12 +267,11 @@ pub struct Deviation {
 /// Millimetres per unit of a model's `units` metadata (`m`, `cm` or `mm`; cm if absent, the
 /// ICT-FaceKit unit).
 pub fn mm_per_unit(actor: &AimActor<'_>) -> Result<f64> {
-    match actor.file().metadata().get("units").unwrap_or("cm") {
-        "m" => Ok(1000.0),
-        "cm" => Ok(10.0),
-        "mm" => Ok(1.0),
-        u => bail!("unknown units {u:?} in the model's metadata"),
-    }
+    let name = actor.file().metadata().get("units").unwrap_or("cm");
+    let unit: crate::io::units::Unit = name
+        .parse()
+        .with_context(|| "in the model's metadata (units)")?;
+    Ok(unit.mm())
 }
 
 /// Plays the replay's inputs in its mode and in the `f32` reference mode and measures how far
@@ -322,6 +323,78 @@ pub fn deviation(model: &[u8], replay: &[u8]) -> Result<Deviation> {
         max_normal_diff: max_nd,
         mean_normal_diff: sum_nd / n,
     })
+}
+
+/// One frame of an S2D input file.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct S2dInputFrame {
+    /// The decoder input, `[I]` (`sinew_core::s2d::S2dDecoder::input`).
+    input: Vec<f32>,
+}
+
+/// The input file of an S2D replay: the frames, and optionally the neutral to decode onto.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct S2dInputFile {
+    frames: Vec<S2dInputFrame>,
+    #[serde(default)]
+    neutral: Option<Vec<f32>>,
+}
+
+/// `sinew replay record`: returns the number of frames recorded. An AIM actor takes a pose file;
+/// an S2D decoder takes `{"frames": [{"input": [I]}, ...], "neutral": [V·3]}` (neutral
+/// optional).
+pub fn replay_record(
+    model: &Path,
+    poses: &Path,
+    out: &Path,
+    mode: sinew_core::replay::Mode,
+) -> Result<usize> {
+    let bytes = crate::io::container::read(model)?;
+    if sinew_core::SinewFile::from_bytes(&bytes)
+        .is_ok_and(|f| f.kind == sinew_core::ArtifactKind::S2dDecoder)
+    {
+        if mode != sinew_core::replay::Mode::F32 {
+            anyhow::bail!("S2D replays are f32 only (--mode {mode})");
+        }
+        let text = std::fs::read_to_string(poses)
+            .with_context(|| format!("{}: cannot read", poses.display()))?;
+        let file: S2dInputFile = serde_json::from_str(&text).with_context(|| {
+            format!(
+                "{}: not an S2D input file {{\"frames\": [{{\"input\": [I]}}, ...], \"neutral\": [V·3]?}}",
+                poses.display()
+            )
+        })?;
+        let inputs: Vec<Vec<f32>> = file.frames.into_iter().map(|f| f.input).collect();
+        let replay = crate::replay::record_s2d(&bytes, &inputs, file.neutral.as_deref())
+            .with_context(|| format!("recording {} with {}", poses.display(), model.display()))?;
+        crate::io::atomic::write(out, &replay)?;
+        return Ok(inputs.len());
+    }
+    let actor =
+        AimActor::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
+    let file = PoseFile::read(poses, actor.shape_count())?;
+    let replay = crate::replay::record(&bytes, mode, &file.frames)
+        .with_context(|| format!("recording {} with {}", poses.display(), model.display()))?;
+    crate::io::atomic::write(out, &replay)?;
+    Ok(file.frames.len())
+}
+
+/// `sinew replay verify`.
+pub fn replay_verify(model: &Path, replay: &Path) -> Result<crate::replay::Verification> {
+    let m = crate::io::container::read(model)?;
+    let r = crate::io::container::read(replay)?;
+    crate::replay::verify(&m, &r)
+        .with_context(|| format!("verifying {} against {}", replay.display(), model.display()))
+}
+
+/// The deviation of a replay's numeric mode from the `f32` reference (`sinew replay verify`).
+pub fn replay_deviation(model: &Path, replay: &Path) -> Result<crate::replay::Deviation> {
+    let m = crate::io::container::read(model)?;
+    let r = crate::io::container::read(replay)?;
+    crate::replay::deviation(&m, &r)
+        .with_context(|| format!("measuring {} against {}", replay.display(), model.display()))
 }
 
 #[cfg(test)]

@@ -333,7 +333,7 @@ fn s2d_hierarchy_writes_a_file_and_names_bad_templates() {
 
 #[test]
 fn s2d_pairs_train_and_eval_end_to_end() {
-    let Some(root) = sinew_host::testing::data_dir() else {
+    let Some(root) = sinew_host::io::data::data_dir() else {
         return;
     };
     let kit = root.join("ict-facekit");
@@ -588,10 +588,10 @@ fn s2d_pairs_train_and_eval_end_to_end() {
     assert_ne!(lr["mean_error_mm"], plain["mean_error_mm"]);
 
     // Applications on real faces of the decoder's template (the ICT face region).
-    let ict = sinew_host::ict::IctFaceKit::open(&kit).unwrap();
+    let ict = sinew_host::io::ict::IctFaceKit::open(&kit).unwrap();
     let (face, _) = ict
         .neutral()
-        .submesh(|v| sinew_host::ict::FACE_REGION.contains(&v));
+        .submesh(|v| sinew_host::io::ict::FACE_REGION.contains(&v));
     let delta = ict.expression_delta("jawOpen").unwrap();
     let open: Vec<[f32; 3]> = face
         .positions
@@ -615,7 +615,7 @@ fn s2d_pairs_train_and_eval_end_to_end() {
         "--out",
         s(&out),
     ]);
-    let got = sinew_host::mesh::Mesh::read(&out).unwrap();
+    let got = sinew_host::io::mesh::Mesh::read(&out).unwrap();
     assert_eq!(got.positions.len(), face.positions.len());
     assert_ne!(got.positions, open, "neutralising moves the face");
     let frames = dir.path().join("transferred");
@@ -672,4 +672,109 @@ fn s2d_pairs_train_and_eval_end_to_end() {
         s(&report),
     ]);
     assert!(e.contains("nowhere") && e.contains("manifest.json"), "{e}");
+}
+
+/// `sinew` with `env` set (and `SINEW_SEED`, `SINEW_DATA` removed unless `env` sets them).
+fn sinew_env(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_sinew"));
+    cmd.args(args)
+        .env_remove("SINEW_SEED")
+        .env_remove("SINEW_DATA");
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    cmd.output().expect("run sinew")
+}
+
+/// The seed a command says it uses (`seed N (override with --seed or SINEW_SEED)` on stderr).
+fn said_seed(out: &Output) -> u64 {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("seed "))
+        .unwrap_or_else(|| panic!("no seed line in:\n{stderr}"));
+    line.split_whitespace().nth(1).unwrap().parse().unwrap()
+}
+
+/// One rule for every command family: a flag beats its environment variable, which beats the
+/// default. Each command stops right after saying its seed (its data folder does not exist).
+#[test]
+fn flags_beat_the_environment_which_beats_the_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing");
+    let out = dir.path().join("out");
+    let report = dir.path().join("r.json");
+    let commands: [(Vec<&str>, u64); 3] = [
+        (
+            vec![
+                "train",
+                "aim",
+                "--data",
+                s(&missing),
+                "--out",
+                s(&out),
+                "--report",
+                s(&report),
+            ],
+            sinew_host::aim::AimConfig::default().seed,
+        ),
+        (
+            vec![
+                "train",
+                "s2d",
+                "--pairs",
+                s(&missing),
+                "--protocol",
+                "expression",
+                "--out",
+                s(&out),
+                "--report",
+                s(&report),
+            ],
+            sinew_host::s2d::train::TrainConfig::default().seed,
+        ),
+        (
+            vec!["data", "s2d-pairs", "--data", s(&missing), "--out", s(&out)],
+            sinew_host::s2d::data::PairsConfig::default().seed,
+        ),
+    ];
+    for (args, default) in commands {
+        let plain = sinew_env(&args, &[]);
+        assert!(
+            !plain.status.success(),
+            "{args:?} on a missing folder must fail"
+        );
+        assert_eq!(said_seed(&plain), default, "{args:?}: the default seed");
+        let env = sinew_env(&args, &[("SINEW_SEED", "4242")]);
+        assert_eq!(
+            said_seed(&env),
+            4242,
+            "{args:?}: SINEW_SEED beats the default"
+        );
+        let flag = [args.as_slice(), &["--seed", "7"]].concat();
+        let both = sinew_env(&flag, &[("SINEW_SEED", "4242")]);
+        assert_eq!(said_seed(&both), 7, "{args:?}: --seed beats SINEW_SEED");
+        let help = ok(&[args[0], args[1], "--help"]);
+        assert!(
+            help.contains("SINEW_SEED"),
+            "{args:?} --help names SINEW_SEED:\n{help}"
+        );
+    }
+    // SINEW_DATA is where the template bones are, unless --templates says otherwise.
+    let bones = |extra: &[&str], env: &[(&str, &str)]| {
+        let args = [
+            &["bones", "fit", "--data", s(&missing), "--out", s(&out)],
+            extra,
+        ]
+        .concat();
+        String::from_utf8_lossy(&sinew_env(&args, env).stderr).into_owned()
+    };
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    assert!(
+        bones(&[], &[]).contains("../shared/data"),
+        "default templates folder"
+    );
+    assert!(bones(&[], &[("SINEW_DATA", s(&a))]).contains(s(&a)));
+    assert!(bones(&["--templates", s(&b)], &[("SINEW_DATA", s(&a))]).contains(s(&b)));
+    assert!(ok(&["bones", "fit", "--help"]).contains("SINEW_DATA"));
 }

@@ -63,10 +63,10 @@ fn golden(name: &str, actual: &[u8]) -> Option<Vec<u8>> {
 }
 
 /// Where the real face data lives (`$SINEW_DATA`, else `../shared/data`), with a subfolder;
-/// `None` to skip a data test (see `sinew_host::testing::data_dir`, which fails instead under
+/// `None` to skip a data test (see `sinew_host::io::data::data_dir`, which fails instead under
 /// `SINEW_REQUIRE_DATA=1`).
 pub fn data_dir(subfolder: &str) -> Option<PathBuf> {
-    sinew_host::testing::data_dir().map(|d| d.join(subfolder))
+    sinew_host::io::data::data_dir().map(|d| d.join(subfolder))
 }
 
 /// A small deterministic generator for test inputs and weights (PCG32 via `rand_pcg`), so goldens

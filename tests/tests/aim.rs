@@ -5,9 +5,9 @@ use sinew_core::aim::AimActor;
 use sinew_host::aim::AimConfig;
 use sinew_host::aim::bake::{BakeInput, bake};
 use sinew_host::aim::eval::shape_errors;
+use sinew_host::aim::testing::aim_train_options;
 use sinew_host::aim::train::train;
-use sinew_host::backend::Backend;
-use sinew_host::testing::aim_train_options;
+use sinew_host::training::backend::Backend;
 
 /// Training runs one at a time in this process: burn's CPU kernels split reductions across the
 /// shared thread pool according to the work in flight, so two trainings at once round differently
@@ -15,13 +15,13 @@ use sinew_host::testing::aim_train_options;
 static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 fn small_set() -> sinew_host::aim::TrainingSet {
-    sinew_host::testing::procedural_training_set(16)
+    sinew_host::aim::testing::procedural_training_set(16)
 }
 
 fn tiny_config(iterations: usize) -> AimConfig {
     AimConfig {
         checkpoint_every: 5,
-        ..sinew_host::testing::small_aim_config(iterations)
+        ..sinew_host::aim::testing::small_aim_config(iterations)
     }
 }
 
@@ -170,7 +170,7 @@ fn training_learns_the_procedural_actor_and_the_core_agrees() {
     let nets = actor.networks().expect("networks baked");
     let mut scratch = vec![0.0; nets.scratch_len()];
     let mut e = vec![0.0; nets.corrective_len()];
-    let tol = sinew_host::tolerance::SIREN;
+    let tol = sinew_host::training::tolerance::SIREN;
     for i in (0..actor.vertex_count()).step_by(37) {
         let c = sinew_core::linalg::Vec3::new(
             actor.template().at(3 * i),
@@ -225,7 +225,7 @@ fn softplus_thickness_is_positive_and_the_core_agrees() {
     let nets = actor.networks().expect("networks baked");
     let mut scratch = vec![0.0; nets.scratch_len()];
     let mut e = vec![0.0; nets.corrective_len()];
-    let tol = sinew_host::tolerance::SIREN;
+    let tol = sinew_host::training::tolerance::SIREN;
     for i in (0..actor.vertex_count()).step_by(29) {
         let c = sinew_core::linalg::Vec3::new(
             actor.template().at(3 * i),

@@ -5,7 +5,7 @@ use sinew_core::format::{HEADER_LEN, SECTION_ENTRY_LEN, SinewFile};
 use sinew_core::network::load_mlp;
 use sinew_core::nn::Activation;
 use sinew_host::SinewWriter;
-use sinew_host::nn::{LayerWeights, write_mlp};
+use sinew_host::training::nn::{LayerWeights, write_mlp};
 use sinew_tests::Rng;
 
 /// A network artefact: metadata and a 3→4→2 MLP with a sine and a GELU layer.

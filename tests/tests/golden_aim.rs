@@ -11,7 +11,7 @@ use std::fmt::Write;
 use sinew_core::aim::AimActor;
 use sinew_core::replay::Mode;
 use sinew_host::aim::bake::with_q16_cache;
-use sinew_host::commands::Frame;
+use sinew_host::aim::play::Frame;
 use sinew_host::replay::{record, verify};
 use sinew_tests::{check, check_bytes, golden_dir};
 
@@ -22,8 +22,8 @@ fn bake_golden() -> Vec<u8> {
     use sinew_host::aim::AimConfig;
     use sinew_host::aim::bake::{BakeInput, bake};
     use sinew_host::aim::train::train;
-    use sinew_host::backend::Backend;
-    let set = sinew_host::testing::procedural_training_set(16);
+    use sinew_host::training::backend::Backend;
+    let set = sinew_host::aim::testing::procedural_training_set(16);
     let config = AimConfig {
         hidden: 32,
         layers: 2,
@@ -42,7 +42,7 @@ fn bake_golden() -> Vec<u8> {
         ..AimConfig::default()
     };
     let dir = tempfile::tempdir().unwrap();
-    let options = sinew_host::testing::aim_train_options(dir.path(), false, None);
+    let options = sinew_host::aim::testing::aim_train_options(dir.path(), false, None);
     let trained = train(&set, &config, &options).unwrap();
     let tri = set.template.triangles();
     let input = BakeInput {

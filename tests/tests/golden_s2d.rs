@@ -61,7 +61,7 @@ fn real_sequence(model: &[u8]) -> (Vec<Vec<f32>>, Option<Vec<f32>>) {
     use sinew_host::s2d::train::landmark_input;
     let root = sinew_tests::data_dir("ict-facekit")
         .expect("UPDATE_EXPECT=1 for the S2D replay needs the ICT-FaceKit data ($SINEW_DATA)");
-    let kit = sinew_host::ict::IctFaceKit::open(&root).unwrap();
+    let kit = sinew_host::io::ict::IctFaceKit::open(&root).unwrap();
     // The kit's shared deltas, the default when the decoder was made.
     let config = PairsConfig {
         expressions: Expressions::Shared,

@@ -1,6 +1,6 @@
 //! The core's kernels against burn on the same weights: the host trains with burn and the core
 //! plays back, so both must compute the same function. Allowed differences are in
-//! `sinew_host::tolerance`, one entry per kernel with its reason.
+//! `sinew_host::training::tolerance`, one entry per kernel with its reason.
 
 use burn::tensor::Device;
 use sinew_core::SinewFile;
@@ -8,12 +8,14 @@ use sinew_core::network::load_mlp;
 use sinew_core::nn::Activation;
 use sinew_core::spiral::{SpiralConv as CoreSpiralConv, Spirals};
 use sinew_host::SinewWriter;
-use sinew_host::nn::{Mlp, SpiralConv, tensor, to_vec};
-use sinew_host::tolerance::{self, Tolerance};
+use sinew_host::training::nn::{Mlp, SpiralConv, tensor, to_vec};
+use sinew_host::training::tolerance::{self, Tolerance};
 use sinew_tests::Rng;
 
 fn device() -> Device {
-    sinew_host::backend::Backend::Flex.device(7).unwrap()
+    sinew_host::training::backend::Backend::Flex
+        .device(7)
+        .unwrap()
 }
 
 /// Runs the exported MLP through the core, row by row.
@@ -174,10 +176,10 @@ fn s2d_decoder_matches_burn() {
 fn s2d_decoder_matches_burn_on_flame() {
     use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder};
     use sinew_host::s2d::hierarchy::{Config, build_with};
-    let Some(dir) = sinew_host::testing::data_dir() else {
+    let Some(dir) = sinew_host::io::data::data_dir() else {
         return;
     };
-    let mesh = sinew_host::mesh::Mesh::read(&dir.join("flame/FLAME_template.ply")).unwrap();
+    let mesh = sinew_host::io::mesh::Mesh::read(&dir.join("flame/FLAME_template.ply")).unwrap();
     let h = build_with(&mesh, &Config::reference_flame()).unwrap();
     let device = device();
     let config = DecoderConfig::default();

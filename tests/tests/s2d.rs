@@ -569,7 +569,9 @@ fn decode_bits_match_a_plain_reference() {
     use sinew_host::s2d::decoder::StageActivation::{Elu, Identity, LeakyRelu};
     use sinew_host::s2d::decoder::{DecoderConfig, S2dDecoder as Burn};
     use sinew_host::s2d::synthetic;
-    let device = sinew_host::backend::Backend::Flex.device(1).unwrap();
+    let device = sinew_host::training::backend::Backend::Flex
+        .device(1)
+        .unwrap();
     let mut cases = vec![synthetic::tiny_baked_decoder().1];
     for (sizes, spirals, fc, filters, activation, seed) in [
         (&[30, 12, 5][..], &[5, 4, 3][..], 4, vec![5, 3], Elu, 1),

@@ -5,12 +5,12 @@
 
 use std::path::Path;
 
-use sinew_host::backend::Backend;
-use sinew_host::nn::to_vec;
 use sinew_host::s2d::checkpoint::{STATE_FILE, read_state};
 use sinew_host::s2d::decoder::S2dDecoder;
 use sinew_host::s2d::synthetic;
 use sinew_host::s2d::train::{Sample, TrainConfig, TrainOptions, Trained, request_stop, train};
+use sinew_host::training::backend::Backend;
+use sinew_host::training::nn::to_vec;
 
 /// Training runs one at a time in this process: burn's CPU kernels split reductions across the
 /// shared thread pool according to the work in flight, so two trainings at once round differently

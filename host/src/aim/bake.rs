@@ -2,13 +2,14 @@
 //! vertices as a per-vertex cache for real-time playback (see `sinew_core::aim` for the sections).
 
 use anyhow::Result;
+
+use super::{AimConfig, TrainingSet};
 use burn::tensor::Device;
 use sinew_core::format::{ArtifactKind, FLAG_PLAYBACK_ONLY};
 
-use super::model::AimNet;
-use super::train::normalise;
-use crate::container::SinewWriter;
-use crate::nn::{tensor, to_vec};
+use super::model::{AimNet, normalise};
+use crate::io::container::SinewWriter;
+use crate::training::nn::{tensor, to_vec};
 
 /// The networks' outputs at a set of points.
 #[derive(Clone, Debug, Default)]
@@ -39,12 +40,14 @@ pub fn evaluate(net: &AimNet, points: &[[f32; 3]], norm: [f32; 4], device: &Devi
         );
         let c = tensor(chunk.iter().flatten().copied().collect(), [n, 3], device);
         let p = net.predict(x, c);
-        cache.skin.extend(crate::mesh::points(to_vec(p.skin)));
+        cache.skin.extend(crate::io::mesh::points(to_vec(p.skin)));
         cache.k.extend(to_vec(p.k));
         cache.correctives.extend(to_vec(p.correctives));
-        cache.bone.extend(crate::mesh::points(to_vec(p.bone)));
+        cache.bone.extend(crate::io::mesh::points(to_vec(p.bone)));
         cache.thickness.extend(to_vec(p.thickness));
-        cache.normal.extend(crate::mesh::points(to_vec(p.normal)));
+        cache
+            .normal
+            .extend(crate::io::mesh::points(to_vec(p.normal)));
     }
     cache
 }
@@ -135,6 +138,22 @@ pub fn with_q16_cache(actor_bytes: &[u8]) -> Result<Vec<u8>> {
     w.q16s("q16.k", &[v], &q("cache.k")?)?;
     w.q16s("q16.e", &[v, m, 3], &q("cache.e")?)?;
     w.to_bytes()
+}
+
+/// Metadata recorded in every baked actor.
+pub fn metadata(set: &TrainingSet, config: &AimConfig) -> Result<Vec<(String, String)>> {
+    Ok(vec![
+        ("units".into(), set.units.name().into()),
+        ("axes".into(), "x-left-of-actor,y-up,z-forward".into()),
+        (
+            "tool".into(),
+            format!("sinew {}", env!("CARGO_PKG_VERSION")),
+        ),
+        ("source".into(), set.source.replace('\n', " ")),
+        ("seed".into(), config.seed.to_string()),
+        ("shapes".into(), set.names.join(",")),
+        ("config".into(), serde_json::to_string(config)?),
+    ])
 }
 
 #[cfg(test)]

@@ -1,6 +1,9 @@
 //! AIM training configuration: every knob with the paper's value or the one that worked here,
 //! saved as JSON beside every output so a run can be repeated.
 
+use std::path::Path;
+
+use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
 /// How the learning rate moves from `lr` to `lr_end` over the run.
@@ -171,7 +174,7 @@ impl Default for AimConfig {
             lambda_jaw: 1.0,
             jaw_init: JawInit::Bones,
             checkpoint_every: 1000,
-            max_constraint_depth: 2.5,
+            max_constraint_depth: crate::anatomy::constraints::DEFAULT_MAX_DEPTH,
             thickness_activation: ThicknessActivation::Softplus,
         }
     }
@@ -298,6 +301,18 @@ impl AimConfig {
         );
         Ok(())
     }
+}
+
+/// Reads a JSON configuration file, naming it on error.
+pub fn read_config(path: &Path) -> Result<AimConfig> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let config: AimConfig = serde_json::from_str(&text)
+        .with_context(|| format!("{}: invalid AIM configuration", path.display()))?;
+    config
+        .validate()
+        .with_context(|| format!("{}: invalid AIM configuration", path.display()))?;
+    Ok(config)
 }
 
 #[cfg(test)]

@@ -4,11 +4,11 @@
 
 use anyhow::{Result, ensure};
 
-use super::{Anchor, Plane, TrainingSet};
-use crate::bones::RigidFit;
-use crate::constraints::{self, Bone, ConstraintParams};
-use crate::ict::Actor;
-use crate::mesh::Mesh;
+use super::{Plane, TrainingSet};
+use crate::anatomy::constraints::anchors;
+use crate::geometry::align::RigidFit;
+use crate::io::ict::Actor;
+use crate::io::mesh::Mesh;
 
 /// Symmetric iBUG-68 landmark pairs (left, right) used to estimate the plane of symmetry.
 const IBUG_PAIRS: [(usize, usize); 17] = [
@@ -135,7 +135,7 @@ pub fn rigid_to_pivot_9d(fit: &RigidFit, pivot: [f32; 3]) -> [f32; 9] {
 }
 
 /// The jaw transform of each expression (shapes 1..N) estimated from the data: the
-/// least-squares rigid transform (Horn, [`crate::bones::fit_rigid`]) taking the neutral's
+/// least-squares rigid transform (Horn, [`crate::geometry::align::fit_rigid`]) taking the neutral's
 /// jaw-constrained skin vertices ([`TrainingSet::jaw_constrained`]) to their positions in that
 /// shape, in AIM's 9 parameters about the set's jaw pivot. `None` for every shape when fewer
 /// than three vertices are jaw-constrained or they are (nearly) collinear, or for a shape whose
@@ -154,50 +154,8 @@ pub fn jaw_transforms(set: &TrainingSet) -> Vec<Option<[f32; 9]>> {
     set.shapes[1..]
         .iter()
         .map(|shape| {
-            let fit = crate::bones::fit_rigid(from.as_deref()?, &at(shape)?)?;
+            let fit = crate::geometry::align::fit_rigid(from.as_deref()?, &at(shape)?)?;
             Some(rigid_to_pivot_9d(&fit, set.jaw_pivot))
-        })
-        .collect()
-}
-
-/// Wu et al.'s sparse constraints of every vertex of `neutral` against the bones.
-pub fn anchors(neutral: &Mesh, skull: &Mesh, jaw: &Mesh, max_depth: f32) -> Vec<Option<Anchor>> {
-    let normals = neutral.vertex_normals();
-    let (skull_tri, jaw_tri) = (skull.triangles(), jaw.triangles());
-    let found = constraints::compute(
-        &neutral.positions,
-        &normals,
-        &[
-            (Bone::Skull, &skull.positions, &skull_tri),
-            (Bone::Jaw, &jaw.positions, &jaw_tri),
-        ],
-        &ConstraintParams::new(max_depth),
-    );
-    // The constraint's normal is the unit direction from the bone point to the skin vertex (the
-    // reversed ray), not the bone triangle's normal: then b + d·n reproduces the skin vertex
-    // exactly, as AIM eq. 1 states, and L_A (eq. 12) does not pull the neutral off the skin.
-    // With the triangle normal, b + d·n missed the ICT skin by 3.9 mm (median) and the trained
-    // neutral was 3.9 mm off on average while the expressions, helped by their correctives,
-    // were 0.85 mm off (2000 steps; docs/AIM.md).
-    found
-        .per_vertex
-        .iter()
-        .zip(&neutral.positions)
-        .map(|(c, s)| {
-            c.and_then(|c| {
-                let d = [
-                    s[0] - c.bone_point[0],
-                    s[1] - c.bone_point[1],
-                    s[2] - c.bone_point[2],
-                ];
-                let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                (len > 0.0).then(|| Anchor {
-                    bone: c.bone_point,
-                    thickness: len,
-                    normal: d.map(|v| v / len),
-                    on: c.bone,
-                })
-            })
         })
         .collect()
 }
@@ -213,12 +171,7 @@ pub fn training_set(
     ensure!(!actor.shapes.is_empty(), "the actor has no shapes");
     let neutral = &actor.template;
     let anchors = anchors(neutral, skull, jaw, max_depth);
-    let mm_per_unit = match actor.units {
-        "m" => 1000.0,
-        "cm" => 10.0,
-        "mm" => 1.0,
-        other => anyhow::bail!("unknown length unit {other:?}"),
-    };
+    let mm_per_unit = actor.units.mm() as f32;
     let set = TrainingSet {
         template: neutral.clone(),
         shapes: actor.shapes.clone(),
@@ -227,7 +180,7 @@ pub fn training_set(
         forehead: forehead(&neutral.positions, &actor.landmarks),
         symmetry: symmetry_plane(&neutral.positions, &actor.landmarks),
         jaw_pivot: pivot.unwrap_or_else(|| jaw_pivot(jaw)),
-        units: actor.units.to_owned(),
+        units: actor.units,
         mm_per_unit,
         source: actor.source.clone(),
     };
@@ -238,7 +191,7 @@ pub fn training_set(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nn::{tensor, to_vec};
+    use crate::training::nn::{tensor, to_vec};
     use sinew_core::linalg::Vec3;
 
     /// Rotation by `deg` degrees about the unit `axis` (Rodrigues), row-major.
@@ -286,7 +239,7 @@ mod tests {
             })
             .collect();
         let y: Vec<[f32; 3]> = x.iter().map(|&p| moved(p)).collect();
-        let fit = crate::bones::fit_rigid(&x, &y).expect("well-posed");
+        let fit = crate::geometry::align::fit_rigid(&x, &y).expect("well-posed");
         let p9 = rigid_to_pivot_9d(&fit, pivot);
         // The 9 parameters are [first column, second column, t] of the pivot form.
         for i in 0..3 {
@@ -304,7 +257,7 @@ mod tests {
             }
         }
         // ... and so does the training model's rotate_6d (eq. 10 with k = 1).
-        let device = crate::backend::Backend::Flex.device(1).unwrap();
+        let device = crate::training::backend::Backend::Flex.device(1).unwrap();
         let n = x.len();
         let r6 = tensor(
             (0..n).flat_map(|_| p9[..6].to_vec()).collect(),
@@ -330,14 +283,15 @@ mod tests {
     #[test]
     fn rigid_fit_refuses_too_few_or_collinear_points() {
         let line: Vec<[f32; 3]> = (0..10).map(|i| [i as f32, 2.0 * i as f32, 0.5]).collect();
-        assert!(crate::bones::fit_rigid(&line, &line).is_none());
+        assert!(crate::geometry::align::fit_rigid(&line, &line).is_none());
         let three = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
-        assert!(crate::bones::fit_rigid(&three[..2], &three[..2]).is_none());
-        assert!(crate::bones::fit_rigid(&three, &three[..2]).is_none());
+        assert!(crate::geometry::align::fit_rigid(&three[..2], &three[..2]).is_none());
+        assert!(crate::geometry::align::fit_rigid(&three, &three[..2]).is_none());
         let mut bad = three;
         bad[1][0] = f32::NAN;
-        assert!(crate::bones::fit_rigid(&three, &bad).is_none());
-        let fit = crate::bones::fit_rigid(&three, &three).expect("three points in a plane");
+        assert!(crate::geometry::align::fit_rigid(&three, &bad).is_none());
+        let fit =
+            crate::geometry::align::fit_rigid(&three, &three).expect("three points in a plane");
         assert_eq!(
             rigid_to_pivot_9d(&fit, [1.0, 2.0, 3.0]),
             super::super::model::IDENTITY_9D
@@ -346,7 +300,8 @@ mod tests {
 
     #[test]
     fn jaw_init_recovers_the_procedural_jaw_open() {
-        let (actor, bones) = crate::procedural::actor(crate::procedural::DEFAULT_RESOLUTION);
+        let (actor, bones) =
+            crate::aim::procedural::actor(crate::aim::procedural::DEFAULT_RESOLUTION);
         let set =
             training_set(&actor, &bones.skull, &bones.jaw, Some(bones.jaw_pivot), 2.5).unwrap();
         let jaw = set.jaw_constrained();
@@ -376,7 +331,7 @@ mod tests {
         // Without jaw constraints there is nothing to fit: every shape falls back.
         let mut bare = set.clone();
         for a in bare.anchors.iter_mut().flatten() {
-            a.on = crate::constraints::Bone::Skull;
+            a.on = crate::anatomy::constraints::Bone::Skull;
         }
         assert!(jaw_transforms(&bare).iter().all(Option::is_none));
     }

@@ -3,15 +3,22 @@
 //! accuracy report.
 
 pub mod bake;
+pub mod commands;
 pub mod config;
 pub mod data;
+pub mod demo;
+pub mod edit;
 pub mod eval;
 pub mod model;
+pub mod play;
+pub mod procedural;
 pub mod run;
+pub mod testing;
 pub mod train;
 
 use serde::Serialize;
 
+pub use crate::anatomy::constraints::Anchor;
 pub use config::AimConfig;
 
 /// A plane of symmetry: points x with (x − origin)·normal = 0.
@@ -42,28 +49,11 @@ impl Plane {
     }
 }
 
-/// One sparse anatomical constraint at a skin vertex (Wu et al. 2016): bone point, soft-tissue
-/// thickness, bone normal and which bone was hit.
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct Anchor {
-    /// Bone point.
-    pub bone: [f32; 3],
-    /// Thickness, in the data's unit.
-    pub thickness: f32,
-    /// Unit bone normal (pointing out of the bone, towards the skin).
-    pub normal: [f32; 3],
-    /// The bone the constraint lies on: the skin over the jaw ([`Bone::Jaw`]) moves with the jaw
-    /// transform, which is what the jaw initialisation and the jaw skinning term use.
-    ///
-    /// [`Bone::Jaw`]: crate::constraints::Bone::Jaw
-    pub on: crate::constraints::Bone,
-}
-
 /// Everything AIM learns from: template points, the actor's shapes and the anatomy priors.
 #[derive(Clone, Debug)]
 pub struct TrainingSet {
     /// Template points c and their polygons (for baking, rendering and OBJ export).
-    pub template: crate::mesh::Mesh,
+    pub template: crate::io::mesh::Mesh,
     /// The N shapes, neutral first, each `[V]` points in the template's order.
     pub shapes: Vec<Vec<[f32; 3]>>,
     /// Shape names, "neutral" first.
@@ -76,8 +66,8 @@ pub struct TrainingSet {
     pub symmetry: Plane,
     /// The jaw's pivot for LBS (eq. 10).
     pub jaw_pivot: [f32; 3],
-    /// Length unit of all coordinates ("cm" for ICT-FaceKit).
-    pub units: String,
+    /// Length unit of all coordinates (cm for ICT-FaceKit).
+    pub units: crate::io::units::Unit,
     /// Millimetres per unit (10 for cm), for reports.
     pub mm_per_unit: f32,
     /// Where the data came from, with its licence.
@@ -94,7 +84,8 @@ impl TrainingSet {
     pub fn jaw_constrained(&self) -> Vec<u32> {
         (0..self.anchors.len() as u32)
             .filter(|&i| {
-                self.anchors[i as usize].is_some_and(|a| a.on == crate::constraints::Bone::Jaw)
+                self.anchors[i as usize]
+                    .is_some_and(|a| a.on == crate::anatomy::constraints::Bone::Jaw)
             })
             .collect()
     }

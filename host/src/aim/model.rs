@@ -5,7 +5,7 @@ use burn::module::{Module, Param};
 use burn::tensor::{Device, Int, Tensor, TensorData};
 
 use super::config::AimConfig;
-use crate::nn::Mlp;
+use crate::training::nn::Mlp;
 
 /// The five networks B, D, N, K, E and the per-shape jaw transforms T_b,i.
 #[derive(Module, Debug)]
@@ -185,14 +185,43 @@ pub fn cross(a: Tensor<2>, b: Tensor<2>) -> Tensor<2> {
     Tensor::cat(vec![x, y, z], 1)
 }
 
+/// The input normalisation of a template: centre of its bounding box and half its largest extent,
+/// so SIREN sees coordinates in [−1, 1].
+pub fn normalisation(points: &[[f32; 3]]) -> [f32; 4] {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in points {
+        for i in 0..3 {
+            lo[i] = lo[i].min(p[i]);
+            hi[i] = hi[i].max(p[i]);
+        }
+    }
+    let scale = (0..3).map(|i| hi[i] - lo[i]).fold(0.0f32, f32::max) * 0.5;
+    [
+        (lo[0] + hi[0]) * 0.5,
+        (lo[1] + hi[1]) * 0.5,
+        (lo[2] + hi[2]) * 0.5,
+        scale.max(1e-6),
+    ]
+}
+
+/// Normalised coordinates of `p`.
+pub fn normalise(p: [f32; 3], n: [f32; 4]) -> [f32; 3] {
+    [
+        (p[0] - n[0]) / n[3],
+        (p[1] - n[1]) / n[3],
+        (p[2] - n[2]) / n[3],
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nn::{tensor, to_vec};
+    use crate::training::nn::{tensor, to_vec};
 
     #[test]
     fn rotate_6d_matches_the_core() {
-        let device = crate::backend::Backend::Flex.device(1).unwrap();
+        let device = crate::training::backend::Backend::Flex.device(1).unwrap();
         let r = [0.3f32, -1.2, 0.5, 2.0, 0.1, -0.7];
         let v = [1.5f32, -0.25, 2.0];
         let burn = to_vec(rotate_6d(
@@ -210,7 +239,7 @@ mod tests {
 
     #[test]
     fn neutral_samples_are_unposed_and_expressions_add_their_corrective() {
-        let device = crate::backend::Backend::Flex.device(3).unwrap();
+        let device = crate::training::backend::Backend::Flex.device(3).unwrap();
         let config = AimConfig {
             hidden: 8,
             layers: 1,

@@ -7,11 +7,11 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 use sinew_core::aim::AimActor;
 
-use super::bake::{BakeInput, bake};
+use super::bake::{BakeInput, bake, metadata};
 use super::eval::{SkinningWeightMeans, shape_errors, thickness_deviation};
 use super::train::{TERMS, TrainOptions, Trained, train};
 use super::{AimConfig, ErrorStats, TrainingSet};
-use crate::render::{Image, View, render_heatmap};
+use crate::figures::render::{Image, View, render_heatmap};
 
 /// The JSON report of `sinew train aim` and `sinew eval aim`.
 #[derive(Clone, Debug, Serialize)]
@@ -45,13 +45,13 @@ pub struct Report {
     /// Mean learned jaw skinning weight k over the jaw-constrained vertices and the forehead.
     pub skinning_weight: SkinningWeightMeans,
     /// Data unit and source.
-    pub units: String,
+    pub units: crate::io::units::Unit,
     /// Where the data came from.
     pub source: String,
     /// The configuration used.
     pub config: AimConfig,
     /// The backend used.
-    pub backend: crate::backend::Backend,
+    pub backend: crate::training::backend::Backend,
     /// The baked model file.
     pub model: String,
 }
@@ -65,22 +65,6 @@ pub struct Outputs {
     pub report: PathBuf,
     /// Folder for pictures and OBJs (`None`: no pictures).
     pub pictures: Option<PathBuf>,
-}
-
-/// Metadata recorded in every baked actor.
-pub fn metadata(set: &TrainingSet, config: &AimConfig) -> Result<Vec<(String, String)>> {
-    Ok(vec![
-        ("units".into(), set.units.clone()),
-        ("axes".into(), "x-left-of-actor,y-up,z-forward".into()),
-        (
-            "tool".into(),
-            format!("sinew {}", env!("CARGO_PKG_VERSION")),
-        ),
-        ("source".into(), set.source.replace('\n', " ")),
-        ("seed".into(), config.seed.to_string()),
-        ("shapes".into(), set.names.join(",")),
-        ("config".into(), serde_json::to_string(config)?),
-    ])
 }
 
 /// Trains, bakes, evaluates and reports.
@@ -112,8 +96,8 @@ pub fn run(
         metadata: metadata(set, config)?,
     };
     let (bytes, _) = bake(&model, &input, &device)?;
-    crate::atomic::write(&out.model, &bytes)?;
-    crate::atomic::write(
+    crate::io::atomic::write(&out.model, &bytes)?;
+    crate::io::atomic::write(
         &out.model.with_extension("config.json"),
         serde_json::to_string_pretty(config)?.as_bytes(),
     )?;
@@ -127,7 +111,7 @@ pub fn run(
         state.steps_done,
         &out.model,
     )?;
-    crate::atomic::write(
+    crate::io::atomic::write(
         &out.report,
         serde_json::to_string_pretty(&report)?.as_bytes(),
     )?;
@@ -148,7 +132,7 @@ pub fn run(
             .collect();
         let borrowed: Vec<(&str, &[(f64, f64)])> =
             series.iter().map(|(n, s)| (*n, s.as_slice())).collect();
-        crate::plot::loss_curves(&borrowed, "AIM training loss", true, 900, 600)
+        crate::figures::plot::loss_curves(&borrowed, "AIM training loss", true, 900, 600)
             .write_png(&dir.join("loss.png"))?;
         pictures(&bytes, set, dir)?;
     }
@@ -160,7 +144,7 @@ pub fn evaluate(
     bytes: &[u8],
     set: &TrainingSet,
     config: &AimConfig,
-    backend: crate::backend::Backend,
+    backend: crate::training::backend::Backend,
     seconds: f64,
     iterations: usize,
     model: &Path,
@@ -187,7 +171,7 @@ pub fn evaluate(
             &actor.skinning_weights().iter().collect::<Vec<_>>(),
             set,
         ),
-        units: set.units.clone(),
+        units: set.units,
         source: set.source.clone(),
         config: config.clone(),
         backend,
@@ -209,7 +193,7 @@ pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<()> {
         width: 640,
         height: 640,
     };
-    let skin: Vec<[f32; 3]> = crate::mesh::points(actor.rest().iter());
+    let skin: Vec<[f32; 3]> = crate::io::mesh::points(actor.rest().iter());
     let worst = errors
         .per_shape
         .iter()
@@ -219,7 +203,7 @@ pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<()> {
         .map_or(0, |(i, _)| i);
     let poses = super::eval::training_poses(&actor)?;
     let posed = super::eval::pose_training_shape(&actor, &poses[worst], worst);
-    let posed: Vec<[f32; 3]> = crate::mesh::points(posed.iter().copied());
+    let posed: Vec<[f32; 3]> = crate::io::mesh::points(posed.iter().copied());
     let err_neutral = render_heatmap(
         &skin,
         &tri,
@@ -279,5 +263,5 @@ pub fn anatomy_surface(bytes: &[u8]) -> Result<Vec<[f32; 3]>> {
         .section("cache.b0")
         .and_then(|s| s.f32s())
         .context("model has no cache.b0")?;
-    Ok(crate::mesh::points(b.iter()))
+    Ok(crate::io::mesh::points(b.iter()))
 }

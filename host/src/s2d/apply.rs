@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail};
 use sinew_core::s2d::S2dDecoder;
 
-use crate::mesh::Mesh;
+use crate::io::mesh::Mesh;
 
 /// A loaded decoder with its buffers.
 struct Decoder<'a> {
@@ -72,7 +72,7 @@ fn flat(mesh: &Mesh) -> Vec<f32> {
 /// expressive face's landmarks to the template's neutral landmarks, and that displacement is
 /// added to the expressive face. Writes the result with the input's polygons and UVs.
 pub fn neutralize(model: &Path, expressive: &Path, out: &Path) -> Result<()> {
-    let bytes = crate::container::read(model)?;
+    let bytes = crate::io::container::read(model)?;
     let mut dec = Decoder::new(&bytes, model)?;
     let mesh = Mesh::read(expressive)?;
     dec.check(&mesh, expressive)?;
@@ -81,7 +81,8 @@ pub fn neutralize(model: &Path, expressive: &Path, out: &Path) -> Result<()> {
     let from = dec.landmarks(&positions);
     let to = dec.landmarks(&neutral);
     let result = dec.apply(&positions, &from, &to)?;
-    mesh.with_positions(crate::mesh::points(result)).write(out)
+    mesh.with_positions(crate::io::mesh::points(result))
+        .write(out)
 }
 
 /// Expression transfer: each frame's landmark motion relative to the source neutral, decoded onto
@@ -97,7 +98,7 @@ pub fn transfer(
     if frames.is_empty() {
         bail!("no source frames");
     }
-    let bytes = crate::container::read(model)?;
+    let bytes = crate::io::container::read(model)?;
     let mut dec = Decoder::new(&bytes, model)?;
     let src = Mesh::read(source_neutral)?;
     dec.check(&src, source_neutral)?;
@@ -114,7 +115,7 @@ pub fn transfer(
         let result = dec
             .apply(&base, &from, &to)
             .with_context(|| format!("{}", path.display()))?;
-        tgt.with_positions(crate::mesh::points(result))
+        tgt.with_positions(crate::io::mesh::points(result))
             .write(&out.join(format!("frame_{i:05}.obj")))?;
     }
     Ok(frames.len())

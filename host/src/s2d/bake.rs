@@ -7,8 +7,8 @@ use sinew_core::ArtifactKind;
 
 use super::Hierarchy;
 use super::decoder::S2dDecoder;
-use crate::container::SinewWriter;
-use crate::nn::{SpiralConv, to_vec};
+use crate::io::container::SinewWriter;
+use crate::training::nn::{SpiralConv, to_vec};
 
 /// Writes `decoder` over `hierarchy`, with the landmark vertex indices of the template (level 0),
 /// as `s2d.` sections of `w`.
@@ -114,7 +114,7 @@ mod tests {
 
     #[test]
     fn baked_decoder_loads_and_decodes() {
-        let device = crate::backend::Backend::Flex.device(4).unwrap();
+        let device = crate::training::backend::Backend::Flex.device(4).unwrap();
         let h = synthetic::hierarchy(&[30, 12, 5], &[5, 4, 3], 6);
         let config = synthetic::small_config();
         let dec = S2dDecoder::new(&config, &h, &device).unwrap();

@@ -17,9 +17,9 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use super::decoder::{DecoderConfig, S2dDecoder};
-use super::train::{Sample, TrainConfig};
-pub use crate::checkpoint::STATE_FILE;
-use crate::checkpoint::{self, WeightFiles};
+use super::objective::{Sample, TrainConfig};
+pub use crate::training::checkpoint::STATE_FILE;
+use crate::training::checkpoint::{self, WeightFiles};
 
 /// [`CheckpointState::format`] of an S2D checkpoint.
 pub const CHECKPOINT_FORMAT: &str = "sinew-s2d-checkpoint";

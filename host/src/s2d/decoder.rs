@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use sinew_core::nn::Activation;
 
 use super::{Hierarchy, Sampling};
-use crate::nn::{SpiralConv, pytorch_linear};
+use crate::training::nn::{SpiralConv, pytorch_linear};
 
 /// Number of landmarks the decoder reads (iBUG-68).
 pub const LANDMARKS: usize = 68;
@@ -437,11 +437,11 @@ impl S2dDecoder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nn::{tensor, to_vec};
     use crate::s2d::synthetic;
+    use crate::training::nn::{tensor, to_vec};
 
     fn device() -> Device {
-        crate::backend::Backend::Flex.device(3).unwrap()
+        crate::training::backend::Backend::Flex.device(3).unwrap()
     }
 
     #[test]

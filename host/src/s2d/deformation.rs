@@ -31,7 +31,7 @@ use anyhow::{Result, bail, ensure};
 use nalgebra::DMatrix;
 use nalgebra_sparse::{CooMatrix, CscMatrix, factorization::CscCholesky};
 
-use crate::vec3::{V3, cross, dot, norm, sub};
+use crate::geometry::vec3::{V3, cross, dot, norm, sub};
 
 /// The pull toward the source displacement, relative to the Laplacian: fixes the translation
 /// the Laplacian leaves free while changing the lowest-frequency shape of the result by about

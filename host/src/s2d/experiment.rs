@@ -9,19 +9,18 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail, ensure};
-use serde::{Deserialize, Serialize};
 
 use super::baseline::{DEFAULT_RIDGE, Dictionary, DictionaryConfig, Pca};
 use super::checkpoint::{STATE_FILE, read_state};
 use super::data::{Expressions, PairSet};
 use super::decoder::{DecoderConfig, InputNormalisation, S2dDecoder};
 use super::hierarchy;
+pub use super::objective::Objective;
 use super::protocol::{FOLDS, Protocol, Split, split};
+pub use super::report::*;
 use super::symmetry::{Mirror, partners};
-use super::train::{
-    LossVariant, Sample, TrainConfig, TrainOptions, landmark_distances, train, vertex_weights,
-};
-use crate::backend::Backend;
+use super::train::{Sample, TrainConfig, TrainOptions, landmark_distances, train};
+use crate::training::backend::Backend;
 
 /// Default epochs of `sinew train s2d` (one fold within 45 minutes on the shared 2-core machine;
 /// docs/S2D.md has the measurement).
@@ -29,138 +28,6 @@ pub const DEFAULT_EPOCHS: usize = 70;
 
 /// ICT is in cm; errors are reported in mm.
 const MM_PER_UNIT: f32 = 10.0;
-
-/// The training objective, including Table 2's ablations.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "kebab-case")]
-pub enum Objective {
-    /// The authors' code (the published numbers): weighted sum + 0.1 · mean (Table 2's S3 as
-    /// the code has it).
-    #[default]
-    Code,
-    /// The paper's text: L_dr + 0.1 · L_pr with the 1/d weights (S3 as the paper writes it).
-    Paper,
-    /// Table 2's S1: L_dr alone (the paper's loss with every vertex weight 0).
-    Dr,
-    /// Table 2's S2: L_dr + 0.1 · L_pr without distance weights (every vertex weight 1).
-    DrUnweighted,
-}
-
-impl Objective {
-    /// The trainer's loss and the vertex weights it takes, from the landmark distances.
-    pub fn loss_and_weights(self, distances: &[f32]) -> (LossVariant, Vec<f32>) {
-        match self {
-            Self::Code => (
-                LossVariant::Code,
-                vertex_weights(LossVariant::Code, distances),
-            ),
-            Self::Paper => (
-                LossVariant::Paper,
-                vertex_weights(LossVariant::Paper, distances),
-            ),
-            Self::Dr => (LossVariant::Paper, vec![0.0; distances.len()]),
-            Self::DrUnweighted => (LossVariant::Paper, vec![1.0; distances.len()]),
-        }
-    }
-}
-
-/// Mean and standard deviation of per-vertex errors.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ErrorStats {
-    /// Mean per-vertex error (mm).
-    pub mean_error_mm: f64,
-    /// Standard deviation of the per-vertex error (mm).
-    pub std_error_mm: f64,
-    /// Components (PCA) or atoms (DL-3DMM) used, baselines only; in a pooled entry, only when
-    /// all folds agree.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub components: Option<usize>,
-}
-
-impl ErrorStats {
-    fn of(errors: &[f32], components: Option<usize>) -> Self {
-        let n = errors.len().max(1) as f64;
-        let mean = errors.iter().map(|&e| f64::from(e)).sum::<f64>() / n;
-        let var = errors
-            .iter()
-            .map(|&e| (f64::from(e) - mean).powi(2))
-            .sum::<f64>()
-            / n;
-        Self {
-            mean_error_mm: mean,
-            std_error_mm: var.sqrt(),
-            components,
-        }
-    }
-}
-
-/// The 3DMM baselines of Table 1.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Baselines {
-    /// PCA with the components that explain 99% of the training variance.
-    pub pca99: ErrorStats,
-    /// PCA with min(220, rank) components.
-    pub pca_max: ErrorStats,
-    /// DL-3DMM, a dictionary of 220 sparse-coded atoms ([`Dictionary`]); its count is the atoms
-    /// the training codes use.
-    pub dl_3dmm: ErrorStats,
-    /// Not a method but a bound: the test displacements' orthogonal projection onto the
-    /// training displacements' affine span ([`Pca::project`], all `rank` components, reading
-    /// the whole dense ground truth). It is the least-squares closest displacement any model
-    /// built from that span (the three above) can give, so their errors do not go below it
-    /// (strictly so for the root-mean-square error; the mean per-vertex error is a different
-    /// norm).
-    pub span_floor: ErrorStats,
-}
-
-/// Per-vertex errors (mm) on a split's test pairs of the baselines, with their component
-/// (atom) counts, and of the training span's floor ([`Baselines::span_floor`]).
-#[derive(Clone, Debug)]
-pub struct BaselineErrors {
-    /// PCA, 99% of the variance.
-    pub pca99: (Vec<f32>, usize),
-    /// PCA, min(220, rank) components.
-    pub pca_max: (Vec<f32>, usize),
-    /// DL-3DMM, atoms used.
-    pub dl_3dmm: (Vec<f32>, usize),
-    /// The training span's floor, and the span's dimension (the PCA's rank).
-    pub span_floor: (Vec<f32>, usize),
-}
-
-/// One fold's results.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FoldReport {
-    /// The fold.
-    pub fold: usize,
-    /// Held-out identities (indices) or expression shapes (names).
-    pub held_out: Vec<String>,
-    /// Training pairs.
-    pub train_pairs: usize,
-    /// Test pairs.
-    pub test_pairs: usize,
-    /// S2D-Dec on the test pairs.
-    pub s2d: ErrorStats,
-    /// The baselines on the same split.
-    pub baselines: Baselines,
-    /// The baked model of this fold.
-    pub model: PathBuf,
-    /// Mean training loss of each epoch (empty for `eval`).
-    pub losses: Vec<f32>,
-    /// Training time (s), over every invocation when the fold was resumed.
-    pub train_seconds: f64,
-    /// Each held-out shape (expression split) or identity (identity split), with the errors on
-    /// the test pairs that involve it (absent from reports written before it).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub per_held_out: Vec<HeldOutErrors>,
-    /// Mirror images of training pairs added to the training set, of S2D-Dec and of every
-    /// baseline (`train s2d --mirror`; absent when none).
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub mirrored_pairs: usize,
-}
-
-fn is_zero(n: &usize) -> bool {
-    *n == 0
-}
 
 /// `train s2d --mirror`: the face region's left–right symmetry, and each expression shape's
 /// mirror image among the shapes.
@@ -222,90 +89,6 @@ impl Mirroring {
     }
 }
 
-/// The errors on the test pairs of a fold that involve one held-out expression shape (every pair
-/// that combines it with others of its group) or identity: the mean per-vertex error (mm) over
-/// those pairs' vertices, for S2D-Dec and each baseline (0 when no test pair involves it).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct HeldOutErrors {
-    /// The shape's name or the identity's index.
-    pub held_out: String,
-    /// Test pairs that involve it.
-    pub pairs: usize,
-    /// S2D-Dec.
-    pub s2d_mm: f64,
-    /// PCA, 99% of the variance.
-    pub pca99_mm: f64,
-    /// PCA, min(220, rank) components.
-    pub pca_max_mm: f64,
-    /// DL-3DMM.
-    pub dl_3dmm_mm: f64,
-}
-
-/// [`HeldOutErrors`] of every held-out item of `s`; `involves(p, item)` says whether pair `p`
-/// involves it, and `errors` are per-vertex errors of S2D-Dec, pca99, pca_max and DL-3DMM on
-/// the test pairs in order, `vertices` a pair.
-fn per_held_out(
-    s: &Split,
-    involves: impl Fn(usize, &str) -> bool,
-    vertices: usize,
-    errors: [&[f32]; 4],
-) -> Vec<HeldOutErrors> {
-    s.held_out
-        .iter()
-        .map(|item| {
-            let pairs: Vec<usize> = (0..s.test.len())
-                .filter(|&i| involves(s.test[i], item))
-                .collect();
-            let mean = |e: &[f32]| {
-                let sum: f64 = pairs
-                    .iter()
-                    .flat_map(|&i| &e[i * vertices..(i + 1) * vertices])
-                    .map(|&x| f64::from(x))
-                    .sum();
-                sum / (pairs.len() * vertices).max(1) as f64
-            };
-            HeldOutErrors {
-                held_out: item.clone(),
-                pairs: pairs.len(),
-                s2d_mm: mean(errors[0]),
-                pca99_mm: mean(errors[1]),
-                pca_max_mm: mean(errors[2]),
-                dl_3dmm_mm: mean(errors[3]),
-            }
-        })
-        .collect()
-}
-
-/// The report of `train s2d` / `eval s2d`: the folds pooled (every test vertex of every fold),
-/// then each fold.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Report {
-    /// The protocol.
-    pub protocol: Protocol,
-    /// Folds run.
-    pub folds: usize,
-    /// Test pairs over all folds run.
-    pub test_pairs: usize,
-    /// S2D-Dec mean per-vertex error (mm).
-    pub mean_error_mm: f64,
-    /// S2D-Dec standard deviation (mm).
-    pub std_error_mm: f64,
-    /// Baselines, pooled the same way.
-    pub baselines: Baselines,
-    /// Each fold.
-    pub per_fold: Vec<FoldReport>,
-    /// The training configuration (absent for `eval`).
-    pub train: Option<TrainConfig>,
-    /// The objective.
-    pub objective: Option<Objective>,
-    /// The data set folder.
-    pub pairs: PathBuf,
-    /// The cumulative-error plot written beside the report.
-    pub plot: PathBuf,
-    /// Wall time (s).
-    pub seconds: f64,
-}
-
 /// What `train s2d` runs.
 #[derive(Clone, Debug)]
 pub struct TrainS2d {
@@ -359,7 +142,7 @@ pub fn fold_model_path(out: &Path, fold: usize) -> PathBuf {
 /// The checkpoint folder of `fold` for the `--out` path of fold 0: beside the fold's model
 /// ([`fold_model_path`]) with the extension `ckpt`, `MODEL.ckpt/` and `MODEL.fold<k>.ckpt/`.
 pub fn fold_checkpoint_path(out: &Path, fold: usize) -> PathBuf {
-    crate::commands::checkpoint_dir_for(&fold_model_path(out, fold))
+    crate::training::checkpoint::checkpoint_dir_for(&fold_model_path(out, fold))
 }
 
 /// The plot path beside a report: `REPORT.png` (the report's extension replaced).
@@ -462,51 +245,6 @@ pub fn decoder_errors(model: &[u8], set: &PairSet, s: &Split) -> Result<Vec<f32>
     Ok(errors)
 }
 
-/// The cumulative per-vertex error curves (S2D Fig. 3): for each method, the percentage of
-/// vertices with an error at most x mm, x from 0 to the largest 99th percentile.
-pub fn cumulative_plot(methods: &[(&str, &[f32])], title: &str) -> crate::render::Image {
-    let sorted: Vec<Vec<f32>> = methods
-        .iter()
-        .map(|(_, e)| {
-            let mut v = e.to_vec();
-            v.sort_by(f32::total_cmp);
-            v
-        })
-        .collect();
-    let x_max = sorted
-        .iter()
-        .filter(|v| !v.is_empty())
-        .map(|v| f64::from(v[(v.len() - 1) * 99 / 100]))
-        .fold(0.0f64, f64::max)
-        .max(1e-3);
-    let curves: Vec<Vec<(f64, f64)>> = sorted
-        .iter()
-        .map(|v| {
-            (0..=200)
-                .map(|i| {
-                    let x = x_max * f64::from(i) / 200.0;
-                    let below = v.partition_point(|&e| f64::from(e) <= x);
-                    (x, 100.0 * below as f64 / v.len().max(1) as f64)
-                })
-                .collect()
-        })
-        .collect();
-    let series: Vec<(&str, &[(f64, f64)])> = methods
-        .iter()
-        .zip(&curves)
-        .map(|((name, _), c)| (*name, c.as_slice()))
-        .collect();
-    crate::plot::line_plot(
-        &series,
-        title,
-        "per-vertex error (mm)",
-        "% of vertices",
-        false,
-        720,
-        480,
-    )
-}
-
 /// Pools the folds and writes the report and its plot.
 fn finish(
     per_fold: Vec<FoldReport>,
@@ -558,7 +296,7 @@ fn finish(
         plot,
         seconds: started.elapsed().as_secs_f64(),
     };
-    crate::atomic::write(report, serde_json::to_string_pretty(&r)?.as_bytes())?;
+    crate::io::atomic::write(report, serde_json::to_string_pretty(&r)?.as_bytes())?;
     Ok(r)
 }
 
@@ -661,7 +399,7 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         let (decoder, losses) = (trained.decoder, trained.state.losses);
         let mut meta = vec![
             ("content", "s2d-decoder".to_owned()),
-            ("units", set.manifest.units.clone()),
+            ("units", set.manifest.units.name().to_owned()),
             ("protocol", args.protocol.to_string()),
             ("fold", fold.to_string()),
             ("pairs_seed", set.manifest.config.seed.to_string()),
@@ -679,7 +417,7 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
             meta.into_iter().map(|(k, v)| (k.to_owned(), v)).collect();
         let bytes = super::bake::bake(&decoder, &h, &set.manifest.landmarks, &meta)?;
         let model = fold_model_path(&args.out, fold);
-        crate::atomic::write(&model, &bytes)?;
+        crate::io::atomic::write(&model, &bytes)?;
         let mirrored: Vec<&[f32]> = samples[s.train.len()..]
             .iter()
             .map(|m| m.displacement.as_slice())
@@ -861,7 +599,7 @@ pub fn eval_s2d(model: &Path, pairs: &Path, folds: usize, report: &Path) -> Resu
     let mut mirroring = None;
     for k in 0..folds {
         let path = fold_model_path(model, k);
-        let bytes = crate::container::read(&path)?;
+        let bytes = crate::io::container::read(&path)?;
         let (protocol, fold, mirrored) = trained_split(&path, &bytes, &set, pairs)?;
         if folds > 1 {
             ensure!(
@@ -903,153 +641,4 @@ pub fn eval_s2d(model: &Path, pairs: &Path, folds: usize, report: &Path) -> Resu
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn stats_and_paths() {
-        let s = ErrorStats::of(&[1.0, 3.0], None);
-        assert_eq!((s.mean_error_mm, s.std_error_mm), (2.0, 1.0));
-        assert_eq!(
-            fold_model_path(Path::new("out/m.sinew"), 2),
-            Path::new("out/m.fold2.sinew")
-        );
-        assert_eq!(
-            fold_model_path(Path::new("out/m.sinew"), 0),
-            Path::new("out/m.sinew")
-        );
-        assert_eq!(plot_path(Path::new("r/rep.json")), Path::new("r/rep.png"));
-        assert_eq!(
-            fold_checkpoint_path(Path::new("out/m.sinew"), 0),
-            Path::new("out/m.ckpt")
-        );
-        assert_eq!(
-            fold_checkpoint_path(Path::new("out/m.sinew"), 3),
-            Path::new("out/m.fold3.ckpt")
-        );
-        let (l, w) = Objective::Dr.loss_and_weights(&[0.0, 1.0]);
-        assert_eq!((l, w), (LossVariant::Paper, vec![0.0, 0.0]));
-        let (_, w) = Objective::DrUnweighted.loss_and_weights(&[0.0, 1.0]);
-        assert_eq!(w, [1.0, 1.0]);
-        let (_, w) = Objective::Code.loss_and_weights(&[0.0, 1.0]);
-        assert_eq!(w, [1.0, 0.0]);
-    }
-
-    /// Each held-out item's errors average the vertices of exactly the test pairs that involve
-    /// it, per method; an item no test pair involves gets no pairs and zero error.
-    #[test]
-    fn held_out_errors_average_the_pairs_that_involve_each_item() {
-        let s = Split {
-            protocol: Protocol::Expression,
-            fold: 0,
-            held_out: vec!["a".into(), "b".into(), "c".into()],
-            train: vec![0, 1],
-            test: vec![2, 5, 7],
-        };
-        // Pair 2 uses a, pair 5 a and b, pair 7 b.
-        let involves = |p: usize, item: &str| match item {
-            "a" => p == 2 || p == 5,
-            "b" => p == 5 || p == 7,
-            _ => false,
-        };
-        // Two vertices a pair; method m (1 to 4) has errors m × [1, 2 | 3, 4 | 5, 6].
-        let e: Vec<Vec<f32>> = (1..=4)
-            .map(|m| (1..=6).map(|x| (m * x) as f32).collect())
-            .collect();
-        let h = per_held_out(&s, involves, 2, [&e[0], &e[1], &e[2], &e[3]]);
-        let got: Vec<_> = h
-            .iter()
-            .map(|h| {
-                (
-                    h.held_out.as_str(),
-                    h.pairs,
-                    [h.s2d_mm, h.pca99_mm, h.pca_max_mm, h.dl_3dmm_mm],
-                )
-            })
-            .collect();
-        assert_eq!(
-            got,
-            [
-                ("a", 2, [2.5, 5.0, 7.5, 10.0]),
-                ("b", 2, [4.5, 9.0, 13.5, 18.0]),
-                ("c", 0, [0.0; 4]),
-            ]
-        );
-    }
-
-    /// Small real pair sets (8 identities, 160 pairs, seed 3) of each kind, generated once for
-    /// the tests of this module that use them; none without the data.
-    fn real_pairs(expressions: Expressions) -> Option<&'static PairSet> {
-        static SETS: [std::sync::OnceLock<PairSet>; 2] =
-            [std::sync::OnceLock::new(), std::sync::OnceLock::new()];
-        let root = crate::testing::data_dir()?;
-        let slot = &SETS[usize::from(expressions == Expressions::Transferred)];
-        Some(slot.get_or_init(|| {
-            let kit = crate::ict::IctFaceKit::open(&root.join("ict-facekit")).unwrap();
-            let config = super::super::data::PairsConfig {
-                seed: 3,
-                identities: 8,
-                pairs: 160,
-                max_shapes: 3,
-                expressions,
-            };
-            super::super::data::generate(&kit, &config).unwrap()
-        }))
-    }
-
-    /// On real pairs the larger PCA fits at least as well as pca99, and on the identity split
-    /// (ICT's expression deltas are shared by all identities) it is nearly exact.
-    #[test]
-    fn pca_max_is_no_worse_than_pca99_on_real_pairs() {
-        let Some(set) = real_pairs(Expressions::Shared) else {
-            return;
-        };
-        for protocol in [Protocol::Identity, Protocol::Expression] {
-            let s = split(&set.manifest, protocol, 0).unwrap();
-            let all = baseline_errors(set, &s, &[]).unwrap();
-            let [(p99, k99), (pmax, kmax), (dl, atoms)] = [all.pca99, all.pca_max, all.dl_3dmm];
-            let (a, b) = (ErrorStats::of(&p99, None), ErrorStats::of(&pmax, None));
-            let d = ErrorStats::of(&dl, None);
-            let f = ErrorStats::of(&all.span_floor.0, None);
-            eprintln!(
-                "{protocol}: pca99 ({k99}) {:.4} mm, pca_max ({kmax}) {:.4} mm, DL-3DMM ({atoms}) \
-                 {:.4} mm, span floor {:.4} mm",
-                a.mean_error_mm, b.mean_error_mm, d.mean_error_mm, f.mean_error_mm
-            );
-            assert!(
-                f.mean_error_mm < d.mean_error_mm.min(b.mean_error_mm),
-                "{protocol}"
-            );
-            assert!(k99 <= kmax);
-            assert!(b.mean_error_mm <= a.mean_error_mm * 1.001, "{protocol}");
-            if protocol == Protocol::Identity {
-                // Both models span the test displacements: only the prior's bias is left.
-                assert!(b.mean_error_mm < 0.05, "{}", b.mean_error_mm);
-                assert!(d.mean_error_mm < 0.1, "{}", d.mean_error_mm);
-                assert!(f.mean_error_mm < 0.02, "{}", f.mean_error_mm);
-            } else {
-                assert!(d.mean_error_mm < 1.1 * b.mean_error_mm, "{protocol}");
-            }
-            assert!(atoms > kmax, "an overcomplete dictionary: {atoms} atoms");
-        }
-    }
-
-    /// With identity-specific (transferred) expressions the identity split is no longer
-    /// spanned by the training identities: `pca_max` misses the unseen identities' own way of
-    /// performing each expression, by far more than the ridge's bias it had on shared deltas.
-    #[test]
-    fn transferred_expressions_make_the_identity_split_a_test() {
-        let mut pca_max = Vec::new();
-        for expressions in [Expressions::Shared, Expressions::Transferred] {
-            let Some(set) = real_pairs(expressions) else {
-                return;
-            };
-            let s = split(&set.manifest, Protocol::Identity, 0).unwrap();
-            let (pmax, kmax) = baseline_errors(set, &s, &[]).unwrap().pca_max;
-            let e = ErrorStats::of(&pmax, None).mean_error_mm;
-            eprintln!("identity split, {expressions:?} expressions: pca_max ({kmax}) {e:.4} mm");
-            pca_max.push(e);
-        }
-        assert!(pca_max[1] > 5.0 * pca_max[0], "{pca_max:?}");
-    }
-}
+mod tests;

@@ -134,7 +134,7 @@ mod tests {
             format: MANIFEST_FORMAT.into(),
             version: MANIFEST_VERSION,
             config: PairsConfig::default(),
-            units: "cm".into(),
+            units: crate::io::units::Unit::Centimetre,
             source: String::new(),
             vertices: 0,
             landmarks: Vec::new(),

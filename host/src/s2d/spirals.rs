@@ -26,7 +26,7 @@ use std::collections::BinaryHeap;
 
 use anyhow::{Result, bail};
 
-use super::hierarchy::{fan, incident_triangles};
+use crate::geometry::topology::{fan, incident_triangles};
 
 /// The spiral lengths of the authors' reference configuration on FLAME, levels 0 to 4
 /// (`shared/notes/s2d-reference.md`). Sinew's statistics give `[15, 13, 9, 9, 7]` on its own
@@ -270,42 +270,5 @@ mod tests {
         let (len, rows) = build(&p, &t, 1, 1, Some(8)).unwrap();
         assert_eq!(len, 8);
         assert_eq!(&rows[..8], &[0, 4, 5, 6, 1, 2, 3, 7]);
-    }
-
-    fn print_statistics(name: &str, mesh: &crate::mesh::Mesh) {
-        use super::super::hierarchy::{DEFAULT_FACTORS, build};
-        let h = build(mesh, &DEFAULT_FACTORS).unwrap();
-        for (i, (l, (steps, dil))) in h.levels.iter().zip(reference_schedule(5)).enumerate() {
-            let lens: Vec<f64> = natural(&l.positions, &l.triangles, steps)
-                .unwrap()
-                .iter()
-                .map(|s| dilate(s, dil).len() as f64)
-                .collect();
-            let n = lens.len() as f64;
-            let mean = lens.iter().sum::<f64>() / n;
-            let std = (lens.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n).sqrt();
-            eprintln!(
-                "{name} level {i}: {} vertices, dilated natural length mean {mean:.3} std \
-                 {std:.3} → mean + 2 std = {:.3}",
-                l.positions.len(),
-                mean + 2.0 * std
-            );
-        }
-    }
-
-    /// The statistics behind the spiral lengths on FLAME and the ICT face region (printed for
-    /// docs/S2D.md).
-    #[test]
-    fn spiral_statistics_on_real_meshes() {
-        let Some(dir) = crate::testing::data_dir() else {
-            return;
-        };
-        let flame = crate::mesh::Mesh::read(&dir.join("flame/FLAME_template.ply")).unwrap();
-        print_statistics("FLAME", &flame);
-        let ict =
-            crate::mesh::Mesh::read(&dir.join("ict-facekit/generic_neutral_mesh.obj")).unwrap();
-        let region = crate::ict::FACE_REGION;
-        let (face, _) = ict.submesh(|v| region.contains(&v));
-        print_statistics("ICT face region", &face);
     }
 }

@@ -17,8 +17,8 @@
 
 use anyhow::{Result, bail, ensure};
 
-use crate::bones::Grid;
-use crate::mesh::Mesh;
+use crate::geometry::spatial::Grid;
+use crate::io::mesh::Mesh;
 
 /// How far (relative to the template's bounding-box diagonal) a vertex's mirror image may lie
 /// from the vertex it is mapped to. ICT-FaceKit's face region is symmetric to 1.4 × 10⁻⁴ of its
@@ -185,9 +185,9 @@ fn nearest_images(mirror: &Mirror, shapes: &[&[[f32; 3]]]) -> Vec<Option<(usize,
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ict::IctFaceKit;
+    use crate::io::data::data_dir;
+    use crate::io::ict::IctFaceKit;
     use crate::s2d::decoder::InputNormalisation;
-    use crate::testing::data_dir;
 
     /// A strip of quads symmetric about x = 1: columns x = 0, 1, 2 (the middle column maps to
     /// itself) and rows y = 0, 1, 2.

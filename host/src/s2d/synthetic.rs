@@ -127,7 +127,7 @@ pub fn small_config() -> super::decoder::DecoderConfig {
 /// 2-filter stage) baked with `units = m`. Returns the hierarchy and the bytes.
 pub fn tiny_baked_decoder() -> (Hierarchy, Vec<u8>) {
     use super::decoder::{DecoderConfig, S2dDecoder};
-    let device = crate::backend::Backend::Flex
+    let device = crate::training::backend::Backend::Flex
         .device(3)
         .expect("the flex backend is always built in");
     let h = hierarchy(&[8, 3], &[3, 2], 4);

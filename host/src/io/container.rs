@@ -248,7 +248,7 @@ impl SinewWriter {
 
     /// Serialises and writes the artefact atomically.
     pub fn write(&self, path: &Path) -> Result<()> {
-        crate::atomic::write(path, &self.to_bytes()?)
+        crate::io::atomic::write(path, &self.to_bytes()?)
     }
 }
 

@@ -1,38 +1,10 @@
-//! Support for tests and benchmarks that read the real face data.
+//! The small AIM training set and configuration the tests and benchmarks share.
 
-use std::path::{Path, PathBuf};
-
-/// The shared real-data folder: `$SINEW_DATA`, else `../shared/data` beside the repository.
-pub fn data_root() -> PathBuf {
-    std::env::var_os("SINEW_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"))
-}
-
-/// [`data_root`] when it exists. When it does not, a data test skips: this returns `None` after
-/// saying so, unless `SINEW_REQUIRE_DATA=1` (set by `.ci/run`), where a missing data set must
-/// fail the run instead, and this panics.
-pub fn data_dir() -> Option<PathBuf> {
-    let dir = data_root();
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    if std::env::var_os("SINEW_REQUIRE_DATA").is_some_and(|v| v == "1") {
-        panic!(
-            "{}: data folder missing and SINEW_REQUIRE_DATA=1",
-            dir.display()
-        );
-    }
-    eprintln!(
-        "skipping: real data folder {} not found (set SINEW_DATA)",
-        dir.display()
-    );
-    None
-}
+use std::path::Path;
 
 /// The procedural actor at `resolution` as an AIM training set, as the tests train on it.
 pub fn procedural_training_set(resolution: usize) -> crate::aim::TrainingSet {
-    let (actor, bones) = crate::procedural::actor(resolution);
+    let (actor, bones) = crate::aim::procedural::actor(resolution);
     crate::aim::data::training_set(&actor, &bones.skull, &bones.jaw, Some(bones.jaw_pivot), 2.5)
         .expect("the procedural actor makes a training set")
 }
@@ -61,7 +33,7 @@ pub fn aim_train_options(
     stop_after: Option<usize>,
 ) -> crate::aim::train::TrainOptions {
     crate::aim::train::TrainOptions {
-        backend: crate::backend::Backend::Flex,
+        backend: crate::training::backend::Backend::Flex,
         checkpoint_dir: dir.to_path_buf(),
         resume,
         stop_after,

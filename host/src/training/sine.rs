@@ -29,7 +29,7 @@ use rayon::prelude::*;
 
 /// sin(ω·x) for a SIREN layer: burn's `sin` on GPU backends, the vectorised kernel on flex.
 pub fn siren_sine<const D: usize>(x: Tensor<D>, omega: f32) -> Tensor<D> {
-    if crate::backend::on_flex(&x) {
+    if crate::training::backend::on_flex(&x) {
         Tensor::from_dispatch(Dispatch::scaled_sin(x.into_dispatch(), omega))
     } else {
         x.mul_scalar(omega).sin()
@@ -254,7 +254,8 @@ mod tests {
         let values: Vec<f32> = (0..3 * 70_001)
             .map(|i| ((i * 7919) % 2001) as f32 * 1e-3 - 1.0)
             .collect();
-        let make = || crate::nn::tensor(values.clone(), [3, 70_001], &device).require_grad();
+        let make =
+            || crate::training::tensor::tensor(values.clone(), [3, 70_001], &device).require_grad();
         let omega = 30.0;
 
         let x = make();
@@ -277,14 +278,20 @@ mod tests {
             .backward();
         let gy = y.grad(&grad_stock).expect("gradient reaches y");
 
-        let (a, b) = (crate::nn::to_vec(ours), crate::nn::to_vec(stock));
+        let (a, b) = (
+            crate::training::tensor::to_vec(ours),
+            crate::training::tensor::to_vec(stock),
+        );
         let worst = a
             .iter()
             .zip(&b)
             .map(|(p, q)| (p - q).abs())
             .fold(0.0f32, f32::max);
         assert!(worst < 5e-7, "forward differs from burn's sin by {worst}");
-        let (a, b) = (crate::nn::to_vec(gx), crate::nn::to_vec(gy));
+        let (a, b) = (
+            crate::training::tensor::to_vec(gx),
+            crate::training::tensor::to_vec(gy),
+        );
         let worst = a
             .iter()
             .zip(&b)
@@ -297,8 +304,8 @@ mod tests {
     #[test]
     fn untracked_and_non_flex_paths_agree() {
         let values: Vec<f32> = (0..1000).map(|i| i as f32 * 0.01 - 5.0).collect();
-        let flex = crate::nn::to_vec(siren_sine(
-            crate::nn::tensor(values.clone(), [10, 100], &Device::flex()),
+        let flex = crate::training::tensor::to_vec(siren_sine(
+            crate::training::tensor::tensor(values.clone(), [10, 100], &Device::flex()),
             3.0,
         ));
         for (v, s) in values.iter().zip(&flex) {
@@ -307,11 +314,11 @@ mod tests {
         }
         #[cfg(feature = "ndarray")]
         {
-            let nd = crate::nn::to_vec(siren_sine(
-                crate::nn::tensor(
+            let nd = crate::training::tensor::to_vec(siren_sine(
+                crate::training::tensor::tensor(
                     values,
                     [10, 100],
-                    &crate::backend::Backend::Ndarray
+                    &crate::training::backend::Backend::Ndarray
                         .device(0)
                         .expect("ndarray device"),
                 ),

@@ -36,3 +36,18 @@ pub(crate) fn norm2(a: V3) -> f64 {
 pub(crate) fn norm(a: V3) -> f64 {
     norm2(a).sqrt()
 }
+/// Narrows an `f64` point.
+pub(crate) fn to32(p: V3) -> [f32; 3] {
+    p.map(|c| c as f32)
+}
+
+/// The unit vector along `a` (zero for zero).
+pub(crate) fn normalize(a: V3) -> V3 {
+    let n = norm(a);
+    if n > 0.0 { scale(a, 1.0 / n) } else { [0.0; 3] }
+}
+
+/// `a + t (b − a)`, as `(1 − t) a + t b`.
+pub(crate) fn lerp(a: V3, b: V3, t: f64) -> V3 {
+    add(scale(a, 1.0 - t), scale(b, t))
+}

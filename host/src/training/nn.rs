@@ -10,26 +10,15 @@ use burn::tensor::activation::{elu, gelu, leaky_relu, relu};
 use burn::tensor::{Device, Distribution, Int, Tensor, TensorData};
 use sinew_core::nn::Activation;
 
-use crate::container::SinewWriter;
+use crate::io::container::SinewWriter;
 
-/// Reads a float tensor back as a `Vec<f32>`.
-pub fn to_vec<const D: usize>(t: Tensor<D>) -> Vec<f32> {
-    t.into_data()
-        .convert::<f32>()
-        .try_to_vec::<f32>()
-        .unwrap_or_default()
-}
-
-/// Makes a float tensor from row-major values.
-pub fn tensor<const D: usize>(values: Vec<f32>, shape: [usize; D], device: &Device) -> Tensor<D> {
-    Tensor::from_data(TensorData::new(values, shape), device)
-}
+pub use super::tensor::{tensor, to_vec};
 
 /// Applies `act` as the core does (same formula; rounding differs, see `tolerance`).
 pub fn activate<const D: usize>(x: Tensor<D>, act: Activation) -> Tensor<D> {
     match act {
         Activation::Identity => x,
-        Activation::Sine { omega0 } => crate::sine::siren_sine(x, omega0),
+        Activation::Sine { omega0 } => crate::training::sine::siren_sine(x, omega0),
         Activation::Gelu => gelu(x),
         Activation::Elu { alpha } => elu(x, f64::from(alpha)),
         Activation::Relu => relu(x),

@@ -4,7 +4,7 @@
 //! `state.json` last, so an interruption at any moment leaves the previous checkpoint whole;
 //! earlier weight files are removed only once the new `state.json` is in place.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, ensure};
 use serde::{Deserialize, Serialize};
@@ -91,12 +91,12 @@ pub fn save<S: Serialize>(
         optim_file: format!("optim-{steps}.bpk"),
         optim_crc: crc_hex(optim),
     };
-    crate::atomic::write(&dir.join(&files.model_file), model)?;
-    crate::atomic::write(&dir.join(&files.optim_file), optim)?;
+    crate::io::atomic::write(&dir.join(&files.model_file), model)?;
+    crate::io::atomic::write(&dir.join(&files.optim_file), optim)?;
     let keep = files.clone();
     set_files(state, files);
     // state.json last: until it is in place, the previous one still names whole files.
-    crate::atomic::write(
+    crate::io::atomic::write(
         &dir.join(STATE_FILE),
         serde_json::to_string_pretty(state)?.as_bytes(),
     )?;
@@ -141,6 +141,11 @@ fn read_checked(dir: &Path, name: &str, crc: &str) -> Result<Vec<u8>> {
         path.display()
     );
     Ok(bytes)
+}
+
+/// The checkpoint folder that belongs to a model path: `MODEL.ckpt/` beside it.
+pub fn checkpoint_dir_for(model: &Path) -> PathBuf {
+    model.with_extension("ckpt")
 }
 
 #[cfg(test)]

@@ -10,8 +10,8 @@
 
 use std::f64::consts::PI;
 
-use crate::ict::Actor;
-use crate::mesh::Mesh;
+use crate::io::ict::Actor;
+use crate::io::mesh::Mesh;
 
 /// The resolution [`actor`] is meant to be called with: 48 rows of 65 vertices (3,120).
 pub const DEFAULT_RESOLUTION: usize = 48;
@@ -355,7 +355,7 @@ pub fn actor(resolution: usize) -> (Actor, Bones) {
         shapes,
         names: SHAPE_NAMES.iter().map(|s| (*s).to_owned()).collect(),
         landmarks,
-        units: "cm",
+        units: crate::io::units::Unit::Centimetre,
         source: format!(
             "sinew built-in procedural demo actor (no external data), resolution {rows}x{cols}"
         ),
@@ -388,7 +388,7 @@ mod tests {
         assert_eq!(actor.shapes.len(), 7);
         assert!(actor.shapes.iter().all(|s| s.len() == n));
         assert_eq!(actor.shapes[0], actor.template.positions);
-        assert_eq!(actor.units, "cm");
+        assert_eq!(actor.units, crate::io::units::Unit::Centimetre);
         // Every non-neutral shape actually moves something.
         for s in &actor.shapes[1..] {
             assert!(

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
 
-use crate::mesh::Mesh;
+use crate::io::mesh::Mesh;
 
 /// The full face area: vertices 0–9408 and polygons 0–9229 of the ICT topology (the upstream
 /// README's "Face" geometry; eyes, mouth socket, teeth and back of the head are excluded).
@@ -63,7 +63,7 @@ pub struct Actor {
     /// where a landmark's vertex is not part of the template.
     pub landmarks: Vec<Option<u32>>,
     /// Length unit of every coordinate.
-    pub units: &'static str,
+    pub units: crate::io::units::Unit,
     /// Where the actor comes from, with licence and attribution, for artefact metadata.
     pub source: String,
 }
@@ -346,7 +346,7 @@ impl IctFaceKit {
             shapes,
             names,
             landmarks,
-            units: "cm",
+            units: crate::io::units::Unit::Centimetre,
             source,
         })
     }
@@ -380,7 +380,7 @@ impl IctFaceKit {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::data_dir;
+    use crate::io::data::data_dir;
 
     fn kit() -> Option<IctFaceKit> {
         let dir = data_dir()?.join("ict-facekit");
@@ -454,7 +454,7 @@ mod tests {
             kit.neutral().positions[..9_409]
         );
         assert_eq!(actor.shapes[0], actor.template.positions);
-        assert_eq!(actor.units, "cm");
+        assert_eq!(actor.units, crate::io::units::Unit::Centimetre);
         assert!(actor.source.contains("MIT") && actor.source.contains("USC"));
 
         // The data README: jawOpen moves some vertex by 4.2 cm, mouthSmile_L by 1.6 cm.

@@ -1,7 +1,7 @@
 //! ArtiSynth's "Badin" face: a finite-element model of one real speaker's lower face
 //! (`face.node`, `face.elem`) co-registered with his mandible (`badinjaw.obj`) and maxilla
 //! (`badinmaxilla.obj`). It is the only real skin + bone pair in the data, so it is where the
-//! ray-based anatomical constraints ([`crate::constraints`]) are checked against measured
+//! ray-based anatomical constraints ([`crate::anatomy::constraints`]) are checked against measured
 //! soft-tissue thickness (`fstt/soft_tissue_thickness.md`, section B).
 //!
 //! Frame: metres; x points posterior (anterior = smaller x), y is lateral with the midline at
@@ -30,8 +30,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 
-use crate::constraints::{Bone, BoneScene, ConstraintParams, Constraints};
-use crate::mesh::Mesh;
+use crate::anatomy::constraints::{Bone, BoneScene, ConstraintParams, Constraints};
+use crate::io::mesh::Mesh;
 
 /// A finite-element mesh read from ANSYS node and element files.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -415,7 +415,7 @@ impl Badin {
 mod tests {
     use super::*;
 
-    use crate::testing::data_dir;
+    use crate::io::data::data_dir;
 
     /// ANSYS node lines: id in 8 columns, coordinates right-aligned in 20 (a negative value
     /// fills all 20, so it touches the previous field, as in the real file).

@@ -1,7 +1,7 @@
 //! Loss-curve plots: training losses against iteration, on a linear or log10 y axis, drawn with
-//! [`crate::render::Image`] (its lines and bitmap font), so they need nothing beyond `png`.
+//! [`crate::figures::render::Image`] (its lines and bitmap font), so they need nothing beyond `png`.
 
-use crate::render::{Image, LINE_HEIGHT, format_value, text_scale, text_width};
+use crate::figures::render::{Image, LINE_HEIGHT, format_value, text_scale, text_width};
 
 /// Series colours, in order (the widely used "tab10" palette: distinct, and readable for the
 /// common colour-vision deficiencies). Series past the tenth reuse them.

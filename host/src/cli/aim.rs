@@ -1,0 +1,321 @@
+//! `sinew demo`, `train aim`, `eval aim`, `bake`, `play` and `edit`: the arguments, and the
+//! hand-over to [`sinew_host::aim`].
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+use sinew_host::aim::AimConfig;
+use sinew_host::aim::config::{JawInit, Schedule};
+use sinew_host::aim::run::Outputs;
+use sinew_host::training::backend::Backend;
+
+/// `sinew demo`.
+#[derive(Debug, Args)]
+pub(crate) struct DemoArgs {
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Optimisation steps (default: the demo configuration's).
+    #[arg(long)]
+    iterations: Option<usize>,
+    #[command(flatten)]
+    jaw: JawArgs,
+    /// Hide the progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// `sinew bake`.
+#[derive(Debug, Args)]
+pub(crate) struct BakeArgs {
+    /// Checkpoint folder (MODEL.ckpt from `sinew train aim`).
+    #[arg(long)]
+    checkpoint: PathBuf,
+    /// Output .sinew file.
+    #[arg(long)]
+    out: PathBuf,
+    /// Evaluate the networks at this mesh's vertices instead of the training template (e.g.
+    /// another resolution of the same face).
+    #[arg(long)]
+    template: Option<PathBuf>,
+    /// Leave the networks out (small targets).
+    #[arg(long)]
+    playback_only: bool,
+    /// Add the Q16.16 playback cache for the core's fixed-point mode (FPU-less targets).
+    #[arg(long)]
+    q16: bool,
+}
+
+/// `sinew play`.
+#[derive(Debug, Args)]
+pub(crate) struct PlayArgs {
+    /// The baked actor.
+    #[arg(long)]
+    model: PathBuf,
+    /// Pose file: {"frames": [{"head": [9], "jaw": [9], "weights": [M]}, ...]}.
+    #[arg(long)]
+    poses: PathBuf,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// `sinew eval aim`.
+#[derive(Debug, Args)]
+pub(crate) struct EvalAim {
+    /// The baked actor.
+    #[arg(long)]
+    model: PathBuf,
+    /// ICT-FaceKit folder.
+    #[arg(long)]
+    data: PathBuf,
+    /// Output JSON report.
+    #[arg(long)]
+    report: PathBuf,
+    /// Bones folder (as for `train aim`), for the constraint statistics.
+    #[arg(long)]
+    bones: Option<PathBuf>,
+    #[command(flatten)]
+    templates: super::bones::TemplatesArg,
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct TrainAim {
+    /// ICT-FaceKit folder.
+    #[arg(long)]
+    data: PathBuf,
+    /// Output baked model (.sinew); its checkpoints go to MODEL.ckpt/.
+    #[arg(long)]
+    out: PathBuf,
+    /// Output JSON report.
+    #[arg(long)]
+    report: PathBuf,
+    /// Optimisation steps (overrides the configuration).
+    #[arg(long)]
+    iterations: Option<usize>,
+    /// JSON configuration file (fields of AimConfig; missing ones take their defaults).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Continue from this checkpoint folder.
+    #[arg(long)]
+    resume: Option<PathBuf>,
+    /// Folder with skull.obj and jaw.obj aligned to the neutral (from `sinew bones fit`);
+    /// without it the bones are fitted now from the template bones (--templates).
+    #[arg(long)]
+    bones: Option<PathBuf>,
+    #[command(flatten)]
+    templates: super::bones::TemplatesArg,
+    /// burn backend.
+    #[arg(long, value_enum, default_value_t = Backend::Flex)]
+    backend: Backend,
+    /// Learning rate (overrides the configuration).
+    #[arg(long)]
+    lr: Option<f64>,
+    /// Final learning rate (overrides the configuration).
+    #[arg(long)]
+    lr_end: Option<f64>,
+    /// Learning-rate schedule (overrides the configuration).
+    #[arg(long, value_enum)]
+    schedule: Option<Schedule>,
+    /// Seed (overrides the configuration).
+    #[arg(long, env = "SINEW_SEED")]
+    seed: Option<u64>,
+    /// Thickness activation: softplus (positive by construction, the default) or identity (the
+    /// paper); overrides the configuration.
+    #[arg(long, value_enum)]
+    thickness_activation: Option<sinew_host::aim::config::ThicknessActivation>,
+    #[command(flatten)]
+    jaw: JawArgs,
+    /// Folder for pictures (error heatmaps, anatomy, loss curve) and OBJs.
+    #[arg(long)]
+    pictures: Option<PathBuf>,
+    /// Hide the progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(Debug, Subcommand)]
+pub(crate) enum Edit {
+    /// Scale the learned soft-tissue thickness in a region and re-derive the skin (AIM Fig. 5).
+    Thickness {
+        /// The baked actor.
+        #[arg(long)]
+        model: PathBuf,
+        /// Region: JSON list of vertex indices, or {"weights": [...]} with one weight per vertex.
+        #[arg(long)]
+        mask: PathBuf,
+        /// Thickness factor inside the region.
+        #[arg(long)]
+        scale: f32,
+        /// Output folder (edited neutral OBJ and a before/after picture).
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+/// The jaw options of `train aim` and `demo`.
+#[derive(Debug, Args)]
+pub(crate) struct JawArgs {
+    /// How the jaw transforms start: bones (rigid fits of the jaw-constrained skin, the default)
+    /// or identity (the paper's; use with --lambda-jaw 0); overrides the configuration.
+    #[arg(long, value_enum)]
+    jaw_init: Option<JawInit>,
+    /// λ_J of the jaw skinning term (k = 1 on the skin over the jaw; default 1; 0 = the paper's
+    /// objective); overrides the configuration.
+    #[arg(long)]
+    lambda_jaw: Option<f32>,
+}
+
+impl JawArgs {
+    fn apply(&self, config: &mut AimConfig) {
+        if let Some(j) = self.jaw_init {
+            config.jaw_init = j;
+        }
+        if let Some(l) = self.lambda_jaw {
+            config.lambda_jaw = l;
+        }
+    }
+}
+
+/// The configuration of `train aim`: the file's (or the default), then each flag given (a flag
+/// or its environment variable beats the file).
+fn config_for(args: &TrainAim) -> Result<AimConfig> {
+    let mut config = match &args.config {
+        Some(p) => sinew_host::aim::config::read_config(p)?,
+        None => AimConfig::default(),
+    };
+    if let Some(n) = args.iterations {
+        config.iterations = n;
+    }
+    if let Some(v) = args.lr {
+        config.lr = v;
+    }
+    if let Some(v) = args.lr_end {
+        config.lr_end = v;
+    }
+    if let Some(s) = args.schedule {
+        config.schedule = s;
+    }
+    if let Some(a) = args.thickness_activation {
+        config.thickness_activation = a;
+    }
+    args.jaw.apply(&mut config);
+    if let Some(s) = args.seed {
+        config.seed = s;
+    }
+    config.validate()?;
+    Ok(config)
+}
+
+/// `sinew demo`.
+pub(crate) fn demo(args: DemoArgs) -> Result<()> {
+    let mut config = AimConfig::demo();
+    if let Some(n) = args.iterations {
+        config.iterations = n;
+    }
+    args.jaw.apply(&mut config);
+    let report = sinew_host::aim::demo::demo(&args.out, &config, args.quiet)?;
+    println!("{}", serde_json::to_string_pretty(&report)?);
+    eprintln!("demo written to {}", args.out.display());
+    Ok(())
+}
+
+/// `sinew train aim`.
+pub(crate) fn train(args: TrainAim) -> Result<()> {
+    let config = config_for(&args)?;
+    eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
+    let (set, said) = sinew_host::aim::commands::ict_training_set(
+        &args.data,
+        args.bones.as_deref(),
+        &args.templates.path,
+        &config,
+    )?;
+    eprintln!(
+        "{said}; {:.1}% of {} vertices constrained",
+        100.0 * set.constrained_fraction(),
+        set.vertices()
+    );
+    let outputs = Outputs {
+        model: args.out.clone(),
+        report: args.report.clone(),
+        pictures: args.pictures.clone(),
+    };
+    let report = sinew_host::aim::commands::train_aim(
+        &set,
+        &config,
+        args.backend,
+        &outputs,
+        args.resume.as_deref(),
+        args.quiet,
+    )?;
+    println!(
+        "{}: mean {:.3} mm, p95 {:.3} mm, max {:.3} mm over {} shapes in {:.0} s",
+        args.out.display(),
+        report.mean_error_mm,
+        report.p95_error_mm,
+        report.max_error_mm,
+        report.shapes,
+        report.seconds
+    );
+    Ok(())
+}
+
+/// `sinew eval aim`.
+pub(crate) fn eval(args: EvalAim) -> Result<()> {
+    let EvalAim {
+        model,
+        data,
+        report,
+        bones,
+        templates,
+    } = args;
+    let r = sinew_host::aim::commands::eval_aim(&model, &data, bones.as_deref(), &templates.path)?;
+    sinew_host::io::atomic::write(&report, serde_json::to_string_pretty(&r)?.as_bytes())?;
+    println!(
+        "{}: mean {:.3} mm, median {:.3} mm, p95 {:.3} mm, max {:.3} mm",
+        model.display(),
+        r.mean_error_mm,
+        r.median_error_mm,
+        r.p95_error_mm,
+        r.max_error_mm
+    );
+    Ok(())
+}
+
+/// `sinew bake`.
+pub(crate) fn bake(args: BakeArgs) -> Result<()> {
+    sinew_host::aim::commands::bake(
+        &args.checkpoint,
+        &args.out,
+        args.template.as_deref(),
+        args.playback_only,
+        args.q16,
+    )?;
+    println!("{}", sinew_host::io::inspect::inspect(&args.out)?);
+    Ok(())
+}
+
+/// `sinew play`.
+pub(crate) fn play(args: PlayArgs) -> Result<()> {
+    let n = sinew_host::aim::play::play(&args.model, &args.poses, &args.out, None)?;
+    println!("{n} frames written to {}", args.out.display());
+    Ok(())
+}
+
+/// `sinew edit`.
+pub(crate) fn edit(cmd: Edit) -> Result<()> {
+    match cmd {
+        Edit::Thickness {
+            model,
+            mask,
+            scale,
+            out,
+        } => {
+            sinew_host::aim::edit::edit_thickness(&model, &mask, scale, &out)
+                .with_context(|| format!("editing {}", model.display()))?;
+            println!("edited neutral and picture written to {}", out.display());
+        }
+    }
+    Ok(())
+}

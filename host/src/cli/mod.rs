@@ -1,0 +1,107 @@
+//! The `sinew` command line: one clap-derived struct per command, one file per command group.
+//! Each command's options are typed here (a flag beats its environment variable, which beats the
+//! default: clap's `env`), then the work is handed to the library; nothing here computes.
+
+mod aim;
+mod bones;
+mod replay;
+mod s2d;
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+
+/// Sinew: learn an actor's face from meshes, and play it back anywhere, bit for bit.
+#[derive(Debug, Parser)]
+#[command(name = "sinew", version, about)]
+pub(crate) struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// The built-in demo: train a small AIM on a procedural face, bake it, play it back through
+    /// sinew-core, and write the report, pictures and OBJs. Needs no data files.
+    Demo(aim::DemoArgs),
+    /// Train a model.
+    #[command(subcommand)]
+    Train(Train),
+    /// Measure a baked model on data.
+    #[command(subcommand)]
+    Eval(Eval),
+    /// Re-bake a model from a training checkpoint.
+    Bake(aim::BakeArgs),
+    /// Pose a baked actor through sinew-core, one OBJ per frame.
+    Play(aim::PlayArgs),
+    /// Show what a .sinew file holds: kind, version, sections, shapes, sizes, checksum status.
+    Inspect {
+        /// The .sinew file.
+        file: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Anatomy editing.
+    #[command(subcommand)]
+    Edit(aim::Edit),
+    /// Bones under the skin.
+    #[command(subcommand)]
+    Bones(bones::Bones),
+    /// Record and verify bit-exact playback replays.
+    #[command(subcommand)]
+    Replay(replay::Replay),
+    /// S2D: sparse-to-dense expression decoding.
+    #[command(subcommand)]
+    S2d(s2d::S2d),
+    /// Generate data sets.
+    #[command(subcommand)]
+    Data(s2d::Data),
+}
+
+#[derive(Debug, Subcommand)]
+enum Train {
+    /// Learn an AIM actor from ICT-FaceKit blendshapes.
+    Aim(aim::TrainAim),
+    /// Train S2D-Dec on pairs from `sinew data s2d-pairs` under a cross-validation protocol,
+    /// bake each fold's model, and compare it with the PCA baselines on the held-out pairs
+    /// (report JSON, and a cumulative-error PNG beside it).
+    S2d(s2d::TrainS2dArgs),
+}
+
+#[derive(Debug, Subcommand)]
+enum Eval {
+    /// Evaluate a model from `sinew train s2d` (through sinew-core) and the 3DMM baselines on the
+    /// held-out pairs of the fold it was trained for (or of each of its folds, `--folds`).
+    S2d(s2d::EvalS2d),
+    /// Per-vertex error of a baked AIM actor on its ICT-FaceKit training shapes.
+    Aim(aim::EvalAim),
+}
+
+/// Runs the parsed command.
+pub(crate) fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Demo(args) => aim::demo(args),
+        Command::Train(Train::Aim(args)) => aim::train(args),
+        Command::Train(Train::S2d(args)) => s2d::train(args),
+        Command::Eval(Eval::S2d(args)) => s2d::eval(args),
+        Command::Eval(Eval::Aim(args)) => aim::eval(args),
+        Command::Bake(args) => aim::bake(args),
+        Command::Play(args) => aim::play(args),
+        Command::Inspect { file, json } => {
+            let report = sinew_host::io::inspect::inspect(&file)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{report}");
+            }
+            Ok(())
+        }
+        Command::Edit(cmd) => aim::edit(cmd),
+        Command::Bones(cmd) => bones::run(cmd),
+        Command::Replay(cmd) => replay::run(cmd),
+        Command::S2d(cmd) => s2d::run(cmd),
+        Command::Data(cmd) => s2d::data(cmd),
+    }
+}

@@ -1,0 +1,11 @@
+//! Files in and out: meshes (OBJ, PLY), the ICT-FaceKit reader, the `.sinew` writer and
+//! inspector, the real-data folder, and atomic outputs. The lowest layer of the host: it imports
+//! nothing else of the crate.
+
+pub mod atomic;
+pub mod container;
+pub mod data;
+pub mod ict;
+pub mod inspect;
+pub mod mesh;
+pub mod units;
