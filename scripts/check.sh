@@ -21,5 +21,11 @@ cargo build -p sinew-core --target thumbv7em-none-eabihf --locked
 echo "== tests"
 cargo test --workspace --locked
 
+echo "== C API: the golden replays from C (core/ffi/examples/replay.c)"
+if ! command -v cc >/dev/null; then
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gcc >/dev/null
+fi
+bash core/ffi/run-example.sh
+
 echo "== firmware-sim: golden replays on Cortex-M4F, RISC-V (QEMU) and wasm (node)"
 bash firmware-sim/run.sh

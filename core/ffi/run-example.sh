@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Builds the C API as a static library (release), compiles examples/replay.c against it with
+# strict warnings, plays every golden model's replays from C and diffs the printed hash lists
+# against tests/data/*.hashes. Exits non-zero on a build error, a warning, a failed call, a
+# frame that differs from its recording, or any line that differs from the golden list.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+
+: "${CARGO_TARGET_DIR:=target}"
+CC="${CC:-cc}"
+out="$CARGO_TARGET_DIR/ffi-example"
+mkdir -p "$out"
+
+cargo build -p sinew-ffi --release --locked
+"$CC" -std=c11 -Wall -Wextra -Werror -pedantic -O2 -Icore/ffi/include \
+  core/ffi/examples/replay.c "$CARGO_TARGET_DIR/release/libsinew.a" \
+  -lm -lpthread -ldl -o "$out/replay"
+
+for name in aim-procedural aim-ict s2d-ict; do
+  "$out/replay" tests/data "$name" >"$out/$name.hashes"
+  diff -u "tests/data/$name.hashes" "$out/$name.hashes"
+  echo "$name: $(grep -vc '^#' "$out/$name.hashes") frames match tests/data/$name.hashes"
+done

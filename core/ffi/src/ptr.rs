@@ -1,0 +1,100 @@
+//! Turning the caller's pointers into slices and references, with every check that can be made
+//! from this side: NULL, alignment, and a length that fits the address space. What cannot be
+//! checked (that the memory is really there, and not written by someone else meanwhile) is the
+//! caller's promise, stated on each entry point.
+
+use std::mem::{align_of, size_of};
+
+use crate::status::{Fail, Result, SinewStatus};
+
+/// Checks `ptr` for a `len`-element slice of `T`: not NULL (even when `len` is 0), aligned, and
+/// `len` elements within `isize::MAX` bytes.
+fn check<T>(ptr: *const T, len: usize, what: &str) -> Result<()> {
+    if ptr.is_null() {
+        return Err(Fail::null(what));
+    }
+    if !(ptr as usize).is_multiple_of(align_of::<T>()) {
+        return Err(Fail::new(
+            SinewStatus::BufferLength,
+            format_args!("{what} is not aligned to {} bytes", align_of::<T>()),
+        ));
+    }
+    if len
+        .checked_mul(size_of::<T>())
+        .is_none_or(|bytes| bytes > isize::MAX as usize)
+    {
+        return Err(Fail::new(
+            SinewStatus::BufferLength,
+            format_args!("{what}: length {len} is larger than memory"),
+        ));
+    }
+    Ok(())
+}
+
+/// The caller's `len` elements at `ptr`, read-only.
+///
+/// The returned lifetime is the caller's to uphold: the memory must stay valid and unwritten for
+/// as long as the slice is used (one call, or a handle's life for model and replay bytes).
+pub(crate) fn slice<'a, T>(ptr: *const T, len: usize, what: &str) -> Result<&'a [T]> {
+    check(ptr, len, what)?;
+    #[allow(unsafe_code)]
+    // Safety: `ptr` is not NULL, aligned and `len` elements fit in `isize::MAX` bytes (checked
+    // above); the caller promises `len` initialised elements there, not written during the call.
+    Ok(unsafe { std::slice::from_raw_parts(ptr, len) })
+}
+
+/// The caller's `len` elements at `ptr`, writable.
+pub(crate) fn slice_mut<'a, T>(ptr: *mut T, len: usize, what: &str) -> Result<&'a mut [T]> {
+    check(ptr, len, what)?;
+    #[allow(unsafe_code)]
+    // Safety: as in `slice`; the caller also promises that nothing else reads or writes the
+    // memory during the call (in particular that it does not overlap another argument).
+    Ok(unsafe { std::slice::from_raw_parts_mut(ptr, len) })
+}
+
+/// Like [`slice`], but a NULL `ptr` is `None` (an optional argument).
+pub(crate) fn optional<'a, T>(ptr: *const T, len: usize, what: &str) -> Result<Option<&'a [T]>> {
+    if ptr.is_null() {
+        Ok(None)
+    } else {
+        slice(ptr, len, what).map(Some)
+    }
+}
+
+/// Like [`slice_mut`], but a NULL `ptr` is `None` (an optional argument).
+pub(crate) fn optional_mut<'a, T>(
+    ptr: *mut T,
+    len: usize,
+    what: &str,
+) -> Result<Option<&'a mut [T]>> {
+    if ptr.is_null() {
+        Ok(None)
+    } else {
+        slice_mut(ptr, len, what).map(Some)
+    }
+}
+
+/// The caller's nine floats at `ptr` (a 6D rotation and a translation).
+pub(crate) fn nine(ptr: *const f32, what: &str) -> Result<[f32; 9]> {
+    let s = slice(ptr, 9, what)?;
+    let mut out = [0.0; 9];
+    out.copy_from_slice(s);
+    Ok(out)
+}
+
+/// Writes `value` to the caller's `*ptr` (an out-parameter, which may be uninitialised).
+pub(crate) fn write<T: Copy>(ptr: *mut T, value: T, what: &str) -> Result<()> {
+    check(ptr, 1, what)?;
+    #[allow(unsafe_code)]
+    // Safety: `ptr` is not NULL and aligned (checked above); the caller promises it points to
+    // writable memory for one `T`. `write` neither reads nor drops the old contents.
+    unsafe {
+        ptr.write(value);
+    }
+    Ok(())
+}
+
+/// The caller's handle at `ptr`, shared.
+pub(crate) fn handle<'a, T>(ptr: *const T, what: &str) -> Result<&'a T> {
+    slice(ptr, 1, what).map(|s| &s[0])
+}
