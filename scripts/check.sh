@@ -21,5 +21,12 @@ cargo build -p sinew-core --target thumbv7em-none-eabihf --locked
 echo "== tests"
 cargo test --workspace --locked
 
+echo "== wasm package: build, then the golden replays through the JavaScript API (node)"
+if ! command -v node >/dev/null; then
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends nodejs
+fi
+bash core/wasm/build.sh
+node --test core/wasm/test/*.test.mjs
+
 echo "== firmware-sim: golden replays on Cortex-M4F, RISC-V (QEMU) and wasm (node)"
 bash firmware-sim/run.sh
