@@ -19,7 +19,7 @@ fi
 # simd128 (128-bit SIMD: Chrome 91, Firefox 89, Safari 16.4, node 16.4 and later) lets LLVM
 # vectorise the spiral convolution's independent sums, 4x faster S2D decoding with the same bits
 # (docs/WASM.md); set for this target only, so host build scripts are unaffected.
-export CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUSTFLAGS="${CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUSTFLAGS:--C target-feature=+simd128}"
+export CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUSTFLAGS="${CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUSTFLAGS--C target-feature=+simd128}"
 (cd "$root" && nice -n 10 cargo build --locked -p sinew-wasm --target wasm32-unknown-unknown \
   --profile wasm)
 
