@@ -233,7 +233,7 @@ pub extern "C" fn sinew_info(handle: i32) -> i32 {
                 m.vertex_count(),
                 m.shape_count(),
                 m.input_len(),
-                m.triangles().len() / 3,
+                m.triangle_count(),
                 m.content_hash()
             )),
             Some(Object::Replay(r)) => Ok(format!(
@@ -242,7 +242,7 @@ pub extern "C" fn sinew_info(handle: i32) -> i32 {
                 r.mode(),
                 r.frames(),
                 r.model_hash(),
-                u8::from(r.neutral().is_some())
+                u8::from(r.has_neutral())
             )),
             None => Err(stale(handle)),
         }

@@ -261,6 +261,14 @@ impl Model {
         }
     }
 
+    /// Triangles of an AIM actor's template; 0 for an S2D decoder.
+    pub fn triangle_count(&self) -> usize {
+        match &self.inner {
+            ModelInner::Aim(c) => c.borrow_dependent().triangles().len(),
+            ModelInner::S2d { .. } => 0,
+        }
+    }
+
     /// The landmark vertex of each decoder input landmark, `[inputs / 3]`; empty for an AIM
     /// actor.
     pub fn landmark_vertices(&self) -> Vec<u32> {
@@ -480,6 +488,14 @@ impl Replay {
         match &self.inner {
             ReplayInner::Aim(_) => None,
             ReplayInner::S2d(c) => c.borrow_dependent().neutral().map(|n| n.iter().collect()),
+        }
+    }
+
+    /// Whether an S2D replay carries the neutral its frames decode onto.
+    pub fn has_neutral(&self) -> bool {
+        match &self.inner {
+            ReplayInner::Aim(_) => false,
+            ReplayInner::S2d(c) => c.borrow_dependent().neutral().is_some(),
         }
     }
 

@@ -27,6 +27,9 @@ fn aim_replays_hash_as_recorded_and_as_the_core_hashes() {
         assert_eq!((model.kind(), replay.kind()), (Kind::Aim, Kind::Aim));
         replay.check(&model).unwrap();
         let actor = AimActor::from_bytes(&bytes).unwrap();
+        assert_eq!(model.triangle_count(), actor.triangles().len());
+        assert_eq!(model.triangles().len(), 3 * model.triangle_count());
+        assert!(!replay.has_neutral());
         let v3 = 3 * actor.vertex_count();
         let (mut p, mut n) = (vec![0.0; v3], vec![0.0; v3]);
         for f in 0..replay.frames() {
@@ -65,6 +68,8 @@ fn the_s2d_replay_hashes_as_recorded() {
     let mut model = Model::load(data("s2d-ict.sinew")).unwrap();
     let replay = Replay::load(data("s2d-ict.replay.sinew")).unwrap();
     replay.check(&model).unwrap();
+    assert!(replay.has_neutral());
+    assert_eq!(model.triangle_count(), 0);
     let neutral = replay.neutral().unwrap();
     for f in 0..replay.frames() {
         let FrameInputs::S2d(input) = replay.frame(f).unwrap() else {
