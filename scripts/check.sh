@@ -27,5 +27,12 @@ if ! command -v cc >/dev/null; then
 fi
 bash core/ffi/run-example.sh
 
+echo "== wasm package: build, then the golden replays through the JavaScript API (node)"
+if ! command -v node >/dev/null; then
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends nodejs
+fi
+bash core/wasm/build.sh
+node --test core/wasm/test/*.test.mjs
+
 echo "== firmware-sim: golden replays on Cortex-M4F, RISC-V (QEMU) and wasm (node)"
 bash firmware-sim/run.sh

@@ -1,0 +1,101 @@
+// Types of sinew.mjs, Sinew's face models in JavaScript. Reference: docs/WASM.md.
+//
+// Every failure is thrown: an `Error` whose message is sinew-core's (e.g. "header says the file
+// is 81008 bytes, but it is 1000 bytes (truncated or padded)"), a `TypeError` for an argument
+// of the wrong type, a `RangeError` for a frame index that is not a non-negative integer.
+
+/** Bytes of a `.sinew` file: an ArrayBuffer or any typed array (node's Buffer included). */
+export type Bytes = ArrayBuffer | ArrayBufferView;
+/** `f32` values; an array of numbers is converted. */
+export type Floats = Float32Array | ArrayLike<number>;
+
+/**
+ * Instantiates the WebAssembly module once; every other call needs it. `source`: the module's
+ * URL (default: `sinew_wasm.wasm` beside sinew.mjs; `file:` URLs are read with node:fs), a
+ * Response, its bytes, or a compiled WebAssembly.Module.
+ */
+export function init(source?: string | URL | Response | Bytes | WebAssembly.Module): Promise<void>;
+
+/** A validated AIM actor or S2D decoder. */
+export class Model {
+  private constructor();
+  /** Validates a `.sinew` model (AIM actor or S2D decoder). */
+  static load(bytes: Bytes): Model;
+  readonly kind: "aim" | "s2d";
+  /** Vertices of the output mesh. */
+  readonly vertexCount: number;
+  /** Coefficients per pose (corrective shapes) of an AIM actor; 0 for an S2D decoder. */
+  readonly shapeCount: number;
+  /** Values of an S2D decoder's input (3 per landmark); 0 for an AIM actor. */
+  readonly inputLength: number;
+  /** Landmarks of an S2D decoder's input; 0 for an AIM actor. */
+  readonly landmarkCount: number;
+  /** Triangles of an AIM actor's template; 0 for an S2D decoder (its file has no faces). */
+  readonly triangleCount: number;
+  /** Content hash of the model's bytes, 16 hex digits; a replay names it. */
+  readonly hash: string;
+  /** Metadata (`units`, provenance). */
+  readonly metadata: Record<string, string>;
+  /** `[triangleCount * 3]` vertex indices, counter-clockwise (empty for an S2D decoder). */
+  triangles(): Uint32Array;
+  /** `[landmarkCount]` the vertex of each input landmark (empty for an AIM actor). */
+  landmarkVertices(): Uint32Array;
+  /** `[vertexCount * 3]` an AIM actor's neutral skin, an S2D decoder's template. */
+  neutral(): Float32Array;
+  /**
+   * AIM: `[vertexCount * 3]` posed positions. `head`, `jaw`: 9 values each (6D rotation, then
+   * translation; the jaw about the actor's pivot); `coefficients`: `[shapeCount]`.
+   */
+  pose(head: Floats, jaw: Floats, coefficients: Floats): Float32Array;
+  /** AIM: `[vertexCount * 3]` area-weighted unit normals of posed positions. */
+  normals(positions: Floats): Float32Array;
+  /** S2D: the decoder's `[inputLength]` input from `[landmarkCount * 3]` neutral and expressive landmarks. */
+  landmarkInput(neutralLandmarks: Floats, landmarks: Floats): Float32Array;
+  /** S2D: `[vertexCount * 3]` vertices, decoded onto `neutral` (same topology) or the template. */
+  decode(input: Floats, neutral?: Floats | null): Float32Array;
+  /** S2D: `decode(landmarkInput(neutralLandmarks, landmarks), neutral)`. */
+  decodeLandmarks(neutralLandmarks: Floats, landmarks: Floats, neutral?: Floats | null): Float32Array;
+  /** Frees the model's memory in the module now (otherwise when it is garbage-collected). */
+  free(): void;
+}
+
+/** One frame of an AIM replay. */
+export interface AimFrame {
+  head: Float32Array;
+  jaw: Float32Array;
+  coefficients: Float32Array;
+}
+
+/** One frame of an S2D replay: the decoder's input. */
+export interface S2dFrame {
+  input: Float32Array;
+}
+
+/** A validated replay: per-frame inputs and the hash recorded for each frame. */
+export class Replay {
+  private constructor();
+  /** Validates a `.sinew` replay. */
+  static load(bytes: Bytes): Replay;
+  readonly kind: "aim" | "s2d";
+  /** The numeric mode it was recorded in; this package plays "f32" (S2D replays are all "f32"). */
+  readonly mode: "f32" | "q16" | "fast";
+  readonly frameCount: number;
+  /** Content hash of the model it was recorded with, 16 hex digits. */
+  readonly modelHash: string;
+  /** `[vertexCount * 3]` the neutral an S2D replay decodes onto, or null (the template). */
+  readonly neutral: Float32Array | null;
+  /** Frame `f`'s inputs (`0 <= f < frameCount`). */
+  frame(f: number): AimFrame | S2dFrame;
+  /** The hash recorded for frame `f`, 16 hex digits. */
+  expected(f: number): string;
+  /** Throws unless this replay was recorded with `model` (content hash and sizes). */
+  check(model: Model): void;
+  free(): void;
+}
+
+/**
+ * A frame's hash, 16 hex digits: the values of every array in order. `frameHash(positions,
+ * normals)` equals sinew-core's `replay::frame_hash` in the f32 mode, `frameHash(vertices)` its
+ * `replay::s2d_frame_hash`.
+ */
+export function frameHash(...arrays: Floats[]): string;

@@ -1,0 +1,305 @@
+// Sinew's face models in JavaScript: the ES module over sinew_wasm.wasm (sinew-core compiled to
+// WebAssembly). API reference: docs/WASM.md; types: sinew.d.ts.
+//
+// The module's exports speak in numbers only (core/wasm/src/exports.rs): inputs are copied
+// into the module's I/O area, an operation returns the length of its result there (or -1, and
+// `sinew_error` gives the message), and models and replays are handles. This file turns that
+// into classes, typed arrays and Error exceptions. WebAssembly memory is little-endian, as are
+// the typed arrays of every platform a browser or node runs on.
+
+let wasm = null;
+
+/**
+ * Instantiates the WebAssembly module once. `source` is the module's URL (default: the
+ * `sinew_wasm.wasm` beside this file), a Response, its bytes, or a compiled WebAssembly.Module.
+ */
+export async function init(source) {
+  if (wasm) return;
+  source ??= new URL("./sinew_wasm.wasm", import.meta.url);
+  if (typeof source === "string") source = new URL(source, import.meta.url);
+  let instance;
+  if (source instanceof WebAssembly.Module) {
+    instance = await WebAssembly.instantiate(source, {});
+  } else if (source instanceof URL && source.protocol === "file:") {
+    // node: fetch() does not read files.
+    const { readFile } = await import("node:fs/promises");
+    ({ instance } = await WebAssembly.instantiate(await readFile(source), {}));
+  } else if (source instanceof URL || (typeof Response !== "undefined" && source instanceof Response)) {
+    const response = source instanceof URL ? await fetch(source) : source;
+    if (!response.ok) throw new Error(`sinew: cannot fetch ${response.url}: ${response.status}`);
+    ({ instance } = await WebAssembly.instantiate(await response.arrayBuffer(), {}));
+  } else {
+    ({ instance } = await WebAssembly.instantiate(bytesOf(source, "the module"), {}));
+  }
+  wasm = instance.exports;
+}
+
+function exports() {
+  if (!wasm) throw new Error("sinew: call `await init()` before using the module");
+  return wasm;
+}
+
+/** The bytes of an ArrayBuffer or a typed array (node's Buffer included), without a copy. */
+function bytesOf(data, what) {
+  if (data instanceof ArrayBuffer) return new Uint8Array(data);
+  if (ArrayBuffer.isView(data)) return new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
+  throw new TypeError(`sinew: ${what} must be an ArrayBuffer or a typed array`);
+}
+
+/** `values` as a Float32Array (an array of numbers is converted). */
+function floats(values, what) {
+  if (values instanceof Float32Array) return values;
+  if (Array.isArray(values) || ArrayBuffer.isView(values)) return Float32Array.from(values);
+  throw new TypeError(`sinew: ${what} must be a Float32Array or an array of numbers`);
+}
+
+const f32Bytes = (a) => new Uint8Array(a.buffer, a.byteOffset, a.byteLength);
+
+/** Copies `parts` (Uint8Arrays) one after the other into the I/O area. */
+function put(...parts) {
+  const w = exports();
+  const total = parts.reduce((n, p) => n + p.length, 0);
+  const ptr = w.sinew_io_reserve(total) >>> 0;
+  const memory = new Uint8Array(w.memory.buffer);
+  let at = ptr;
+  for (const p of parts) {
+    memory.set(p, at);
+    at += p.length;
+  }
+}
+
+/** The result of an operation that returned `status`: a copy of its bytes, or an Error thrown. */
+function take(status) {
+  const w = exports();
+  if (status < 0) {
+    const len = w.sinew_error();
+    throw new Error(text(len));
+  }
+  const ptr = w.sinew_io_ptr() >>> 0;
+  // A copy: the memory may grow (and its buffer be replaced) at the next call.
+  return new Uint8Array(w.memory.buffer).slice(ptr, ptr + status);
+}
+
+function text(len) {
+  const w = exports();
+  const ptr = w.sinew_io_ptr() >>> 0;
+  return new TextDecoder().decode(new Uint8Array(w.memory.buffer, ptr, len));
+}
+
+const takeF32 = (status) => new Float32Array(take(status).buffer);
+const takeU32 = (status) => new Uint32Array(take(status).buffer);
+const takeText = (status) => new TextDecoder().decode(take(status));
+
+/** `key=value` lines as an object. */
+function keyValues(lines) {
+  const out = {};
+  for (const line of lines.split("\n")) {
+    const eq = line.indexOf("=");
+    if (eq > 0) out[line.slice(0, eq)] = line.slice(eq + 1);
+  }
+  return out;
+}
+
+// Frees the module's side of a model or replay that was garbage-collected without `free()`.
+const finalizer = new FinalizationRegistry((handle) => wasm?.sinew_free(handle));
+const token = Symbol("sinew handle");
+
+class Handle {
+  #handle;
+
+  constructor(key, handle) {
+    if (key !== token) throw new TypeError("sinew: use Model.load or Replay.load");
+    this.#handle = handle;
+    finalizer.register(this, handle, this);
+  }
+
+  /** The handle; 0 (never live) once freed, so a freed object's calls throw. */
+  get _h() {
+    return this.#handle;
+  }
+
+  /** Frees the model or replay now (its memory in the module). Further calls throw. */
+  free() {
+    if (this.#handle !== 0) {
+      finalizer.unregister(this);
+      exports().sinew_free(this.#handle);
+      this.#handle = 0;
+    }
+  }
+}
+
+function load(bytes, loader) {
+  const w = exports();
+  put(bytesOf(bytes, "the model or replay"));
+  const handle = loader(w);
+  if (handle < 0) throw new Error(text(w.sinew_error()));
+  return handle;
+}
+
+function frameIndex(f) {
+  if (!Number.isInteger(f) || f < 0 || f > 0xffff_ffff) {
+    throw new RangeError(`sinew: a frame index is a non-negative integer, got ${f}`);
+  }
+  return f;
+}
+
+/** A validated AIM actor or S2D decoder. */
+export class Model extends Handle {
+  #info;
+
+  /** Validates a `.sinew` model (AIM actor or S2D decoder); throws an Error saying what is wrong. */
+  static load(bytes) {
+    return new Model(token, load(bytes, (w) => w.sinew_model_load()));
+  }
+
+  constructor(key, handle) {
+    super(key, handle);
+    this.#info = keyValues(takeText(exports().sinew_info(handle)));
+  }
+
+  /** "aim" or "s2d". */
+  get kind() {
+    return this.#info.kind;
+  }
+  /** Vertices of the output mesh. */
+  get vertexCount() {
+    return Number(this.#info.vertices);
+  }
+  /** Coefficients per pose (corrective shapes) of an AIM actor; 0 for an S2D decoder. */
+  get shapeCount() {
+    return Number(this.#info.shapes);
+  }
+  /** Values of an S2D decoder's input (3 per landmark); 0 for an AIM actor. */
+  get inputLength() {
+    return Number(this.#info.inputs);
+  }
+  /** Landmarks of an S2D decoder's input; 0 for an AIM actor. */
+  get landmarkCount() {
+    return Number(this.#info.inputs) / 3;
+  }
+  /** Triangles of an AIM actor's template; 0 for an S2D decoder (its file has no faces). */
+  get triangleCount() {
+    return Number(this.#info.triangles);
+  }
+  /** The content hash of the model's bytes (16 hex digits), which a replay names. */
+  get hash() {
+    return this.#info.hash;
+  }
+  /** The metadata (`units`, provenance) as an object of strings. */
+  get metadata() {
+    return keyValues(takeText(exports().sinew_metadata(this._h)));
+  }
+  /** Triangle vertex indices, 3 per triangle (empty for an S2D decoder). */
+  triangles() {
+    return takeU32(exports().sinew_array(this._h, 0));
+  }
+  /** The vertex of each input landmark of an S2D decoder (empty for an AIM actor). */
+  landmarkVertices() {
+    return takeU32(exports().sinew_array(this._h, 1));
+  }
+  /** The neutral mesh, x y z per vertex: an AIM actor's neutral skin, an S2D decoder's template. */
+  neutral() {
+    return takeF32(exports().sinew_array(this._h, 2));
+  }
+
+  /** Poses an AIM actor: head and jaw as 9 values (6D rotation, translation), the coefficients. */
+  pose(head, jaw, coefficients) {
+    const h = floats(head, "head");
+    const j = floats(jaw, "jaw");
+    put(f32Bytes(h), f32Bytes(j), f32Bytes(floats(coefficients, "coefficients")));
+    return takeF32(exports().sinew_pose(this._h, h.length, j.length));
+  }
+
+  /** Area-weighted vertex normals of an AIM actor's posed positions. */
+  normals(positions) {
+    put(f32Bytes(floats(positions, "positions")));
+    return takeF32(exports().sinew_normals(this._h));
+  }
+
+  /** An S2D decoder's input from a neutral and an expressive landmark set (x y z each). */
+  landmarkInput(neutralLandmarks, landmarks) {
+    const n = floats(neutralLandmarks, "neutral landmarks");
+    put(f32Bytes(n), f32Bytes(floats(landmarks, "landmarks")));
+    return takeF32(exports().sinew_landmark_input(this._h, n.length));
+  }
+
+  /** Decodes an S2D input onto `neutral` (same topology), or onto the decoder's template. */
+  decode(input, neutral) {
+    const i = floats(input, "input");
+    const parts = [f32Bytes(i)];
+    if (neutral !== undefined && neutral !== null) parts.push(f32Bytes(floats(neutral, "neutral")));
+    put(...parts);
+    return takeF32(exports().sinew_decode(this._h, i.length));
+  }
+
+  /** `decode(landmarkInput(neutralLandmarks, landmarks), neutral)`. */
+  decodeLandmarks(neutralLandmarks, landmarks, neutral) {
+    return this.decode(this.landmarkInput(neutralLandmarks, landmarks), neutral);
+  }
+}
+
+/** A validated replay: per-frame inputs and the hash recorded for each frame. */
+export class Replay extends Handle {
+  #info;
+  #neutral;
+
+  /** Validates a `.sinew` replay; throws an Error saying what is wrong. */
+  static load(bytes) {
+    return new Replay(token, load(bytes, (w) => w.sinew_replay_load()));
+  }
+
+  constructor(key, handle) {
+    super(key, handle);
+    this.#info = keyValues(takeText(exports().sinew_info(handle)));
+  }
+
+  /** "aim" or "s2d": the kind of model it plays. */
+  get kind() {
+    return this.#info.kind;
+  }
+  /** The numeric mode it was recorded in: "f32", "q16" or "fast" (S2D: "f32"). */
+  get mode() {
+    return this.#info.mode;
+  }
+  /** Number of frames. */
+  get frameCount() {
+    return Number(this.#info.frames);
+  }
+  /** The content hash of the model it was recorded with (16 hex digits). */
+  get modelHash() {
+    return this.#info.model;
+  }
+  /** The neutral an S2D replay's frames decode onto, or null (decode onto the template). */
+  get neutral() {
+    if (this.#info.neutral !== "1") return null;
+    this.#neutral ??= takeF32(exports().sinew_array(this._h, 3));
+    return this.#neutral;
+  }
+
+  /** Frame `f`'s inputs: `{ head, jaw, coefficients }` (AIM) or `{ input }` (S2D). */
+  frame(f) {
+    const v = takeF32(exports().sinew_replay_frame(this._h, frameIndex(f)));
+    if (this.kind === "s2d") return { input: v };
+    return { head: v.subarray(0, 9), jaw: v.subarray(9, 18), coefficients: v.subarray(18) };
+  }
+
+  /** The hash recorded for frame `f` (16 hex digits). */
+  expected(f) {
+    return takeText(exports().sinew_replay_expected(this._h, frameIndex(f)));
+  }
+
+  /** Throws unless this replay was recorded with `model` (content hash and sizes). */
+  check(model) {
+    if (!(model instanceof Model)) throw new TypeError("sinew: check takes a Model");
+    take(exports().sinew_replay_check(this._h, model._h));
+  }
+}
+
+/**
+ * The hash of a frame (16 hex digits): the values of every array in order. `frameHash(positions,
+ * normals)` is an AIM frame's hash in the f32 mode, `frameHash(vertices)` an S2D frame's.
+ */
+export function frameHash(...arrays) {
+  put(...arrays.map((a, i) => f32Bytes(floats(a, `array ${i}`))));
+  return takeText(exports().sinew_frame_hash());
+}

@@ -1,0 +1,398 @@
+//! The WebAssembly module's exports: plain `extern "C"` functions over numbers, which
+//! `core/wasm/js/sinew.mjs` wraps into the JavaScript API.
+//!
+//! # Protocol
+//! Data crosses through one exchange buffer, the *I/O area*, a `Vec<u8>` owned here. JavaScript
+//! asks for room with [`sinew_io_reserve`], copies its bytes (a model's file, or `f32` inputs
+//! as little-endian values) to the address returned, then calls an operation. An operation reads
+//! its inputs from the I/O area, replaces the area with its result and returns the result's
+//! length in bytes (read it at [`sinew_io_ptr`]), or `-1` when it failed: [`sinew_error`] then
+//! puts the message in the I/O area. No Rust reference to the area is alive between calls, so
+//! JavaScript's writes never alias a borrow; memory can grow during any call, so JavaScript
+//! takes a fresh view of it after each.
+//!
+//! Models and replays live in a table here; JavaScript holds their handles (positive `i32`) and
+//! hands them back with [`sinew_free`]. Pointers are 32-bit on `wasm32`, the only target these
+//! functions are meant for (on the host they are compiled and linted, not called).
+//!
+//! Every export carries `#[unsafe(no_mangle)]` (exported under its own name), the one kind of
+//! unsafe code in this crate; no other symbol in the module has a `sinew_` name.
+
+use std::cell::RefCell;
+
+use crate::{Error, FrameInputs, Model, Replay};
+
+#[derive(Debug)]
+enum Object {
+    Model(Model),
+    Replay(Replay),
+}
+
+thread_local! {
+    /// The I/O area (see the module documentation).
+    static IO: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
+    /// The message of the last failed operation.
+    static ERROR: RefCell<String> = const { RefCell::new(String::new()) };
+    /// Models and replays; handle `h` is slot `h − 1`.
+    static OBJECTS: RefCell<Vec<Option<Object>>> = const { RefCell::new(Vec::new()) };
+}
+
+/// What an operation returns: its result's bytes (placed in the I/O area) or an error.
+type Outcome = Result<Vec<u8>, Error>;
+
+/// Places `outcome` in the I/O area (or the error message aside) and returns the export's
+/// status: the result's length in bytes, or -1.
+fn finish(outcome: Outcome) -> i32 {
+    let outcome = outcome.and_then(|bytes| {
+        i32::try_from(bytes.len())
+            .map(|len| (bytes, len))
+            .map_err(|_| Error::new("result is larger than 2 GiB"))
+    });
+    match outcome {
+        Ok((bytes, len)) => {
+            IO.with_borrow_mut(|io| *io = bytes);
+            len
+        }
+        Err(e) => {
+            ERROR.with_borrow_mut(|m| *m = e.0);
+            -1
+        }
+    }
+}
+
+/// The I/O area's contents as little-endian `f32` values (a trailing partial value is ignored;
+/// JavaScript always writes whole values).
+fn io_f32s() -> Vec<f32> {
+    IO.with_borrow(|io| {
+        let (values, _) = io.as_chunks::<4>();
+        values.iter().map(|c| f32::from_le_bytes(*c)).collect()
+    })
+}
+
+fn io_bytes() -> Vec<u8> {
+    IO.with_borrow_mut(std::mem::take)
+}
+
+fn f32_bytes(values: &[f32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+fn u32_bytes(values: &[u32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+/// Splits `values` at `first` values: the two inputs an operation read from the I/O area.
+fn split_at(values: &[f32], first: u32) -> Result<(&[f32], &[f32]), Error> {
+    values
+        .split_at_checked(first as usize)
+        .ok_or_else(|| Error::new("inputs are shorter than their stated lengths"))
+}
+
+fn slot(handle: i32) -> Option<usize> {
+    usize::try_from(handle).ok()?.checked_sub(1)
+}
+
+fn stale(handle: i32) -> Error {
+    Error::new(format!("handle {handle} is not a live model or replay"))
+}
+
+/// Runs `f` on the model behind `handle`.
+fn with_model<T>(handle: i32, f: impl FnOnce(&mut Model) -> Result<T, Error>) -> Result<T, Error> {
+    OBJECTS.with_borrow_mut(|objects| {
+        match slot(handle)
+            .and_then(|i| objects.get_mut(i))
+            .and_then(Option::as_mut)
+        {
+            Some(Object::Model(m)) => f(m),
+            Some(Object::Replay(_)) => Err(Error::new(format!(
+                "handle {handle} is a replay, not a model"
+            ))),
+            None => Err(stale(handle)),
+        }
+    })
+}
+
+/// Runs `f` on the replay behind `handle`.
+fn with_replay<T>(handle: i32, f: impl FnOnce(&Replay) -> Result<T, Error>) -> Result<T, Error> {
+    OBJECTS.with_borrow(|objects| {
+        match slot(handle)
+            .and_then(|i| objects.get(i))
+            .and_then(Option::as_ref)
+        {
+            Some(Object::Replay(r)) => f(r),
+            Some(Object::Model(_)) => Err(Error::new(format!(
+                "handle {handle} is a model, not a replay"
+            ))),
+            None => Err(stale(handle)),
+        }
+    })
+}
+
+/// Stores `object` and returns its handle.
+fn insert(object: Object) -> Result<i32, Error> {
+    OBJECTS.with_borrow_mut(|objects| {
+        let i = match objects.iter().position(Option::is_none) {
+            Some(i) => i,
+            None => {
+                objects.push(None);
+                objects.len() - 1
+            }
+        };
+        let handle = i32::try_from(i + 1).map_err(|_| Error::new("too many live objects"))?;
+        if let Some(s) = objects.get_mut(i) {
+            *s = Some(object);
+        }
+        Ok(handle)
+    })
+}
+
+/// A handle, or -1 with the error kept for [`sinew_error`].
+fn handle_or_error(result: Result<i32, Error>) -> i32 {
+    match result {
+        Ok(h) => h,
+        Err(e) => {
+            ERROR.with_borrow_mut(|m| *m = e.0);
+            -1
+        }
+    }
+}
+
+/// Makes the I/O area `len` bytes long (zeroed) and returns its address, where JavaScript then
+/// writes an operation's inputs.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_io_reserve(len: u32) -> u32 {
+    IO.with_borrow_mut(|io| {
+        io.clear();
+        io.resize(len as usize, 0);
+        io.as_mut_ptr() as usize as u32
+    })
+}
+
+/// The address of the I/O area, where the last operation's result starts.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_io_ptr() -> u32 {
+    IO.with_borrow_mut(|io| io.as_mut_ptr() as usize as u32)
+}
+
+/// Puts the last failure's message (UTF-8) in the I/O area; returns its length in bytes.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_error() -> i32 {
+    finish(Ok(ERROR.with_borrow_mut(std::mem::take).into_bytes()))
+}
+
+/// Loads the model whose bytes are in the I/O area ([`Model::load`]); returns its handle, or -1.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_model_load() -> i32 {
+    handle_or_error(Model::load(io_bytes()).and_then(|m| insert(Object::Model(m))))
+}
+
+/// Loads the replay whose bytes are in the I/O area ([`Replay::load`]); returns its handle, or
+/// -1.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_replay_load() -> i32 {
+    handle_or_error(Replay::load(io_bytes()).and_then(|r| insert(Object::Replay(r))))
+}
+
+/// Frees the model or replay behind `handle` (nothing for a handle not in use).
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_free(handle: i32) {
+    OBJECTS.with_borrow_mut(|objects| {
+        if let Some(s) = slot(handle).and_then(|i| objects.get_mut(i)) {
+            *s = None;
+        }
+    });
+}
+
+/// Describes the object behind `handle` as `key=value` lines: for a model `kind`, `vertices`,
+/// `shapes`, `inputs`, `triangles` and `hash` (16 hex digits); for a replay `kind`, `mode`,
+/// `frames`, `model` (the model's hash) and `neutral` (1 if it carries one).
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_info(handle: i32) -> i32 {
+    let text = OBJECTS.with_borrow(|objects| {
+        match slot(handle)
+            .and_then(|i| objects.get(i))
+            .and_then(Option::as_ref)
+        {
+            Some(Object::Model(m)) => Ok(format!(
+                "kind={}\nvertices={}\nshapes={}\ninputs={}\ntriangles={}\nhash={:016x}\n",
+                m.kind().name(),
+                m.vertex_count(),
+                m.shape_count(),
+                m.input_len(),
+                m.triangle_count(),
+                m.content_hash()
+            )),
+            Some(Object::Replay(r)) => Ok(format!(
+                "kind={}\nmode={}\nframes={}\nmodel={:016x}\nneutral={}\n",
+                r.kind().name(),
+                r.mode(),
+                r.frames(),
+                r.model_hash(),
+                u8::from(r.has_neutral())
+            )),
+            None => Err(stale(handle)),
+        }
+    });
+    finish(text.map(String::into_bytes))
+}
+
+/// Puts the model's metadata text in the I/O area.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_metadata(handle: i32) -> i32 {
+    finish(with_model(handle, |m| Ok(m.metadata().as_bytes().to_vec())))
+}
+
+/// `which` of [`sinew_array`]: a model's triangle indices (`u32`).
+pub const ARRAY_TRIANGLES: u32 = 0;
+/// `which` of [`sinew_array`]: an S2D decoder's landmark vertices (`u32`).
+pub const ARRAY_LANDMARKS: u32 = 1;
+/// `which` of [`sinew_array`]: a model's neutral mesh (`f32`).
+pub const ARRAY_NEUTRAL: u32 = 2;
+/// `which` of [`sinew_array`]: an S2D replay's neutral (`f32`).
+pub const ARRAY_REPLAY_NEUTRAL: u32 = 3;
+
+/// Puts one of the object's arrays (`ARRAY_*`) in the I/O area.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_array(handle: i32, which: u32) -> i32 {
+    finish(match which {
+        ARRAY_TRIANGLES => with_model(handle, |m| Ok(u32_bytes(&m.triangles()))),
+        ARRAY_LANDMARKS => with_model(handle, |m| Ok(u32_bytes(&m.landmark_vertices()))),
+        ARRAY_NEUTRAL => with_model(handle, |m| Ok(f32_bytes(&m.neutral()))),
+        ARRAY_REPLAY_NEUTRAL => with_replay(handle, |r| {
+            r.neutral()
+                .map(|n| f32_bytes(&n))
+                .ok_or_else(|| Error::new("this replay carries no neutral"))
+        }),
+        _ => Err(Error::new(format!("unknown array {which}"))),
+    })
+}
+
+/// Poses an AIM actor ([`Model::pose`]); the I/O area holds head (`head_len` values), jaw
+/// (`jaw_len`) and coefficients (the rest). Result: the positions (`f32`).
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_pose(handle: i32, head_len: u32, jaw_len: u32) -> i32 {
+    let values = io_f32s();
+    finish(with_model(handle, |m| {
+        let (head, rest) = split_at(&values, head_len)?;
+        let (jaw, coefficients) = split_at(rest, jaw_len)?;
+        Ok(f32_bytes(&m.pose(head, jaw, coefficients)?))
+    }))
+}
+
+/// Vertex normals ([`Model::normals`]) of the positions in the I/O area. Result: `f32`.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_normals(handle: i32) -> i32 {
+    let values = io_f32s();
+    finish(with_model(handle, |m| Ok(f32_bytes(&m.normals(&values)?))))
+}
+
+/// An S2D decoder's input ([`Model::landmark_input`]); the I/O area holds the neutral
+/// landmarks (`neutral_len` values), then the expressive ones. Result: `f32`.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_landmark_input(handle: i32, neutral_len: u32) -> i32 {
+    let values = io_f32s();
+    finish(with_model(handle, |m| {
+        let (neutral, landmarks) = split_at(&values, neutral_len)?;
+        Ok(f32_bytes(&m.landmark_input(neutral, landmarks)?))
+    }))
+}
+
+/// Decodes an S2D input ([`Model::decode`]); the I/O area holds the input (`input_len` values),
+/// then the neutral to decode onto, or nothing for the decoder's template. Result: `f32`.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_decode(handle: i32, input_len: u32) -> i32 {
+    let values = io_f32s();
+    finish(with_model(handle, |m| {
+        let (input, neutral) = split_at(&values, input_len)?;
+        let neutral = (!neutral.is_empty()).then_some(neutral);
+        Ok(f32_bytes(&m.decode(input, neutral)?))
+    }))
+}
+
+/// The frame hash ([`crate::frame_hash`]) of the `f32` values in the I/O area. Result: 16 hex
+/// digits.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_frame_hash() -> i32 {
+    let values = io_f32s();
+    finish(Ok(
+        format!("{:016x}", crate::frame_hash(&[&values])).into_bytes()
+    ))
+}
+
+/// Frame `frame`'s inputs of a replay ([`Replay::frame`]). Result (`f32`): head, jaw and
+/// coefficients for AIM, the decoder input for S2D.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_replay_frame(handle: i32, frame: u32) -> i32 {
+    finish(with_replay(handle, |r| {
+        Ok(match r.frame(frame as usize)? {
+            FrameInputs::Aim {
+                head,
+                jaw,
+                coefficients,
+            } => f32_bytes(&[&head[..], &jaw[..], &coefficients].concat()),
+            FrameInputs::S2d(input) => f32_bytes(&input),
+        })
+    }))
+}
+
+/// The hash a replay recorded for frame `frame` ([`Replay::expected`]). Result: 16 hex digits.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_replay_expected(handle: i32, frame: u32) -> i32 {
+    finish(with_replay(handle, |r| {
+        Ok(format!("{:016x}", r.expected(frame as usize)?).into_bytes())
+    }))
+}
+
+/// Checks that a replay was recorded with a model ([`Replay::check`]). Result: empty.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_replay_check(replay: i32, model: i32) -> i32 {
+    let outcome = OBJECTS.with_borrow(|objects| {
+        let get = |h: i32| {
+            slot(h)
+                .and_then(|i| objects.get(i))
+                .and_then(Option::as_ref)
+        };
+        match (get(replay), get(model)) {
+            (Some(Object::Replay(r)), Some(Object::Model(m))) => r.check(m).map(|()| Vec::new()),
+            (Some(Object::Replay(_)), _) => {
+                Err(Error::new(format!("handle {model} is not a live model")))
+            }
+            _ => Err(Error::new(format!("handle {replay} is not a live replay"))),
+        }
+    });
+    finish(outcome)
+}
