@@ -10,7 +10,7 @@ the values. `--distinct` runs the networks once per distinct point of the batch,
 (about 3,300 of the 4,096 on 9,409 points). `--shapes-per-point K` draws the batch as
 4,096 / K points with K different shapes each (Sinew's default `shapes_per_point` is 2; with
 `--distinct`, about 1,850 distinct points). `--jaw-term` adds L_J on 512 more points (K(c) = 1 over
-the jaw, on by default in Sinew since session 5). Sinew's default step is therefore
+the jaw, on by default in Sinew). Sinew's default step is therefore
 `--distinct --shapes-per-point 2 --jaw-term`. Run on demand (not in CI):
 
     python3 scripts/bench_torch_aim_step.py [--threads 2] [--steps 50] [--distinct]

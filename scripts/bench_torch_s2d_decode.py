@@ -2,7 +2,8 @@
 """PyTorch reference of the S2D decoder (the authors' network, written from
 shared/notes/s2d-reference.md), for comparison with
 `cargo bench -p sinew-host --bench s2d_decode` (single frame) and
-`cargo bench -p sinew-host --bench s2d_train_step` (`--train`); results in docs/S2D.md.
+`cargo bench -p sinew-host --bench s2d_train_step` (`--train`); results in docs/BENCHMARKS.md
+and docs/results/S2D.md.
 
 Same shapes as the Rust benchmarks: levels of 5023/1256/314/79/20 vertices (+ one dummy each),
 spirals [15, 14, 9, 9, 7] with random indices, up-sampling U with three random barycentric
