@@ -478,3 +478,52 @@ fn the_checks_find_what_they_look_for() {
         "comments are not imports"
     );
 }
+
+/// Every source file the docs name by path (`host/src/io/mesh.rs`, `scripts/check.sh`, …)
+/// exists, so the docs follow the code when it moves.
+#[test]
+fn docs_name_files_that_exist() {
+    let root = repo();
+    let mut docs = vec![root.join("README.md"), root.join("firmware-sim/README.md")];
+    for dir in ["docs", "docs/results"] {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(root.join(dir))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "md"))
+            .collect();
+        files.sort();
+        docs.extend(files);
+    }
+    const EXTENSIONS: &[&str] = &["rs", "py", "sh", "mjs", "c", "h", "toml"];
+    let mut missing = Vec::new();
+    for doc in docs {
+        let text = std::fs::read_to_string(&doc).unwrap();
+        for start in ["host/", "core/", "tests/", "firmware-sim/", "scripts/"] {
+            let mut from = 0;
+            while let Some(i) = text[from..].find(start) {
+                let at = from + i;
+                let end = text[at..]
+                    .find(|c: char| !(c.is_ascii_alphanumeric() || "_./-".contains(c)))
+                    .map_or(text.len(), |e| at + e);
+                from = end.max(at + 1);
+                let before = text[..at].chars().next_back();
+                if before.is_some_and(|c| c.is_ascii_alphanumeric() || "_./-".contains(c)) {
+                    continue;
+                }
+                let path = text[at..end].trim_end_matches('.');
+                let is_source = path
+                    .rsplit_once('.')
+                    .is_some_and(|(_, ext)| EXTENSIONS.contains(&ext));
+                if is_source && !root.join(path).exists() {
+                    missing.push(format!(
+                        "{}: names {path}, which does not exist",
+                        doc.strip_prefix(&root).unwrap().display()
+                    ));
+                }
+            }
+        }
+    }
+    missing.sort();
+    missing.dedup();
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}
