@@ -31,6 +31,7 @@ pub mod error;
 pub mod fast;
 pub mod format;
 pub mod hash;
+pub mod layout;
 pub mod linalg;
 pub mod network;
 pub mod nn;
