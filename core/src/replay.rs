@@ -31,6 +31,15 @@ use crate::tensor::{F32s, U32s};
 /// Values per AIM frame before the coefficients: head 9, jaw 9.
 pub const AIM_POSE_LEN: usize = 18;
 
+/// The section of every replay's model content hash ([`model_hash`]), `u32` `[2]` as
+/// [`hash_words`] stores it.
+pub const MODEL_HASH: &str = "replay.model";
+/// The section of every replay's recorded frame hashes, `u32` `[F, 2]`, each as [`hash_words`]
+/// stores it.
+pub const FRAME_HASHES: &str = "replay.hash";
+/// The section of an AIM replay's per-frame inputs, `f32` `[F, AIM_POSE_LEN + M]`.
+pub const AIM_INPUTS: &str = "replay.aim";
+
 /// The numeric mode a replay was recorded in; each has its own goldens.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
@@ -69,7 +78,12 @@ impl fmt::Display for Mode {
     }
 }
 
-/// The `i`-th 64-bit value of a section stored as (low, high) 32-bit word pairs.
+/// A 64-bit hash as a replay stores it: two `u32` words, the low one first.
+pub const fn hash_words(hash: u64) -> [u32; 2] {
+    [hash as u32, (hash >> 32) as u32]
+}
+
+/// The `i`-th 64-bit value of a section stored as (low, high) 32-bit word pairs ([`hash_words`]).
 fn word_pair(words: &U32s<'_>, i: usize) -> Option<u64> {
     let lo = words.get(2 * i)?;
     let hi = words.get(2 * i + 1)?;
@@ -100,13 +114,13 @@ impl<'a> AimReplay<'a> {
     /// no frames, or more coefficients than [`MAX_SHAPES`].
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::Replay)?;
-        let model = file.u32_tensor("replay.model", &[2])?;
+        let model = file.u32_tensor(MODEL_HASH, &[2])?;
         let mode = file
             .metadata()
             .get("mode")
             .and_then(Mode::from_name)
             .ok_or(FormatError::UnknownCode)?;
-        let (shape, rank) = file.dims_of("replay.aim")?;
+        let (shape, rank) = file.dims_of(AIM_INPUTS)?;
         let [frames, width, ..] = shape;
         if rank != 2 || frames == 0 || (width as usize) < AIM_POSE_LEN {
             return Err(FormatError::IncompatibleShapes);
@@ -120,8 +134,8 @@ impl<'a> AimReplay<'a> {
             mode,
             frames: frames as usize,
             shapes,
-            inputs: file.f32_tensor("replay.aim", &[frames, width])?,
-            hashes: file.u32_tensor("replay.hash", &[frames, 2])?,
+            inputs: file.f32_tensor(AIM_INPUTS, &[frames, width])?,
+            hashes: file.u32_tensor(FRAME_HASHES, &[frames, 2])?,
         })
     }
 
@@ -460,7 +474,7 @@ impl<'a> S2dReplay<'a> {
     /// `f32`, no frames, or a neutral that is not `[V, 3]`.
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::Replay)?;
-        let model = file.u32_tensor("replay.model", &[2])?;
+        let model = file.u32_tensor(MODEL_HASH, &[2])?;
         if file.metadata().get("mode").and_then(Mode::from_name) != Some(Mode::F32) {
             return Err(FormatError::UnknownCode);
         }
@@ -485,7 +499,7 @@ impl<'a> S2dReplay<'a> {
             inputs: width as usize,
             data: file.f32_tensor(S2D_INPUTS, &[frames, width])?,
             neutral,
-            hashes: file.u32_tensor("replay.hash", &[frames, 2])?,
+            hashes: file.u32_tensor(FRAME_HASHES, &[frames, 2])?,
         })
     }
 
@@ -684,6 +698,16 @@ mod tests {
     ];
     const DECODER: &[u8] = include_bytes!("../../tests/data/s2d-ict.sinew");
     const DECODER_REPLAY: &[u8] = include_bytes!("../../tests/data/s2d-ict.replay.sinew");
+
+    #[test]
+    fn hash_words_are_low_word_first_and_read_back() {
+        let h = 0x0123_4567_89AB_CDEF_u64;
+        assert_eq!(hash_words(h), [0x89AB_CDEF, 0x0123_4567]);
+        let bytes: Vec<u8> = hash_words(h).iter().flat_map(|w| w.to_le_bytes()).collect();
+        assert_eq!(word_pair(&U32s::new(&bytes).unwrap(), 0), Some(h));
+        let replay = AimReplay::from_bytes(ACTOR_REPLAYS[0]).unwrap();
+        assert_eq!(replay.model_hash(), model_hash(ACTOR));
+    }
 
     #[test]
     fn golden_aim_replays_verify_frame_by_frame() {
