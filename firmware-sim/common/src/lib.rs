@@ -713,20 +713,22 @@ mod tests {
         assert!(wrong[0].to_string().contains("DIFFERS"));
     }
 
-    /// Recomputes the CRC of section `name` (the last field of its 64-byte table entry) and the
-    /// header CRC (over the header before its CRC field, then the table).
+    /// Recomputes the CRC of section `name` (the last field of its table entry) and the header
+    /// CRC (over the header before its CRC field, then the table).
     fn refresh_crcs(mut bytes: Vec<u8>, file: &sinew_core::SinewFile<'_>, name: &str) -> Vec<u8> {
-        use sinew_core::format::{CRC32, HEADER_CRC_OFFSET, HEADER_LEN, SECTION_ENTRY_LEN};
+        use sinew_core::format::{
+            CRC32, ENTRY_CRC, HEADER_CRC, HEADER_CRC_OFFSET, HEADER_LEN, SECTION_ENTRY_LEN,
+        };
         let s = file.section(name).unwrap();
         let entry = HEADER_LEN + usize::from(s.index) * SECTION_ENTRY_LEN;
         let start = s.data().as_ptr() as usize - file.bytes().as_ptr() as usize;
         let crc = CRC32.checksum(&bytes[start..start + s.data().len()]);
-        bytes[entry + 60..entry + 64].copy_from_slice(&crc.to_le_bytes());
+        bytes[ENTRY_CRC.at(entry)].copy_from_slice(&crc.to_le_bytes());
         let table_end = HEADER_LEN + file.section_count() * SECTION_ENTRY_LEN;
         let mut h = CRC32.digest();
         h.update(&bytes[..HEADER_CRC_OFFSET]);
         h.update(&bytes[HEADER_LEN..table_end]);
-        bytes[HEADER_CRC_OFFSET..HEADER_LEN].copy_from_slice(&h.finalize().to_le_bytes());
+        bytes[HEADER_CRC.range()].copy_from_slice(&h.finalize().to_le_bytes());
         bytes
     }
 
