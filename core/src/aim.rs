@@ -5,16 +5,16 @@
 //! # Sections (artefact kind [`ArtifactKind::AimActor`])
 //! | name | dtype | shape | meaning |
 //! |---|---|---|---|
-//! | `tpl.pos` | f32 | [V, 3] | template points c |
-//! | `tpl.tri` | u32 | [T, 3] | template triangles (for normals and rendering) |
-//! | `cache.s0` | f32 | [V, 3] | neutral skin s0 = b0 + d0·n0 at the template points (eq. 6) |
-//! | `cache.k` | f32 | [V] | jaw skinning weight k (eq. 7) |
-//! | `cache.e` | f32 | [V, M, 3] | corrective basis B_e, vertex-major (eq. 8), M = N − 1 |
-//! | `cache.b0` | f32 | [V, 3] | bone point b0 (eq. 3) |
-//! | `cache.d0` | f32 | [V] | soft-tissue thickness d0 (eq. 4) |
-//! | `cache.n0` | f32 | [V, 3] | unit bone normal n0 (eq. 5) |
-//! | `jaw.pivot` | f32 | [3] | the jaw's pivot p: T_b(x) = R (x − p) + p + t |
-//! | `aim.norm` | f32 | [4] | network input normalisation: ĉ = (c − centre) / scale; centre xyz, scale |
+//! | `tpl.pos` | f32 | `[V, 3]` | template points c |
+//! | `tpl.tri` | u32 | `[T, 3]` | template triangles (for normals and rendering) |
+//! | `cache.s0` | f32 | `[V, 3]` | neutral skin s0 = b0 + d0·n0 at the template points (eq. 6) |
+//! | `cache.k` | f32 | `[V]` | jaw skinning weight k (eq. 7) |
+//! | `cache.e` | f32 | `[V, M, 3]` | corrective basis B_e, vertex-major (eq. 8), M = N − 1 |
+//! | `cache.b0` | f32 | `[V, 3]` | bone point b0 (eq. 3) |
+//! | `cache.d0` | f32 | `[V]` | soft-tissue thickness d0 (eq. 4) |
+//! | `cache.n0` | f32 | `[V, 3]` | unit bone normal n0 (eq. 5) |
+//! | `jaw.pivot` | f32 | `[3]` | the jaw's pivot p: T_b(x) = R (x − p) + p + t |
+//! | `aim.norm` | f32 | `[4]` | network input normalisation: ĉ = (c − centre) / scale; centre xyz, scale |
 //! | `net.b`, `net.d`, `net.n`, `net.k`, `net.e` | MLP | | the five networks (absent when playback-only) |
 //!
 //! The networks see ĉ and predict: b0 = c + B(ĉ) (a residual, so the network's outputs stay of

@@ -27,7 +27,7 @@ pub enum FormatError {
         /// Length of the byte slice.
         actual: usize,
     },
-    /// More sections than [`crate::format::MAX_SECTIONS`].
+    /// More sections than [`crate::layout::MAX_SECTIONS`].
     TooManySections,
     /// The CRC-32 over the header and section table does not match.
     HeaderChecksum,
@@ -61,7 +61,7 @@ pub enum FormatError {
         /// Index of the section in the table.
         section: u16,
     },
-    /// A rank above [`crate::format::MAX_RANK`], or dimensions past the rank that are not zero.
+    /// A rank above [`crate::layout::MAX_RANK`], or dimensions past the rank that are not zero.
     BadShape {
         /// Index of the section in the table.
         section: u16,
@@ -97,13 +97,13 @@ impl fmt::Display for FormatError {
             Self::TooShort => write!(
                 f,
                 "file is shorter than the {}-byte header",
-                crate::format::HEADER_LEN
+                crate::layout::HEADER_LEN
             ),
             Self::BadMagic => write!(f, "not a .sinew file (bad magic bytes)"),
             Self::UnsupportedMajor { found } => write!(
                 f,
                 "format major version {found} is newer than this build supports ({})",
-                crate::format::VERSION_MAJOR
+                crate::layout::VERSION_MAJOR
             ),
             Self::NonZeroReserved => write!(f, "a reserved field or padding byte is not zero"),
             Self::LengthMismatch { header, actual } => {
@@ -113,7 +113,7 @@ impl fmt::Display for FormatError {
                 )
             }
             Self::TooManySections => {
-                write!(f, "more than {} sections", crate::format::MAX_SECTIONS)
+                write!(f, "more than {} sections", crate::layout::MAX_SECTIONS)
             }
             Self::HeaderChecksum => write!(f, "header/section-table CRC-32 mismatch (corrupted)"),
             Self::TruncatedSection { section } => {

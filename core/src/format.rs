@@ -1,38 +1,14 @@
 //! The `.sinew` container: one byte format for every baked artefact (actor models, decoders,
 //! generators, performances, replays). `docs/FORMAT.md` is the normative description; every limit
-//! it names is a constant in this module.
+//! it names is a constant of [`crate::layout`], re-exported here.
 //!
 //! [`SinewFile::from_bytes`] validates the whole container once: header, section table, bounds,
 //! layout, checksums, shapes and finiteness of every `f32` tensor. Typed loaders (an MLP, an actor)
 //! then only check roles and index ranges, and evaluation cannot fail on model data.
 
 use crate::error::FormatError;
+pub use crate::layout::*;
 use crate::tensor::{F32s, I32s, U32s};
-
-/// The eight magic bytes: a non-ASCII first byte, the name, and CR LF / EOF / LF to catch text-mode
-/// transfers, in the manner of PNG.
-pub const MAGIC: [u8; 8] = [0x89, b'S', b'N', b'W', b'\r', b'\n', 0x1A, b'\n'];
-/// Major format version: a reader rejects files with a larger major version.
-pub const VERSION_MAJOR: u16 = 1;
-/// Minor format version: additions that older readers can skip (new section kinds, new flags).
-pub const VERSION_MINOR: u16 = 0;
-/// Length of the fixed header in bytes.
-pub const HEADER_LEN: usize = 32;
-/// Length of one section-table entry in bytes.
-pub const SECTION_ENTRY_LEN: usize = 64;
-/// Bytes reserved for a section name (ASCII, NUL-padded, at least one byte long).
-pub const NAME_LEN: usize = 32;
-/// Largest tensor rank.
-pub const MAX_RANK: usize = 4;
-/// Largest number of sections in one file.
-pub const MAX_SECTIONS: usize = 4096;
-/// Every section's data starts at a multiple of this many bytes from the start of the file.
-pub const SECTION_ALIGN: usize = 16;
-/// Byte offset of the header CRC field; the CRC covers bytes `0..HEADER_CRC_OFFSET` and the table.
-pub const HEADER_CRC_OFFSET: usize = 28;
-
-/// Header flag: the artefact omits what only training or re-baking needs (e.g. an actor's networks).
-pub const FLAG_PLAYBACK_ONLY: u32 = 1;
 
 /// The CRC-32 used throughout (the ISO-HDLC polynomial of zlib, PNG and gzip).
 pub const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
@@ -292,16 +268,26 @@ pub struct SinewFile<'a> {
     section_count: u16,
 }
 
-fn u16_at(b: &[u8], at: usize) -> Option<u16> {
-    match b.get(at..at.checked_add(2)?) {
+/// The `u16` in field `f` of `b` (`None` if `b` is too short or the field is not two bytes).
+fn u16_in(b: &[u8], f: Field) -> Option<u16> {
+    match b.get(f.range()) {
         Some(&[x, y]) => Some(u16::from_le_bytes([x, y])),
         _ => None,
     }
 }
 
-fn u32_at(b: &[u8], at: usize) -> Option<u32> {
-    match b.get(at..at.checked_add(4)?) {
+/// The `u32` in field `f` of `b` (`None` if `b` is too short or the field is not four bytes).
+fn u32_in(b: &[u8], f: Field) -> Option<u32> {
+    match b.get(f.range()) {
         Some(&[x, y, z, w]) => Some(u32::from_le_bytes([x, y, z, w])),
+        _ => None,
+    }
+}
+
+/// The `u8` in field `f` of `b` (`None` if `b` is too short or the field is not one byte).
+fn u8_in(b: &[u8], f: Field) -> Option<u8> {
+    match b.get(f.range()) {
+        Some(&[x]) => Some(x),
         _ => None,
     }
 }
@@ -328,21 +314,21 @@ fn read_entry(table: &[u8], i: usize) -> Option<Entry<'_>> {
     let e = table
         .get(i.checked_mul(SECTION_ENTRY_LEN)?..)?
         .get(..SECTION_ENTRY_LEN)?;
-    let name_field = e.get(4..4 + NAME_LEN)?;
+    let name_field = e.get(ENTRY_NAME.range())?;
     let name_len = name_field.iter().position(|&c| c == 0).unwrap_or(NAME_LEN);
     let mut shape = [0u32; MAX_RANK];
     for (d, s) in shape.iter_mut().enumerate() {
-        *s = u32_at(e, 36 + 4 * d)?;
+        *s = u32_in(e, entry_dim(d))?;
     }
     Some(Entry {
-        kind: u16_at(e, 0)?,
-        dtype: *e.get(2)?,
-        rank: *e.get(3)?,
+        kind: u16_in(e, ENTRY_KIND)?,
+        dtype: u8_in(e, ENTRY_DTYPE)?,
+        rank: u8_in(e, ENTRY_RANK)?,
         name: name_field.get(..name_len)?,
         shape,
-        offset: u32_at(e, 52)?,
-        length: u32_at(e, 56)?,
-        crc: u32_at(e, 60)?,
+        offset: u32_in(e, ENTRY_OFFSET)?,
+        length: u32_in(e, ENTRY_LENGTH)?,
+        crc: u32_in(e, ENTRY_CRC)?,
     })
 }
 
@@ -362,24 +348,24 @@ impl<'a> SinewFile<'a> {
     /// is finite; the metadata section must be UTF-8 `key=value` lines.
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let header = bytes.get(..HEADER_LEN).ok_or(FormatError::TooShort)?;
-        if header.get(..8) != Some(&MAGIC[..]) {
+        if header.get(HEADER_MAGIC.range()) != Some(&MAGIC[..]) {
             return Err(FormatError::BadMagic);
         }
-        let field16 = |at| u16_at(header, at).ok_or(FormatError::TooShort);
-        let field32 = |at| u32_at(header, at).ok_or(FormatError::TooShort);
-        let major = field16(8)?;
-        let minor = field16(10)?;
-        let flags = field32(12)?;
-        let kind = ArtifactKind::from_code(field16(16)?);
+        let field16 = |f| u16_in(header, f).ok_or(FormatError::TooShort);
+        let field32 = |f| u32_in(header, f).ok_or(FormatError::TooShort);
+        let major = field16(HEADER_MAJOR)?;
+        let minor = field16(HEADER_MINOR)?;
+        let flags = field32(HEADER_FLAGS)?;
+        let kind = ArtifactKind::from_code(field16(HEADER_KIND)?);
         if major > VERSION_MAJOR || major == 0 {
             return Err(FormatError::UnsupportedMajor { found: major });
         }
-        if field16(18)? != 0 {
+        if field16(HEADER_RESERVED)? != 0 {
             return Err(FormatError::NonZeroReserved);
         }
-        let count = field32(20)? as usize;
-        let file_len = field32(24)?;
-        let header_crc = field32(HEADER_CRC_OFFSET)?;
+        let count = field32(HEADER_SECTION_COUNT)? as usize;
+        let file_len = field32(HEADER_FILE_LEN)?;
+        let header_crc = field32(HEADER_CRC)?;
         if file_len as usize != bytes.len() {
             return Err(FormatError::LengthMismatch {
                 header: file_len,
@@ -407,7 +393,7 @@ impl<'a> SinewFile<'a> {
             let section = u16::try_from(i).map_err(|_| FormatError::TooManySections)?;
             let e = read_entry(table, i).ok_or(FormatError::TruncatedSection { section })?;
             let field = table
-                .get(i * SECTION_ENTRY_LEN + 4..i * SECTION_ENTRY_LEN + 4 + NAME_LEN)
+                .get(ENTRY_NAME.at(i * SECTION_ENTRY_LEN))
                 .unwrap_or(&[]);
             if !valid_name(NAME_LEN, e.name, field.get(e.name.len()..).unwrap_or(&[])) {
                 return Err(FormatError::BadName { section });

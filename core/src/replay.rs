@@ -14,7 +14,9 @@
 //! Their mode is always `f32`.
 //!
 //! [`frame_hash`] (AIM) and [`s2d_frame_hash`] (S2D) are the one definition of a frame's hash;
-//! recording (host) and verification (every target) both call them.
+//! recording (host) and verification (every target) both call them. [`check_frame`] and
+//! [`check_s2d_frame`] play one frame of a replay and compare it with the recording: [`verify`]
+//! and [`verify_s2d`] loop over them, and so do the firmware targets, one frame at a time.
 
 use core::fmt;
 
@@ -28,6 +30,15 @@ use crate::tensor::{F32s, U32s};
 
 /// Values per AIM frame before the coefficients: head 9, jaw 9.
 pub const AIM_POSE_LEN: usize = 18;
+
+/// The section of every replay's model content hash ([`model_hash`]), `u32` `[2]` as
+/// [`hash_words`] stores it.
+pub const MODEL_HASH: &str = "replay.model";
+/// The section of every replay's recorded frame hashes, `u32` `[F, 2]`, each as [`hash_words`]
+/// stores it.
+pub const FRAME_HASHES: &str = "replay.hash";
+/// The section of an AIM replay's per-frame inputs, `f32` `[F, AIM_POSE_LEN + M]`.
+pub const AIM_INPUTS: &str = "replay.aim";
 
 /// The numeric mode a replay was recorded in; each has its own goldens.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,7 +78,12 @@ impl fmt::Display for Mode {
     }
 }
 
-/// The `i`-th 64-bit value of a section stored as (low, high) 32-bit word pairs.
+/// A 64-bit hash as a replay stores it: two `u32` words, the low one first.
+pub const fn hash_words(hash: u64) -> [u32; 2] {
+    [hash as u32, (hash >> 32) as u32]
+}
+
+/// The `i`-th 64-bit value of a section stored as (low, high) 32-bit word pairs ([`hash_words`]).
 fn word_pair(words: &U32s<'_>, i: usize) -> Option<u64> {
     let lo = words.get(2 * i)?;
     let hi = words.get(2 * i + 1)?;
@@ -98,13 +114,13 @@ impl<'a> AimReplay<'a> {
     /// no frames, or more coefficients than [`MAX_SHAPES`].
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::Replay)?;
-        let model = file.u32_tensor("replay.model", &[2])?;
+        let model = file.u32_tensor(MODEL_HASH, &[2])?;
         let mode = file
             .metadata()
             .get("mode")
             .and_then(Mode::from_name)
             .ok_or(FormatError::UnknownCode)?;
-        let (shape, rank) = file.dims_of("replay.aim")?;
+        let (shape, rank) = file.dims_of(AIM_INPUTS)?;
         let [frames, width, ..] = shape;
         if rank != 2 || frames == 0 || (width as usize) < AIM_POSE_LEN {
             return Err(FormatError::IncompatibleShapes);
@@ -118,8 +134,8 @@ impl<'a> AimReplay<'a> {
             mode,
             frames: frames as usize,
             shapes,
-            inputs: file.f32_tensor("replay.aim", &[frames, width])?,
-            hashes: file.u32_tensor("replay.hash", &[frames, 2])?,
+            inputs: file.f32_tensor(AIM_INPUTS, &[frames, width])?,
+            hashes: file.u32_tensor(FRAME_HASHES, &[frames, 2])?,
         })
     }
 
@@ -382,8 +398,33 @@ impl fmt::Display for FrameCheck {
     }
 }
 
-/// Plays `replay` through `actor` frame by frame, calling `on_frame` after each; returns the
-/// first frame whose hash differs, or `None` when every frame matched.
+/// Plays frame `f` of `replay` through `actor` ([`frame_hash`] in the replay's mode) and compares
+/// its hash with the recorded one: the step of [`verify`] and of every target's replay loop.
+/// `buf.weights` receives the frame's coefficients. Call [`check_model`] once before the first
+/// frame.
+///
+/// # Errors
+/// [`ReplayError::Buffer`] if `f` is past the end or a buffer has the wrong length;
+/// [`ReplayError::NoQ16Cache`] as [`pose_frame`].
+pub fn check_frame(
+    actor: &AimActor<'_>,
+    replay: &AimReplay<'_>,
+    f: usize,
+    buf: &mut FrameBuffers<'_>,
+) -> Result<FrameCheck, ReplayError> {
+    let (head, jaw) = replay
+        .frame(f, buf.weights)
+        .ok_or(ReplayError::Buffer(BufferError::Input))?;
+    let hash = frame_hash(actor, replay.mode(), &head, &jaw, buf)?;
+    Ok(FrameCheck {
+        frame: f,
+        hash,
+        expected: replay.expected(f).unwrap_or(!hash),
+    })
+}
+
+/// Plays `replay` through `actor` frame by frame ([`check_frame`]), calling `on_frame` after
+/// each; returns the first frame whose hash differs, or `None` when every frame matched.
 ///
 /// `model_bytes` must be the bytes `actor` was loaded from: the replay names their content hash.
 ///
@@ -400,15 +441,7 @@ pub fn verify(
     check_model(model_bytes, actor, replay)?;
     let mut first_bad = None;
     for f in 0..replay.frames() {
-        let (head, jaw) = replay
-            .frame(f, buf.weights)
-            .ok_or(ReplayError::Buffer(BufferError::Input))?;
-        let hash = frame_hash(actor, replay.mode(), &head, &jaw, buf)?;
-        let check = FrameCheck {
-            frame: f,
-            hash,
-            expected: replay.expected(f).unwrap_or(!hash),
-        };
+        let check = check_frame(actor, replay, f, buf)?;
         if !check.ok() && first_bad.is_none() {
             first_bad = Some(f);
         }
@@ -441,7 +474,7 @@ impl<'a> S2dReplay<'a> {
     /// `f32`, no frames, or a neutral that is not `[V, 3]`.
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::Replay)?;
-        let model = file.u32_tensor("replay.model", &[2])?;
+        let model = file.u32_tensor(MODEL_HASH, &[2])?;
         if file.metadata().get("mode").and_then(Mode::from_name) != Some(Mode::F32) {
             return Err(FormatError::UnknownCode);
         }
@@ -466,7 +499,7 @@ impl<'a> S2dReplay<'a> {
             inputs: width as usize,
             data: file.f32_tensor(S2D_INPUTS, &[frames, width])?,
             neutral,
-            hashes: file.u32_tensor("replay.hash", &[frames, 2])?,
+            hashes: file.u32_tensor(FRAME_HASHES, &[frames, 2])?,
         })
     }
 
@@ -507,6 +540,25 @@ impl<'a> S2dReplay<'a> {
     pub fn expected(&self, f: usize) -> Option<u64> {
         word_pair(&self.hashes, f)
     }
+
+    /// Copies the replay's neutral into `out` (`[V, 3]`, [`S2dBuffers::neutral`]) once, before
+    /// the first frame. Without a neutral, `out` must be empty: the frames then decode onto the
+    /// decoder's template.
+    ///
+    /// # Errors
+    /// [`BufferError::Input`] if `out` has another length.
+    pub fn copy_neutral(&self, out: &mut [f32]) -> Result<(), BufferError> {
+        match self.neutral {
+            Some(n) if n.len() == out.len() => {
+                for (d, s) in out.iter_mut().zip(n.iter()) {
+                    *d = s;
+                }
+                Ok(())
+            }
+            None if out.is_empty() => Ok(()),
+            _ => Err(BufferError::Input),
+        }
+    }
 }
 
 /// Caller-owned buffers for one S2D frame of a decoder with `I` inputs and `V` vertices.
@@ -523,8 +575,21 @@ pub struct S2dBuffers<'b> {
 }
 
 /// Decodes one frame (`buf.input`) onto `buf.neutral`, or onto the decoder's template when
-/// `buf.neutral` is empty, into `buf.vertices`, and returns the frame's hash: the decoded
-/// vertices' bits ([`FrameHasher::write_f32s`]).
+/// `buf.neutral` is empty, into `buf.vertices`: S2D's counterpart of [`pose_frame`].
+///
+/// # Errors
+/// [`ReplayError::Buffer`] if a buffer has the wrong length.
+pub fn decode_frame(decoder: &S2dDecoder<'_>, buf: &mut S2dBuffers<'_>) -> Result<(), ReplayError> {
+    if buf.neutral.is_empty() {
+        decoder.decode(buf.input, buf.scratch, buf.vertices)?;
+    } else {
+        decoder.decode_onto(buf.neutral, buf.input, buf.scratch, buf.vertices)?;
+    }
+    Ok(())
+}
+
+/// Decodes one frame ([`decode_frame`]) and returns the frame's hash: the decoded vertices' bits
+/// ([`FrameHasher::write_f32s`]).
 ///
 /// # Errors
 /// [`ReplayError::Buffer`] if a buffer has the wrong length.
@@ -532,11 +597,7 @@ pub fn s2d_frame_hash(
     decoder: &S2dDecoder<'_>,
     buf: &mut S2dBuffers<'_>,
 ) -> Result<u64, ReplayError> {
-    if buf.neutral.is_empty() {
-        decoder.decode(buf.input, buf.scratch, buf.vertices)?;
-    } else {
-        decoder.decode_onto(buf.neutral, buf.input, buf.scratch, buf.vertices)?;
-    }
+    decode_frame(decoder, buf)?;
     let mut h = FrameHasher::new();
     h.write_f32s(buf.vertices);
     Ok(h.finish())
@@ -571,9 +632,34 @@ pub fn check_s2d_model(
     Ok(())
 }
 
-/// Plays `replay` through `decoder` frame by frame, calling `on_frame` after each; returns the
-/// first frame whose hash differs, or `None` when every frame matched. `buf.neutral` must be
-/// `[V, 3]` when the replay carries a neutral (it is copied in here) and empty otherwise.
+/// Plays frame `f` of `replay` through `decoder` ([`s2d_frame_hash`]) and compares its hash with
+/// the recorded one: the step of [`verify_s2d`] and of every target's replay loop. `buf.input`
+/// receives the frame's input; `buf.neutral` must already hold the replay's neutral
+/// ([`S2dReplay::copy_neutral`]). Call [`check_s2d_model`] once before the first frame.
+///
+/// # Errors
+/// [`ReplayError::Buffer`] if `f` is past the end or a buffer has the wrong length.
+pub fn check_s2d_frame(
+    decoder: &S2dDecoder<'_>,
+    replay: &S2dReplay<'_>,
+    f: usize,
+    buf: &mut S2dBuffers<'_>,
+) -> Result<FrameCheck, ReplayError> {
+    replay
+        .frame(f, buf.input)
+        .ok_or(ReplayError::Buffer(BufferError::Input))?;
+    let hash = s2d_frame_hash(decoder, buf)?;
+    Ok(FrameCheck {
+        frame: f,
+        hash,
+        expected: replay.expected(f).unwrap_or(!hash),
+    })
+}
+
+/// Plays `replay` through `decoder` frame by frame ([`check_s2d_frame`]), calling `on_frame`
+/// after each; returns the first frame whose hash differs, or `None` when every frame matched.
+/// `buf.neutral` must be `[V, 3]` when the replay carries a neutral (it is copied in here) and
+/// empty otherwise.
 ///
 /// # Errors
 /// [`ReplayError`] if the replay belongs to another decoder, does not fit it, or a buffer has
@@ -586,30 +672,112 @@ pub fn verify_s2d(
     mut on_frame: impl FnMut(&FrameCheck),
 ) -> Result<Option<usize>, ReplayError> {
     check_s2d_model(model_bytes, decoder, replay)?;
-    match replay.neutral() {
-        Some(n) if n.len() == buf.neutral.len() => {
-            for (d, s) in buf.neutral.iter_mut().zip(n.iter()) {
-                *d = s;
-            }
-        }
-        None if buf.neutral.is_empty() => {}
-        _ => return Err(ReplayError::Buffer(BufferError::Input)),
-    }
+    replay.copy_neutral(buf.neutral)?;
     let mut first_bad = None;
     for f in 0..replay.frames() {
-        replay
-            .frame(f, buf.input)
-            .ok_or(ReplayError::Buffer(BufferError::Input))?;
-        let hash = s2d_frame_hash(decoder, buf)?;
-        let check = FrameCheck {
-            frame: f,
-            hash,
-            expected: replay.expected(f).unwrap_or(!hash),
-        };
+        let check = check_s2d_frame(decoder, replay, f, buf)?;
         if !check.ok() && first_bad.is_none() {
             first_bad = Some(f);
         }
         on_frame(&check);
     }
     Ok(first_bad)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::vec;
+    use std::vec::Vec;
+
+    const ACTOR: &[u8] = include_bytes!("../../tests/data/aim-procedural.sinew");
+    const ACTOR_REPLAYS: [&[u8]; 3] = [
+        include_bytes!("../../tests/data/aim-procedural.f32.replay.sinew"),
+        include_bytes!("../../tests/data/aim-procedural.q16.replay.sinew"),
+        include_bytes!("../../tests/data/aim-procedural.fast.replay.sinew"),
+    ];
+    const DECODER: &[u8] = include_bytes!("../../tests/data/s2d-ict.sinew");
+    const DECODER_REPLAY: &[u8] = include_bytes!("../../tests/data/s2d-ict.replay.sinew");
+
+    #[test]
+    fn hash_words_are_low_word_first_and_read_back() {
+        let h = 0x0123_4567_89AB_CDEF_u64;
+        assert_eq!(hash_words(h), [0x89AB_CDEF, 0x0123_4567]);
+        let bytes: Vec<u8> = hash_words(h).iter().flat_map(|w| w.to_le_bytes()).collect();
+        assert_eq!(word_pair(&U32s::new(&bytes).unwrap(), 0), Some(h));
+        let replay = AimReplay::from_bytes(ACTOR_REPLAYS[0]).unwrap();
+        assert_eq!(replay.model_hash(), model_hash(ACTOR));
+    }
+
+    #[test]
+    fn golden_aim_replays_verify_frame_by_frame() {
+        let actor = AimActor::from_bytes(ACTOR).unwrap();
+        let (n, m) = (3 * actor.vertex_count(), actor.shape_count());
+        for bytes in ACTOR_REPLAYS {
+            let replay = AimReplay::from_bytes(bytes).unwrap();
+            let (mut p, mut nrm, mut w) = (vec![0.0; n], vec![0.0; n], vec![0.0; m]);
+            let (mut pq, mut wq) = (vec![Q16::ZERO; n], vec![Q16::ZERO; m]);
+            let mut buf = FrameBuffers {
+                positions: &mut p,
+                normals: &mut nrm,
+                positions_q16: &mut pq,
+                weights: &mut w,
+                weights_q16: &mut wq,
+            };
+            let mut checks = Vec::new();
+            let first_bad = verify(ACTOR, &actor, &replay, &mut buf, |c| checks.push(*c));
+            assert_eq!(first_bad, Ok(None), "{}", replay.mode());
+            assert_eq!(checks.len(), replay.frames());
+            assert!(
+                checks
+                    .iter()
+                    .enumerate()
+                    .all(|(f, c)| c.frame == f && c.ok())
+            );
+            let last = check_frame(&actor, &replay, replay.frames() - 1, &mut buf).unwrap();
+            assert_eq!(last, checks[replay.frames() - 1]);
+            assert_eq!(
+                check_frame(&actor, &replay, replay.frames(), &mut buf),
+                Err(ReplayError::Buffer(BufferError::Input))
+            );
+        }
+    }
+
+    #[test]
+    fn golden_s2d_replay_verifies_frame_by_frame() {
+        let decoder = S2dDecoder::from_bytes(DECODER).unwrap();
+        let replay = S2dReplay::from_bytes(DECODER_REPLAY).unwrap();
+        let v = 3 * decoder.vertex_count();
+        let mut input = vec![0.0; decoder.input_len()];
+        let mut neutral = vec![0.0; v];
+        let mut scratch = vec![0.0; decoder.scratch_len()];
+        let mut vertices = vec![0.0; v];
+        let mut buf = S2dBuffers {
+            input: &mut input,
+            neutral: &mut neutral,
+            scratch: &mut scratch,
+            vertices: &mut vertices,
+        };
+        let mut checks = Vec::new();
+        let first_bad = verify_s2d(DECODER, &decoder, &replay, &mut buf, |c| checks.push(*c));
+        assert_eq!(first_bad, Ok(None));
+        assert_eq!(checks.len(), replay.frames());
+        assert!(checks.iter().all(FrameCheck::ok));
+        assert_eq!(
+            check_s2d_frame(&decoder, &replay, replay.frames(), &mut buf),
+            Err(ReplayError::Buffer(BufferError::Input))
+        );
+        // The neutral goes in whole or not at all.
+        assert_eq!(
+            replay.copy_neutral(&mut vec![0.0; v - 3]),
+            Err(BufferError::Input)
+        );
+        assert_eq!(replay.copy_neutral(&mut []), Err(BufferError::Input));
+        // Without the neutral, frame 0 decodes onto the template, which is another face.
+        let mut empty = [];
+        buf.neutral = &mut empty;
+        let onto_template = check_s2d_frame(&decoder, &replay, 0, &mut buf).unwrap();
+        assert_eq!(onto_template.expected, checks[0].expected);
+        assert!(!onto_template.ok());
+    }
 }

@@ -14,17 +14,17 @@
 //!
 //! | name | dtype | shape | meaning |
 //! |---|---|---|---|
-//! | `s2d.levels` | u32 | [L + 1, 2] | per level, finest first: vertices n_k (without the dummy), spiral length len_k |
-//! | `s2d.h0.pos` | f32 | [n_0, 3] | the template's neutral positions |
-//! | `s2d.h<k>.spiral` | u32 | [n_k + 1, len_k] | spirals of level k (indices ≤ n_k) |
-//! | `s2d.u<k>.ptr`, `.col`, `.val` | u32, u32, f32 | [n_k + 2], [nnz], [nnz] | U_k: level k+1 → k, CSR `(n_k + 1) × (n_{k+1} + 1)` |
-//! | `s2d.cfg` | u32 | [3] | inputs, F (features after the FC), outputs (3) |
-//! | `s2d.input` | u32 | [1] | input normalisation code ([`INPUT_FROBENIUS`] or [`INPUT_NEUTRAL_SCALE`]) |
-//! | `s2d.lmk` | u32 | [inputs / 3] | landmark vertex of each input landmark (< n_0) |
-//! | `s2d.fc.w`, `s2d.fc.b` | f32 | [(n_L + 1) · F, inputs], [(n_L + 1) · F] | the FC layer |
-//! | `s2d.conv.<k>.w`, `.b` | f32 | [out, len_k · in], [out] | the stage convolution at level k < L |
-//! | `s2d.act`, `s2d.par` | u32, f32 | [1], [1] | optional: the stages' activation code and parameter ([`Activation::from_code`]); absent: ELU, α = 1 |
-//! | `s2d.out.w`, `s2d.out.b` | f32 | [outputs, len_0 · in], [outputs] | the output convolution (identity) |
+//! | `s2d.levels` | u32 | `[L + 1, 2]` | per level, finest first: vertices n_k (without the dummy), spiral length len_k |
+//! | `s2d.h0.pos` | f32 | `[n_0, 3]` | the template's neutral positions |
+//! | `s2d.h<k>.spiral` | u32 | `[n_k + 1, len_k]` | spirals of level k (indices ≤ n_k) |
+//! | `s2d.u<k>.ptr`, `.col`, `.val` | u32, u32, f32 | `[n_k + 2]`, `[nnz]`, `[nnz]` | U_k: level k+1 → k, CSR `(n_k + 1) × (n_{k+1} + 1)` |
+//! | `s2d.cfg` | u32 | `[3]` | inputs, F (features after the FC), outputs (3) |
+//! | `s2d.input` | u32 | `[1]` | input normalisation code ([`INPUT_FROBENIUS`] or [`INPUT_NEUTRAL_SCALE`]) |
+//! | `s2d.lmk` | u32 | `[inputs / 3]` | landmark vertex of each input landmark (< n_0) |
+//! | `s2d.fc.w`, `s2d.fc.b` | f32 | `[(n_L + 1) · F, inputs]`, `[(n_L + 1) · F]` | the FC layer |
+//! | `s2d.conv.<k>.w`, `.b` | f32 | `[out, len_k · in]`, `[out]` | the stage convolution at level k < L |
+//! | `s2d.act`, `s2d.par` | u32, f32 | `[1]`, `[1]` | optional: the stages' activation code and parameter ([`Activation::from_code`]); absent: ELU, α = 1 |
+//! | `s2d.out.w`, `s2d.out.b` | f32 | `[outputs, len_0 · in]`, `[outputs]` | the output convolution (identity) |
 
 use core::fmt::Write;
 

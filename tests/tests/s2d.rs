@@ -439,7 +439,7 @@ fn missing_sections_and_wrong_kind() {
 /// Overwrites value `i` of the f32 section `name` and recomputes the section and header CRCs,
 /// as a writer that did not check finiteness would have.
 fn patch_f32(bytes: &mut [u8], name: &str, i: usize, x: f32) {
-    use sinew_core::format::{CRC32, HEADER_LEN, SECTION_ENTRY_LEN};
+    use sinew_core::format::{CRC32, ENTRY_CRC, HEADER_LEN, SECTION_ENTRY_LEN};
     let (index, offset, len, count) = {
         let file = sinew_core::SinewFile::from_bytes(bytes).unwrap();
         let index = file.sections().position(|s| s.name() == name).unwrap();
@@ -450,20 +450,19 @@ fn patch_f32(bytes: &mut [u8], name: &str, i: usize, x: f32) {
     bytes[offset + 4 * i..offset + 4 * i + 4].copy_from_slice(&x.to_le_bytes());
     let crc = CRC32.checksum(&bytes[offset..offset + len]);
     let entry = HEADER_LEN + index * SECTION_ENTRY_LEN;
-    bytes[entry + SECTION_ENTRY_LEN - 4..entry + SECTION_ENTRY_LEN]
-        .copy_from_slice(&crc.to_le_bytes());
+    bytes[ENTRY_CRC.at(entry)].copy_from_slice(&crc.to_le_bytes());
     fix_header_crc(bytes, count);
 }
 
 /// Recomputes the header CRC (over header bytes 0..28 and the section table).
 fn fix_header_crc(bytes: &mut [u8], sections: usize) {
-    use sinew_core::format::{CRC32, HEADER_CRC_OFFSET, HEADER_LEN, SECTION_ENTRY_LEN};
+    use sinew_core::format::{CRC32, HEADER_CRC, HEADER_LEN, SECTION_ENTRY_LEN};
     let table_end = HEADER_LEN + sections * SECTION_ENTRY_LEN;
     let mut digest = CRC32.digest();
-    digest.update(&bytes[..HEADER_CRC_OFFSET]);
+    digest.update(&bytes[..HEADER_CRC.offset]);
     digest.update(&bytes[HEADER_LEN..table_end]);
     let crc = digest.finalize();
-    bytes[HEADER_CRC_OFFSET..HEADER_CRC_OFFSET + 4].copy_from_slice(&crc.to_le_bytes());
+    bytes[HEADER_CRC.range()].copy_from_slice(&crc.to_le_bytes());
 }
 
 /// A plain S2D decode read straight from the artefact's sections, in the documented order (the

@@ -1,12 +1,13 @@
 //! The golden replays every firmware simulator runs: each is a baked actor and a replay recorded
 //! on the x86_64 host (`tests/data/*.replay.sinew`: the model's content hash, the pose of every
 //! frame and the hash the host computed for it, in one numeric mode). A target plays each frame
-//! through `sinew-core` ([`sinew_core::replay::frame_hash`], the function the host recorded with)
-//! and compares hashes.
+//! through `sinew-core` ([`sinew_core::replay::check_frame`], the step of the host's
+//! verification, which hashes with [`sinew_core::replay::frame_hash`], the function the host
+//! recorded with) and compares hashes.
 //!
 //! The S2D golden ([`S2D_GOLDENS`], [`S2dRun`], [`replay_s2d`]) is a baked S2D decoder and its
 //! replay (each frame's decoder input, the neutral it decodes onto, the host's hash of the decoded
-//! vertices), played with [`sinew_core::replay::s2d_frame_hash`].
+//! vertices), played with [`sinew_core::replay::check_s2d_frame`].
 //!
 //! Nothing here allocates: the frame buffers live in a caller-owned [`Scratch`] (a `static` on
 //! the microcontrollers), sized for up to [`MAX_VERTICES`] vertices. An S2D replay reuses the
@@ -43,8 +44,8 @@ use sinew_core::aim::{AimActor, MAX_SHAPES};
 use sinew_core::q16::Q16;
 pub use sinew_core::replay::FrameCheck;
 use sinew_core::replay::{
-    AimReplay, FrameBuffers, ReplayError, S2dBuffers, S2dReplay, check_model, check_s2d_model,
-    frame_hash, s2d_frame_hash,
+    AimReplay, FrameBuffers, ReplayError, S2dBuffers, S2dReplay, check_frame, check_model,
+    check_s2d_frame, check_s2d_model, decode_frame,
 };
 use sinew_core::s2d::S2dDecoder;
 
@@ -263,7 +264,7 @@ impl<'s> Replay<'s> {
         &self.replay
     }
 
-    /// Plays frame `f`.
+    /// Plays frame `f` with the core's [`check_frame`], the step of the host's verification.
     fn play(&mut self, f: usize) -> Result<FrameCheck, Error> {
         let n = 3 * self.actor.vertex_count();
         let m = self.actor.shape_count();
@@ -273,16 +274,7 @@ impl<'s> Replay<'s> {
                 vertices: self.actor.vertex_count(),
             });
         };
-        let Some((head, jaw)) = self.replay.frame(f, buf.weights) else {
-            return Err(Error::Replay(FormatError::IncompatibleShapes));
-        };
-        let hash = frame_hash(&self.actor, self.replay.mode(), &head, &jaw, &mut buf)
-            .map_err(Error::Playback)?;
-        Ok(FrameCheck {
-            frame: f,
-            hash,
-            expected: self.replay.expected(f).unwrap_or(!hash),
-        })
+        check_frame(&self.actor, &self.replay, f, &mut buf).map_err(Error::Playback)
     }
 }
 
@@ -350,11 +342,9 @@ impl<'s> S2dRun<'s> {
         let Some(buf) = run.buffers() else {
             return Err(Error::S2dTooLarge { values });
         };
-        if let Some(n) = replay.neutral() {
-            for (d, s) in buf.neutral.iter_mut().zip(n.iter()) {
-                *d = s;
-            }
-        }
+        replay
+            .copy_neutral(buf.neutral)
+            .map_err(|e| Error::Playback(ReplayError::Buffer(e)))?;
         Ok(run)
     }
 
@@ -400,22 +390,15 @@ impl<'s> S2dRun<'s> {
         })
     }
 
-    /// Plays frame `f`.
+    /// Plays frame `f` with the core's [`check_s2d_frame`], the step of the host's
+    /// verification.
     fn play(&mut self, f: usize) -> Result<FrameCheck, Error> {
         let (replay, decoder) = (self.replay, self.decoder.clone());
         let values = self.needed();
         let Some(mut buf) = self.buffers() else {
             return Err(Error::S2dTooLarge { values });
         };
-        if replay.frame(f, buf.input).is_none() {
-            return Err(Error::Replay(FormatError::IncompatibleShapes));
-        }
-        let hash = s2d_frame_hash(&decoder, &mut buf).map_err(Error::Playback)?;
-        Ok(FrameCheck {
-            frame: f,
-            hash,
-            expected: replay.expected(f).unwrap_or(!hash),
-        })
+        check_s2d_frame(&decoder, &replay, f, &mut buf).map_err(Error::Playback)
     }
 }
 
@@ -459,6 +442,10 @@ impl fmt::Display for S2dCosts {
 }
 
 /// Measures decoding and hashing of frame `frame` of the S2D `golden` separately with `now`.
+///
+/// Decoding is the core's [`decode_frame`], the first half of
+/// [`sinew_core::replay::s2d_frame_hash`]; the hashing half is repeated here only so that the
+/// counter can be read between the two.
 pub fn s2d_costs(
     golden: &Golden,
     frame: usize,
@@ -469,24 +456,15 @@ pub fn s2d_costs(
     let mut run = S2dRun::new(golden, scratch)?;
     let (replay, decoder) = (run.replay, run.decoder.clone());
     let values = run.needed();
-    let Some(buf) = run.buffers() else {
+    let Some(mut buf) = run.buffers() else {
         return Err(Error::S2dTooLarge { values });
     };
     if replay.frame(frame, buf.input).is_none() {
         return Err(Error::Replay(FormatError::IncompatibleShapes));
     }
-    let buffer = |e| Error::Playback(ReplayError::Buffer(e));
     let mut costs = S2dCosts::default();
     let t = now();
-    if buf.neutral.is_empty() {
-        decoder
-            .decode(buf.input, buf.scratch, buf.vertices)
-            .map_err(buffer)?;
-    } else {
-        decoder
-            .decode_onto(buf.neutral, buf.input, buf.scratch, buf.vertices)
-            .map_err(buffer)?;
-    }
+    decode_frame(&decoder, &mut buf).map_err(Error::Playback)?;
     costs.decode = now() - t;
     let t = now();
     let mut h = FrameHasher::new();
@@ -524,6 +502,11 @@ impl fmt::Display for PhaseCosts {
 
 /// Measures each phase of frame `frame` of `golden` separately with `now` (a monotonic counter:
 /// retired instructions on RISC-V, SysTick on the Cortex-M).
+///
+/// This repeats the steps of [`sinew_core::replay::pose_frame`] and
+/// [`sinew_core::replay::frame_hash`] (posing in each mode, each mode's normals, hashing) only so
+/// that the counter can be read between them, in every mode on the same frame; the replays
+/// themselves ([`Replay`], [`S2dRun`]) play through the core's functions.
 pub fn phase_costs(
     golden: &Golden,
     frame: usize,
@@ -730,20 +713,22 @@ mod tests {
         assert!(wrong[0].to_string().contains("DIFFERS"));
     }
 
-    /// Recomputes the CRC of section `name` (the last field of its 64-byte table entry) and the
-    /// header CRC (over the header before its CRC field, then the table).
+    /// Recomputes the CRC of section `name` (the last field of its table entry) and the header
+    /// CRC (over the header before its CRC field, then the table).
     fn refresh_crcs(mut bytes: Vec<u8>, file: &sinew_core::SinewFile<'_>, name: &str) -> Vec<u8> {
-        use sinew_core::format::{CRC32, HEADER_CRC_OFFSET, HEADER_LEN, SECTION_ENTRY_LEN};
+        use sinew_core::format::{
+            CRC32, ENTRY_CRC, HEADER_CRC, HEADER_CRC_OFFSET, HEADER_LEN, SECTION_ENTRY_LEN,
+        };
         let s = file.section(name).unwrap();
         let entry = HEADER_LEN + usize::from(s.index) * SECTION_ENTRY_LEN;
         let start = s.data().as_ptr() as usize - file.bytes().as_ptr() as usize;
         let crc = CRC32.checksum(&bytes[start..start + s.data().len()]);
-        bytes[entry + 60..entry + 64].copy_from_slice(&crc.to_le_bytes());
+        bytes[ENTRY_CRC.at(entry)].copy_from_slice(&crc.to_le_bytes());
         let table_end = HEADER_LEN + file.section_count() * SECTION_ENTRY_LEN;
         let mut h = CRC32.digest();
         h.update(&bytes[..HEADER_CRC_OFFSET]);
         h.update(&bytes[HEADER_LEN..table_end]);
-        bytes[HEADER_CRC_OFFSET..HEADER_LEN].copy_from_slice(&h.finalize().to_le_bytes());
+        bytes[HEADER_CRC.range()].copy_from_slice(&h.finalize().to_le_bytes());
         bytes
     }
 

@@ -5,9 +5,11 @@ use std::path::Path;
 
 use anyhow::{Result, bail};
 use sinew_core::format::{
-    ArtifactKind, CRC32, Dtype, HEADER_CRC_OFFSET, HEADER_LEN, MAGIC, MAX_RANK, MAX_SECTIONS,
+    ArtifactKind, CRC32, Dtype, ENTRY_CRC, ENTRY_DTYPE, ENTRY_KIND, ENTRY_LENGTH, ENTRY_NAME,
+    ENTRY_OFFSET, ENTRY_RANK, HEADER_CRC, HEADER_FILE_LEN, HEADER_FLAGS, HEADER_KIND, HEADER_LEN,
+    HEADER_MAGIC, HEADER_MAJOR, HEADER_MINOR, HEADER_SECTION_COUNT, MAGIC, MAX_RANK, MAX_SECTIONS,
     NAME_LEN, SECTION_ALIGN, SECTION_ENTRY_LEN, SectionKind, VERSION_MAJOR, VERSION_MINOR,
-    data_start,
+    data_start, entry_dim,
 };
 
 /// One section waiting to be written.
@@ -216,33 +218,33 @@ impl SinewWriter {
             .map_err(|_| anyhow::anyhow!("artefact of {file_len} bytes exceeds 4 GiB"))?;
 
         let mut out = vec![0u8; file_len];
-        out[..8].copy_from_slice(&MAGIC);
-        out[8..10].copy_from_slice(&VERSION_MAJOR.to_le_bytes());
-        out[10..12].copy_from_slice(&VERSION_MINOR.to_le_bytes());
-        out[12..16].copy_from_slice(&self.flags.to_le_bytes());
-        out[16..18].copy_from_slice(&self.kind.code().to_le_bytes());
-        out[20..24].copy_from_slice(&(sections.len() as u32).to_le_bytes());
-        out[24..28].copy_from_slice(&file_len_u32.to_le_bytes());
+        out[HEADER_MAGIC.range()].copy_from_slice(&MAGIC);
+        out[HEADER_MAJOR.range()].copy_from_slice(&VERSION_MAJOR.to_le_bytes());
+        out[HEADER_MINOR.range()].copy_from_slice(&VERSION_MINOR.to_le_bytes());
+        out[HEADER_FLAGS.range()].copy_from_slice(&self.flags.to_le_bytes());
+        out[HEADER_KIND.range()].copy_from_slice(&self.kind.code().to_le_bytes());
+        out[HEADER_SECTION_COUNT.range()].copy_from_slice(&(sections.len() as u32).to_le_bytes());
+        out[HEADER_FILE_LEN.range()].copy_from_slice(&file_len_u32.to_le_bytes());
         for (i, (s, &offset)) in sections.iter().zip(&offsets).enumerate() {
             let e = &mut out[HEADER_LEN + i * SECTION_ENTRY_LEN..][..SECTION_ENTRY_LEN];
-            e[0..2].copy_from_slice(&s.kind.code().to_le_bytes());
-            e[2] = s.dtype.code();
-            e[3] = s.dims.len() as u8;
-            e[4..4 + s.name.len()].copy_from_slice(s.name.as_bytes());
+            e[ENTRY_KIND.range()].copy_from_slice(&s.kind.code().to_le_bytes());
+            e[ENTRY_DTYPE.range()].copy_from_slice(&[s.dtype.code()]);
+            e[ENTRY_RANK.range()].copy_from_slice(&[s.dims.len() as u8]);
+            e[ENTRY_NAME.range()][..s.name.len()].copy_from_slice(s.name.as_bytes());
             for (d, &dim) in s.dims.iter().enumerate() {
-                e[36 + 4 * d..40 + 4 * d].copy_from_slice(&dim.to_le_bytes());
+                e[entry_dim(d).range()].copy_from_slice(&dim.to_le_bytes());
             }
-            e[52..56].copy_from_slice(&(offset as u32).to_le_bytes());
-            e[56..60].copy_from_slice(&(s.data.len() as u32).to_le_bytes());
-            e[60..64].copy_from_slice(&CRC32.checksum(&s.data).to_le_bytes());
+            e[ENTRY_OFFSET.range()].copy_from_slice(&(offset as u32).to_le_bytes());
+            e[ENTRY_LENGTH.range()].copy_from_slice(&(s.data.len() as u32).to_le_bytes());
+            e[ENTRY_CRC.range()].copy_from_slice(&CRC32.checksum(&s.data).to_le_bytes());
             out[offset..offset + s.data.len()].copy_from_slice(&s.data);
         }
         let table_end = HEADER_LEN + sections.len() * SECTION_ENTRY_LEN;
         let mut digest = CRC32.digest();
-        digest.update(&out[..HEADER_CRC_OFFSET]);
+        digest.update(&out[..HEADER_CRC.offset]);
         digest.update(&out[HEADER_LEN..table_end]);
         let crc = digest.finalize();
-        out[HEADER_CRC_OFFSET..HEADER_LEN].copy_from_slice(&crc.to_le_bytes());
+        out[HEADER_CRC.range()].copy_from_slice(&crc.to_le_bytes());
         Ok(out)
     }
 

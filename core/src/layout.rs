@@ -1,0 +1,274 @@
+//! The byte layout of the `.sinew` container: the magic, the versions, the sizes of the header and
+//! of a section-table entry, and every limit `docs/FORMAT.md` names.
+//!
+//! This module depends on nothing else in the crate, so that both the reader ([`crate::format`],
+//! which re-exports everything here) and the errors ([`crate::error`], whose messages quote the
+//! limits) can use it without depending on each other.
+
+/// The eight magic bytes: a non-ASCII first byte, the name, and CR LF / EOF / LF to catch text-mode
+/// transfers, in the manner of PNG.
+pub const MAGIC: [u8; 8] = [0x89, b'S', b'N', b'W', b'\r', b'\n', 0x1A, b'\n'];
+/// Major format version: a reader rejects files with a larger major version.
+pub const VERSION_MAJOR: u16 = 1;
+/// Minor format version: additions that older readers can skip (new section kinds, new flags).
+pub const VERSION_MINOR: u16 = 0;
+/// Length of the fixed header in bytes.
+pub const HEADER_LEN: usize = 32;
+/// Length of one section-table entry in bytes.
+pub const SECTION_ENTRY_LEN: usize = 64;
+/// Bytes reserved for a section name (ASCII, NUL-padded, at least one byte long).
+pub const NAME_LEN: usize = 32;
+/// Largest tensor rank.
+pub const MAX_RANK: usize = 4;
+/// Largest number of sections in one file.
+pub const MAX_SECTIONS: usize = 4096;
+/// Every section's data starts at a multiple of this many bytes from the start of the file.
+pub const SECTION_ALIGN: usize = 16;
+/// Byte offset of the header CRC field; the CRC covers bytes `0..HEADER_CRC_OFFSET` and the table.
+pub const HEADER_CRC_OFFSET: usize = 28;
+
+/// Header flag: the artefact omits what only training or re-baking needs (e.g. an actor's networks).
+pub const FLAG_PLAYBACK_ONLY: u32 = 1;
+
+/// A fixed-size field of the header or of a section-table entry: where it starts and how many
+/// bytes it takes. All numbers in it are little-endian.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Field {
+    /// Byte offset from the start of the header, or of the entry.
+    pub offset: usize,
+    /// Size in bytes.
+    pub len: usize,
+}
+
+impl Field {
+    /// The offset just past the field.
+    pub const fn end(self) -> usize {
+        self.offset + self.len
+    }
+
+    /// The field's bytes within the header or entry.
+    pub const fn range(self) -> core::ops::Range<usize> {
+        self.offset..self.end()
+    }
+
+    /// The field's bytes when the header or entry starts at `base` (e.g. an entry in a table).
+    pub const fn at(self, base: usize) -> core::ops::Range<usize> {
+        base + self.offset..base + self.end()
+    }
+}
+
+/// Header: the eight bytes of [`MAGIC`].
+pub const HEADER_MAGIC: Field = Field { offset: 0, len: 8 };
+/// Header: the major version, `u16` ([`VERSION_MAJOR`]).
+pub const HEADER_MAJOR: Field = Field { offset: 8, len: 2 };
+/// Header: the minor version, `u16` ([`VERSION_MINOR`]).
+pub const HEADER_MINOR: Field = Field { offset: 10, len: 2 };
+/// Header: the flags, `u32` (`FLAG_*`).
+pub const HEADER_FLAGS: Field = Field { offset: 12, len: 4 };
+/// Header: the artefact kind, `u16` (`ArtifactKind::code`).
+pub const HEADER_KIND: Field = Field { offset: 16, len: 2 };
+/// Header: reserved, `u16`, must be zero.
+pub const HEADER_RESERVED: Field = Field { offset: 18, len: 2 };
+/// Header: the number of section-table entries, `u32` (at most [`MAX_SECTIONS`]).
+pub const HEADER_SECTION_COUNT: Field = Field { offset: 20, len: 4 };
+/// Header: the length of the whole file in bytes, `u32`.
+pub const HEADER_FILE_LEN: Field = Field { offset: 24, len: 4 };
+/// Header: the CRC-32 over header bytes `0..HEADER_CRC_OFFSET` and the section table, `u32`.
+pub const HEADER_CRC: Field = Field {
+    offset: HEADER_CRC_OFFSET,
+    len: 4,
+};
+
+/// Section-table entry: the section kind, `u16` (`SectionKind::code`).
+pub const ENTRY_KIND: Field = Field { offset: 0, len: 2 };
+/// Section-table entry: the element type, `u8` (`Dtype::code`).
+pub const ENTRY_DTYPE: Field = Field { offset: 2, len: 1 };
+/// Section-table entry: the rank, `u8` (at most [`MAX_RANK`]).
+pub const ENTRY_RANK: Field = Field { offset: 3, len: 1 };
+/// Section-table entry: the name, [`NAME_LEN`] bytes of ASCII, NUL-padded.
+pub const ENTRY_NAME: Field = Field {
+    offset: 4,
+    len: NAME_LEN,
+};
+/// Section-table entry: the shape, [`MAX_RANK`] `u32` dimensions ([`SHAPE_DIM_LEN`] bytes each),
+/// zero past the rank.
+pub const ENTRY_SHAPE: Field = Field {
+    offset: 36,
+    len: MAX_RANK * SHAPE_DIM_LEN,
+};
+/// Bytes of one dimension in [`ENTRY_SHAPE`] (a `u32`).
+pub const SHAPE_DIM_LEN: usize = 4;
+/// Section-table entry: the data's offset from the start of the file, `u32`.
+pub const ENTRY_OFFSET: Field = Field { offset: 52, len: 4 };
+/// Section-table entry: the data's length in bytes, `u32`.
+pub const ENTRY_LENGTH: Field = Field { offset: 56, len: 4 };
+/// Section-table entry: the CRC-32 of the data, `u32`.
+pub const ENTRY_CRC: Field = Field { offset: 60, len: 4 };
+
+/// Dimension `d` of [`ENTRY_SHAPE`] (`d < MAX_RANK`).
+pub const fn entry_dim(d: usize) -> Field {
+    Field {
+        offset: ENTRY_SHAPE.offset + d * SHAPE_DIM_LEN,
+        len: SHAPE_DIM_LEN,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::format;
+    use std::string::String;
+    use std::vec::Vec;
+
+    /// Every header field, by the name of its constant, in byte order.
+    const HEADER_FIELDS: [(&str, Field); 9] = [
+        ("HEADER_MAGIC", HEADER_MAGIC),
+        ("HEADER_MAJOR", HEADER_MAJOR),
+        ("HEADER_MINOR", HEADER_MINOR),
+        ("HEADER_FLAGS", HEADER_FLAGS),
+        ("HEADER_KIND", HEADER_KIND),
+        ("HEADER_RESERVED", HEADER_RESERVED),
+        ("HEADER_SECTION_COUNT", HEADER_SECTION_COUNT),
+        ("HEADER_FILE_LEN", HEADER_FILE_LEN),
+        ("HEADER_CRC", HEADER_CRC),
+    ];
+
+    /// Every section-table entry field, by the name of its constant, in byte order.
+    const ENTRY_FIELDS: [(&str, Field); 8] = [
+        ("ENTRY_KIND", ENTRY_KIND),
+        ("ENTRY_DTYPE", ENTRY_DTYPE),
+        ("ENTRY_RANK", ENTRY_RANK),
+        ("ENTRY_NAME", ENTRY_NAME),
+        ("ENTRY_SHAPE", ENTRY_SHAPE),
+        ("ENTRY_OFFSET", ENTRY_OFFSET),
+        ("ENTRY_LENGTH", ENTRY_LENGTH),
+        ("ENTRY_CRC", ENTRY_CRC),
+    ];
+
+    const FORMAT_MD: &str = include_str!("../../docs/FORMAT.md");
+
+    /// The fields follow each other without gaps or overlaps and fill `len` bytes exactly, so
+    /// the lists above name every field.
+    fn tiles(fields: &[(&str, Field)], len: usize) -> Result<(), String> {
+        let mut end = 0;
+        for (name, f) in fields {
+            if f.offset != end {
+                return Err(format!("{name} starts at {}, not at {end}", f.offset));
+            }
+            end = f.end();
+        }
+        if end == len {
+            Ok(())
+        } else {
+            Err(format!("the fields end at {end}, not at {len}"))
+        }
+    }
+
+    #[test]
+    fn fields_tile_the_header_and_the_entry() {
+        tiles(&HEADER_FIELDS, HEADER_LEN).unwrap();
+        tiles(&ENTRY_FIELDS, SECTION_ENTRY_LEN).unwrap();
+        assert_eq!(HEADER_MAGIC.len, MAGIC.len());
+        assert_eq!(HEADER_CRC.end(), HEADER_LEN);
+        assert_eq!(entry_dim(MAX_RANK - 1).end(), ENTRY_SHAPE.end());
+        assert_eq!(ENTRY_NAME.at(SECTION_ENTRY_LEN), 68..100);
+        let mut wrong = HEADER_FIELDS;
+        wrong[2].1.len = 4;
+        assert!(
+            tiles(&wrong, HEADER_LEN)
+                .unwrap_err()
+                .contains("HEADER_FLAGS")
+        );
+    }
+
+    /// Checks the markdown table that follows the heading starting with `heading` in `doc`
+    /// (columns `offset`, `size`, `field` and `constant`) against `fields`: every row's constant
+    /// must be one of them with the row's offset and size, and every field must have one row.
+    /// Returns one line per failure, naming the row.
+    fn check_table(doc: &str, heading: &str, fields: &[(&str, Field)]) -> Vec<String> {
+        let mut errors = Vec::new();
+        let mut lines = doc.lines().skip_while(|l| !l.starts_with(heading));
+        if lines.next().is_none() {
+            return Vec::from([format!("no heading {heading:?}")]);
+        }
+        let mut table = lines
+            .skip_while(|l| !l.starts_with('|'))
+            .take_while(|l| l.starts_with('|'))
+            .map(|l| {
+                l.trim_matches('|')
+                    .split('|')
+                    .map(|c| c.trim().trim_matches('`'))
+                    .collect::<Vec<_>>()
+            });
+        let Some(columns) = table.next() else {
+            return Vec::from([format!("{heading}: no table")]);
+        };
+        let column = |name: &str| columns.iter().position(|c| *c == name);
+        let (Some(offset), Some(size), Some(field), Some(constant)) = (
+            column("offset"),
+            column("size"),
+            column("field"),
+            column("constant"),
+        ) else {
+            return Vec::from([format!("{heading}: the table lacks a column: {columns:?}")]);
+        };
+        let mut seen = Vec::new();
+        for row in table.skip(1) {
+            let cell = |i: usize| row.get(i).copied().unwrap_or("");
+            let what = format!("{heading}, row `{}`", cell(field));
+            let Some((name, f)) = fields.iter().find(|(n, _)| *n == cell(constant)) else {
+                errors.push(format!("{what}: `{}` is no field constant", cell(constant)));
+                continue;
+            };
+            seen.push(*name);
+            if cell(offset).parse() != Ok(f.offset) {
+                errors.push(format!(
+                    "{what}: offset {} in the document, {} in {name}",
+                    cell(offset),
+                    f.offset
+                ));
+            }
+            if cell(size).parse() != Ok(f.len) {
+                errors.push(format!(
+                    "{what}: size {} in the document, {} in {name}",
+                    cell(size),
+                    f.len
+                ));
+            }
+        }
+        for (name, _) in fields {
+            match seen.iter().filter(|s| *s == name).count() {
+                1 => {}
+                n => errors.push(format!("{heading}: {name} has {n} rows, not one")),
+            }
+        }
+        errors
+    }
+
+    #[test]
+    fn format_md_field_tables_match_the_constants() {
+        let mut errors = check_table(FORMAT_MD, "### Header", &HEADER_FIELDS);
+        errors.extend(check_table(
+            FORMAT_MD,
+            "### Section-table entry",
+            &ENTRY_FIELDS,
+        ));
+        assert!(errors.is_empty(), "docs/FORMAT.md:\n{}", errors.join("\n"));
+    }
+
+    #[test]
+    fn a_wrong_row_in_format_md_is_named() {
+        let doc = FORMAT_MD.replace("| 10 | 2 | minor |", "| 11 | 2 | minor |");
+        let errors = check_table(&doc, "### Header", &HEADER_FIELDS);
+        assert_eq!(
+            errors,
+            ["### Header, row `minor`: offset 11 in the document, 10 in HEADER_MINOR"]
+        );
+        let doc = FORMAT_MD.replace("| 52 | 4 | offset | u32 | `ENTRY_OFFSET` |\n", "");
+        let errors = check_table(&doc, "### Section-table entry", &ENTRY_FIELDS);
+        assert_eq!(
+            errors,
+            ["### Section-table entry: ENTRY_OFFSET has 0 rows, not one"]
+        );
+    }
+}
