@@ -14,13 +14,44 @@ use sinew_core::aim::AimActor;
 use sinew_core::format::ArtifactKind;
 use sinew_core::q16::Q16;
 use sinew_core::replay::{
-    AimReplay, FrameBuffers, FrameCheck, Mode, S2D_INPUTS, S2D_NEUTRAL, S2dBuffers, S2dReplay,
-    frame_hash, model_hash, pose_frame, s2d_frame_hash, verify as core_verify, verify_s2d,
+    AIM_INPUTS, AIM_POSE_LEN, AimReplay, FRAME_HASHES, FrameBuffers, FrameCheck, MODEL_HASH, Mode,
+    S2D_INPUTS, S2D_NEUTRAL, S2dBuffers, S2dReplay, frame_hash, hash_words, model_hash, pose_frame,
+    s2d_frame_hash, verify as core_verify, verify_s2d,
 };
 use sinew_core::s2d::S2dDecoder;
 
 use crate::aim::play::{Frame, PoseFile};
 use crate::io::container::SinewWriter;
+
+/// Buffers for one frame of an S2D `decoder`: its input, the neutral to decode onto (`neutral`
+/// values, or none to decode onto the template), scratch and output.
+struct S2dOwned {
+    input: Vec<f32>,
+    neutral: Vec<f32>,
+    scratch: Vec<f32>,
+    vertices: Vec<f32>,
+}
+
+impl S2dOwned {
+    fn for_decoder(decoder: &S2dDecoder<'_>, neutral: Vec<f32>) -> Self {
+        Self {
+            input: vec![0.0; decoder.input_len()],
+            neutral,
+            scratch: vec![0.0; decoder.scratch_len()],
+            vertices: vec![0.0; 3 * decoder.vertex_count()],
+        }
+    }
+
+    /// The core's view of these buffers.
+    fn frame(&mut self) -> S2dBuffers<'_> {
+        S2dBuffers {
+            input: &mut self.input,
+            neutral: &mut self.neutral,
+            scratch: &mut self.scratch,
+            vertices: &mut self.vertices,
+        }
+    }
+}
 
 /// Buffers for one frame of `actor` in every mode.
 struct Buffers {
@@ -66,7 +97,7 @@ pub fn record(model: &[u8], mode: Mode, frames: &[Frame]) -> Result<Vec<u8>> {
     }
     let m = actor.shape_count();
     let mut buf = Buffers::for_actor(&actor);
-    let mut inputs = Vec::with_capacity(frames.len() * (18 + m));
+    let mut inputs = Vec::with_capacity(frames.len() * (AIM_POSE_LEN + m));
     let mut hashes = Vec::with_capacity(2 * frames.len());
     for (i, f) in frames.iter().enumerate() {
         if f.weights.len() != m {
@@ -79,20 +110,16 @@ pub fn record(model: &[u8], mode: Mode, frames: &[Frame]) -> Result<Vec<u8>> {
         let h = frame_hash(&actor, mode, &f.head, &f.jaw, &mut buf.view())
             .map_err(|e| anyhow!("frame {i}: {e}"))?;
         inputs.extend(f.head.iter().chain(&f.jaw).chain(&f.weights));
-        hashes.extend([h as u32, (h >> 32) as u32]);
+        hashes.extend(hash_words(h));
     }
     let content = model_hash(model);
     let mut w = SinewWriter::new(ArtifactKind::Replay);
     w.meta("mode", mode.name())
         .meta("model", format!("{content:016x}"))
         .meta("frames", frames.len());
-    w.u32s(
-        "replay.model",
-        &[2],
-        &[content as u32, (content >> 32) as u32],
-    )?;
-    w.f32s("replay.aim", &[frames.len(), 18 + m], &inputs)?;
-    w.u32s("replay.hash", &[frames.len(), 2], &hashes)?;
+    w.u32s(MODEL_HASH, &[2], &hash_words(content))?;
+    w.f32s(AIM_INPUTS, &[frames.len(), AIM_POSE_LEN + m], &inputs)?;
+    w.u32s(FRAME_HASHES, &[frames.len(), 2], &hashes)?;
     w.to_bytes()
 }
 
@@ -138,26 +165,19 @@ pub fn record_s2d(model: &[u8], inputs: &[Vec<f32>], neutral: Option<&[f32]>) ->
             n.len()
         );
     }
-    let mut input = vec![0.0f32; width];
-    let mut neutral_buf = neutral.map(<[f32]>::to_vec).unwrap_or_default();
-    let mut scratch = vec![0.0f32; decoder.scratch_len()];
-    let mut vertices = vec![0.0f32; 3 * v];
+    let mut owned =
+        S2dOwned::for_decoder(&decoder, neutral.map(<[f32]>::to_vec).unwrap_or_default());
     let mut flat = Vec::with_capacity(inputs.len() * width);
     let mut hashes = Vec::with_capacity(2 * inputs.len());
     for (i, x) in inputs.iter().enumerate() {
         if x.len() != width {
             bail!("frame {i} has {} inputs, the decoder {width}", x.len());
         }
-        input.copy_from_slice(x);
-        let mut buf = S2dBuffers {
-            input: &mut input,
-            neutral: &mut neutral_buf,
-            scratch: &mut scratch,
-            vertices: &mut vertices,
-        };
-        let h = s2d_frame_hash(&decoder, &mut buf).map_err(|e| anyhow!("frame {i}: {e}"))?;
+        owned.input.copy_from_slice(x);
+        let h =
+            s2d_frame_hash(&decoder, &mut owned.frame()).map_err(|e| anyhow!("frame {i}: {e}"))?;
         flat.extend_from_slice(x);
-        hashes.extend([h as u32, (h >> 32) as u32]);
+        hashes.extend(hash_words(h));
     }
     let content = model_hash(model);
     let mut w = SinewWriter::new(ArtifactKind::Replay);
@@ -165,16 +185,12 @@ pub fn record_s2d(model: &[u8], inputs: &[Vec<f32>], neutral: Option<&[f32]>) ->
         .meta("model", format!("{content:016x}"))
         .meta("frames", inputs.len())
         .meta("content", "s2d-replay");
-    w.u32s(
-        "replay.model",
-        &[2],
-        &[content as u32, (content >> 32) as u32],
-    )?;
+    w.u32s(MODEL_HASH, &[2], &hash_words(content))?;
     w.f32s(S2D_INPUTS, &[inputs.len(), width], &flat)?;
     if let Some(n) = neutral {
         w.f32s(S2D_NEUTRAL, &[v, 3], n)?;
     }
-    w.u32s("replay.hash", &[inputs.len(), 2], &hashes)?;
+    w.u32s(FRAME_HASHES, &[inputs.len(), 2], &hashes)?;
     w.to_bytes()
 }
 
@@ -202,19 +218,17 @@ pub fn s2d_inputs(replay: &[u8]) -> Result<S2dInputs> {
 fn verify_s2d_replay(model: &[u8], replay: &[u8]) -> Result<Verification> {
     let decoder = S2dDecoder::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
     let r = S2dReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
-    let v = decoder.vertex_count();
-    let mut input = vec![0.0f32; decoder.input_len()];
-    let mut neutral = vec![0.0f32; if r.neutral().is_some() { 3 * v } else { 0 }];
-    let mut scratch = vec![0.0f32; decoder.scratch_len()];
-    let mut vertices = vec![0.0f32; 3 * v];
-    let mut buf = S2dBuffers {
-        input: &mut input,
-        neutral: &mut neutral,
-        scratch: &mut scratch,
-        vertices: &mut vertices,
-    };
+    let neutral = vec![
+        0.0f32;
+        if r.neutral().is_some() {
+            3 * decoder.vertex_count()
+        } else {
+            0
+        }
+    ];
+    let mut owned = S2dOwned::for_decoder(&decoder, neutral);
     let mut frames = Vec::with_capacity(r.frames());
-    let first_mismatch = verify_s2d(model, &decoder, &r, &mut buf, |c| frames.push(*c))
+    let first_mismatch = verify_s2d(model, &decoder, &r, &mut owned.frame(), |c| frames.push(*c))
         .map_err(|e| anyhow!("{e}"))?;
     Ok(Verification {
         mode: Mode::F32,
@@ -538,14 +552,14 @@ mod tests {
         let bad = record_s2d(&model, &changed, Some(&neutral)).unwrap();
         let hashes: Vec<u32> = sinew_core::SinewFile::from_bytes(&good)
             .unwrap()
-            .u32_tensor("replay.hash", &[4, 2])
+            .u32_tensor(FRAME_HASHES, &[4, 2])
             .unwrap()
             .iter()
             .collect();
         let file = sinew_core::SinewFile::from_bytes(&bad).unwrap();
         let mut w = SinewWriter::from_file(&file).unwrap();
-        w.remove_prefixed("replay.hash");
-        w.u32s("replay.hash", &[4, 2], &hashes).unwrap();
+        w.remove_prefixed(FRAME_HASHES);
+        w.u32s(FRAME_HASHES, &[4, 2], &hashes).unwrap();
         let v = verify(&model, &w.to_bytes().unwrap()).unwrap();
         assert_eq!(v.first_mismatch, Some(1));
         assert!(v.frames[1].to_string().contains("DIFFERS"));
@@ -574,14 +588,14 @@ mod tests {
                 bad_r.expected(f)
             }
             .unwrap();
-            hashes.extend([h as u32, (h >> 32) as u32]);
+            hashes.extend(hash_words(h));
         }
         // Swap the hash section for the mixed list.
         let mut w2 = SinewWriter::new(ArtifactKind::Replay);
         w2.meta("mode", "f32");
         for s in file.sections().filter(|s| s.name().starts_with("replay.")) {
-            if s.name() == "replay.hash" {
-                w2.u32s("replay.hash", &[4, 2], &hashes).unwrap();
+            if s.name() == FRAME_HASHES {
+                w2.u32s(FRAME_HASHES, &[4, 2], &hashes).unwrap();
             } else {
                 let dims: Vec<usize> = s.dims().iter().map(|&d| d as usize).collect();
                 match s.f32s() {

@@ -80,6 +80,8 @@ pub fn play(model: &Path, poses: &Path, out: &Path, template: Option<&Mesh>) -> 
     std::fs::create_dir_all(out)
         .with_context(|| format!("{}: cannot create folder", out.display()))?;
     let mut buf = vec![0.0; 3 * actor.vertex_count()];
+    // The core's f32 posing, as `sinew_core::replay::pose_frame` does it in f32 mode, without
+    // the normals an OBJ does not carry.
     for (i, f) in file.frames.iter().enumerate() {
         let pose = actor.pose_from_9d(&f.jaw, &f.head);
         actor

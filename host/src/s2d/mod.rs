@@ -59,6 +59,7 @@ pub mod deformation;
 pub mod experiment;
 pub mod hierarchy;
 pub mod objective;
+pub mod pairs_file;
 pub mod protocol;
 pub mod report;
 pub mod spirals;
