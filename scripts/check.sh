@@ -15,6 +15,9 @@ echo "== clippy"
 # The ndarray backend is linted here (once), so its narrow deprecation allowance stays checked.
 cargo clippy --workspace --all-targets --locked --features sinew-host/ndarray -- -D warnings
 
+echo "== docs (rustdoc, warnings are errors)"
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace --locked
+
 echo "== no_std core for thumbv7em-none-eabihf"
 cargo build -p sinew-core --target thumbv7em-none-eabihf --locked
 

@@ -69,7 +69,7 @@ pub fn write(
     Ok(())
 }
 
-/// A complete S2D-decoder artefact: the sections of [`write`] and metadata.
+/// A complete S2D-decoder artefact: the sections of [`write()`] and metadata.
 pub fn bake(
     decoder: &S2dDecoder,
     hierarchy: &Hierarchy,

@@ -339,7 +339,7 @@ const LASSO_SWEEPS: usize = 500;
 /// largest correlation in a sweep.
 const LASSO_TOLERANCE: f64 = 1e-10;
 
-/// The DL-3DMM of Ferrari et al. (S2D's reference [20]): a dictionary of displacement atoms
+/// The DL-3DMM of Ferrari et al. (S2D's reference \[20\]): a dictionary of displacement atoms
 /// learned with sparse codes, fitted to landmarks by ridge regression weighted by how much each
 /// atom is used.
 ///

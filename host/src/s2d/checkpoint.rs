@@ -3,7 +3,7 @@
 //! belongs to. Every file is written atomically and `state.json` last, naming the weight files
 //! it goes with, so an interruption at any moment leaves the previous checkpoint whole.
 //!
-//! A resumed run must be the same run: [`check_same_run`] compares the training configuration,
+//! A resumed run must be the same run: `check_same_run` compares the training configuration,
 //! the decoder's shape, a fingerprint of the training data and the caller's context (protocol,
 //! fold, …) and names every difference.
 
@@ -216,7 +216,7 @@ pub fn read_state(dir: &Path) -> Result<CheckpointState> {
 }
 
 /// Loads the checkpoint in `dir` into `decoder` and `optim` (built as for a fresh run), after
-/// checking that it belongs to the run `current` describes ([`check_same_run`]). Returns them
+/// checking that it belongs to the run `current` describes (`check_same_run`). Returns them
 /// with the checkpoint's state.
 pub fn load_checkpoint(
     dir: &Path,

@@ -45,11 +45,11 @@ pub struct Baselines {
     pub pca99: ErrorStats,
     /// PCA with min(220, rank) components.
     pub pca_max: ErrorStats,
-    /// DL-3DMM, a dictionary of 220 sparse-coded atoms ([`Dictionary`]); its count is the atoms
+    /// DL-3DMM, a dictionary of 220 sparse-coded atoms ([`Dictionary`](super::baseline::Dictionary)); its count is the atoms
     /// the training codes use.
     pub dl_3dmm: ErrorStats,
     /// Not a method but a bound: the test displacements' orthogonal projection onto the
-    /// training displacements' affine span ([`Pca::project`], all `rank` components, reading
+    /// training displacements' affine span ([`Pca::project`](super::baseline::Pca::project), all `rank` components, reading
     /// the whole dense ground truth). It is the least-squares closest displacement any model
     /// built from that span (the three above) can give, so their errors do not go below it
     /// (strictly so for the root-mean-square error; the mean per-vertex error is a different
