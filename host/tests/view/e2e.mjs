@@ -138,10 +138,27 @@ try {
   check((await setSlider("head-yaw", 20)) !== neutral, "the head yaw slider changes the positions");
   await setSlider("head-yaw", 0);
 
-  // A screenshot of a posed frame; the face must cover a fair share of the canvas.
+  // Orbit (drag) and zoom (wheel) move the camera, not the face.
+  const nextPaint = () => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
   await setSlider("frame", 9);
-  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
-  const canvasPng = PNG.sync.read(await page.locator("#face").screenshot());
+  await nextPaint();
+  const canvas = page.locator("#face");
+  const head = await page.evaluate(() => window.sinewTest.positionsChecksum());
+  const front = await canvas.screenshot();
+  const box = await canvas.boundingBox();
+  const [cx, cy] = [box.x + box.width / 2, box.y + box.height / 2];
+  await page.mouse.move(cx, cy);
+  await page.mouse.down();
+  await page.mouse.move(cx - 50, cy - 15, { steps: 5 });
+  await page.mouse.up();
+  await page.mouse.wheel(0, -100);
+  await nextPaint();
+  const turned = await canvas.screenshot();
+  check(!front.equals(turned), "dragging and the wheel change the view");
+  check((await page.evaluate(() => window.sinewTest.positionsChecksum())) === head, "…and not the positions");
+
+  // A screenshot of a posed frame; the face must cover a fair share of the canvas.
+  const canvasPng = PNG.sync.read(turned);
   let face = 0;
   for (let i = 0; i < canvasPng.data.length; i += 4) {
     const d = [0, 1, 2].some((k) => Math.abs(canvasPng.data[i + k] - BACKGROUND[k]) > 8);

@@ -308,7 +308,7 @@ class FaceView {
     }
     this.centre = lo.map((l, k) => (l + hi[k]) / 2);
     this.radius = Math.hypot(...hi.map((h, k) => h - lo[k])) / 2 || 1;
-    this.distance = this.radius * 2.4;
+    this.distance = this.radius * 2.8;
     this.yaw = 0;
     this.pitch = 0;
     this.listen();
