@@ -162,6 +162,35 @@ mod tests {
     }
 
     #[test]
+    fn serves_a_checked_pose_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let poses = dir.path().join("smile.json");
+        std::fs::write(
+            &poses,
+            r#"{"frames": [{"weights": [0, 0.5, 0, 0, 0, 1]}, {"jaw": [1, 0, 0, 0, 0.9, 0.1, 0, 0, 0], "weights": [0, 0, 0, 0, 0, 0]}]}"#,
+        )
+        .unwrap();
+        let site = Site::load(Inputs {
+            model: &data("aim-procedural.sinew"),
+            replay: None,
+            poses: Some(&poses),
+        })
+        .unwrap();
+        let config: serde_json::Value =
+            serde_json::from_slice(get(&site, "/config.json").body).unwrap();
+        assert_eq!(config["poses"]["name"], "smile.json");
+        assert_eq!(config["poses"]["frames"], 2);
+        assert!(config["replay"].is_null());
+        assert_eq!(get(&site, "/replay.sinew").status, 404);
+        let served: serde_json::Value =
+            serde_json::from_slice(get(&site, "/poses.json").body).unwrap();
+        // Absent head and jaw are served as the identity, so the page need not know the default.
+        assert_eq!(served["frames"][0]["head"][0], 1.0);
+        assert_eq!(served["frames"][0]["weights"][5], 1.0);
+        assert_eq!(served["frames"][1]["jaw"][5].as_f64().unwrap() as f32, 0.1);
+    }
+
+    #[test]
     fn bad_files_are_named() {
         let err = |inputs: Inputs<'_>| format!("{:#}", Site::load(inputs).unwrap_err());
         let s2d = data("s2d-ict.sinew");

@@ -1,16 +1,17 @@
-// Browser end-to-end test of `sinew view` (docs/VIEW.md): starts the viewer on the ICT actor and
-// its golden f32 replay, loads the page in Debian's headless chromium (WebGL2 on SwiftShader, no
-// GPU needed) through playwright-core, plays the replay and requires every frame's hash computed
-// in the page to equal tests/data/aim-ict.hashes, moves a slider, checks a screenshot is not
-// blank, checks the server's refusals, then stops the server with Ctrl-C (SIGINT).
+// Browser end-to-end test of `sinew view` (docs/VIEW.md): starts the viewer on the ICT actor, its
+// golden f32 replay and a pose file made here, loads the page in Debian's headless chromium
+// (WebGL2 on SwiftShader, no GPU needed) through playwright-core, plays both and requires every
+// frame's hash computed in the page to equal tests/data/aim-ict.hashes (f32) and the host's hashes
+// of the pose file; moves the sliders and the camera, checks a screenshot is not blank, checks the
+// server's refusals, then stops the server with Ctrl-C (SIGINT).
 //
 // Usage: node host/tests/view/e2e.mjs [--screenshot PATH]
 //   (after `cargo build -p sinew-host` and `npm ci` in this folder)
 // Environment: SINEW_BIN (default target/debug/sinew), CHROMIUM (default /usr/bin/chromium).
 // Prints the per-frame time (pose + normals through WebAssembly) for docs/BENCHMARKS.md.
 
-import { spawn } from "node:child_process";
-import { existsSync, mkdtempSync, readFileSync, writeFileSync } from "node:fs";
+import { execFileSync, spawn } from "node:child_process";
+import { existsSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from "node:fs";
 import { request } from "node:http";
 import { tmpdir } from "node:os";
 import { dirname, join, resolve } from "node:path";
@@ -22,9 +23,9 @@ const root = resolve(dirname(fileURLToPath(import.meta.url)), "../../..");
 const data = join(root, "tests/data");
 const bin = process.env.SINEW_BIN ?? join(root, "target/debug/sinew");
 const browserPath = process.env.CHROMIUM ?? "/usr/bin/chromium";
+const work = mkdtempSync(join(tmpdir(), "sinew-view-"));
 const screenshotArg = process.argv.indexOf("--screenshot");
-const screenshotPath =
-  screenshotArg > 0 ? resolve(process.argv[screenshotArg + 1]) : join(mkdtempSync(join(tmpdir(), "sinew-view-")), "view.png");
+const screenshotPath = screenshotArg > 0 ? resolve(process.argv[screenshotArg + 1]) : join(work, "view.png");
 /** The page's background (style.css, viewer.js clear colour). */
 const BACKGROUND = [0x1d, 0x20, 0x26];
 /** Frames of pose + normals timed before the figures are printed. */
@@ -57,6 +58,33 @@ const guard = setTimeout(() => {
 let server = null;
 let browser = null;
 try {
+  // A pose file of three frames (neutral, jaw open 10°, head turned 15° with correctives), and
+  // its frame hashes as the host computes them (`sinew replay record`, then `verify`).
+  const rad = Math.PI / 180;
+  const poses = join(work, "poses.json");
+  writeFileSync(
+    poses,
+    JSON.stringify({
+      frames: [
+        { weights: Array(19).fill(0) },
+        { jaw: [1, 0, 0, 0, Math.cos(10 * rad), Math.sin(10 * rad), 0, 0, 0], weights: Array(19).fill(0) },
+        {
+          head: [Math.cos(15 * rad), 0, -Math.sin(15 * rad), 0, 1, 0, 0, 0, 0],
+          weights: Array.from({ length: 19 }, (_, i) => (i % 4) / 4),
+        },
+      ],
+    }),
+  );
+  const recorded = join(work, "poses.replay.sinew");
+  const model = join(data, "aim-ict.sinew");
+  execFileSync(bin, ["replay", "record", "--model", model, "--poses", poses, "--out", recorded, "--mode", "f32"]);
+  const hostHashes = execFileSync(bin, ["replay", "verify", "--model", model, "--replay", recorded], { encoding: "utf8" })
+    .split("\n")
+    .map((l) => /^frame (\d+) ([0-9a-f]{16}) ok$/.exec(l))
+    .filter(Boolean)
+    .map((m) => m[2]);
+  check(hostHashes.length === 3, "the host hashes the pose file's 3 frames");
+
   server = spawn(
     bin,
     [
@@ -64,6 +92,8 @@ try {
       join(data, "aim-ict.sinew"),
       "--replay",
       join(data, "aim-ict.f32.replay.sinew"),
+      "--poses",
+      poses,
       "--port",
       "0",
       // A safety net only: the test stops it with SIGINT below.
@@ -117,6 +147,18 @@ try {
   check(!(await page.evaluate(() => window.sinewTest.playing())), "Pause stops playback");
   const status = await page.textContent("#check");
   check(/16\/16 frames match the recording/.test(status), `the page reports the match (${status})`);
+
+  // The pose file, chosen in the source menu and played: the host's hashes, frame for frame.
+  check(ready.sources.length === 2 && ready.sources[1].count === 3, "the pose file is the second source");
+  await page.selectOption("#source", "1");
+  await page.click("#play");
+  await page.waitForFunction(() => window.sinewTest.playedHashes(1).every((h) => h !== null), null, {
+    timeout: 30_000,
+  });
+  await page.click("#play");
+  const posesPlayed = await page.evaluate(() => window.sinewTest.playedHashes(1));
+  check(JSON.stringify(posesPlayed) === JSON.stringify(hostHashes), "the pose file's frames hash as on the host");
+  await page.selectOption("#source", "0");
 
   // The sliders move the geometry, and moving back restores it bit for bit.
   const setSlider = (id, value) =>
@@ -197,6 +239,7 @@ try {
   await browser?.close().catch(() => {});
   server?.kill("SIGKILL");
   clearTimeout(guard);
+  for (const file of ["poses.json", "poses.replay.sinew"]) rmSync(join(work, file), { force: true });
 }
 
 function sleep(ms) {
