@@ -33,6 +33,7 @@ fn main() {
     let target_dir = env::var_os("SINEW_VIEW_WASM_TARGET_DIR")
         .map(PathBuf::from)
         .unwrap_or_else(|| target_root(&out, &root).join("view-wasm"));
+    ensure_wasm_target();
     let cargo = env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let mut build = Command::new(cargo);
     build
@@ -65,14 +66,43 @@ fn main() {
     if !status.success() {
         fail(
             "building the viewer's WebAssembly module (sinew-wasm for wasm32-unknown-unknown) \
-             failed; its errors are above. If the target is missing, add it with \
-             `rustup target add wasm32-unknown-unknown`.",
+             failed; its errors are above.",
         );
     }
     let module = target_dir.join("wasm32-unknown-unknown/wasm/sinew_wasm.wasm");
     std::fs::copy(&module, out.join("sinew_wasm.wasm")).unwrap_or_else(|e| {
         fail(&format!("cannot copy {}: {e}", module.display()));
     });
+}
+
+/// Adds rustup's `wasm32-unknown-unknown` target when the compiler's sysroot lacks it, as
+/// `core/wasm/build.sh` does, so that a fresh checkout builds with plain `cargo build`.
+fn ensure_wasm_target() {
+    let rustc = env::var_os("RUSTC").unwrap_or_else(|| "rustc".into());
+    let sysroot = Command::new(rustc)
+        .args(["--print", "sysroot"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| PathBuf::from(String::from_utf8_lossy(&o.stdout).trim()));
+    let installed =
+        sysroot.is_some_and(|s| s.join("lib/rustlib/wasm32-unknown-unknown/lib").is_dir());
+    if installed {
+        return;
+    }
+    println!(
+        "cargo::warning=adding rustup's wasm32-unknown-unknown target for the viewer's module"
+    );
+    let added = Command::new("rustup")
+        .args(["target", "add", "wasm32-unknown-unknown"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !added {
+        fail(
+            "the viewer's WebAssembly module needs the wasm32-unknown-unknown target, and \
+             `rustup target add wasm32-unknown-unknown` failed: add it, then build again",
+        );
+    }
 }
 
 /// The workspace's target folder: `OUT_DIR` is `<target>/<profile>/build/<package>-<hash>/out`
