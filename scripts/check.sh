@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 rustup component add rustfmt clippy >/dev/null 2>&1 || true
-rustup target add thumbv7em-none-eabihf >/dev/null
+rustup target add thumbv7em-none-eabihf wasm32-unknown-unknown >/dev/null
 
 echo "== fmt"
 cargo fmt --all --check
@@ -36,6 +36,16 @@ if ! command -v node >/dev/null; then
 fi
 bash core/wasm/build.sh
 node --test core/wasm/test/*.test.mjs
+
+echo "== sinew view: the page in headless chromium plays the golden replay (host/tests/view/e2e.mjs)"
+for tool in chromium npm; do
+  if ! command -v "$tool" >/dev/null; then
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$tool" >/dev/null
+  fi
+done
+(cd host/tests/view && npm ci --no-audit --no-fund)
+cargo build -p sinew-host --locked
+node host/tests/view/e2e.mjs
 
 echo "== firmware-sim: golden replays on Cortex-M4F, RISC-V (QEMU) and wasm (node)"
 bash firmware-sim/run.sh

@@ -3,7 +3,7 @@
 //!
 //! The folders are the architecture, each layer importing only the layers below it
 //! (docs/ARCHITECTURE.md, "Code map"; `tests/tests/architecture.rs` keeps it so):
-//! [`replay`] above [`aim`] and [`s2d`], above [`training`], [`figures`] and [`anatomy`], above
+//! [`view`] above [`replay`], above [`aim`] and [`s2d`], above [`training`], [`figures`] and [`anatomy`], above
 //! [`geometry`], above [`io`].
 
 pub mod aim;
@@ -14,5 +14,6 @@ pub mod io;
 pub mod replay;
 pub mod s2d;
 pub mod training;
+pub mod view;
 
 pub use io::container::SinewWriter;

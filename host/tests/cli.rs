@@ -778,3 +778,59 @@ fn flags_beat_the_environment_which_beats_the_default() {
     assert!(bones(&["--templates", s(&b)], &[("SINEW_DATA", s(&a))]).contains(s(&b)));
     assert!(ok(&["bones", "fit", "--help"]).contains("SINEW_DATA"));
 }
+
+#[test]
+fn view_prints_its_address_first_serves_and_stops_after_its_deadline() {
+    use std::io::{BufRead, BufReader, Read, Write};
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data");
+    let model = data.join("aim-procedural.sinew");
+    let replay = data.join("aim-procedural.f32.replay.sinew");
+    let start = std::time::Instant::now();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sinew"))
+        .args(["view", s(&model), "--replay", s(&replay), "--port", "0"])
+        .args(["--exit-after-seconds", "2"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    let url = lines.next().unwrap().unwrap();
+    let port: u16 = url
+        .strip_prefix("http://127.0.0.1:")
+        .and_then(|rest| rest.strip_suffix('/'))
+        .unwrap_or_else(|| panic!("first line {url:?} is not the address"))
+        .parse()
+        .unwrap();
+    let mut stream = std::net::TcpStream::connect(("127.0.0.1", port)).unwrap();
+    write!(
+        stream,
+        "GET /config.json HTTP/1.0\r\nHost: 127.0.0.1:{port}\r\n\r\n"
+    )
+    .unwrap();
+    let mut answer = String::new();
+    stream.read_to_string(&mut answer).unwrap();
+    assert!(answer.starts_with("HTTP/1.0 200"), "{answer}");
+    assert!(
+        answer.contains("\"aim-procedural.f32.replay.sinew\""),
+        "{answer}"
+    );
+    let status = child.wait().unwrap();
+    assert!(status.success(), "{status}");
+    let took = start.elapsed();
+    assert!(took.as_secs_f64() >= 2.0 && took.as_secs() < 30, "{took:?}");
+}
+
+#[test]
+fn view_names_a_bad_model_and_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.sinew");
+    std::fs::write(&bad, b"not a model").unwrap();
+    let e = err(&["view", s(&bad), "--port", "0"]);
+    assert!(e.contains("bad.sinew"), "{e}");
+    let s2d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/s2d-ict.sinew");
+    let e = err(&["view", s(&s2d), "--port", "0"]);
+    assert!(
+        e.contains("s2d-ict.sinew") && e.contains("not an AIM actor"),
+        "{e}"
+    );
+}

@@ -21,6 +21,7 @@ const HOST_LAYERS: &[&[&str]] = &[
     &["anatomy", "training"],
     &["aim", "s2d"],
     &["replay"],
+    &["view"],
     &["cli"],
 ];
 

@@ -6,6 +6,7 @@ mod aim;
 mod bones;
 mod replay;
 mod s2d;
+mod view;
 
 use std::path::PathBuf;
 
@@ -58,6 +59,10 @@ enum Command {
     /// Generate data sets.
     #[command(subcommand)]
     Data(s2d::Data),
+    /// Show a baked actor in a web browser: serves a page on 127.0.0.1 that poses it through
+    /// sinew-core compiled to WebAssembly (sliders, orbit, replay playback). Prints the page's
+    /// address as its first line; stops on Ctrl-C.
+    View(view::ViewArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -103,5 +108,6 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Replay(cmd) => replay::run(cmd),
         Command::S2d(cmd) => s2d::run(cmd),
         Command::Data(cmd) => s2d::data(cmd),
+        Command::View(args) => view::run(args),
     }
 }

@@ -1,0 +1,48 @@
+//! `sinew view`: the arguments, and the hand-over to [`sinew_host::view`].
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Result;
+use clap::Args;
+
+#[derive(Debug, Args)]
+pub(crate) struct ViewArgs {
+    /// The baked AIM actor (.sinew).
+    model: PathBuf,
+    /// A replay recorded with this actor (`sinew replay record`): the page plays it at 30 frames
+    /// per second and checks every frame's hash.
+    #[arg(long)]
+    replay: Option<PathBuf>,
+    /// A pose file for this actor (`sinew play`'s JSON) to play instead of, or beside, a replay.
+    #[arg(long)]
+    poses: Option<PathBuf>,
+    /// Port on 127.0.0.1; 0 takes any free port.
+    #[arg(long, env = "SINEW_VIEW_PORT", default_value_t = 8123)]
+    port: u16,
+    /// Stop serving after this many seconds (for scripts and tests); without it, serve until
+    /// Ctrl-C.
+    #[arg(long, value_name = "SECONDS")]
+    exit_after_seconds: Option<u64>,
+}
+
+/// `sinew view`.
+pub(crate) fn run(args: ViewArgs) -> Result<()> {
+    let inputs = sinew_host::view::Inputs {
+        model: &args.model,
+        replay: args.replay.as_deref(),
+        poses: args.poses.as_deref(),
+    };
+    sinew_host::view::view(
+        inputs,
+        args.port,
+        args.exit_after_seconds.map(Duration::from_secs),
+        |url| {
+            println!("{url}");
+            eprintln!(
+                "sinew view: serving {} on {url} (Ctrl-C stops)",
+                args.model.display()
+            );
+        },
+    )
+}

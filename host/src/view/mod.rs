@@ -1,0 +1,310 @@
+//! `sinew view`: a baked AIM actor in a web browser. A small server on 127.0.0.1 serves a page
+//! (WebGL2, `web/`) that poses the actor through the core compiled to WebAssembly, with sliders,
+//! orbit controls and replay playback; docs/VIEW.md.
+//!
+//! [`files`] is the fixed table of what is served, [`server`] the HTTP side and its safety rules.
+
+pub mod files;
+pub mod server;
+
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+
+pub use files::{Inputs, Site};
+pub use server::Viewer;
+
+/// `sinew view`: loads and checks the files, listens on 127.0.0.1:`port` (0: any free port),
+/// hands the page's address to `ready` (the command prints it as its first line), and serves
+/// until Ctrl-C or, with `exit_after`, until that time has passed.
+pub fn view(
+    inputs: Inputs<'_>,
+    port: u16,
+    exit_after: Option<Duration>,
+    ready: impl FnOnce(&str),
+) -> Result<()> {
+    let viewer = Viewer::bind(Site::load(inputs)?, port)?;
+    crate::training::interrupt::watch_ctrl_c();
+    ready(&viewer.url());
+    viewer.serve(
+        exit_after.map(|d| Instant::now() + d),
+        crate::training::interrupt::take_stop_request,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use std::io::{Read, Write};
+    use std::net::{Ipv4Addr, SocketAddr, TcpStream};
+    use std::path::{Path, PathBuf};
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    use tiny_http::Method;
+
+    use super::server::respond;
+    use super::*;
+
+    fn data(name: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../tests/data")
+            .join(name)
+    }
+
+    fn site() -> Site {
+        Site::load(Inputs {
+            model: &data("aim-procedural.sinew"),
+            replay: Some(&data("aim-procedural.f32.replay.sinew")),
+            poses: None,
+        })
+        .unwrap()
+    }
+
+    const LOCAL: Option<SocketAddr> = Some(SocketAddr::new(
+        std::net::IpAddr::V4(Ipv4Addr::LOCALHOST),
+        50000,
+    ));
+
+    fn get<'a>(site: &'a Site, url: &str) -> server::Reply<'a> {
+        respond(site, &Method::Get, url, LOCAL, Some("127.0.0.1:8000"), 8000)
+    }
+
+    #[test]
+    fn serves_its_table_and_nothing_else() {
+        let site = site();
+        for entry in site.entries() {
+            let reply = get(&site, entry.path);
+            assert_eq!(reply.status, 200, "{}", entry.path);
+            assert_eq!(reply.body, &entry.body[..]);
+        }
+        let model = std::fs::read(data("aim-procedural.sinew")).unwrap();
+        assert_eq!(get(&site, "/model.sinew").body, &model[..]);
+        assert_eq!(get(&site, "/model.sinew?x=1").body, &model[..]);
+        assert_eq!(get(&site, "/sinew_wasm.wasm").body[..4], *b"\0asm");
+        assert_eq!(
+            get(&site, "/sinew_wasm.wasm").content_type,
+            "application/wasm"
+        );
+        let config: serde_json::Value =
+            serde_json::from_slice(get(&site, "/config.json").body).unwrap();
+        assert_eq!(config["replay"]["frames"], 16);
+        assert_eq!(config["replay"]["mode"], "f32");
+        assert!(config["poses"].is_null());
+        for url in [
+            "/../Cargo.toml",
+            "/%2e%2e/",
+            "/%2e%2e/Cargo.toml",
+            "/..%2fCargo.toml",
+            "//etc/passwd",
+            "/index.html/../model.sinew",
+            "/poses.json",
+            "/Cargo.toml",
+            "../Cargo.toml",
+            "",
+            "/model.sinew/",
+            "/MODEL.SINEW",
+        ] {
+            assert_eq!(get(&site, url).status, 404, "{url}");
+        }
+    }
+
+    #[test]
+    fn refuses_other_peers_hosts_and_methods() {
+        let site = site();
+        let host = Some("127.0.0.1:8000");
+        for peer in [
+            "192.168.1.20:5000",
+            "10.0.0.1:80",
+            "[2001:db8::1]:80",
+            "0.0.0.0:1",
+        ] {
+            let peer: SocketAddr = peer.parse().unwrap();
+            let reply = respond(&site, &Method::Get, "/", Some(peer), host, 8000);
+            assert_eq!(reply.status, 403, "{peer}");
+        }
+        assert_eq!(
+            respond(&site, &Method::Get, "/", None, host, 8000).status,
+            403
+        );
+        let ipv6_loopback: SocketAddr = "[::1]:5000".parse().unwrap();
+        let reply = respond(&site, &Method::Get, "/", Some(ipv6_loopback), host, 8000);
+        assert_eq!(reply.status, 200);
+        for host in [
+            None,
+            Some("evil.example:8000"),
+            Some("127.0.0.1:8001"),
+            Some("127.0.0.1"),
+        ] {
+            assert_eq!(
+                respond(&site, &Method::Get, "/", LOCAL, host, 8000).status,
+                421
+            );
+        }
+        assert_eq!(
+            respond(
+                &site,
+                &Method::Get,
+                "/",
+                LOCAL,
+                Some("LOCALHOST:8000"),
+                8000
+            )
+            .status,
+            200
+        );
+        for method in [Method::Post, Method::Put, Method::Delete, Method::Options] {
+            assert_eq!(respond(&site, &method, "/", LOCAL, host, 8000).status, 405);
+        }
+        assert_eq!(
+            respond(&site, &Method::Head, "/", LOCAL, host, 8000).status,
+            200
+        );
+    }
+
+    #[test]
+    fn serves_a_checked_pose_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let poses = dir.path().join("smile.json");
+        std::fs::write(
+            &poses,
+            r#"{"frames": [{"weights": [0, 0.5, 0, 0, 0, 1]}, {"jaw": [1, 0, 0, 0, 0.9, 0.1, 0, 0, 0], "weights": [0, 0, 0, 0, 0, 0]}]}"#,
+        )
+        .unwrap();
+        let site = Site::load(Inputs {
+            model: &data("aim-procedural.sinew"),
+            replay: None,
+            poses: Some(&poses),
+        })
+        .unwrap();
+        let config: serde_json::Value =
+            serde_json::from_slice(get(&site, "/config.json").body).unwrap();
+        assert_eq!(config["poses"]["name"], "smile.json");
+        assert_eq!(config["poses"]["frames"], 2);
+        assert!(config["replay"].is_null());
+        assert_eq!(get(&site, "/replay.sinew").status, 404);
+        let served: serde_json::Value =
+            serde_json::from_slice(get(&site, "/poses.json").body).unwrap();
+        // Absent head and jaw are served as the identity, so the page need not know the default.
+        assert_eq!(served["frames"][0]["head"][0], 1.0);
+        assert_eq!(served["frames"][0]["weights"][5], 1.0);
+        assert_eq!(served["frames"][1]["jaw"][5].as_f64().unwrap() as f32, 0.1);
+    }
+
+    #[test]
+    fn bad_files_are_named() {
+        let err = |inputs: Inputs<'_>| format!("{:#}", Site::load(inputs).unwrap_err());
+        let s2d = data("s2d-ict.sinew");
+        let e = err(Inputs {
+            model: &s2d,
+            replay: None,
+            poses: None,
+        });
+        assert!(
+            e.contains("s2d-ict.sinew") && e.contains("not an AIM actor"),
+            "{e}"
+        );
+        let model = data("aim-procedural.sinew");
+        let other = data("aim-ict.f32.replay.sinew");
+        let e = err(Inputs {
+            model: &model,
+            replay: Some(&other),
+            poses: None,
+        });
+        assert!(
+            e.contains("aim-ict.f32.replay.sinew") && e.contains("does not play"),
+            "{e}"
+        );
+        let e = err(Inputs {
+            model: &model,
+            replay: Some(&model),
+            poses: None,
+        });
+        assert!(e.contains("not an AIM replay"), "{e}");
+        let dir = tempfile::tempdir().unwrap();
+        let poses = dir.path().join("p.json");
+        std::fs::write(&poses, r#"{"frames": [{"weights": [1]}]}"#).unwrap();
+        let e = err(Inputs {
+            model: &model,
+            replay: None,
+            poses: Some(&poses),
+        });
+        assert!(e.contains("p.json") && e.contains("weights"), "{e}");
+        let missing = dir.path().join("missing.sinew");
+        let e = err(Inputs {
+            model: &missing,
+            replay: None,
+            poses: None,
+        });
+        assert!(e.contains("missing.sinew"), "{e}");
+    }
+
+    /// One raw HTTP/1.1 request (raw, so that the path reaches the server as written), and the
+    /// status line and body of the answer.
+    fn raw(port: u16, method: &str, path: &str) -> (String, Vec<u8>) {
+        let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
+        write!(
+            stream,
+            "{method} {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n"
+        )
+        .unwrap();
+        let mut answer = Vec::new();
+        stream.read_to_end(&mut answer).unwrap();
+        let split = answer.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+        let head = String::from_utf8_lossy(&answer[..split]).into_owned();
+        let status = head.lines().next().unwrap().to_owned();
+        (status, answer[split + 4..].to_vec())
+    }
+
+    #[test]
+    fn serves_over_tcp_on_loopback_and_stops() {
+        let viewer = Arc::new(Viewer::bind(site(), 0).unwrap());
+        let port = viewer.port();
+        assert_eq!(viewer.url(), format!("http://127.0.0.1:{port}/"));
+        let stop = Arc::new(AtomicBool::new(false));
+        let thread = {
+            let (viewer, stop) = (viewer.clone(), stop.clone());
+            std::thread::spawn(move || viewer.serve(None, || stop.load(Ordering::SeqCst)))
+        };
+        let (status, body) = raw(port, "GET", "/");
+        assert!(status.contains(" 200 "), "{status}");
+        assert!(String::from_utf8_lossy(&body).contains("<canvas"));
+        let model = std::fs::read(data("aim-procedural.sinew")).unwrap();
+        let served = raw(port, "GET", "/model.sinew").1;
+        assert!(
+            served == model,
+            "{} bytes served, {} in the file",
+            served.len(),
+            model.len()
+        );
+        for path in [
+            "/../Cargo.toml",
+            "/%2e%2e/",
+            "/%2E%2E/%2E%2E/etc/passwd",
+            "/..",
+        ] {
+            let (status, _) = raw(port, "GET", path);
+            assert!(status.contains(" 404 "), "{path}: {status}");
+        }
+        let (status, _) = raw(port, "POST", "/");
+        assert!(status.contains(" 405 "), "{status}");
+        stop.store(true, Ordering::SeqCst);
+        thread.join().unwrap().unwrap();
+        // Stopped: the port no longer answers.
+        drop(viewer);
+        assert!(TcpStream::connect(("127.0.0.1", port)).is_err());
+    }
+
+    #[test]
+    fn stops_at_its_deadline() {
+        let viewer = Viewer::bind(site(), 0).unwrap();
+        let start = Instant::now();
+        viewer
+            .serve(Some(start + Duration::from_millis(300)), || false)
+            .unwrap();
+        let took = start.elapsed();
+        assert!(
+            took >= Duration::from_millis(300) && took < Duration::from_secs(5),
+            "{took:?}"
+        );
+    }
+}
