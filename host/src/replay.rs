@@ -9,19 +9,98 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result};
+use sinew_core::FormatError;
 use sinew_core::aim::AimActor;
 use sinew_core::format::ArtifactKind;
 use sinew_core::q16::Q16;
 use sinew_core::replay::{
     AIM_INPUTS, AIM_POSE_LEN, AimReplay, FRAME_HASHES, FrameBuffers, FrameCheck, MODEL_HASH, Mode,
-    S2D_INPUTS, S2D_NEUTRAL, S2dBuffers, S2dReplay, frame_hash, hash_words, model_hash, pose_frame,
-    s2d_frame_hash, verify as core_verify, verify_s2d,
+    ReplayError as CoreReplayError, S2D_INPUTS, S2D_NEUTRAL, S2dBuffers, S2dReplay, frame_hash,
+    hash_words, model_hash, pose_frame, s2d_frame_hash, verify as core_verify, verify_s2d,
 };
 use sinew_core::s2d::S2dDecoder;
 
 use crate::aim::play::{Frame, PoseFile};
-use crate::io::container::SinewWriter;
+use crate::io::container::{SinewWriter, WriterError};
+use crate::io::units::UnknownUnit;
+
+/// Why a replay could not be recorded, verified or measured.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReplayError {
+    /// The model's bytes are not the artefact expected (an AIM actor or an S2D decoder).
+    #[error("model")]
+    Model(#[source] FormatError),
+    /// The replay's bytes are not a valid replay of the kind expected.
+    #[error("replay")]
+    Replay(#[source] FormatError),
+    /// The model is an S2D decoder, the replay an AIM replay.
+    #[error("the model is an S2D decoder, the replay an AIM replay")]
+    AimReplayForS2d,
+    /// The replay is an S2D replay, the model not an S2D decoder.
+    #[error("the replay is an S2D replay, the model is not an S2D decoder")]
+    S2dReplayForAim,
+    /// Nothing to record.
+    #[error("a replay needs at least one frame")]
+    NoFrames,
+    /// A pose frame whose coefficient count is not the actor's.
+    #[error("frame {frame} has {weights} weights, the model {shapes} shapes")]
+    WeightCount {
+        /// The frame.
+        frame: usize,
+        /// Its coefficients.
+        weights: usize,
+        /// The actor's shapes.
+        shapes: usize,
+    },
+    /// An S2D frame whose input length is not the decoder's.
+    #[error("frame {frame} has {inputs} inputs, the decoder {width}")]
+    InputLength {
+        /// The frame.
+        frame: usize,
+        /// Its input length.
+        inputs: usize,
+        /// The decoder's.
+        width: usize,
+    },
+    /// An S2D neutral whose length is not three per template vertex.
+    #[error("the neutral has {values} values, the decoder's template {vertices} vertices (× 3)")]
+    NeutralLength {
+        /// The neutral's values.
+        values: usize,
+        /// The template's vertices.
+        vertices: usize,
+    },
+    /// The core refused to play a frame (for example Q16 without the Q16.16 cache).
+    #[error("frame {frame}")]
+    Frame {
+        /// The frame.
+        frame: usize,
+        /// The core's reason.
+        #[source]
+        source: CoreReplayError,
+    },
+    /// An S2D replay frame that cannot be read back.
+    #[error("replay: frame {frame} unreadable")]
+    FrameUnreadable {
+        /// The frame.
+        frame: usize,
+    },
+    /// A replay whose coefficient count is not the model's.
+    #[error("replay has another coefficient count than the model")]
+    CoefficientCount,
+    /// The core refused the replay for this model (another model's content hash, another
+    /// coefficient count or input width, a mode the model cannot play).
+    #[error(transparent)]
+    Refused(CoreReplayError),
+    /// The model's `units` metadata names no known unit.
+    #[error("in the model's metadata (units)")]
+    Units(#[source] UnknownUnit),
+    /// The replay artefact could not be laid out.
+    #[error(transparent)]
+    Writer(#[from] WriterError),
+}
 
 /// Buffers for one frame of an S2D `decoder`: its input, the neutral to decode onto (`neutral`
 /// values, or none to decode onto the template), scratch and output.
@@ -90,10 +169,10 @@ impl Buffers {
 /// # Errors
 /// If `model` is not an AIM actor, a frame's coefficient count differs from the actor's, or
 /// `mode` is Q16 and the actor has no Q16.16 cache (`sinew bake --q16`).
-pub fn record(model: &[u8], mode: Mode, frames: &[Frame]) -> Result<Vec<u8>> {
-    let actor = AimActor::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
+pub fn record(model: &[u8], mode: Mode, frames: &[Frame]) -> Result<Vec<u8>, ReplayError> {
+    let actor = AimActor::from_bytes(model).map_err(ReplayError::Model)?;
     if frames.is_empty() {
-        bail!("a replay needs at least one frame");
+        return Err(ReplayError::NoFrames);
     }
     let m = actor.shape_count();
     let mut buf = Buffers::for_actor(&actor);
@@ -101,14 +180,15 @@ pub fn record(model: &[u8], mode: Mode, frames: &[Frame]) -> Result<Vec<u8>> {
     let mut hashes = Vec::with_capacity(2 * frames.len());
     for (i, f) in frames.iter().enumerate() {
         if f.weights.len() != m {
-            bail!(
-                "frame {i} has {} weights, the model {m} shapes",
-                f.weights.len()
-            );
+            return Err(ReplayError::WeightCount {
+                frame: i,
+                weights: f.weights.len(),
+                shapes: m,
+            });
         }
         buf.weights.copy_from_slice(&f.weights);
         let h = frame_hash(&actor, mode, &f.head, &f.jaw, &mut buf.view())
-            .map_err(|e| anyhow!("frame {i}: {e}"))?;
+            .map_err(|source| ReplayError::Frame { frame: i, source })?;
         inputs.extend(f.head.iter().chain(&f.jaw).chain(&f.weights));
         hashes.extend(hash_words(h));
     }
@@ -120,7 +200,7 @@ pub fn record(model: &[u8], mode: Mode, frames: &[Frame]) -> Result<Vec<u8>> {
     w.u32s(MODEL_HASH, &[2], &hash_words(content))?;
     w.f32s(AIM_INPUTS, &[frames.len(), AIM_POSE_LEN + m], &inputs)?;
     w.u32s(FRAME_HASHES, &[frames.len(), 2], &hashes)?;
-    w.to_bytes()
+    Ok(w.to_bytes()?)
 }
 
 /// The outcome of [`verify`].
@@ -151,19 +231,23 @@ fn is_s2d_model(model: &[u8]) -> bool {
 /// # Errors
 /// If `model` is not an S2D decoder, there are no frames, or a frame's input or the neutral has
 /// the wrong length.
-pub fn record_s2d(model: &[u8], inputs: &[Vec<f32>], neutral: Option<&[f32]>) -> Result<Vec<u8>> {
-    let decoder = S2dDecoder::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
+pub fn record_s2d(
+    model: &[u8],
+    inputs: &[Vec<f32>],
+    neutral: Option<&[f32]>,
+) -> Result<Vec<u8>, ReplayError> {
+    let decoder = S2dDecoder::from_bytes(model).map_err(ReplayError::Model)?;
     if inputs.is_empty() {
-        bail!("a replay needs at least one frame");
+        return Err(ReplayError::NoFrames);
     }
     let (width, v) = (decoder.input_len(), decoder.vertex_count());
     if let Some(n) = neutral
         && n.len() != 3 * v
     {
-        bail!(
-            "the neutral has {} values, the decoder's template {v} vertices (× 3)",
-            n.len()
-        );
+        return Err(ReplayError::NeutralLength {
+            values: n.len(),
+            vertices: v,
+        });
     }
     let mut owned =
         S2dOwned::for_decoder(&decoder, neutral.map(<[f32]>::to_vec).unwrap_or_default());
@@ -171,11 +255,15 @@ pub fn record_s2d(model: &[u8], inputs: &[Vec<f32>], neutral: Option<&[f32]>) ->
     let mut hashes = Vec::with_capacity(2 * inputs.len());
     for (i, x) in inputs.iter().enumerate() {
         if x.len() != width {
-            bail!("frame {i} has {} inputs, the decoder {width}", x.len());
+            return Err(ReplayError::InputLength {
+                frame: i,
+                inputs: x.len(),
+                width,
+            });
         }
         owned.input.copy_from_slice(x);
-        let h =
-            s2d_frame_hash(&decoder, &mut owned.frame()).map_err(|e| anyhow!("frame {i}: {e}"))?;
+        let h = s2d_frame_hash(&decoder, &mut owned.frame())
+            .map_err(|source| ReplayError::Frame { frame: i, source })?;
         flat.extend_from_slice(x);
         hashes.extend(hash_words(h));
     }
@@ -191,7 +279,7 @@ pub fn record_s2d(model: &[u8], inputs: &[Vec<f32>], neutral: Option<&[f32]>) ->
         w.f32s(S2D_NEUTRAL, &[v, 3], n)?;
     }
     w.u32s(FRAME_HASHES, &[inputs.len(), 2], &hashes)?;
-    w.to_bytes()
+    Ok(w.to_bytes()?)
 }
 
 /// An S2D replay's inputs as [`record_s2d`] takes them: each frame's decoder input, and the
@@ -202,22 +290,22 @@ pub type S2dInputs = (Vec<Vec<f32>>, Option<Vec<f32>>);
 ///
 /// # Errors
 /// If `replay` is not a valid S2D replay.
-pub fn s2d_inputs(replay: &[u8]) -> Result<S2dInputs> {
-    let r = S2dReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
+pub fn s2d_inputs(replay: &[u8]) -> Result<S2dInputs, ReplayError> {
+    let r = S2dReplay::from_bytes(replay).map_err(ReplayError::Replay)?;
     let mut frames = Vec::with_capacity(r.frames());
     for f in 0..r.frames() {
         let mut x = vec![0.0f32; r.input_len()];
         r.frame(f, &mut x)
-            .ok_or_else(|| anyhow!("replay: frame {f} unreadable"))?;
+            .ok_or(ReplayError::FrameUnreadable { frame: f })?;
         frames.push(x);
     }
     Ok((frames, r.neutral().map(|n| n.iter().collect())))
 }
 
 /// Plays an S2D replay through the decoder in `model` (see [`verify`]).
-fn verify_s2d_replay(model: &[u8], replay: &[u8]) -> Result<Verification> {
-    let decoder = S2dDecoder::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
-    let r = S2dReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
+fn verify_s2d_replay(model: &[u8], replay: &[u8]) -> Result<Verification, ReplayError> {
+    let decoder = S2dDecoder::from_bytes(model).map_err(ReplayError::Model)?;
+    let r = S2dReplay::from_bytes(replay).map_err(ReplayError::Replay)?;
     let neutral = vec![
         0.0f32;
         if r.neutral().is_some() {
@@ -229,7 +317,7 @@ fn verify_s2d_replay(model: &[u8], replay: &[u8]) -> Result<Verification> {
     let mut owned = S2dOwned::for_decoder(&decoder, neutral);
     let mut frames = Vec::with_capacity(r.frames());
     let first_mismatch = verify_s2d(model, &decoder, &r, &mut owned.frame(), |c| frames.push(*c))
-        .map_err(|e| anyhow!("{e}"))?;
+        .map_err(ReplayError::Refused)?;
     Ok(Verification {
         mode: Mode::F32,
         frames,
@@ -244,19 +332,19 @@ fn verify_s2d_replay(model: &[u8], replay: &[u8]) -> Result<Verification> {
 /// If either file is invalid, the replay is of the other model kind or was recorded with another
 /// model, or the mode is unavailable for this model. A differing frame is not an error: see
 /// [`Verification::first_mismatch`].
-pub fn verify(model: &[u8], replay: &[u8]) -> Result<Verification> {
+pub fn verify(model: &[u8], replay: &[u8]) -> Result<Verification, ReplayError> {
     match (is_s2d_model(model), is_s2d_replay(replay)) {
         (true, true) => return verify_s2d_replay(model, replay),
-        (true, false) => bail!("the model is an S2D decoder, the replay an AIM replay"),
-        (false, true) => bail!("the replay is an S2D replay, the model is not an S2D decoder"),
+        (true, false) => return Err(ReplayError::AimReplayForS2d),
+        (false, true) => return Err(ReplayError::S2dReplayForAim),
         (false, false) => {}
     }
-    let actor = AimActor::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
-    let r = AimReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
+    let actor = AimActor::from_bytes(model).map_err(ReplayError::Model)?;
+    let r = AimReplay::from_bytes(replay).map_err(ReplayError::Replay)?;
     let mut buf = Buffers::for_actor(&actor);
     let mut frames = Vec::with_capacity(r.frames());
     let first_mismatch = core_verify(model, &actor, &r, &mut buf.view(), |c| frames.push(*c))
-        .map_err(|e| anyhow!("{e}"))?;
+        .map_err(ReplayError::Refused)?;
     Ok(Verification {
         mode: r.mode(),
         frames,
@@ -280,11 +368,9 @@ pub struct Deviation {
 
 /// Millimetres per unit of a model's `units` metadata (`m`, `cm` or `mm`; cm if absent, the
 /// ICT-FaceKit unit).
-pub fn mm_per_unit(actor: &AimActor<'_>) -> Result<f64> {
+pub fn mm_per_unit(actor: &AimActor<'_>) -> Result<f64, ReplayError> {
     let name = actor.file().metadata().get("units").unwrap_or("cm");
-    let unit: crate::io::units::Unit = name
-        .parse()
-        .with_context(|| "in the model's metadata (units)")?;
+    let unit: crate::io::units::Unit = name.parse().map_err(ReplayError::Units)?;
     Ok(unit.mm())
 }
 
@@ -293,9 +379,9 @@ pub fn mm_per_unit(actor: &AimActor<'_>) -> Result<f64> {
 ///
 /// # Errors
 /// As [`verify`].
-pub fn deviation(model: &[u8], replay: &[u8]) -> Result<Deviation> {
-    let actor = AimActor::from_bytes(model).map_err(|e| anyhow!("model: {e}"))?;
-    let r = AimReplay::from_bytes(replay).map_err(|e| anyhow!("replay: {e}"))?;
+pub fn deviation(model: &[u8], replay: &[u8]) -> Result<Deviation, ReplayError> {
+    let actor = AimActor::from_bytes(model).map_err(ReplayError::Model)?;
+    let r = AimReplay::from_bytes(replay).map_err(ReplayError::Replay)?;
     let unit = mm_per_unit(&actor)?;
     let v = actor.vertex_count();
     let mut reference = Buffers::for_actor(&actor);
@@ -304,10 +390,11 @@ pub fn deviation(model: &[u8], replay: &[u8]) -> Result<Deviation> {
     for f in 0..r.frames() {
         let (head, jaw) = r
             .frame(f, &mut reference.weights)
-            .ok_or_else(|| anyhow!("replay has another coefficient count than the model"))?;
+            .ok_or(ReplayError::CoefficientCount)?;
         mode.weights.copy_from_slice(&reference.weights);
         let play = |m, b: &mut Buffers| {
-            pose_frame(&actor, m, &head, &jaw, &mut b.view()).map_err(|e| anyhow!("frame {f}: {e}"))
+            pose_frame(&actor, m, &head, &jaw, &mut b.view())
+                .map_err(|source| ReplayError::Frame { frame: f, source })
         };
         play(Mode::F32, &mut reference)?;
         play(r.mode(), &mut mode)?;
@@ -451,12 +538,27 @@ mod tests {
             assert_eq!(v.frames.len(), 3);
             assert_eq!(v.first_mismatch, None);
             // Another model (one metadata entry more) is refused by content hash.
-            let err = verify(&other, &r).unwrap_err().to_string();
-            assert!(err.contains("recorded with model"), "{err}");
+            let err = verify(&other, &r).unwrap_err();
+            assert!(
+                matches!(
+                    err,
+                    ReplayError::Refused(CoreReplayError::WrongModel { .. })
+                ),
+                "{err:?}"
+            );
         }
         // Q16 needs the cache.
         let err = record(&no_q16, Mode::Q16, &frames(m, 1)).unwrap_err();
-        assert!(err.to_string().contains("Q16.16 cache"), "{err}");
+        assert!(
+            matches!(
+                err,
+                ReplayError::Frame {
+                    frame: 0,
+                    source: CoreReplayError::NoQ16Cache
+                }
+            ),
+            "{err:?}"
+        );
     }
 
     #[test]
@@ -519,27 +621,40 @@ mod tests {
         let file = sinew_core::SinewFile::from_bytes(&model).unwrap();
         let mut w = SinewWriter::from_file(&file).unwrap();
         w.meta("note", "another model");
-        let err = verify(&w.to_bytes().unwrap(), &with)
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("recorded with model"), "{err}");
+        let err = verify(&w.to_bytes().unwrap(), &with).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                ReplayError::Refused(CoreReplayError::WrongModel { .. })
+            ),
+            "{err:?}"
+        );
         // An AIM actor with an S2D replay, and an S2D decoder with an AIM replay.
-        let err = verify(&golden(), &with).unwrap_err().to_string();
-        assert!(err.contains("S2D replay"), "{err}");
+        let err = verify(&golden(), &with).unwrap_err();
+        assert!(matches!(err, ReplayError::S2dReplayForAim), "{err:?}");
         let aim = golden();
         let m = AimActor::from_bytes(&aim).unwrap().shape_count();
         let aim_replay = record(&aim, Mode::F32, &frames(m, 2)).unwrap();
-        let err = verify(&model, &aim_replay).unwrap_err().to_string();
-        assert!(err.contains("AIM replay"), "{err}");
+        let err = verify(&model, &aim_replay).unwrap_err();
+        assert!(matches!(err, ReplayError::AimReplayForS2d), "{err:?}");
         // Recording refuses wrong lengths, naming them.
-        let err = record_s2d(&model, &[vec![0.0; 5]], None)
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("frame 0 has 5 inputs"), "{err}");
-        let err = record_s2d(&model, &inputs, Some(&neutral[1..]))
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("neutral"), "{err}");
+        let err = record_s2d(&model, &[vec![0.0; 5]], None).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                ReplayError::InputLength {
+                    frame: 0,
+                    inputs: 5,
+                    ..
+                }
+            ),
+            "{err:?}"
+        );
+        let err = record_s2d(&model, &inputs, Some(&neutral[1..])).unwrap_err();
+        assert!(
+            matches!(err, ReplayError::NeutralLength { values, .. } if values == neutral.len() - 1),
+            "{err:?}"
+        );
     }
 
     #[test]

@@ -137,7 +137,7 @@ pub fn with_q16_cache(actor_bytes: &[u8]) -> Result<Vec<u8>> {
     w.q16s("q16.s0", &[v, 3], &q("cache.s0")?)?;
     w.q16s("q16.k", &[v], &q("cache.k")?)?;
     w.q16s("q16.e", &[v, m, 3], &q("cache.e")?)?;
-    w.to_bytes()
+    Ok(w.to_bytes()?)
 }
 
 /// Metadata recorded in every baked actor.

@@ -1,10 +1,87 @@
 //! AIM training configuration: every knob with the paper's value or the one that worked here,
 //! saved as JSON beside every output so a run can be repeated.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
+
+/// A configuration file that could not be used, with its path.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// The file could not be read.
+    #[error("{}: cannot read", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not an AIM configuration in JSON (unknown fields included).
+    #[error("{}: invalid AIM configuration", path.display())]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// What the JSON reader said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The file's values are out of range.
+    #[error("{}: invalid AIM configuration", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// The rule broken.
+        #[source]
+        source: InvalidConfig,
+    },
+}
+
+/// The range rule of [`AimConfig`] a configuration breaks, naming the field.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum InvalidConfig {
+    /// `hidden` or `layers` is 0.
+    #[error("hidden and layers must be positive")]
+    Size,
+    /// More hidden layers than the core's networks hold.
+    #[error("layers: at most {max}")]
+    Layers {
+        /// The most there may be.
+        max: usize,
+    },
+    /// `batch` or `iterations` is 0.
+    #[error("batch and iterations must be positive")]
+    Run,
+    /// `shapes_per_point` outside `1..=batch`.
+    #[error("shapes_per_point must be between 1 and batch ({batch}), got {got}")]
+    ShapesPerPoint {
+        /// The batch.
+        batch: usize,
+        /// The value given.
+        got: usize,
+    },
+    /// `lr` or `lr_end` is not positive.
+    #[error("learning rates must be positive")]
+    LearningRate,
+    /// `checkpoint_every` is 0.
+    #[error("checkpoint_every must be positive")]
+    CheckpointEvery,
+    /// `anneal_fraction` outside `[0, 1)` or `anneal_factor` not positive.
+    #[error(
+        "anneal_fraction must be in [0, 1) and anneal_factor positive, got {fraction} and {factor}"
+    )]
+    Anneal {
+        /// `anneal_fraction`.
+        fraction: f64,
+        /// `anneal_factor`.
+        factor: f64,
+    },
+    /// `lambda_jaw` negative or not finite.
+    #[error("lambda_jaw must be a finite number ≥ 0, got {0}")]
+    LambdaJaw(f32),
+}
 
 /// How the learning rate moves from `lr` to `lr_end` over the run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
@@ -260,58 +337,57 @@ impl AimConfig {
     }
 
     /// Checks ranges; the error names the field.
-    pub fn validate(&self) -> anyhow::Result<()> {
-        anyhow::ensure!(
-            self.hidden > 0 && self.layers > 0,
-            "hidden and layers must be positive"
-        );
-        anyhow::ensure!(
-            self.layers < sinew_core::nn::MAX_LAYERS,
-            "layers: at most {}",
-            sinew_core::nn::MAX_LAYERS - 1
-        );
-        anyhow::ensure!(
-            self.batch > 0 && self.iterations > 0,
-            "batch and iterations must be positive"
-        );
-        anyhow::ensure!(
-            (1..=self.batch).contains(&self.shapes_per_point),
-            "shapes_per_point must be between 1 and batch ({}), got {}",
-            self.batch,
-            self.shapes_per_point
-        );
-        anyhow::ensure!(
-            self.lr > 0.0 && self.lr_end > 0.0,
-            "learning rates must be positive"
-        );
-        anyhow::ensure!(
-            self.checkpoint_every > 0,
-            "checkpoint_every must be positive"
-        );
-        anyhow::ensure!(
-            (0.0..1.0).contains(&self.anneal_fraction) && self.anneal_factor > 0.0,
-            "anneal_fraction must be in [0, 1) and anneal_factor positive, got {} and {}",
-            self.anneal_fraction,
-            self.anneal_factor
-        );
-        anyhow::ensure!(
-            self.lambda_jaw >= 0.0 && self.lambda_jaw.is_finite(),
-            "lambda_jaw must be a finite number ≥ 0, got {}",
-            self.lambda_jaw
-        );
+    pub fn validate(&self) -> Result<(), InvalidConfig> {
+        if !(self.hidden > 0 && self.layers > 0) {
+            return Err(InvalidConfig::Size);
+        }
+        if self.layers >= sinew_core::nn::MAX_LAYERS {
+            return Err(InvalidConfig::Layers {
+                max: sinew_core::nn::MAX_LAYERS - 1,
+            });
+        }
+        if !(self.batch > 0 && self.iterations > 0) {
+            return Err(InvalidConfig::Run);
+        }
+        if !(1..=self.batch).contains(&self.shapes_per_point) {
+            return Err(InvalidConfig::ShapesPerPoint {
+                batch: self.batch,
+                got: self.shapes_per_point,
+            });
+        }
+        if !(self.lr > 0.0 && self.lr_end > 0.0) {
+            return Err(InvalidConfig::LearningRate);
+        }
+        if self.checkpoint_every == 0 {
+            return Err(InvalidConfig::CheckpointEvery);
+        }
+        if !((0.0..1.0).contains(&self.anneal_fraction) && self.anneal_factor > 0.0) {
+            return Err(InvalidConfig::Anneal {
+                fraction: self.anneal_fraction,
+                factor: self.anneal_factor,
+            });
+        }
+        if !(self.lambda_jaw >= 0.0 && self.lambda_jaw.is_finite()) {
+            return Err(InvalidConfig::LambdaJaw(self.lambda_jaw));
+        }
         Ok(())
     }
 }
 
 /// Reads a JSON configuration file, naming it on error.
-pub fn read_config(path: &Path) -> Result<AimConfig> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read", path.display()))?;
-    let config: AimConfig = serde_json::from_str(&text)
-        .with_context(|| format!("{}: invalid AIM configuration", path.display()))?;
-    config
-        .validate()
-        .with_context(|| format!("{}: invalid AIM configuration", path.display()))?;
+pub fn read_config(path: &Path) -> Result<AimConfig, ConfigError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+        path: path.to_owned(),
+        source,
+    })?;
+    let config: AimConfig = serde_json::from_str(&text).map_err(|source| ConfigError::Json {
+        path: path.to_owned(),
+        source,
+    })?;
+    config.validate().map_err(|source| ConfigError::Invalid {
+        path: path.to_owned(),
+        source,
+    })?;
     Ok(config)
 }
 
@@ -363,14 +439,14 @@ mod tests {
         for t in [0, 2_500, 9_999] {
             assert!((long.lr_at(t) - short.lr_at(t)).abs() < 1e-15, "{t}");
         }
-        assert!(
+        assert!(matches!(
             AimConfig {
                 anneal_fraction: 1.0,
                 ..c
             }
-            .validate()
-            .is_err()
-        );
+            .validate(),
+            Err(InvalidConfig::Anneal { fraction: 1.0, .. })
+        ));
     }
 
     #[test]
@@ -430,21 +506,59 @@ mod tests {
             ]
         );
         assert!(AimConfig::from_recorded(serde_json::json!({"hiden": 3})).is_err());
-        for bad in [
-            AimConfig {
-                lambda_jaw: -1.0,
-                ..AimConfig::default()
-            },
-            AimConfig {
-                shapes_per_point: 0,
-                ..AimConfig::default()
-            },
-            AimConfig {
-                shapes_per_point: 4097,
-                ..AimConfig::default()
-            },
+        let batch = AimConfig::default().batch;
+        for (bad, why) in [
+            (
+                AimConfig {
+                    lambda_jaw: -1.0,
+                    ..AimConfig::default()
+                },
+                InvalidConfig::LambdaJaw(-1.0),
+            ),
+            (
+                AimConfig {
+                    shapes_per_point: 0,
+                    ..AimConfig::default()
+                },
+                InvalidConfig::ShapesPerPoint { batch, got: 0 },
+            ),
+            (
+                AimConfig {
+                    shapes_per_point: 4097,
+                    ..AimConfig::default()
+                },
+                InvalidConfig::ShapesPerPoint { batch, got: 4097 },
+            ),
         ] {
-            assert!(bad.validate().is_err(), "{bad:?}");
+            assert_eq!(bad.validate(), Err(why), "{bad:?}");
         }
+    }
+
+    #[test]
+    fn read_config_names_the_file_and_the_problem() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("aim.json");
+        assert!(matches!(read_config(&p), Err(ConfigError::Read { path, .. }) if path == p));
+        std::fs::write(&p, r#"{"hiden": 3}"#).unwrap();
+        assert!(matches!(read_config(&p), Err(ConfigError::Json { .. })));
+        std::fs::write(&p, r#"{"layers": 0}"#).unwrap();
+        let err = read_config(&p).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                ConfigError::Invalid {
+                    source: InvalidConfig::Size,
+                    ..
+                }
+            ),
+            "{err:?}"
+        );
+        assert_eq!(
+            format!("{:#}", anyhow::Error::from(err)),
+            format!(
+                "{}: invalid AIM configuration: hidden and layers must be positive",
+                p.display()
+            )
+        );
     }
 }

@@ -1,9 +1,9 @@
 //! The `.sinew` writer. The reader and every constant live in `sinew_core::format`; this module
 //! only lays bytes out as `docs/FORMAT.md` specifies, so the two cannot drift apart.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Result, bail};
+use sinew_core::FormatError;
 use sinew_core::format::{
     ArtifactKind, CRC32, Dtype, ENTRY_CRC, ENTRY_DTYPE, ENTRY_KIND, ENTRY_LENGTH, ENTRY_NAME,
     ENTRY_OFFSET, ENTRY_RANK, HEADER_CRC, HEADER_FILE_LEN, HEADER_FLAGS, HEADER_KIND, HEADER_LEN,
@@ -11,6 +11,119 @@ use sinew_core::format::{
     NAME_LEN, SECTION_ALIGN, SECTION_ENTRY_LEN, SectionKind, VERSION_MAJOR, VERSION_MINOR,
     data_start, entry_dim,
 };
+
+/// A `.sinew` file that could not be read or written, with its path.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ContainerError {
+    /// The file could not be read.
+    #[error("{}: cannot read", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The bytes are not a valid artefact (the core's verdict).
+    #[error("{}: invalid .sinew file", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: FormatError,
+    },
+    /// The artefact could not be laid out (see [`WriterError`]).
+    #[error(transparent)]
+    Build(#[from] WriterError),
+    /// The bytes could not be written to disk (the message names the file).
+    #[error(transparent)]
+    Write(anyhow::Error),
+}
+
+/// A section, metadata entry or size that the format cannot hold, found before anything is
+/// written.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum WriterError {
+    /// A section name that is empty, too long or not printable ASCII.
+    #[error("section name {name:?} must be 1..={NAME_LEN} printable ASCII characters")]
+    BadName {
+        /// The name.
+        name: String,
+    },
+    /// A section name given twice (or `meta`, which the metadata section takes).
+    #[error("section name {name:?} is used twice")]
+    DuplicateName {
+        /// The name.
+        name: String,
+    },
+    /// More dimensions than the format holds.
+    #[error("section {name}: rank {rank} exceeds {MAX_RANK}")]
+    Rank {
+        /// The section.
+        name: String,
+        /// Its rank.
+        rank: usize,
+    },
+    /// A dimension beyond `u32`.
+    #[error("section {name}: dimension {dim} too large")]
+    DimensionTooLarge {
+        /// The section.
+        name: String,
+        /// The dimension.
+        dim: usize,
+    },
+    /// Data whose length is not the shape's.
+    #[error("section {name}: shape {dims:?} does not match {bytes} bytes of {dtype}")]
+    ShapeMismatch {
+        /// The section.
+        name: String,
+        /// Its shape.
+        dims: Vec<u32>,
+        /// Its data's length.
+        bytes: usize,
+        /// Its element type's name.
+        dtype: &'static str,
+    },
+    /// A NaN or infinite `f32`.
+    #[error("section {name}: value {index} is {value} (weights must be finite)")]
+    NonFinite {
+        /// The section.
+        name: String,
+        /// The value's index.
+        index: usize,
+        /// The value.
+        value: f32,
+    },
+    /// A section of a validated file without an element type.
+    #[error("section {name}: no data type")]
+    NoDtype {
+        /// The section.
+        name: String,
+    },
+    /// A metadata key with `=` or a line break, an empty key, or a value with a line break.
+    #[error("metadata entry {key:?} = {value:?} holds a forbidden character")]
+    Metadata {
+        /// The key.
+        key: String,
+        /// The value.
+        value: String,
+    },
+    /// More sections than the format's limit.
+    #[error("{sections} sections exceed the format's limit of {MAX_SECTIONS}")]
+    TooManySections {
+        /// The sections, metadata included.
+        sections: usize,
+    },
+    /// An artefact (or its metadata) beyond 4 GiB.
+    #[error("artefact of {bytes} bytes exceeds 4 GiB")]
+    TooLarge {
+        /// Its length.
+        bytes: usize,
+    },
+}
 
 /// One section waiting to be written.
 #[derive(Clone, Debug)]
@@ -44,7 +157,7 @@ impl SinewWriter {
 
     /// A writer holding everything of a validated artefact (kind, flags, metadata, sections in
     /// order), to add sections to it and write it again.
-    pub fn from_file(file: &sinew_core::SinewFile<'_>) -> Result<Self> {
+    pub fn from_file(file: &sinew_core::SinewFile<'_>) -> Result<Self, WriterError> {
         let mut w = Self::new(file.kind);
         w.flags(file.flags);
         for (k, v) in file.metadata().iter() {
@@ -55,9 +168,9 @@ impl SinewWriter {
                 continue;
             }
             let dims: Vec<usize> = s.dims().iter().map(|&d| d as usize).collect();
-            let dtype = s
-                .dtype
-                .ok_or_else(|| anyhow::anyhow!("section {}: no data type", s.name()))?;
+            let dtype = s.dtype.ok_or_else(|| WriterError::NoDtype {
+                name: s.name().to_owned(),
+            })?;
             w.push(s.name(), dtype, &dims, s.data().to_vec())?;
             if let Some(last) = w.sections.last_mut() {
                 last.kind = s.kind;
@@ -91,30 +204,37 @@ impl SinewWriter {
         dtype: Dtype,
         dims: &[usize],
         data: Vec<u8>,
-    ) -> Result<&mut Self> {
+    ) -> Result<&mut Self, WriterError> {
+        let name_owned = || name.to_owned();
         if name.is_empty() || name.len() > NAME_LEN || !name.bytes().all(|c| c.is_ascii_graphic()) {
-            bail!("section name {name:?} must be 1..={NAME_LEN} printable ASCII characters");
+            return Err(WriterError::BadName { name: name_owned() });
         }
         if name == "meta" || self.sections.iter().any(|s| s.name == name) {
-            bail!("section name {name:?} is used twice");
+            return Err(WriterError::DuplicateName { name: name_owned() });
         }
         if dims.len() > MAX_RANK {
-            bail!("section {name}: rank {} exceeds {MAX_RANK}", dims.len());
+            return Err(WriterError::Rank {
+                name: name_owned(),
+                rank: dims.len(),
+            });
         }
         let dims: Vec<u32> = dims
             .iter()
             .map(|&d| {
-                u32::try_from(d)
-                    .map_err(|_| anyhow::anyhow!("section {name}: dimension {d} too large"))
+                u32::try_from(d).map_err(|_| WriterError::DimensionTooLarge {
+                    name: name_owned(),
+                    dim: d,
+                })
             })
-            .collect::<Result<_>>()?;
+            .collect::<Result<_, _>>()?;
         let elements: usize = dims.iter().map(|&d| d as usize).product();
         if elements * dtype.size() != data.len() {
-            bail!(
-                "section {name}: shape {dims:?} does not match {} bytes of {}",
-                data.len(),
-                dtype.name()
-            );
+            return Err(WriterError::ShapeMismatch {
+                name: name_owned(),
+                dims,
+                bytes: data.len(),
+                dtype: dtype.name(),
+            });
         }
         self.sections.push(PendingSection {
             kind: SectionKind::Tensor,
@@ -127,12 +247,18 @@ impl SinewWriter {
     }
 
     /// Adds an `f32` tensor; every value must be finite.
-    pub fn f32s(&mut self, name: &str, dims: &[usize], values: &[f32]) -> Result<&mut Self> {
+    pub fn f32s(
+        &mut self,
+        name: &str,
+        dims: &[usize],
+        values: &[f32],
+    ) -> Result<&mut Self, WriterError> {
         if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            bail!(
-                "section {name}: value {i} is {} (weights must be finite)",
-                values[i]
-            );
+            return Err(WriterError::NonFinite {
+                name: name.to_owned(),
+                index: i,
+                value: values[i],
+            });
         }
         self.push(
             name,
@@ -143,7 +269,12 @@ impl SinewWriter {
     }
 
     /// Adds a `u32` tensor.
-    pub fn u32s(&mut self, name: &str, dims: &[usize], values: &[u32]) -> Result<&mut Self> {
+    pub fn u32s(
+        &mut self,
+        name: &str,
+        dims: &[usize],
+        values: &[u32],
+    ) -> Result<&mut Self, WriterError> {
         self.push(
             name,
             Dtype::U32,
@@ -153,7 +284,12 @@ impl SinewWriter {
     }
 
     /// Adds a Q16.16 tensor.
-    pub fn q16s(&mut self, name: &str, dims: &[usize], values: &[i32]) -> Result<&mut Self> {
+    pub fn q16s(
+        &mut self,
+        name: &str,
+        dims: &[usize],
+        values: &[i32],
+    ) -> Result<&mut Self, WriterError> {
         self.push(
             name,
             Dtype::Q16,
@@ -163,7 +299,12 @@ impl SinewWriter {
     }
 
     /// Adds a section of a kind this version may not know (for forward-compatibility tests).
-    pub fn raw(&mut self, kind: SectionKind, name: &str, data: Vec<u8>) -> Result<&mut Self> {
+    pub fn raw(
+        &mut self,
+        kind: SectionKind,
+        name: &str,
+        data: Vec<u8>,
+    ) -> Result<&mut Self, WriterError> {
         let len = data.len();
         self.push(name, Dtype::U8, &[len], data)?;
         if let Some(last) = self.sections.last_mut() {
@@ -173,13 +314,16 @@ impl SinewWriter {
     }
 
     /// Serialises the artefact.
-    pub fn to_bytes(&self) -> Result<Vec<u8>> {
+    pub fn to_bytes(&self) -> Result<Vec<u8>, WriterError> {
         let mut sections = Vec::with_capacity(self.sections.len() + 1);
         if !self.metadata.is_empty() {
             let mut text = String::new();
             for (k, v) in &self.metadata {
                 if k.is_empty() || k.contains(['=', '\n', '\r']) || v.contains(['\n', '\r']) {
-                    bail!("metadata entry {k:?} = {v:?} holds a forbidden character");
+                    return Err(WriterError::Metadata {
+                        key: k.clone(),
+                        value: v.clone(),
+                    });
                 }
                 text.push_str(k);
                 text.push('=');
@@ -187,7 +331,10 @@ impl SinewWriter {
                 text.push('\n');
             }
             let data = text.into_bytes();
-            let dims = vec![u32::try_from(data.len())?];
+            let dims = vec![
+                u32::try_from(data.len())
+                    .map_err(|_| WriterError::TooLarge { bytes: data.len() })?,
+            ];
             sections.push(PendingSection {
                 kind: SectionKind::Metadata,
                 name: "meta".into(),
@@ -198,10 +345,9 @@ impl SinewWriter {
         }
         sections.extend(self.sections.iter().cloned());
         if sections.len() > MAX_SECTIONS {
-            bail!(
-                "{} sections exceed the format's limit of {MAX_SECTIONS}",
-                sections.len()
-            );
+            return Err(WriterError::TooManySections {
+                sections: sections.len(),
+            });
         }
 
         let mut offsets = Vec::with_capacity(sections.len());
@@ -214,8 +360,8 @@ impl SinewWriter {
             .last()
             .zip(sections.last())
             .map_or(HEADER_LEN, |(o, s)| o + s.data.len());
-        let file_len_u32 = u32::try_from(file_len)
-            .map_err(|_| anyhow::anyhow!("artefact of {file_len} bytes exceeds 4 GiB"))?;
+        let file_len_u32 =
+            u32::try_from(file_len).map_err(|_| WriterError::TooLarge { bytes: file_len })?;
 
         let mut out = vec![0u8; file_len];
         out[HEADER_MAGIC.range()].copy_from_slice(&MAGIC);
@@ -249,18 +395,32 @@ impl SinewWriter {
     }
 
     /// Serialises and writes the artefact atomically.
-    pub fn write(&self, path: &Path) -> Result<()> {
-        crate::io::atomic::write(path, &self.to_bytes()?)
+    pub fn write(&self, path: &Path) -> Result<(), ContainerError> {
+        crate::io::atomic::write(path, &self.to_bytes()?).map_err(ContainerError::Write)
     }
 }
 
 /// Reads and validates a `.sinew` file, naming the file in any error.
-pub fn read(path: &Path) -> Result<Vec<u8>> {
-    let bytes =
-        std::fs::read(path).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
-    sinew_core::SinewFile::from_bytes(&bytes)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+pub fn read(path: &Path) -> Result<Vec<u8>, ContainerError> {
+    let bytes = read_bytes(path)?;
+    sinew_core::SinewFile::from_bytes(&bytes).map_err(|source| invalid(path, source))?;
     Ok(bytes)
+}
+
+/// Reads a file's bytes without validating them.
+pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>, ContainerError> {
+    std::fs::read(path).map_err(|source| ContainerError::Read {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// The error for `path`, whose bytes the core rejected.
+pub(crate) fn invalid(path: &Path, source: FormatError) -> ContainerError {
+    ContainerError::Invalid {
+        path: path.to_owned(),
+        source,
+    }
 }
 
 #[cfg(test)]
@@ -307,14 +467,47 @@ mod tests {
     #[test]
     fn rejects_bad_sections_before_writing() {
         let mut w = SinewWriter::new(ArtifactKind::Network);
-        assert!(w.f32s("x", &[2], &[1.0, f32::NAN]).is_err());
-        assert!(w.f32s("x", &[3], &[1.0]).is_err());
-        assert!(
-            w.f32s("a name that is much too long for the table", &[1], &[1.0])
-                .is_err()
-        );
+        assert!(matches!(
+            w.f32s("x", &[2], &[1.0, f32::NAN]),
+            Err(WriterError::NonFinite { index: 1, .. })
+        ));
+        assert!(matches!(
+            w.f32s("x", &[3], &[1.0]),
+            Err(WriterError::ShapeMismatch { bytes: 4, .. })
+        ));
+        assert!(matches!(
+            w.f32s("a name that is much too long for the table", &[1], &[1.0]),
+            Err(WriterError::BadName { .. })
+        ));
         w.f32s("x", &[1], &[1.0]).unwrap();
-        assert!(w.u32s("x", &[1], &[1]).is_err());
+        assert!(matches!(
+            w.u32s("x", &[1], &[1]),
+            Err(WriterError::DuplicateName { name }) if name == "x"
+        ));
+        w.meta("bad=key", 1);
+        assert!(matches!(w.to_bytes(), Err(WriterError::Metadata { .. })));
+    }
+
+    #[test]
+    fn read_names_the_file_and_the_core_verdict() {
+        let dir = tempfile::tempdir().unwrap();
+        let junk = dir.path().join("junk.sinew");
+        std::fs::write(
+            &junk,
+            b"not an artefact at all, but long enough to have a header",
+        )
+        .unwrap();
+        let err = read(&junk).unwrap_err();
+        assert!(
+            matches!(&err, ContainerError::Invalid { path, .. } if path == &junk),
+            "{err:?}"
+        );
+        assert!(err.to_string().contains("junk.sinew"), "{err}");
+        let missing = dir.path().join("missing.sinew");
+        assert!(matches!(
+            crate::io::inspect::inspect(&missing),
+            Err(ContainerError::Read { path, .. }) if path == missing
+        ));
     }
 
     #[test]

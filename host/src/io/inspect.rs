@@ -2,10 +2,11 @@
 
 use std::path::Path;
 
-use anyhow::{Result, anyhow};
 use serde::Serialize;
 use sinew_core::SinewFile;
 use sinew_core::format::{FLAG_PLAYBACK_ONLY, SectionKind};
+
+use crate::io::container::{ContainerError, invalid, read_bytes};
 
 /// The JSON form of `sinew inspect --json`.
 #[derive(Debug, Serialize)]
@@ -52,10 +53,9 @@ pub struct SectionReport {
 }
 
 /// Reads and validates `path`; the error names the file and the problem.
-pub fn inspect(path: &Path) -> Result<Report> {
-    let bytes = std::fs::read(path).map_err(|e| anyhow!("{}: cannot read: {e}", path.display()))?;
-    let f = SinewFile::from_bytes(&bytes)
-        .map_err(|e| anyhow!("{}: invalid .sinew file: {e}", path.display()))?;
+pub fn inspect(path: &Path) -> Result<Report, ContainerError> {
+    let bytes = read_bytes(path)?;
+    let f = SinewFile::from_bytes(&bytes).map_err(|source| invalid(path, source))?;
     let sections = f
         .sections()
         .map(|s| SectionReport {

@@ -11,11 +11,16 @@ use std::collections::HashMap;
 use std::io::{Read, Write};
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow, bail};
 use ply_rs_bw::ply::{
     Addable, DefaultElement, ElementDef, Encoding, Ply, Property, PropertyDef, PropertyType,
     ScalarType,
 };
+
+mod error;
+pub use error::{EncodeError, InvalidMesh, MeshError, ParseReason};
+
+/// A syntax error and the 1-based OBJ line it is on.
+type Syntax = (Option<usize>, ParseReason);
 
 /// A polygon mesh as read from a file: polygons are kept as they are (quads stay quads).
 ///
@@ -46,7 +51,7 @@ enum Format {
 
 /// Picks the format from the file name (`.obj`, `.ply`, either with `.gz`), and whether the
 /// file is gzip-compressed.
-fn format_of(path: &Path) -> Result<(Format, bool)> {
+fn format_of(path: &Path) -> Result<(Format, bool), MeshError> {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().to_ascii_lowercase())
@@ -60,10 +65,9 @@ fn format_of(path: &Path) -> Result<(Format, bool)> {
     } else if stem.ends_with(".ply") {
         Ok((Format::Ply, gz))
     } else {
-        bail!(
-            "{}: unknown mesh format (expected .obj, .obj.gz, .ply or .ply.gz)",
-            path.display()
-        )
+        Err(MeshError::UnknownFormat {
+            path: path.to_owned(),
+        })
     }
 }
 
@@ -91,16 +95,21 @@ impl Mesh {
     /// optional per-corner `texcoord` list (MeshLab's layout).
     ///
     /// Every error names the file; the result is validated (see [`Mesh::validate`]).
-    pub fn read(path: &Path) -> Result<Mesh> {
+    pub fn read(path: &Path) -> Result<Mesh, MeshError> {
         let (format, gz) = format_of(path)?;
-        let raw =
-            std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
+        let raw = std::fs::read(path).map_err(|source| MeshError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
         // Gzip is recognised by its magic too, so a compressed file without `.gz` still reads.
         let bytes = if gz || raw.starts_with(&[0x1f, 0x8b]) {
             let mut out = Vec::with_capacity(raw.len() * 4);
             flate2::read::MultiGzDecoder::new(raw.as_slice())
                 .read_to_end(&mut out)
-                .with_context(|| format!("{}: not a valid gzip file", path.display()))?;
+                .map_err(|source| MeshError::Gzip {
+                    path: path.to_owned(),
+                    source,
+                })?;
             out
         } else {
             raw
@@ -109,9 +118,15 @@ impl Mesh {
             Format::Obj => parse_obj(&bytes),
             Format::Ply => parse_ply(&bytes),
         }
-        .with_context(|| format!("{}: not a valid mesh", path.display()))?;
-        mesh.validate()
-            .with_context(|| format!("{}: inconsistent mesh", path.display()))?;
+        .map_err(|(line, reason)| MeshError::Parse {
+            path: path.to_owned(),
+            line,
+            reason,
+        })?;
+        mesh.validate().map_err(|source| MeshError::Inconsistent {
+            path: path.to_owned(),
+            source,
+        })?;
         Ok(mesh)
     }
 
@@ -123,78 +138,93 @@ impl Mesh {
     /// list. Floats are written exactly (shortest round-trip text in OBJ, raw bits in PLY).
     /// OBJ has no per-vertex layout, so per-vertex UVs are written as `f v/v` and read back in
     /// the per-corner layout (same values at every corner).
-    pub fn write(&self, path: &Path) -> Result<()> {
+    pub fn write(&self, path: &Path) -> Result<(), MeshError> {
         let (format, gz) = format_of(path)?;
-        self.validate().with_context(|| {
-            format!("{}: refusing to write an inconsistent mesh", path.display())
-        })?;
+        self.validate()
+            .map_err(|source| MeshError::WriteInconsistent {
+                path: path.to_owned(),
+                source,
+            })?;
         let mut bytes = Vec::new();
         match format {
-            Format::Obj => self.write_obj(&mut bytes).map_err(anyhow::Error::from),
+            Format::Obj => self.write_obj(&mut bytes).map_err(EncodeError::from),
             Format::Ply => self.write_ply(&mut bytes),
         }
-        .with_context(|| format!("{}: cannot encode the mesh", path.display()))?;
+        .map_err(|source| MeshError::Encode {
+            path: path.to_owned(),
+            source,
+        })?;
         if gz {
             let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
             enc.write_all(&bytes)
                 .and_then(|()| enc.finish())
                 .map(|b| bytes = b)
-                .with_context(|| format!("{}: cannot compress", path.display()))?;
+                .map_err(|source| MeshError::Compress {
+                    path: path.to_owned(),
+                    source,
+                })?;
         }
-        crate::io::atomic::write(path, &bytes)
+        crate::io::atomic::write(path, &bytes).map_err(MeshError::Write)
     }
 
     /// Checks every index and layout rule stated on [`Mesh`]: polygons have at least 3 corners
     /// and index existing vertices; UVs follow one of the two layouts; positions are finite.
-    pub fn validate(&self) -> Result<()> {
+    pub fn validate(&self) -> Result<(), InvalidMesh> {
         let nv = self.positions.len();
         if let Some(i) = self
             .positions
             .iter()
             .position(|p| p.iter().any(|c| !c.is_finite()))
         {
-            bail!(
-                "vertex {i} has a non-finite coordinate {:?}",
-                self.positions[i]
-            );
+            return Err(InvalidMesh::NonFiniteVertex {
+                vertex: i,
+                position: self.positions[i],
+            });
         }
         for (pi, poly) in self.polygons.iter().enumerate() {
             if poly.len() < 3 {
-                bail!(
-                    "polygon {pi} has {} corners (at least 3 needed)",
-                    poly.len()
-                );
+                return Err(InvalidMesh::TooFewCorners {
+                    polygon: pi,
+                    corners: poly.len(),
+                });
             }
             if let Some(&v) = poly.iter().find(|&&v| v as usize >= nv) {
-                bail!("polygon {pi} refers to vertex {v} but the mesh has {nv} vertices");
+                return Err(InvalidMesh::VertexOutOfRange {
+                    polygon: pi,
+                    vertex: v,
+                    vertices: nv,
+                });
             }
         }
         if self.polygon_uvs.is_empty() {
             if !self.uvs.is_empty() && self.uvs.len() != nv {
-                bail!(
-                    "{} texture coordinates for {nv} vertices and no per-corner indices",
-                    self.uvs.len()
-                );
+                return Err(InvalidMesh::UvCount {
+                    uvs: self.uvs.len(),
+                    vertices: nv,
+                });
             }
         } else {
             if self.polygon_uvs.len() != self.polygons.len() {
-                bail!(
-                    "{} polygons but {} polygons of texture indices",
-                    self.polygons.len(),
-                    self.polygon_uvs.len()
-                );
+                return Err(InvalidMesh::UvPolygonCount {
+                    polygons: self.polygons.len(),
+                    uv_polygons: self.polygon_uvs.len(),
+                });
             }
             let nt = self.uvs.len();
             for (pi, (poly, puv)) in self.polygons.iter().zip(&self.polygon_uvs).enumerate() {
                 if poly.len() != puv.len() {
-                    bail!(
-                        "polygon {pi} has {} corners but {} texture indices",
-                        poly.len(),
-                        puv.len()
-                    );
+                    return Err(InvalidMesh::UvCornerCount {
+                        polygon: pi,
+                        corners: poly.len(),
+                        uv_indices: puv.len(),
+                    });
                 }
                 if let Some(&t) = puv.iter().find(|&&t| t as usize >= nt) {
-                    bail!("polygon {pi} refers to texture coordinate {t} but there are {nt}");
+                    return Err(InvalidMesh::UvOutOfRange {
+                        polygon: pi,
+                        uv: t,
+                        uvs: nt,
+                    });
                 }
             }
         }
@@ -203,7 +233,10 @@ impl Mesh {
             .iter()
             .position(|t| t.iter().any(|c| !c.is_finite()))
         {
-            bail!("texture coordinate {i} is not finite: {:?}", self.uvs[i]);
+            return Err(InvalidMesh::NonFiniteUv {
+                index: i,
+                uv: self.uvs[i],
+            });
         }
         Ok(())
     }
@@ -238,7 +271,7 @@ impl Mesh {
         Ok(())
     }
 
-    fn write_ply(&self, out: &mut Vec<u8>) -> Result<()> {
+    fn write_ply(&self, out: &mut Vec<u8>) -> Result<(), EncodeError> {
         let mut ply = Ply::<DefaultElement>::new();
         ply.header.encoding = Encoding::BinaryLittleEndian;
         ply.header.comments.push("written by sinew".to_owned());
@@ -287,16 +320,16 @@ impl Mesh {
         for (pi, poly) in self.polygons.iter().enumerate() {
             // The list length is a uchar, so a PLY polygon has at most 255 corners.
             if poly.len() > 255 {
-                bail!(
-                    "polygon {pi} has {} corners; PLY lists hold 255",
-                    poly.len()
-                );
+                return Err(EncodeError::TooManyCorners {
+                    polygon: pi,
+                    corners: poly.len(),
+                });
             }
             let idx = poly
                 .iter()
                 .map(|&v| i32::try_from(v))
                 .collect::<Result<Vec<i32>, _>>()
-                .map_err(|_| anyhow!("polygon {pi}: vertex index beyond the PLY int range"))?;
+                .map_err(|_| EncodeError::IndexBeyondInt { polygon: pi })?;
             let mut e = DefaultElement::new();
             e.insert("vertex_indices".to_owned(), Property::ListInt(idx));
             if per_corner_uv {
@@ -311,7 +344,7 @@ impl Mesh {
         ply.payload.insert("face".to_owned(), faces);
         ply_rs_bw::writer::Writer::new()
             .write_ply(out, &mut ply)
-            .map_err(|e| anyhow!("PLY encoding failed: {e}"))?;
+            .map_err(EncodeError::Ply)?;
         Ok(())
     }
 
@@ -353,31 +386,28 @@ impl Mesh {
     /// Checks that `other` (read from `other_path`) has this mesh's vertex count and the same
     /// polygons, so that the two correspond vertex by vertex. Texture coordinates are not
     /// compared.
-    pub fn check_same_topology(&self, other: &Mesh, other_path: &Path) -> Result<()> {
+    pub fn check_same_topology(&self, other: &Mesh, other_path: &Path) -> Result<(), MeshError> {
         if self.positions.len() != other.positions.len()
             || self.polygons.len() != other.polygons.len()
         {
-            bail!(
-                "{}: topology differs from the reference: expected {} vertices and {} polygons, \
-                 found {} vertices and {} polygons",
-                other_path.display(),
-                self.positions.len(),
-                self.polygons.len(),
-                other.positions.len(),
-                other.polygons.len()
-            );
+            return Err(MeshError::TopologyCounts {
+                path: other_path.to_owned(),
+                expected_vertices: self.positions.len(),
+                expected_polygons: self.polygons.len(),
+                vertices: other.positions.len(),
+                polygons: other.polygons.len(),
+            });
         }
         if let Some(pi) = (0..self.polygons.len()).find(|&i| self.polygons[i] != other.polygons[i])
         {
-            bail!(
-                "{}: topology differs from the reference: both have {} vertices and {} polygons, \
-                 but polygon {pi} is {:?} instead of {:?}",
-                other_path.display(),
-                self.positions.len(),
-                self.polygons.len(),
-                other.polygons[pi],
-                self.polygons[pi]
-            );
+            return Err(MeshError::TopologyPolygon {
+                path: other_path.to_owned(),
+                vertices: self.positions.len(),
+                polygons: self.polygons.len(),
+                polygon: pi,
+                found: other.polygons[pi].clone(),
+                expected: self.polygons[pi].clone(),
+            });
         }
         Ok(())
     }
@@ -535,39 +565,50 @@ impl Mesh {
 /// Resolves one OBJ index (1-based, or negative counting back from the last element defined so
 /// far) to a 0-based index. Range is checked later by [`Mesh::validate`], since the format
 /// technically allows no forward references but tolerating them costs nothing.
-fn obj_index(token: &str, defined: usize, what: &str) -> Result<u32> {
-    let i: i64 = token
-        .parse()
-        .map_err(|_| anyhow!("bad {what} index {token:?}"))?;
+fn obj_index(token: &str, defined: usize, what: &'static str) -> Result<u32, ParseReason> {
+    let i: i64 = token.parse().map_err(|_| ParseReason::BadIndex {
+        what,
+        token: token.to_owned(),
+    })?;
     let resolved = if i > 0 {
         i - 1
     } else if i < 0 {
         defined as i64 + i
     } else {
-        bail!("{what} index 0 (OBJ indices start at 1)")
+        return Err(ParseReason::ZeroIndex { what });
     };
-    u32::try_from(resolved).map_err(|_| anyhow!("{what} index {token} is out of range"))
+    u32::try_from(resolved).map_err(|_| ParseReason::IndexOutOfRange {
+        what,
+        token: token.to_owned(),
+    })
 }
 
 /// Parses `count` floats from `it`; `min` of them are required, the rest default to zero.
 fn obj_floats<const N: usize>(
     it: &mut std::str::SplitAsciiWhitespace<'_>,
     min: usize,
-) -> Result<[f32; N]> {
+) -> Result<[f32; N], ParseReason> {
     let mut out = [0.0f32; N];
     for (k, slot) in out.iter_mut().enumerate() {
         match it.next() {
             Some(t) => {
-                *slot = t.parse().map_err(|_| anyhow!("bad number {t:?}"))?;
+                *slot = t.parse().map_err(|_| ParseReason::BadNumber {
+                    token: t.to_owned(),
+                })?;
             }
             None if k >= min => break,
-            None => bail!("expected {min} numbers, found {k}"),
+            None => {
+                return Err(ParseReason::MissingNumbers {
+                    expected: min,
+                    found: k,
+                });
+            }
         }
     }
     Ok(out)
 }
 
-fn parse_obj(bytes: &[u8]) -> Result<Mesh> {
+fn parse_obj(bytes: &[u8]) -> Result<Mesh, Syntax> {
     // Comments may hold any bytes; numbers and keywords are ASCII, so a lossy view is exact
     // where it matters and only copies when the file has invalid UTF-8.
     let text = String::from_utf8_lossy(bytes);
@@ -579,7 +620,7 @@ fn parse_obj(bytes: &[u8]) -> Result<Mesh> {
             None => line,
         };
         let mut it = line.split_ascii_whitespace();
-        let parsed: Result<()> = match it.next() {
+        let parsed: Result<(), ParseReason> = match it.next() {
             Some("v") => obj_floats::<3>(&mut it, 3).map(|p| mesh.positions.push(p)),
             Some("vt") => obj_floats::<2>(&mut it, 1).map(|t| mesh.uvs.push(t)),
             Some("f") => (|| {
@@ -597,14 +638,16 @@ fn parse_obj(bytes: &[u8]) -> Result<Mesh> {
                     }
                 }
                 if poly.len() < 3 {
-                    bail!("face with {} corners (at least 3 needed)", poly.len());
+                    return Err(ParseReason::FaceTooSmall {
+                        corners: poly.len(),
+                    });
                 }
                 if puv.is_empty() {
                     without_uv += 1;
                 } else if puv.len() == poly.len() {
                     with_uv += 1;
                 } else {
-                    bail!("face gives texture indices for only some corners");
+                    return Err(ParseReason::PartialFaceTexture);
                 }
                 mesh.polygons.push(poly);
                 mesh.polygon_uvs.push(puv);
@@ -612,7 +655,7 @@ fn parse_obj(bytes: &[u8]) -> Result<Mesh> {
             })(),
             _ => Ok(()),
         };
-        parsed.with_context(|| format!("line {}", n + 1))?;
+        parsed.map_err(|reason| (Some(n + 1), reason))?;
     }
     if with_uv == 0 || without_uv > 0 {
         // No polygon, or not every polygon, has texture indices: the per-corner layout cannot
@@ -623,12 +666,14 @@ fn parse_obj(bytes: &[u8]) -> Result<Mesh> {
     Ok(mesh)
 }
 
-fn parse_ply(bytes: &[u8]) -> Result<Mesh> {
+fn parse_ply(bytes: &[u8]) -> Result<Mesh, Syntax> {
+    parse_ply_body(bytes).map_err(|reason| (None, reason))
+}
+
+fn parse_ply_body(bytes: &[u8]) -> Result<Mesh, ParseReason> {
     let parser = ply_rs_bw::parser::Parser::<DefaultElement>::new();
     let mut src = bytes;
-    let ply = parser
-        .read_ply(&mut src)
-        .map_err(|e| anyhow!("PLY parse error: {e}"))?;
+    let ply = parser.read_ply(&mut src).map_err(ParseReason::Ply)?;
     let mut mesh = Mesh::default();
     let empty = Vec::new();
     let verts = ply.payload.get("vertex").unwrap_or(&empty);
@@ -643,10 +688,10 @@ fn parse_ply(bytes: &[u8]) -> Result<Mesh> {
             .into_iter()
             .find(|(a, b)| def.properties.contains_key(*a) && def.properties.contains_key(*b))
     });
-    let scalar = |e: &DefaultElement, i: usize, name: &str| -> Result<f32> {
+    let scalar = |e: &DefaultElement, i: usize, name: &'static str| -> Result<f32, ParseReason> {
         e.get(name)
             .and_then(Property::to_f32_lossy)
-            .ok_or_else(|| anyhow!("vertex {i}: missing or non-scalar property {name:?}"))
+            .ok_or(ParseReason::VertexProperty { vertex: i, name })
     };
     for (i, e) in verts.iter().enumerate() {
         mesh.positions
@@ -664,23 +709,23 @@ fn parse_ply(bytes: &[u8]) -> Result<Mesh> {
         let idx = e
             .get("vertex_indices")
             .or_else(|| e.get("vertex_index"))
-            .ok_or_else(|| anyhow!("face {fi}: no vertex_indices list"))?;
+            .ok_or(ParseReason::NoVertexIndices { face: fi })?;
         let poly = idx
             .to_u32_list()
-            .ok_or_else(|| anyhow!("face {fi}: vertex_indices is not a list of indices >= 0"))?;
+            .ok_or(ParseReason::BadVertexIndices { face: fi })?;
         let tc: Option<Vec<f32>> = match e.get("texcoord") {
             Some(Property::ListFloat(v)) => Some(v.clone()),
             Some(Property::ListDouble(v)) => Some(v.iter().map(|&x| x as f32).collect()),
-            Some(_) => bail!("face {fi}: texcoord is not a float list"),
+            Some(_) => return Err(ParseReason::TexcoordNotFloat { face: fi }),
             None => None,
         };
         if let Some(tc) = tc {
             if tc.len() != 2 * poly.len() {
-                bail!(
-                    "face {fi}: {} texcoord values for {} corners",
-                    tc.len(),
-                    poly.len()
-                );
+                return Err(ParseReason::TexcoordCount {
+                    face: fi,
+                    values: tc.len(),
+                    corners: poly.len(),
+                });
             }
             let ids = tc
                 .chunks_exact(2)
@@ -698,7 +743,7 @@ fn parse_ply(bytes: &[u8]) -> Result<Mesh> {
     }
     if !polygon_uvs.is_empty() {
         if polygon_uvs.len() != mesh.polygons.len() {
-            bail!("only some faces carry texcoord");
+            return Err(ParseReason::PartialTexcoord);
         }
         // Per-corner coordinates win over per-vertex ones: they can express seams.
         mesh.uvs = corner_uvs;

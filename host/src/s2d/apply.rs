@@ -82,7 +82,8 @@ pub fn neutralize(model: &Path, expressive: &Path, out: &Path) -> Result<()> {
     let to = dec.landmarks(&neutral);
     let result = dec.apply(&positions, &from, &to)?;
     mesh.with_positions(crate::io::mesh::points(result))
-        .write(out)
+        .write(out)?;
+    Ok(())
 }
 
 /// Expression transfer: each frame's landmark motion relative to the source neutral, decoded onto

@@ -102,15 +102,33 @@ impl Default for PairsConfig {
 
 impl PairsConfig {
     /// Checks the counts.
-    pub fn validate(&self) -> Result<()> {
-        ensure!(
-            self.identities >= 2,
-            "at least 2 identities are needed (one to train, one to test)"
-        );
-        ensure!(self.pairs >= 1, "at least one pair is needed");
-        ensure!(self.max_shapes >= 1, "max_shapes must be at least 1");
+    pub fn validate(&self) -> Result<(), InvalidPairsConfig> {
+        if self.identities < 2 {
+            return Err(InvalidPairsConfig::Identities);
+        }
+        if self.pairs < 1 {
+            return Err(InvalidPairsConfig::Pairs);
+        }
+        if self.max_shapes < 1 {
+            return Err(InvalidPairsConfig::MaxShapes);
+        }
         Ok(())
     }
+}
+
+/// The rule of [`PairsConfig`] a configuration breaks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum InvalidPairsConfig {
+    /// Fewer than 2 identities.
+    #[error("at least 2 identities are needed (one to train, one to test)")]
+    Identities,
+    /// No pairs.
+    #[error("at least one pair is needed")]
+    Pairs,
+    /// `max_shapes` is 0.
+    #[error("max_shapes must be at least 1")]
+    MaxShapes,
 }
 
 /// One shape of a pair's expression.

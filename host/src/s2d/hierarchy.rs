@@ -586,7 +586,7 @@ pub fn to_bytes(h: &Hierarchy, key: u64, config: &Config) -> Result<Vec<u8>> {
         w.meta("spiral_lengths", list(lens));
     }
     write_sections(h, &mut w, "s2d", Sections::All)?;
-    w.to_bytes()
+    Ok(w.to_bytes()?)
 }
 
 /// Reads a hierarchy file written by [`to_bytes`].

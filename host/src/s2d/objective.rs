@@ -242,17 +242,27 @@ impl TrainConfig {
             .init()
     }
 
-    pub(crate) fn validate(&self) -> Result<()> {
-        ensure!(
-            self.epochs > 0 && self.batch > 0,
-            "epochs and batch must be positive"
-        );
-        ensure!(
-            self.lr > 0.0 && self.lr_decay > 0.0 && self.weight_decay >= 0.0,
-            "learning rate, decay and weight decay must be positive"
-        );
+    pub(crate) fn validate(&self) -> Result<(), InvalidTrainConfig> {
+        if !(self.epochs > 0 && self.batch > 0) {
+            return Err(InvalidTrainConfig::Run);
+        }
+        if !(self.lr > 0.0 && self.lr_decay > 0.0 && self.weight_decay >= 0.0) {
+            return Err(InvalidTrainConfig::Rates);
+        }
         Ok(())
     }
+}
+
+/// The range rule of [`TrainConfig`] a configuration breaks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum InvalidTrainConfig {
+    /// `epochs` or `batch` is 0.
+    #[error("epochs and batch must be positive")]
+    Run,
+    /// The learning rate or its decay is not positive, or the weight decay is negative.
+    #[error("learning rate, decay and weight decay must be positive")]
+    Rates,
 }
 
 /// One training sample: the decoder's input and the ground-truth dense displacement.
@@ -295,5 +305,25 @@ impl Objective {
             Self::Dr => (LossVariant::Paper, vec![0.0; distances.len()]),
             Self::DrUnweighted => (LossVariant::Paper, vec![1.0; distances.len()]),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn validate_names_the_broken_rule() {
+        assert_eq!(TrainConfig::default().validate(), Ok(()));
+        let no_epochs = TrainConfig {
+            epochs: 0,
+            ..TrainConfig::default()
+        };
+        assert_eq!(no_epochs.validate(), Err(InvalidTrainConfig::Run));
+        let no_lr = TrainConfig {
+            lr: 0.0,
+            ..TrainConfig::default()
+        };
+        assert_eq!(no_lr.validate(), Err(InvalidTrainConfig::Rates));
     }
 }

@@ -50,7 +50,7 @@ impl PairSet {
             }
         }
         w.f32s("pairs.weights", &[p, e], &weights)?;
-        w.to_bytes()
+        Ok(w.to_bytes()?)
     }
 
     /// Writes `pairs.sinew` and `manifest.json` into `dir` (created if missing), each

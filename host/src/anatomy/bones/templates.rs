@@ -186,7 +186,7 @@ pub fn load_templates(data_dir: &Path) -> Result<BoneTemplates> {
                 data_dir.join("README.md").display()
             );
         }
-        Mesh::read(&path)
+        Ok(Mesh::read(&path)?)
     };
     let jaw = read(&spec.templates.jaw.file)?;
     let maxilla = read(&spec.templates.maxilla.file)?;

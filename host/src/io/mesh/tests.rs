@@ -109,37 +109,136 @@ fn obj_reader_handles_groups_negative_indices_and_normals() {
 #[test]
 fn malformed_files_are_errors_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
-    let cases = [
-        ("bad_number.obj", "v 0 0 zero\n", "line 1"),
+    type Check = fn(&MeshError) -> bool;
+    let cases: [(&str, &str, Check); 7] = [
+        ("bad_number.obj", "v 0 0 zero\n", |e| {
+            matches!(
+                e,
+                MeshError::Parse {
+                    line: Some(1),
+                    reason: ParseReason::BadNumber { .. },
+                    ..
+                }
+            )
+        }),
         (
             "bad_index.obj",
             "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
-            "vertex 8",
+            |e| {
+                matches!(
+                    e,
+                    MeshError::Inconsistent {
+                        source: InvalidMesh::VertexOutOfRange {
+                            polygon: 0,
+                            vertex: 8,
+                            vertices: 3
+                        },
+                        ..
+                    }
+                )
+            },
         ),
-        ("short_face.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n", "line 3"),
+        ("short_face.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n", |e| {
+            matches!(
+                e,
+                MeshError::Parse {
+                    line: Some(3),
+                    reason: ParseReason::FaceTooSmall { corners: 2 },
+                    ..
+                }
+            )
+        }),
         (
             "zero_index.obj",
             "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
-            "index 0",
+            |e| {
+                matches!(
+                    e,
+                    MeshError::Parse {
+                        line: Some(4),
+                        reason: ParseReason::ZeroIndex { what: "vertex" },
+                        ..
+                    }
+                )
+            },
         ),
         (
             "garbage.ply",
             "ply\nformat ascii 1.0\nelement vertex 1\nend_head",
-            "PLY",
+            |e| {
+                matches!(
+                    e,
+                    MeshError::Parse {
+                        line: None,
+                        reason: ParseReason::Ply(_),
+                        ..
+                    }
+                )
+            },
         ),
-        ("notgz.obj.gz", "v 0 0 0\n", "gzip"),
-        ("mesh.stl", "solid\n", "unknown mesh format"),
+        ("notgz.obj.gz", "v 0 0 0\n", |e| {
+            matches!(e, MeshError::Gzip { .. })
+        }),
+        ("mesh.stl", "solid\n", |e| {
+            matches!(e, MeshError::UnknownFormat { .. })
+        }),
     ];
-    for (name, text, why) in cases {
+    for (name, text, check) in cases {
         let p = dir.path().join(name);
         std::fs::write(&p, text).unwrap();
-        let msg = format!("{:#}", Mesh::read(&p).unwrap_err());
-        assert!(msg.contains(name), "{msg}");
-        assert!(msg.contains(why), "{name}: {msg}");
+        let err = Mesh::read(&p).unwrap_err();
+        assert!(check(&err), "{name}: {err:?}");
+        assert!(err.to_string().contains(name), "{err}");
     }
     let missing = dir.path().join("missing.obj");
-    let msg = format!("{:#}", Mesh::read(&missing).unwrap_err());
-    assert!(msg.contains("missing.obj"), "{msg}");
+    let err = Mesh::read(&missing).unwrap_err();
+    assert!(
+        matches!(&err, MeshError::Read { path, source }
+            if path == &missing && source.kind() == std::io::ErrorKind::NotFound),
+        "{err:?}"
+    );
+
+    // The chain the binary prints reads file, problem, line, reason.
+    let p = dir.path().join("short_face.obj");
+    let msg = format!("{:#}", anyhow::Error::from(Mesh::read(&p).unwrap_err()));
+    assert_eq!(
+        msg,
+        format!(
+            "{}: not a valid mesh: line 3: face with 2 corners (at least 3 needed)",
+            p.display()
+        )
+    );
+}
+
+#[test]
+fn inconsistent_meshes_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut m = quad_and_triangle();
+    m.positions[2][1] = f32::NAN;
+    assert!(matches!(
+        m.validate(),
+        Err(InvalidMesh::NonFiniteVertex { vertex: 2, .. })
+    ));
+    let p = dir.path().join("nan.obj");
+    assert!(matches!(
+        m.write(&p),
+        Err(MeshError::WriteInconsistent {
+            source: InvalidMesh::NonFiniteVertex { vertex: 2, .. },
+            ..
+        })
+    ));
+    assert!(!p.exists());
+
+    let mut m = quad_and_triangle();
+    m.polygon_uvs[1].pop();
+    assert_eq!(
+        m.validate(),
+        Err(InvalidMesh::UvCornerCount {
+            polygon: 1,
+            corners: 3,
+            uv_indices: 2
+        })
+    );
 }
 
 #[test]
@@ -171,16 +270,25 @@ fn geometry_helpers() {
     m.check_same_topology(&moved, Path::new("x.obj")).unwrap();
     let err = m
         .check_same_topology(&sub, Path::new("other.obj"))
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("other.obj") && err.contains("5 vertices") && err.contains("3 vertices"));
+        .unwrap_err();
+    assert!(
+        matches!(&err, MeshError::TopologyCounts {
+            path,
+            expected_vertices: 5,
+            vertices: 3,
+            ..
+        } if path == Path::new("other.obj")),
+        "{err:?}"
+    );
     let mut flipped = m.clone();
     flipped.polygons[1].reverse();
     let err = m
         .check_same_topology(&flipped, Path::new("f.obj"))
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("polygon 1"), "{err}");
+        .unwrap_err();
+    assert!(
+        matches!(err, MeshError::TopologyPolygon { polygon: 1, .. }),
+        "{err:?}"
+    );
 }
 
 #[test]

@@ -214,10 +214,15 @@ fn bad_config_is_refused() {
         identities: 1,
         ..small()
     };
-    assert!(c.validate().is_err());
+    assert_eq!(c.validate(), Err(InvalidPairsConfig::Identities));
     let c = PairsConfig {
         pairs: 0,
         ..small()
     };
-    assert!(c.validate().is_err());
+    assert_eq!(c.validate(), Err(InvalidPairsConfig::Pairs));
+    let c = PairsConfig {
+        max_shapes: 0,
+        ..small()
+    };
+    assert_eq!(c.validate(), Err(InvalidPairsConfig::MaxShapes));
 }
