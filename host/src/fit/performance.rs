@@ -662,4 +662,4 @@ impl Performance {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
