@@ -220,6 +220,11 @@ impl<'a> AimActor<'a> {
         self.k
     }
 
+    /// The cached corrective basis B_e, `[V, M, 3]` vertex-major (eq. 8).
+    pub const fn correctives(&self) -> F32s<'a> {
+        self.correctives
+    }
+
     /// The jaw pivot.
     pub const fn jaw_pivot(&self) -> Vec3 {
         self.pivot

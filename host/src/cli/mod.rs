@@ -4,6 +4,7 @@
 
 mod aim;
 mod bones;
+mod fit;
 mod replay;
 mod s2d;
 mod view;

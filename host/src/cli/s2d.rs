@@ -47,6 +47,10 @@ pub(crate) enum Data {
         #[arg(long, value_enum, default_value_t = PairsConfig::default().expressions)]
         expressions: Expressions,
     },
+    /// A synthetic facial performance on an ICT-FaceKit actor for fitting: smooth seeded
+    /// trajectories of all 53 expression weights, the jaw and the head; one OBJ per frame,
+    /// performance.json with the ground truth, the camera and 68 projected landmarks.
+    Performance(super::fit::PerformanceArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -274,6 +278,7 @@ pub(crate) fn data(cmd: Data) -> Result<()> {
                 set.vertices()
             );
         }
+        Data::Performance(args) => super::fit::performance(args)?,
     }
     Ok(())
 }

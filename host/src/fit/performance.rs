@@ -1,0 +1,665 @@
+//! Synthetic facial performances on an ICT-FaceKit actor, for fitting (`sinew data performance`).
+//!
+//! The data are synthetic: per frame, smooth seeded trajectories of all 53 of the kit's
+//! expression weights, a jaw transform about the actor's jaw pivot and a head transform pose the
+//! kit's own neutral and deltas in AIM eq. 17's form,
+//! `x = T_g(LBS(n, T_b, k) + Σ_i w_i d_i)` (n: the kit's generic neutral; d_i: its expression
+//! deltas; k: the actor's baked jaw skinning weight), with optional Gaussian noise. The meshes are
+//! in the actor's topology (`--actor`: its template, whose every vertex must be a vertex of the
+//! kit's face region, as for the decimated golden actor; otherwise the full face region), and 68
+//! iBUG landmarks are projected through a pinhole camera.
+//!
+//! # Folder
+//! - `frame_00000.obj` … one mesh per frame (cm);
+//! - `performance.json` ([`Manifest`]), written last: seed, frames, the ground-truth parameters
+//!   per frame, the kit vertex of each mesh vertex, the camera and the 2D landmark tracks.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail, ensure};
+use rand_core::RngCore;
+use serde::{Deserialize, Serialize};
+use sinew_core::aim::AimActor;
+use sinew_core::linalg::{Mat3, Vec3};
+use sinew_core::rotation::to_6d;
+use sinew_core::skinning::{BoneTransform, lbs};
+
+use crate::io::ict::{FACE_REGION, IctFaceKit};
+use crate::io::mesh::Mesh;
+
+/// The manifest's file name.
+pub const MANIFEST: &str = "performance.json";
+/// The manifest's `format` value.
+pub const FORMAT: &str = "sinew-performance";
+/// The manifest's version.
+pub const VERSION: u32 = 1;
+
+/// A pinhole camera looking along −z from `position` (x right, y up in the world; the image's
+/// v axis points down): `u = cx + fx·(x − px)/(pz − z)`, `v = cy − fy·(y − py)/(pz − z)`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Camera {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Focal lengths in pixels.
+    pub fx: f32,
+    /// Focal lengths in pixels.
+    pub fy: f32,
+    /// Principal point in pixels.
+    pub cx: f32,
+    /// Principal point in pixels.
+    pub cy: f32,
+    /// Camera centre in world units (cm).
+    pub position: [f32; 3],
+}
+
+impl Camera {
+    /// The pixel a world point projects to, or `None` behind the camera.
+    pub fn project(&self, p: [f32; 3]) -> Option<[f32; 2]> {
+        let depth = self.position[2] - p[2];
+        if depth <= 0.0 {
+            return None;
+        }
+        Some([
+            self.cx + self.fx * (p[0] - self.position[0]) / depth,
+            self.cy - self.fy * (p[1] - self.position[1]) / depth,
+        ])
+    }
+
+    /// Whether a pixel lies inside the image.
+    pub fn inside(&self, uv: [f32; 2]) -> bool {
+        (0.0..self.width as f32).contains(&uv[0]) && (0.0..self.height as f32).contains(&uv[1])
+    }
+}
+
+/// One frame's ground truth.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrameParameters {
+    /// The weight of each of [`Manifest::expressions`], in [0, 1].
+    pub weights: Vec<f32>,
+    /// Jaw: 6D rotation (first two columns) + translation, about [`Manifest::jaw_pivot`].
+    pub jaw: [f32; 9],
+    /// Head: 6D rotation + translation, applied last.
+    pub head: [f32; 9],
+}
+
+/// The 2D landmark tracks.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Landmarks {
+    /// The mesh vertex of each of the 68 iBUG landmarks (the kit's landmark vertex, or the
+    /// nearest vertex of the actor's template on the neutral when the template lacks it).
+    pub vertices: Vec<u32>,
+    /// Per frame, the 68 landmarks' pixels `[u, v]`.
+    pub pixels: Vec<Vec<[f32; 2]>>,
+}
+
+/// `performance.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// Always [`VERSION`].
+    pub version: u32,
+    /// Always true: every performance of this format is generated.
+    pub synthetic: bool,
+    /// Where the geometry comes from (the kit's attribution and folder).
+    pub source: String,
+    /// The seed of the trajectories and the noise.
+    pub seed: u64,
+    /// Number of frames.
+    pub frames: usize,
+    /// Frames per second of the trajectories.
+    pub fps: f32,
+    /// Standard deviation of the Gaussian noise on every coordinate, in mm.
+    pub noise_mm: f32,
+    /// Length unit of the meshes and the camera.
+    pub units: String,
+    /// Vertices per mesh.
+    pub vertices: usize,
+    /// The ICT-FaceKit folder the performance was made from.
+    pub data: PathBuf,
+    /// The actor whose topology, jaw weights and pivot were used.
+    pub actor: Option<PathBuf>,
+    /// The kit vertex each mesh vertex is.
+    pub kit_vertices: Vec<u32>,
+    /// The jaw pivot (the actor's); `None` without an actor, when the jaw moves through the
+    /// kit's jaw shapes only.
+    pub jaw_pivot: Option<[f32; 3]>,
+    /// The kit's expression names, in weight order (all 53).
+    pub expressions: Vec<String>,
+    /// The mesh file of each frame, relative to the folder.
+    pub files: Vec<String>,
+    /// The ground truth of each frame.
+    pub parameters: Vec<FrameParameters>,
+    /// The camera the landmarks were projected through.
+    pub camera: Camera,
+    /// The 2D landmark tracks.
+    pub landmarks: Landmarks,
+}
+
+/// What `sinew data performance` varies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PerformanceConfig {
+    /// Seed of the trajectories and the noise.
+    pub seed: u64,
+    /// Number of frames.
+    pub frames: usize,
+    /// Gaussian noise on every coordinate, in mm (0: none).
+    pub noise_mm: f32,
+    /// Frames per second.
+    pub fps: f32,
+    /// Image size in pixels (the camera is placed in front of the face, looking at it).
+    pub image: [u32; 2],
+    /// Focal length in pixels.
+    pub focal: f32,
+    /// Distance from the face's front to the camera, in cm.
+    pub distance: f32,
+}
+
+impl Default for PerformanceConfig {
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            frames: 60,
+            noise_mm: 0.0,
+            fps: 30.0,
+            image: [640, 480],
+            focal: 1200.0,
+            distance: 60.0,
+        }
+    }
+}
+
+impl PerformanceConfig {
+    /// Rejects settings that cannot make a performance.
+    pub fn validate(&self) -> Result<()> {
+        ensure!(self.frames > 0, "--frames must be at least 1");
+        ensure!(
+            self.noise_mm.is_finite() && self.noise_mm >= 0.0,
+            "--noise-mm must be finite and not negative, not {}",
+            self.noise_mm
+        );
+        ensure!(self.fps > 0.0, "fps must be positive");
+        ensure!(
+            self.focal > 0.0 && self.distance > 0.0 && self.image.iter().all(|&s| s > 0),
+            "the camera needs a positive focal length, distance and image size"
+        );
+        Ok(())
+    }
+}
+
+/// A PCG-64 stream for the trajectories and the noise.
+struct Rng(rand_pcg::Pcg64);
+
+impl Rng {
+    fn new(seed: u64) -> Self {
+        Self(rand_pcg::Pcg64::new(
+            u128::from(seed) << 64 | 0xfa_ce_5e_90,
+            0x00a0_2bdb_0000_0000_0000_0000_0000_0001,
+        ))
+    }
+
+    /// Uniform in [lo, hi) from 53 random bits.
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * ((self.0.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
+    }
+
+    /// Standard normal by Box–Muller (one value per call).
+    fn normal(&mut self) -> f64 {
+        let u1 = 1.0 - self.uniform(0.0, 1.0);
+        let u2 = self.uniform(0.0, 1.0);
+        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    }
+}
+
+/// A smooth signal in [−1, 1]: the mean of three sinusoids of 0.1–0.8 Hz with random phases.
+struct Wave([(f64, f64); 3]);
+
+impl Wave {
+    fn new(rng: &mut Rng) -> Self {
+        Self([(); 3].map(|()| {
+            (
+                rng.uniform(0.1, 0.8),
+                rng.uniform(0.0, std::f64::consts::TAU),
+            )
+        }))
+    }
+
+    fn at(&self, seconds: f64) -> f64 {
+        self.0
+            .iter()
+            .map(|(f, phase)| (std::f64::consts::TAU * f * seconds + phase).sin())
+            .sum::<f64>()
+            / 3.0
+    }
+}
+
+/// An expression weight's trajectory: `clamp(offset + amplitude · wave, 0, 1)`; the offset is
+/// mostly negative, so each shape is active part of the time, as in a real performance.
+struct Weight {
+    wave: Wave,
+    offset: f64,
+    amplitude: f64,
+}
+
+/// Rotation `Rz(γ) Ry(β) Rx(α)`.
+fn euler(a: f64, b: f64, g: f64) -> Mat3 {
+    let (sa, ca) = a.sin_cos();
+    let (sb, cb) = b.sin_cos();
+    let (sg, cg) = g.sin_cos();
+    let m = [
+        [cg * cb, cg * sb * sa - sg * ca, cg * sb * ca + sg * sa],
+        [sg * cb, sg * sb * sa + cg * ca, sg * sb * ca - cg * sa],
+        [-sb, cb * sa, cb * ca],
+    ];
+    let col = |j: usize| Vec3::new(m[0][j] as f32, m[1][j] as f32, m[2][j] as f32);
+    Mat3 {
+        cols: [col(0), col(1), col(2)],
+    }
+}
+
+fn nine(rot: &Mat3, t: [f64; 3]) -> [f32; 9] {
+    let r = to_6d(rot);
+    [
+        r[0],
+        r[1],
+        r[2],
+        r[3],
+        r[4],
+        r[5],
+        t[0] as f32,
+        t[1] as f32,
+        t[2] as f32,
+    ]
+}
+
+/// The trajectories of every parameter, seeded.
+struct Trajectories {
+    weights: Vec<Weight>,
+    /// Jaw opening, yaw, and translation x, y, z.
+    jaw: [Wave; 5],
+    /// Head rotations about x, y, z and translation x, y, z.
+    head: [Wave; 6],
+}
+
+impl Trajectories {
+    fn new(rng: &mut Rng, shapes: usize) -> Self {
+        let weights = (0..shapes)
+            .map(|_| Weight {
+                wave: Wave::new(rng),
+                offset: rng.uniform(-0.6, 0.2),
+                amplitude: rng.uniform(0.4, 1.0),
+            })
+            .collect();
+        Self {
+            weights,
+            jaw: [(); 5].map(|()| Wave::new(rng)),
+            head: [(); 6].map(|()| Wave::new(rng)),
+        }
+    }
+
+    /// The parameters at time `t` seconds; `jaw` false keeps the jaw transform the identity.
+    fn at(&self, t: f64, jaw: bool) -> FrameParameters {
+        let weights = self
+            .weights
+            .iter()
+            .map(|w| (w.offset + w.amplitude * w.wave.at(t)).clamp(0.0, 1.0) as f32)
+            .collect();
+        let j = |i: usize| self.jaw[i].at(t);
+        // Opening 0–0.12 rad about x (positive opens: the chin, in front of the pivot, goes
+        // down), ±0.03 rad of yaw, ±0.5 mm of translation.
+        let jaw = if jaw {
+            nine(
+                &euler(0.06 * (1.0 + j(0)), 0.03 * j(1), 0.0),
+                [0.05 * j(2), 0.05 * j(3), 0.05 * j(4)],
+            )
+        } else {
+            nine(&Mat3::IDENTITY, [0.0; 3])
+        };
+        let h = |i: usize| self.head[i].at(t);
+        // ±0.08 rad about each axis, ±8 mm of translation.
+        let head = nine(
+            &euler(0.08 * h(0), 0.08 * h(1), 0.08 * h(2)),
+            [0.8 * h(3), 0.8 * h(4), 0.8 * h(5)],
+        );
+        FrameParameters { weights, jaw, head }
+    }
+}
+
+/// The mesh vertices of a performance in kit terms: which kit vertex each is, the triangles, and
+/// the jaw (weight per vertex, pivot) when an actor gave them.
+struct Topology {
+    kit_vertices: Vec<u32>,
+    polygons: Vec<Vec<u32>>,
+    jaw: Option<(Vec<f32>, [f32; 3])>,
+}
+
+/// The actor's topology in terms of the kit's face region: each template point must be, bit for
+/// bit, a vertex of the face region (decimation keeps vertices; it does not move them).
+fn actor_topology(actor_path: &Path, face: &Mesh) -> Result<Topology> {
+    let bytes = crate::io::container::read(actor_path)?;
+    let actor = AimActor::from_bytes(&bytes)
+        .map_err(|e| anyhow!("{}: not an AIM actor: {e}", actor_path.display()))?;
+    let by_bits: HashMap<[u32; 3], u32> = face
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (p.map(f32::to_bits), i as u32))
+        .collect();
+    let tpl = actor.template();
+    let kit_vertices = (0..actor.vertex_count())
+        .map(|i| {
+            let p = [tpl.at(3 * i), tpl.at(3 * i + 1), tpl.at(3 * i + 2)];
+            by_bits.get(&p.map(f32::to_bits)).copied().ok_or_else(|| {
+                anyhow!(
+                    "{}: template vertex {i} at {p:?} is not a vertex of the ICT-FaceKit face \
+                     region; the actor must be made on the kit's generic neutral (or a \
+                     decimation of it)",
+                    actor_path.display()
+                )
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let tri = actor.triangles().indices();
+    let polygons = (0..tri.len() / 3)
+        .map(|t| vec![tri.at(3 * t), tri.at(3 * t + 1), tri.at(3 * t + 2)])
+        .collect();
+    let k = actor.skinning_weights().iter().collect();
+    Ok(Topology {
+        kit_vertices,
+        polygons,
+        jaw: Some((k, actor.jaw_pivot().to_array())),
+    })
+}
+
+/// Generates a performance into `out` (see the module documentation) and returns its manifest.
+pub fn generate(
+    data: &Path,
+    actor: Option<&Path>,
+    config: &PerformanceConfig,
+    out: &Path,
+) -> Result<Manifest> {
+    config.validate()?;
+    let kit = IctFaceKit::open(data)?;
+    let names = kit.expression_names();
+    let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+    let face = kit.actor(&[], &refs, FACE_REGION)?;
+    let topology = match actor {
+        Some(path) => actor_topology(path, &face.template)?,
+        None => Topology {
+            kit_vertices: (0..face.template.positions.len() as u32).collect(),
+            polygons: face.template.polygons.clone(),
+            jaw: None,
+        },
+    };
+    let pick = |shape: &[[f32; 3]]| -> Vec<[f32; 3]> {
+        topology
+            .kit_vertices
+            .iter()
+            .map(|&v| shape[v as usize])
+            .collect()
+    };
+    let neutral = pick(&face.shapes[0]);
+    let deltas: Vec<Vec<[f32; 3]>> = face.shapes[1..]
+        .iter()
+        .map(|s| {
+            pick(s)
+                .iter()
+                .zip(&neutral)
+                .map(|(p, n)| [p[0] - n[0], p[1] - n[1], p[2] - n[2]])
+                .collect()
+        })
+        .collect();
+    let landmark_vertices = landmark_vertices(&face.landmarks, &face.template, &topology)?;
+    let camera = camera_for(&neutral, &landmark_vertices, config);
+
+    let mut rng = Rng::new(config.seed);
+    let trajectories = Trajectories::new(&mut rng, names.len());
+    let noise_cm = f64::from(config.noise_mm) / face.units.mm();
+    let mut manifest = Manifest {
+        format: FORMAT.into(),
+        version: VERSION,
+        synthetic: true,
+        source: format!(
+            "synthetic performance (seeded trajectories of the kit's expression weights, jaw and \
+             head) on {}",
+            face.source
+        ),
+        seed: config.seed,
+        frames: config.frames,
+        fps: config.fps,
+        noise_mm: config.noise_mm,
+        units: face.units.name().into(),
+        vertices: neutral.len(),
+        data: data.to_owned(),
+        actor: actor.map(Path::to_owned),
+        kit_vertices: topology.kit_vertices.clone(),
+        jaw_pivot: topology.jaw.as_ref().map(|(_, p)| *p),
+        expressions: names.clone(),
+        files: Vec::new(),
+        parameters: Vec::new(),
+        camera,
+        landmarks: Landmarks {
+            vertices: landmark_vertices.clone(),
+            pixels: Vec::new(),
+        },
+    };
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("{}: cannot create the output folder", out.display()))?;
+    for f in 0..config.frames {
+        let params = trajectories.at(f as f64 / f64::from(config.fps), topology.jaw.is_some());
+        let mut positions = pose(&neutral, &deltas, topology.jaw.as_ref(), &params);
+        if noise_cm > 0.0 {
+            for p in &mut positions {
+                for c in p.iter_mut() {
+                    *c += (noise_cm * rng.normal()) as f32;
+                }
+            }
+        }
+        let pixels = landmark_vertices
+            .iter()
+            .enumerate()
+            .map(|(l, &v)| {
+                let p = positions[v as usize];
+                camera.project(p).filter(|uv| camera.inside(*uv)).ok_or_else(|| {
+                    anyhow!(
+                        "{}: frame {f}: landmark {l} (vertex {v} at {p:?}) projects outside the \
+                         {}×{} image of the camera at {:?}",
+                        out.display(),
+                        camera.width,
+                        camera.height,
+                        camera.position
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let file = format!("frame_{f:05}.obj");
+        Mesh::new(positions, topology.polygons.clone()).write(&out.join(&file))?;
+        manifest.files.push(file);
+        manifest.parameters.push(params);
+        manifest.landmarks.pixels.push(pixels);
+    }
+    let json = serde_json::to_vec_pretty(&manifest)?;
+    crate::io::atomic::write(&out.join(MANIFEST), &json)?;
+    Ok(manifest)
+}
+
+/// A frame's mesh: `T_g(LBS(n, T_b, k) + Σ_i w_i d_i)` (AIM eq. 17's form over the kit's
+/// deltas).
+fn pose(
+    neutral: &[[f32; 3]],
+    deltas: &[Vec<[f32; 3]>],
+    jaw: Option<&(Vec<f32>, [f32; 3])>,
+    params: &FrameParameters,
+) -> Vec<[f32; 3]> {
+    let head = sinew_core::rotation::rigid_from_9d(&params.head);
+    let bone = jaw.map(|(_, pivot)| BoneTransform::from_9d(&params.jaw, Vec3::from_array(*pivot)));
+    neutral
+        .iter()
+        .enumerate()
+        .map(|(v, &n)| {
+            let n = Vec3::from_array(n);
+            let mut x = match (&bone, jaw) {
+                (Some(bone), Some((k, _))) => lbs(n, bone, k[v]),
+                _ => n,
+            };
+            for (d, &w) in deltas.iter().zip(&params.weights) {
+                x = x + Vec3::from_array(d[v]) * w;
+            }
+            head.apply(x).to_array()
+        })
+        .collect()
+}
+
+/// The mesh vertex of each kit landmark: the same kit vertex, else the nearest mesh vertex on
+/// the neutral (ties to the lower index).
+fn landmark_vertices(
+    landmarks: &[Option<u32>],
+    face: &Mesh,
+    topology: &Topology,
+) -> Result<Vec<u32>> {
+    let index: HashMap<u32, u32> = topology
+        .kit_vertices
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| (v, i as u32))
+        .collect();
+    landmarks
+        .iter()
+        .enumerate()
+        .map(|(l, v)| {
+            let v = v.ok_or_else(|| anyhow!("iBUG landmark {l} lies outside the face region"))?;
+            if let Some(&i) = index.get(&v) {
+                return Ok(i);
+            }
+            let p = face.positions[v as usize];
+            let d2 = |q: [f32; 3]| (0..3).map(|c| (q[c] - p[c]).powi(2)).sum::<f32>();
+            let (best, _) = topology.kit_vertices.iter().enumerate().fold(
+                (0, f32::INFINITY),
+                |best, (i, &k)| {
+                    let d = d2(face.positions[k as usize]);
+                    if d < best.1 { (i as u32, d) } else { best }
+                },
+            );
+            Ok(best)
+        })
+        .collect()
+}
+
+/// A camera `config.distance` in front of the neutral's frontmost point, centred on its
+/// landmarks.
+fn camera_for(neutral: &[[f32; 3]], landmarks: &[u32], config: &PerformanceConfig) -> Camera {
+    let n = landmarks.len().max(1) as f32;
+    let mean = |c: usize| {
+        landmarks
+            .iter()
+            .map(|&v| neutral[v as usize][c])
+            .sum::<f32>()
+            / n
+    };
+    let front = neutral.iter().map(|p| p[2]).fold(f32::MIN, f32::max);
+    Camera {
+        width: config.image[0],
+        height: config.image[1],
+        fx: config.focal,
+        fy: config.focal,
+        cx: config.image[0] as f32 / 2.0,
+        cy: config.image[1] as f32 / 2.0,
+        position: [mean(0), mean(1), front + config.distance],
+    }
+}
+
+/// A performance read back: the manifest and every frame's positions.
+#[derive(Clone, Debug)]
+pub struct Performance {
+    /// The folder it was read from.
+    pub dir: PathBuf,
+    /// `performance.json`.
+    pub manifest: Manifest,
+    /// Per frame, the mesh positions `[V]`.
+    pub frames: Vec<Vec<[f32; 3]>>,
+    /// The first frame's polygons (every frame shares them).
+    pub polygons: Vec<Vec<u32>>,
+}
+
+impl Performance {
+    /// Reads a performance folder, checking the manifest against itself and every frame's mesh
+    /// (present, finite, with the manifest's vertex count); every error names the file.
+    pub fn read(dir: &Path) -> Result<Self> {
+        let path = dir.join(MANIFEST);
+        let text = std::fs::read_to_string(&path)
+            .with_context(|| format!("{}: cannot read the performance manifest", path.display()))?;
+        let manifest: Manifest = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not a performance manifest", path.display()))?;
+        if manifest.format != FORMAT || manifest.version != VERSION {
+            bail!(
+                "{}: format {:?} version {}, expected {FORMAT:?} version {VERSION}",
+                path.display(),
+                manifest.format,
+                manifest.version
+            );
+        }
+        let m = &manifest;
+        let lists = [
+            ("files", m.files.len()),
+            ("parameters", m.parameters.len()),
+            ("landmarks.pixels", m.landmarks.pixels.len()),
+        ];
+        for (name, len) in lists {
+            ensure!(
+                len == m.frames,
+                "{}: {name} has {len} entries for {} frames",
+                path.display(),
+                m.frames
+            );
+        }
+        ensure!(
+            m.kit_vertices.len() == m.vertices,
+            "{}: kit_vertices has {} entries for {} vertices",
+            path.display(),
+            m.kit_vertices.len(),
+            m.vertices
+        );
+        let mut frames = Vec::with_capacity(m.frames);
+        let mut polygons = Vec::new();
+        for (f, file) in m.files.iter().enumerate() {
+            let mesh_path = dir.join(file);
+            if !mesh_path.is_file() {
+                bail!(
+                    "{}: frame {f} is missing (listed in {})",
+                    mesh_path.display(),
+                    path.display()
+                );
+            }
+            let mesh = Mesh::read(&mesh_path)?;
+            if mesh.positions.len() != m.vertices {
+                bail!(
+                    "{}: {} vertices, the performance has {}",
+                    mesh_path.display(),
+                    mesh.positions.len(),
+                    m.vertices
+                );
+            }
+            if f == 0 {
+                polygons = mesh.polygons;
+            }
+            frames.push(mesh.positions);
+        }
+        Ok(Self {
+            dir: dir.to_owned(),
+            manifest,
+            frames,
+            polygons,
+        })
+    }
+
+    /// The mesh file of frame `f`.
+    pub fn frame_path(&self, f: usize) -> PathBuf {
+        self.dir.join(&self.manifest.files[f])
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests;

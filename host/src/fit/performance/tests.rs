@@ -1,0 +1,178 @@
+use super::*;
+use crate::io::data::data_dir;
+
+pub(crate) fn golden_actor() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/aim-ict.sinew")
+}
+
+fn kit_dir() -> Option<PathBuf> {
+    Some(data_dir()?.join("ict-facekit"))
+}
+
+fn small(seed: u64) -> PerformanceConfig {
+    PerformanceConfig {
+        seed,
+        frames: 3,
+        noise_mm: 0.1,
+        ..PerformanceConfig::default()
+    }
+}
+
+#[test]
+fn pinhole_projection() {
+    let cam = Camera {
+        width: 640,
+        height: 480,
+        fx: 1000.0,
+        fy: 800.0,
+        cx: 320.0,
+        cy: 240.0,
+        position: [1.0, 2.0, 50.0],
+    };
+    assert_eq!(cam.project([1.0, 2.0, 0.0]), Some([320.0, 240.0]));
+    // 5 cm right and up at 50 cm: 100 px right (fx/10) and 80 px up (v points down).
+    assert_eq!(cam.project([6.0, 7.0, 0.0]), Some([420.0, 160.0]));
+    assert_eq!(cam.project([0.0, 0.0, 60.0]), None);
+    assert!(cam.inside([0.0, 479.5]) && !cam.inside([640.0, 10.0]) && !cam.inside([-0.1, 0.0]));
+}
+
+#[test]
+fn generation_is_seeded_and_matches_the_actor() {
+    let Some(kit) = kit_dir() else { return };
+    let dirs = [(); 3].map(|()| tempfile::tempdir().unwrap());
+    let actor = golden_actor();
+    let a = generate(&kit, Some(&actor), &small(7), dirs[0].path()).unwrap();
+    let b = generate(&kit, Some(&actor), &small(7), dirs[1].path()).unwrap();
+    let c = generate(&kit, Some(&actor), &small(8), dirs[2].path()).unwrap();
+    assert_eq!(a, b);
+    assert_ne!(a.parameters, c.parameters);
+    for file in &a.files {
+        let x = std::fs::read(dirs[0].path().join(file)).unwrap();
+        assert_eq!(
+            x,
+            std::fs::read(dirs[1].path().join(file)).unwrap(),
+            "{file}"
+        );
+    }
+    assert!(a.synthetic && a.source.starts_with("synthetic"));
+    assert_eq!(a.expressions.len(), 53);
+    assert_eq!(a.vertices, 4_705);
+    assert!(a.jaw_pivot.is_some());
+    // Smooth trajectories that move: every weight stays in [0, 1], some are active, and the
+    // head moves from frame to frame.
+    let w = |f: usize| &a.parameters[f].weights;
+    assert!(w(0).iter().all(|x| (0.0..=1.0).contains(x)));
+    assert!(w(0).iter().filter(|&&x| x > 0.0).count() > 5);
+    assert_ne!(a.parameters[0].head, a.parameters[1].head);
+
+    let perf = Performance::read(dirs[0].path()).unwrap();
+    assert_eq!(perf.frames.len(), 3);
+    // Vertex correspondence: the actor's template is the kit's face region at kit_vertices.
+    let bytes = std::fs::read(&actor).unwrap();
+    let model = AimActor::from_bytes(&bytes).unwrap();
+    assert_eq!(perf.polygons.len(), model.triangles().len());
+    let face = IctFaceKit::open(&kit).unwrap();
+    let tpl = model.template();
+    for (i, &v) in a.kit_vertices.iter().enumerate() {
+        let p = face.neutral().positions[v as usize];
+        assert_eq!(p, [tpl.at(3 * i), tpl.at(3 * i + 1), tpl.at(3 * i + 2)]);
+    }
+    // The landmark tracks are the mesh's landmark vertices through the camera.
+    for (f, positions) in perf.frames.iter().enumerate() {
+        for (l, &v) in a.landmarks.vertices.iter().enumerate() {
+            let uv = a.camera.project(positions[v as usize]).unwrap();
+            let got = a.landmarks.pixels[f][l];
+            assert!((uv[0] - got[0]).abs() < 1e-3 && (uv[1] - got[1]).abs() < 1e-3);
+            assert!(a.camera.inside(got));
+        }
+    }
+    // iBUG 36 (the subject's right eye corner, negative x) is left of 45 in the image.
+    let px = &a.landmarks.pixels[0];
+    assert!(px[36][0] < px[45][0] && px[8][1] > px[30][1], "{px:?}");
+}
+
+#[test]
+fn bad_performances_are_refused_naming_the_file() {
+    let Some(kit) = kit_dir() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let config = PerformanceConfig {
+        frames: 2,
+        ..small(3)
+    };
+    generate(&kit, Some(&golden_actor()), &config, dir.path()).unwrap();
+    let frame1 = dir.path().join("frame_00001.obj");
+    let text = std::fs::read_to_string(&frame1).unwrap();
+    let err = |dir: &Path| format!("{:#}", Performance::read(dir).unwrap_err());
+
+    // A NaN coordinate.
+    let nan = {
+        let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+        let i = lines.iter().position(|l| l.starts_with("v ")).unwrap();
+        lines[i] = "v NaN 0 0".into();
+        lines.join("\n")
+    };
+    std::fs::write(&frame1, nan).unwrap();
+    let e = err(dir.path());
+    assert!(e.contains("frame_00001.obj"), "{e}");
+
+    // Too few vertices (the last vertex dropped, faces referring to it dropped too).
+    let last = text.lines().filter(|l| l.starts_with("v ")).count();
+    let fewer: Vec<&str> = {
+        let mut seen = 0;
+        text.lines()
+            .filter(|l| {
+                if l.starts_with("v ") {
+                    seen += 1;
+                    return seen < last;
+                }
+                !(l.starts_with("f ") && l.split_whitespace().any(|t| t == last.to_string()))
+            })
+            .collect()
+    };
+    std::fs::write(&frame1, fewer.join("\n")).unwrap();
+    let e = err(dir.path());
+    assert!(
+        e.contains("frame_00001.obj") && e.contains("4704 vertices"),
+        "{e}"
+    );
+
+    // A missing frame.
+    std::fs::remove_file(&frame1).unwrap();
+    let e = err(dir.path());
+    assert!(
+        e.contains("frame_00001.obj") && e.contains("missing"),
+        "{e}"
+    );
+
+    // A manifest that disagrees with itself.
+    let path = dir.path().join(MANIFEST);
+    let mut m: Manifest = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    m.frames = 5;
+    std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
+    let e = err(dir.path());
+    assert!(e.contains(MANIFEST) && e.contains("5 frames"), "{e}");
+}
+
+#[test]
+fn an_actor_off_the_kit_is_refused() {
+    let Some(kit) = kit_dir() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let procedural =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/aim-procedural.sinew");
+    let e = generate(&kit, Some(&procedural), &small(1), dir.path()).unwrap_err();
+    let e = format!("{e:#}");
+    assert!(
+        e.contains("aim-procedural.sinew") && e.contains("not a vertex"),
+        "{e}"
+    );
+    let e = generate(
+        &kit,
+        None,
+        &PerformanceConfig {
+            frames: 0,
+            ..small(1)
+        },
+        dir.path(),
+    );
+    assert!(format!("{:#}", e.unwrap_err()).contains("--frames"));
+}
