@@ -7,7 +7,8 @@
 //
 // Usage: node host/tests/view/e2e.mjs [--screenshot PATH]
 //   (after `cargo build -p sinew-host` and `npm ci` in this folder)
-// Environment: SINEW_BIN (default target/debug/sinew), CHROMIUM (default /usr/bin/chromium).
+// Environment: SINEW_BIN (default $CARGO_TARGET_DIR/debug/sinew, the target folder being
+// target/ unless CARGO_TARGET_DIR says otherwise), CHROMIUM (default /usr/bin/chromium).
 // Prints the per-frame time (pose + normals through WebAssembly) for docs/BENCHMARKS.md.
 
 import { execFileSync, spawn } from "node:child_process";
@@ -21,7 +22,9 @@ import { PNG } from "pngjs";
 
 const root = resolve(dirname(fileURLToPath(import.meta.url)), "../../..");
 const data = join(root, "tests/data");
-const bin = process.env.SINEW_BIN ?? join(root, "target/debug/sinew");
+const bin =
+  process.env.SINEW_BIN ??
+  join(process.env.CARGO_TARGET_DIR ?? join(root, "target"), "debug/sinew");
 const browserPath = process.env.CHROMIUM ?? "/usr/bin/chromium";
 const work = mkdtempSync(join(tmpdir(), "sinew-view-"));
 const screenshotArg = process.argv.indexOf("--screenshot");
