@@ -1,10 +1,14 @@
-//! `sinew data performance`: the arguments, and the hand-over to [`sinew_host::fit`].
+//! `sinew data performance`, `sinew fit` and `sinew eval fit`: the arguments, and the hand-over
+//! to [`sinew_host::fit`].
 
 use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
+use sinew_host::fit::aim::{Coefficients, FitConfig};
+use sinew_host::fit::commands::{eval_fit, fit_command};
 use sinew_host::fit::performance::{PerformanceConfig, generate};
+use sinew_host::training::backend::Backend;
 
 /// `sinew data performance`.
 #[derive(Debug, Args)]
@@ -53,5 +57,122 @@ pub(crate) fn performance(args: PerformanceArgs) -> Result<()> {
         m.camera.width,
         m.camera.height
     );
+    Ok(())
+}
+
+/// `sinew fit` and `sinew eval fit`'s shared options.
+#[derive(Debug, Args)]
+pub(crate) struct FitOptions {
+    /// Adam steps per fit (the paper: 10,000).
+    #[arg(long, default_value_t = FitConfig::default().iterations)]
+    iterations: usize,
+    /// Template points constrained per step (every frame at once).
+    #[arg(long, default_value_t = FitConfig::default().points)]
+    points: usize,
+    /// Seed of the fit's initial weights and point draws.
+    #[arg(long, env = "SINEW_SEED", default_value_t = FitConfig::default().seed)]
+    seed: u64,
+    /// burn backend.
+    #[arg(long, value_enum, default_value_t = Backend::default())]
+    backend: Backend,
+}
+
+impl FitOptions {
+    fn config(&self, coefficients: Coefficients) -> FitConfig {
+        FitConfig {
+            iterations: self.iterations,
+            points: self.points,
+            seed: self.seed,
+            coefficients,
+            ..FitConfig::default()
+        }
+    }
+}
+
+/// `sinew fit`.
+#[derive(Debug, Args)]
+pub(crate) struct FitArgs {
+    /// The baked AIM actor.
+    #[arg(long)]
+    model: PathBuf,
+    /// The performance folder (`sinew data performance`).
+    #[arg(long)]
+    target: PathBuf,
+    /// Output FIT.json (per-frame head, jaw and, with --global, coefficients); the fitted meshes
+    /// go to FIT.meshes/ beside it.
+    #[arg(long)]
+    out: PathBuf,
+    /// Report JSON (errors, timing, loss history).
+    #[arg(long)]
+    report: PathBuf,
+    /// One coefficient vector per frame (the paper's "(G)") instead of per template point.
+    #[arg(long)]
+    global: bool,
+    #[command(flatten)]
+    options: FitOptions,
+}
+
+/// `sinew eval fit`.
+#[derive(Debug, Args)]
+pub(crate) struct EvalFitArgs {
+    /// The baked AIM actor.
+    #[arg(long)]
+    model: PathBuf,
+    /// The performance folder (`sinew data performance`).
+    #[arg(long)]
+    target: PathBuf,
+    /// Report JSON: frames, and mean_error_mm and seconds_per_frame of gbs, pbs, aim_global and
+    /// aim_local.
+    #[arg(long)]
+    report: PathBuf,
+    #[command(flatten)]
+    options: FitOptions,
+}
+
+/// `sinew fit`.
+pub(crate) fn fit(args: FitArgs) -> Result<()> {
+    let c = if args.global {
+        Coefficients::Global
+    } else {
+        Coefficients::Local
+    };
+    let config = args.options.config(c);
+    eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
+    let r = fit_command(
+        &args.model,
+        &args.target,
+        &args.out,
+        &args.report,
+        &config,
+        args.options.backend,
+    )?;
+    println!(
+        "{}: {} frames, mean error {:.3} mm, {:.2} s per frame",
+        args.out.display(),
+        r.frames,
+        r.fit.mean_error_mm,
+        r.fit.seconds_per_frame
+    );
+    Ok(())
+}
+
+/// `sinew eval fit`.
+pub(crate) fn eval(args: EvalFitArgs) -> Result<()> {
+    let config = args.options.config(Coefficients::Local);
+    eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
+    let r = eval_fit(
+        &args.model,
+        &args.target,
+        &args.report,
+        &config,
+        args.options.backend,
+    )?;
+    println!("{} frames; mean error (mm), seconds per frame:", r.frames);
+    for (name, m) in &r.methods {
+        println!(
+            "  {name:<10} {:.3}  {:.3}",
+            m.mean_error_mm, m.seconds_per_frame
+        );
+    }
     Ok(())
 }

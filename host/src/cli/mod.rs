@@ -57,6 +57,9 @@ enum Command {
     /// S2D: sparse-to-dense expression decoding.
     #[command(subcommand)]
     S2d(s2d::S2d),
+    /// Fit a baked AIM actor to a performance's meshes (AIM eqs. 17–24): per-frame head, jaw
+    /// and corrective coefficients, and the fitted meshes.
+    Fit(fit::FitArgs),
     /// Generate data sets.
     #[command(subcommand)]
     Data(s2d::Data),
@@ -83,6 +86,8 @@ enum Eval {
     S2d(s2d::EvalS2d),
     /// Per-vertex error of a baked AIM actor on its ICT-FaceKit training shapes.
     Aim(aim::EvalAim),
+    /// AIM's Table 1 on a performance: GBS, PBS, and the global and local AIM fits.
+    Fit(fit::EvalFitArgs),
 }
 
 /// Runs the parsed command.
@@ -93,6 +98,8 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Train(Train::S2d(args)) => s2d::train(args),
         Command::Eval(Eval::S2d(args)) => s2d::eval(args),
         Command::Eval(Eval::Aim(args)) => aim::eval(args),
+        Command::Eval(Eval::Fit(args)) => fit::eval(args),
+        Command::Fit(args) => fit::fit(args),
         Command::Bake(args) => aim::bake(args),
         Command::Play(args) => aim::play(args),
         Command::Inspect { file, json } => {

@@ -1,5 +1,8 @@
 //! Fitting a baked AIM actor to performances (AIM Sec. 4.2, 5.3): synthetic performances to fit
-//! (`performance`) and the blendshape baselines of Table 1 (`baseline`).
+//! (`performance`), the blendshape baselines of Table 1 (`baseline`), the AIM fit on burn
+//! (`aim`) and the commands' work (`commands`).
 
+pub mod aim;
 pub mod baseline;
+pub mod commands;
 pub mod performance;

@@ -8,6 +8,7 @@ pub mod interrupt;
 pub mod malloc;
 pub mod nn;
 pub mod progress;
+pub mod rotation;
 pub mod sine;
 pub mod tensor;
 pub mod tolerance;

@@ -1,0 +1,462 @@
+//! The AIM fit (AIM Sec. 4.2, eqs. 17–24) of a baked actor to a performance's meshes, on burn.
+//!
+//! Per frame j a code z_j ∈ R^f; F_T, a 4-layer GELU MLP, maps z_j to the head and jaw
+//! transforms (6D rotation + translation each, added to the identity so that a zero output is
+//! the rest pose); F_W, a 4-layer GELU MLP, maps (z_j, ĉ) to the corrective coefficients
+//! w_j(c) ∈ R^(N−1) at each template point (local), or z_j alone to one w_j per frame (the
+//! paper's "(G)"). The actor's baked cache (s0, k, B_e, the pivot) is fixed:
+//! `s* = T_g(LBS(s0, T_b, k) + Σ w B_e)` (eq. 17). The objective (eq. 24 without the 2D term):
+//! - eq. 20: `λ_3D · mean_points(|s* − s_GT|² + |s*_lbs − s_GT|²)`, in mm², where
+//!   `s*_lbs = T_g(LBS(s0, T_b, k))` is the skinned shape without correctives;
+//! - eq. 22: `λ_W · mean_points(|w|²)` (λ_W = 0.75; the sum over the N − 1 coefficients);
+//! - eq. 23: `λ_T · mean_j |z_j − z_{j−1}|²` (λ_T = 0.05).
+//!
+//! Each step draws `points` template vertices (the same for every frame, seeded by the step)
+//! and constrains every frame there; the reported error uses every vertex.
+
+use std::time::Instant;
+
+use anyhow::{Result, anyhow, bail, ensure};
+use burn::module::{Module, Param};
+use burn::optim::{AdamConfig, GradientsParams};
+use burn::tensor::{Device, Distribution, Int, Tensor, TensorData};
+use rand_core::RngCore;
+use serde::{Deserialize, Serialize};
+use sinew_core::aim::AimActor;
+use sinew_core::nn::Activation;
+
+use crate::fit::baseline::{mean_error_mm, performance_unit};
+use crate::fit::performance::Performance;
+use crate::training::backend::Backend;
+use crate::training::nn::{Mlp, tensor, to_vec};
+use crate::training::rotation::rotate_6d;
+
+/// How the corrective coefficients vary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Coefficients {
+    /// w_j(c) = F_W(z_j, c): spatially varying (the paper's AIM).
+    #[default]
+    Local,
+    /// w_j = F_W(z_j): one vector per frame (the paper's "Ours (G)").
+    Global,
+    /// w = 0: head and jaw only (a reference the others must beat).
+    Zero,
+}
+
+/// The fit's settings (the paper's unless said otherwise).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FitConfig {
+    /// Adam steps (the paper: 1e4).
+    pub iterations: usize,
+    /// Adam learning rate (the paper: 1e-3).
+    pub lr: f64,
+    /// Frame code size f (the paper does not give it).
+    pub code: usize,
+    /// Hidden width of F_T and F_W (not given in the paper).
+    pub hidden: usize,
+    /// Template points constrained per step (all frames at once).
+    pub points: usize,
+    /// λ_3D of eq. 20 (not given in the paper; positions in mm).
+    pub lambda_3d: f64,
+    /// λ_W of eq. 22 (the paper: 0.75).
+    pub lambda_w: f64,
+    /// λ_T of eq. 23 (the paper: 0.05).
+    pub lambda_t: f64,
+    /// Local, global or no coefficients.
+    pub coefficients: Coefficients,
+    /// Seed of the initial weights, the codes and the point draws.
+    pub seed: u64,
+}
+
+impl Default for FitConfig {
+    fn default() -> Self {
+        Self {
+            iterations: 1000,
+            lr: 1e-3,
+            code: 32,
+            hidden: 128,
+            points: 1024,
+            lambda_3d: 1.0,
+            lambda_w: 0.75,
+            lambda_t: 0.05,
+            coefficients: Coefficients::Local,
+            seed: 1,
+        }
+    }
+}
+
+/// The identity head and jaw, `[6D, t]` twice.
+const IDENTITY_18: [f32; 18] = [
+    1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0,
+];
+
+/// The baked actor's playback cache, in mm (the fit's unit).
+#[derive(Clone, Debug)]
+pub struct ActorCache {
+    /// Vertices V.
+    pub vertices: usize,
+    /// Corrective shapes M = N − 1.
+    pub shapes: usize,
+    /// Neutral skin s0, `[V·3]`, mm.
+    pub rest: Vec<f32>,
+    /// Jaw skinning weight k, `[V]`.
+    pub k: Vec<f32>,
+    /// B_e, `[V·M·3]`, mm.
+    pub correctives: Vec<f32>,
+    /// Jaw pivot, mm.
+    pub pivot: [f32; 3],
+    /// Template points normalised to [−1, 1] (bounding-box centre, half the largest extent).
+    pub normalised: Vec<f32>,
+    /// Millimetres per unit of the actor.
+    pub mm: f32,
+}
+
+impl ActorCache {
+    /// The cache of a baked actor whose lengths are in `unit_mm` millimetres.
+    pub fn new(actor: &AimActor<'_>, unit_mm: f32) -> Self {
+        let scaled = |v: sinew_core::tensor::F32s<'_>| v.iter().map(|x| x * unit_mm).collect();
+        let tpl: Vec<f32> = actor.template().iter().collect();
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for p in tpl.chunks_exact(3) {
+            for c in 0..3 {
+                lo[c] = lo[c].min(p[c]);
+                hi[c] = hi[c].max(p[c]);
+            }
+        }
+        let centre = [0, 1, 2].map(|c| 0.5 * (lo[c] + hi[c]));
+        let half = (0..3).map(|c| 0.5 * (hi[c] - lo[c])).fold(1e-12, f32::max);
+        let normalised = tpl
+            .chunks_exact(3)
+            .flat_map(|p| [0, 1, 2].map(|c| (p[c] - centre[c]) / half))
+            .collect();
+        Self {
+            vertices: actor.vertex_count(),
+            shapes: actor.shape_count(),
+            rest: scaled(actor.rest()),
+            k: actor.skinning_weights().iter().collect(),
+            correctives: scaled(actor.correctives()),
+            pivot: actor.jaw_pivot().to_array().map(|x| x * unit_mm),
+            normalised,
+            mm: unit_mm,
+        }
+    }
+}
+
+/// The fitted variables: the codes, F_T and F_W.
+#[derive(Module, Debug)]
+pub struct FitNet {
+    /// z_j, `[J, f]`.
+    pub codes: Param<Tensor<2>>,
+    /// F_T: z → [T_g, T_b] (18 outputs, added to the identity).
+    pub ft: Mlp,
+    /// F_W: (z, ĉ) → w (local) or z → w (global).
+    pub fw: Mlp,
+}
+
+fn gelu_mlp(inputs: usize, hidden: usize, outputs: usize, device: &Device) -> Mlp {
+    let acts = [
+        Activation::Gelu,
+        Activation::Gelu,
+        Activation::Gelu,
+        Activation::Identity,
+    ];
+    Mlp::new(&[inputs, hidden, hidden, hidden, outputs], &acts, device)
+}
+
+/// The fixed tensors of a fit.
+struct Fixed {
+    rest: Tensor<2>,
+    k: Tensor<2>,
+    correctives: Tensor<2>,
+    normalised: Tensor<2>,
+    pivot: Tensor<2>,
+    targets: Tensor<3>,
+    frames: usize,
+    shapes: usize,
+}
+
+/// The fit at vertices `idx` of every frame.
+struct Posed {
+    /// s*, `[J·P, 3]`.
+    skin: Tensor<2>,
+    /// s*_lbs, `[J·P, 3]`.
+    lbs: Tensor<2>,
+    /// w, `[J·P, M]` (local) or `[J, M]` (global); `None` for zero coefficients.
+    weights: Option<Tensor<2>>,
+}
+
+fn pose(net: &FitNet, fx: &Fixed, idx: Tensor<1, Int>, coefficients: Coefficients) -> Posed {
+    let (j, m) = (fx.frames, fx.shapes);
+    let p = idx.dims()[0];
+    let device = fx.rest.device();
+    let per_frame = |t: Tensor<2>| {
+        let [_, w] = t.dims();
+        t.reshape([1, p, w]).repeat_dim(0, j).reshape([j * p, w])
+    };
+    let per_point = |t: Tensor<2>| {
+        let [_, w] = t.dims();
+        t.reshape([j, 1, w]).repeat_dim(1, p).reshape([j * p, w])
+    };
+    let codes = net.codes.val();
+    let identity = tensor(IDENTITY_18.to_vec(), [1, 18], &device);
+    // AIM eq. 18: [T_g, T_b] = F_T(z_j)
+    let t = per_point(net.ft.forward(codes.clone()) + identity);
+    let (head, jaw) = (t.clone().narrow(1, 0, 9), t.narrow(1, 9, 9));
+    let s0 = per_frame(fx.rest.clone().select(0, idx.clone()));
+    let k = per_frame(fx.k.clone().select(0, idx.clone()));
+    let rel = s0.clone() - fx.pivot.clone();
+    let moved =
+        rotate_6d(jaw.clone().narrow(1, 0, 6), rel) + fx.pivot.clone() + jaw.narrow(1, 6, 3);
+    // LBS(s0, T_b, k) = k T_b(s0) + (1 − k) s0
+    let lbs = moved * k.clone() + s0 * k.neg().add_scalar(1.0);
+    let global =
+        |x: Tensor<2>| rotate_6d(head.clone().narrow(1, 0, 6), x) + head.clone().narrow(1, 6, 3);
+    let (weights, per_row) = match coefficients {
+        Coefficients::Zero => (None, None),
+        // AIM eq. 19: w_j = F_W(z_j, c)
+        Coefficients::Local => {
+            let c = per_frame(fx.normalised.clone().select(0, idx.clone()));
+            let w = net.fw.forward(Tensor::cat(vec![per_point(codes), c], 1));
+            (Some(w.clone()), Some(w))
+        }
+        Coefficients::Global => {
+            let w = net.fw.forward(codes);
+            (Some(w.clone()), Some(per_point(w)))
+        }
+    };
+    let body = match per_row {
+        Some(w) => {
+            let e = per_frame(fx.correctives.clone().select(0, idx)).reshape([j * p, m, 3]);
+            let corr = (w.reshape([j * p, m, 1]) * e)
+                .sum_dim(1)
+                .reshape([j * p, 3]);
+            lbs.clone() + corr
+        }
+        None => lbs.clone(),
+    };
+    // AIM eq. 17: s* = T_g(LBS(s0, T_b, k) + Σ w B_e)
+    Posed {
+        skin: global(body),
+        lbs: global(lbs),
+        weights,
+    }
+}
+
+/// The fit of one performance with one setting.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FitResult {
+    /// The settings.
+    pub config: FitConfig,
+    /// Mean per-vertex distance to the performance's meshes, in mm, after the last step.
+    pub mean_error_mm: f64,
+    /// The same per frame.
+    pub frame_error_mm: Vec<f64>,
+    /// `(step, mean error in mm)` before the first step, half way and after the last.
+    pub error_history: Vec<(usize, f64)>,
+    /// `(step, total loss)` every 10 steps.
+    pub loss_history: Vec<(usize, f64)>,
+    /// Wall-clock seconds of the optimisation divided by the frames.
+    pub seconds_per_frame: f64,
+    /// Per frame: head and jaw (6D + translation in the actor's units).
+    pub head: Vec<[f32; 9]>,
+    /// Per frame: jaw.
+    pub jaw: Vec<[f32; 9]>,
+    /// Per frame, the global coefficients (global fits only).
+    pub weights: Option<Vec<Vec<f32>>>,
+    /// Per frame, the fitted skin `[V]` in the actor's units.
+    #[serde(skip)]
+    pub meshes: Vec<Vec<[f32; 3]>>,
+}
+
+/// Fits `actor` (its bytes, `unit_mm` millimetres per unit) to every frame of `perf`.
+pub fn fit(
+    actor: &AimActor<'_>,
+    perf: &Performance,
+    config: &FitConfig,
+    backend: Backend,
+) -> Result<FitResult> {
+    ensure!(
+        config.iterations > 0 && config.points > 0 && config.code > 0 && config.hidden > 0,
+        "the fit needs at least one iteration, point, code dimension and hidden unit"
+    );
+    let unit = performance_unit(perf)?;
+    let v = actor.vertex_count();
+    for (f, frame) in perf.frames.iter().enumerate() {
+        if frame.len() != v {
+            bail!(
+                "{}: {} vertices, the actor has {v}",
+                perf.frame_path(f).display(),
+                frame.len()
+            );
+        }
+    }
+    let mm = unit.mm() as f32;
+    let cache = ActorCache::new(actor, mm);
+    let (j, m) = (perf.frames.len(), cache.shapes);
+    let device = backend.autodiff_device(config.seed)?;
+    let targets: Vec<f32> = perf
+        .frames
+        .iter()
+        .flatten()
+        .flatten()
+        .map(|x| x * mm)
+        .collect();
+    let fx = Fixed {
+        rest: tensor(cache.rest.clone(), [v, 3], &device),
+        k: tensor(cache.k.clone(), [v, 1], &device),
+        correctives: tensor(cache.correctives.clone(), [v, 3 * m], &device),
+        normalised: tensor(cache.normalised.clone(), [v, 3], &device),
+        pivot: tensor(cache.pivot.to_vec(), [1, 3], &device),
+        targets: tensor(targets, [j, v, 3], &device),
+        frames: j,
+        shapes: m,
+    };
+    let fw_inputs = match config.coefficients {
+        Coefficients::Local => config.code + 3,
+        _ => config.code,
+    };
+    let mut net = FitNet {
+        codes: Param::from_tensor(Tensor::random(
+            [j, config.code],
+            Distribution::Normal(0.0, 0.01),
+            &device,
+        )),
+        ft: gelu_mlp(config.code, config.hidden, 18, &device),
+        fw: gelu_mlp(fw_inputs, config.hidden, m.max(1), &device),
+    };
+    let mut optim = AdamConfig::new().with_epsilon(1e-8).init();
+    let mut rng = rand_pcg::Pcg64::new(
+        u128::from(config.seed) << 64 | 0xf17,
+        0x00a0_2bdb_0000_0000_0000_0000_0000_0001,
+    );
+    let mut result = FitResult {
+        config: config.clone(),
+        mean_error_mm: 0.0,
+        frame_error_mm: Vec::new(),
+        error_history: Vec::new(),
+        loss_history: Vec::new(),
+        seconds_per_frame: 0.0,
+        head: Vec::new(),
+        jaw: Vec::new(),
+        weights: None,
+        meshes: Vec::new(),
+    };
+    let evaluate = |net: &FitNet| -> (Vec<Vec<[f32; 3]>>, Vec<f64>) {
+        evaluate(net, &fx, config.coefficients, perf, unit, mm)
+    };
+    let (_, errors) = evaluate(&net);
+    result.error_history.push((0, mean(&errors)));
+    let start = Instant::now();
+    let bar = crate::training::progress::bar(config.iterations as u64, true);
+    for step in 0..config.iterations {
+        let draw: Vec<i64> = (0..config.points)
+            .map(|_| ((u128::from(rng.next_u64()) * v as u128) >> 64) as i64)
+            .collect();
+        let idx = Tensor::<1, Int>::from_data(TensorData::new(draw, [config.points]), &device);
+        let posed = pose(&net, &fx, idx.clone(), config.coefficients);
+        let gt = fx
+            .targets
+            .clone()
+            .select(1, idx)
+            .reshape([j * config.points, 3]);
+        let sq = |a: Tensor<2>| (a - gt.clone()).square().sum_dim(1).mean();
+        // AIM eq. 20
+        let mut total = (sq(posed.skin) + sq(posed.lbs)).mul_scalar(config.lambda_3d);
+        // AIM eq. 22
+        if let Some(w) = posed.weights {
+            total = total + w.square().sum_dim(1).mean().mul_scalar(config.lambda_w);
+        }
+        // AIM eq. 23
+        if j > 1 {
+            let z = net.codes.val();
+            let d = z.clone().narrow(0, 1, j - 1) - z.narrow(0, 0, j - 1);
+            total = total + d.square().sum_dim(1).mean().mul_scalar(config.lambda_t);
+        }
+        if step % 10 == 0 {
+            let loss = to_vec(total.clone()).first().copied().unwrap_or(f32::NAN);
+            result.loss_history.push((step, f64::from(loss)));
+        }
+        let grads = GradientsParams::from_grads(total.backward(), &net);
+        net = optim.step(config.lr, net, grads);
+        bar.inc(1);
+        if step + 1 == config.iterations / 2 && config.iterations >= 2 {
+            let (_, errors) = evaluate(&net);
+            result.error_history.push((step + 1, mean(&errors)));
+        }
+    }
+    bar.finish_and_clear();
+    result.seconds_per_frame = start.elapsed().as_secs_f64() / j as f64;
+    let (meshes, errors) = evaluate(&net);
+    result.mean_error_mm = mean(&errors);
+    result
+        .error_history
+        .push((config.iterations, result.mean_error_mm));
+    if !result.mean_error_mm.is_finite() {
+        return Err(anyhow!(
+            "the fit diverged (mean error {}); try fewer points or a smaller learning rate",
+            result.mean_error_mm
+        ));
+    }
+    result.frame_error_mm = errors;
+    result.meshes = meshes;
+    let t = to_vec(net.ft.forward(net.codes.val()));
+    for (row, frame) in t.chunks_exact(18).zip(0..j) {
+        let _ = frame;
+        let add = |o: usize| -> [f32; 9] {
+            std::array::from_fn(|i| {
+                let x = row[o + i] + IDENTITY_18[o + i];
+                // Translations back into the actor's units.
+                if i >= 6 { x / mm } else { x }
+            })
+        };
+        result.head.push(add(0));
+        result.jaw.push(add(9));
+    }
+    if config.coefficients == Coefficients::Global {
+        let w = to_vec(net.fw.forward(net.codes.val()));
+        result.weights = Some(w.chunks_exact(m.max(1)).map(<[f32]>::to_vec).collect());
+    }
+    Ok(result)
+}
+
+fn mean(x: &[f64]) -> f64 {
+    x.iter().sum::<f64>() / x.len().max(1) as f64
+}
+
+/// Every frame's fitted skin over all vertices (in chunks), in the actor's units, and each
+/// frame's mean error in mm.
+fn evaluate(
+    net: &FitNet,
+    fx: &Fixed,
+    coefficients: Coefficients,
+    perf: &Performance,
+    unit: crate::io::units::Unit,
+    mm: f32,
+) -> (Vec<Vec<[f32; 3]>>, Vec<f64>) {
+    let v = perf.frames.first().map_or(0, Vec::len);
+    let j = fx.frames;
+    let device = fx.rest.device();
+    let mut meshes = vec![Vec::with_capacity(v); j];
+    for start in (0..v).step_by(2048) {
+        let n = 2048.min(v - start);
+        let idx: Vec<i64> = (start..start + n).map(|i| i as i64).collect();
+        let idx = Tensor::<1, Int>::from_data(TensorData::new(idx, [n]), &device);
+        let skin = to_vec(pose(net, fx, idx, coefficients).skin);
+        for (f, rows) in skin.chunks_exact(3 * n).enumerate() {
+            meshes[f].extend(
+                rows.chunks_exact(3)
+                    .map(|p| [p[0] / mm, p[1] / mm, p[2] / mm]),
+            );
+        }
+    }
+    let errors = meshes
+        .iter()
+        .zip(&perf.frames)
+        .map(|(a, b)| mean_error_mm(a, b, unit))
+        .collect();
+    (meshes, errors)
+}
+
+#[cfg(test)]
+mod tests;
