@@ -3,11 +3,12 @@
 //!
 //! The folders are the architecture, each layer importing only the layers below it
 //! (docs/ARCHITECTURE.md, "Code map"; `tests/tests/architecture.rs` keeps it so):
-//! [`replay`] above [`aim`] and [`s2d`], above [`training`], [`figures`] and [`anatomy`], above
+//! [`replay`] and [`export`] above [`aim`] and [`s2d`], above [`training`], [`figures`] and [`anatomy`], above
 //! [`geometry`], above [`io`].
 
 pub mod aim;
 pub mod anatomy;
+pub mod export;
 pub mod figures;
 pub mod geometry;
 pub mod io;

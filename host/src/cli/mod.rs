@@ -4,6 +4,7 @@
 
 mod aim;
 mod bones;
+mod export;
 mod replay;
 mod s2d;
 
@@ -33,8 +34,12 @@ enum Command {
     Eval(Eval),
     /// Re-bake a model from a training checkpoint.
     Bake(aim::BakeArgs),
-    /// Pose a baked actor through sinew-core, one OBJ per frame.
+    /// Pose a baked actor through sinew-core, one OBJ per frame, from a pose file or an ARKit
+    /// capture.
     Play(aim::PlayArgs),
+    /// Write a baked actor in another engine's format.
+    #[command(subcommand)]
+    Export(export::Export),
     /// Show what a .sinew file holds: kind, version, sections, shapes, sizes, checksum status.
     Inspect {
         /// The .sinew file.
@@ -89,6 +94,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Eval(Eval::Aim(args)) => aim::eval(args),
         Command::Bake(args) => aim::bake(args),
         Command::Play(args) => aim::play(args),
+        Command::Export(cmd) => export::run(cmd),
         Command::Inspect { file, json } => {
             let report = sinew_host::io::inspect::inspect(&file)?;
             if json {
