@@ -24,6 +24,18 @@ cargo build -p sinew-core --target thumbv7em-none-eabihf --locked
 echo "== tests"
 cargo test --workspace --locked
 
+echo "== glTF: the golden ICT actor exported (poses; ARKit capture with bones), Khronos validator"
+if ! command -v npm >/dev/null; then
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq nodejs npm >/dev/null
+fi
+gltf_dir=$(mktemp -d)
+cargo run -q --locked -p sinew-host --bin sinew -- export gltf --model tests/data/aim-ict.sinew \
+  --poses host/tests/gltf/poses.json --out "$gltf_dir/poses.glb" >/dev/null
+cargo run -q --locked -p sinew-host --bin sinew -- export gltf --model tests/data/aim-ict.sinew \
+  --arkit tests/data/arkit-sample.csv --bones --out "$gltf_dir/arkit.glb" >/dev/null
+(cd host/tests/gltf && npm ci --no-audit --no-fund --silent && node validate.mjs "$gltf_dir/poses.glb" "$gltf_dir/arkit.glb")
+rm -rf "$gltf_dir"
+
 echo "== C API: the golden replays from C (core/ffi/examples/replay.c)"
 if ! command -v cc >/dev/null; then
   apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gcc >/dev/null

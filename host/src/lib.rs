@@ -3,11 +3,12 @@
 //!
 //! The folders are the architecture, each layer importing only the layers below it
 //! (docs/ARCHITECTURE.md, "Code map"; `tests/tests/architecture.rs` keeps it so):
-//! [`view`] above [`replay`], above [`aim`], [`s2d`] and [`fit`], above [`training`] and
-//! [`anatomy`], above [`figures`], above [`geometry`], above [`io`].
+//! [`view`] above [`replay`] and [`export`], above [`aim`], [`s2d`] and [`fit`], above
+//! [`training`] and [`anatomy`], above [`figures`], above [`geometry`], above [`io`].
 
 pub mod aim;
 pub mod anatomy;
+pub mod export;
 pub mod figures;
 pub mod fit;
 pub mod geometry;

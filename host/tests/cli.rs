@@ -834,3 +834,113 @@ fn view_names_a_bad_model_and_fails() {
         "{e}"
     );
 }
+
+fn repo(path: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(path)
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+#[test]
+fn play_arkit_and_export_gltf_on_the_golden_actor() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = repo("tests/data/aim-ict.sinew");
+    let capture = repo("tests/data/arkit-sample.csv");
+    let frames = dir.path().join("frames");
+    let out = sinew(&[
+        "play",
+        "--model",
+        &model,
+        "--arkit",
+        &capture,
+        "--out",
+        s(&frames),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("cannot play these capture channels") && stderr.contains("MouthClose"));
+    assert!(frames.join("frame_00029.obj").exists() && !frames.join("frame_00030.obj").exists());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(frames.join("arkit.json")).unwrap()).unwrap();
+    assert_eq!(summary["frames"], 30);
+    let unplayable = summary["mapping"]["unplayable"].as_array().unwrap();
+    assert!(unplayable.iter().any(|c| c == "HeadYaw"));
+    assert_eq!(unplayable.len(), 42);
+
+    let glb = dir.path().join("face.glb");
+    let report = ok(&[
+        "export",
+        "gltf",
+        "--model",
+        &model,
+        "--arkit",
+        &capture,
+        "--bones",
+        "--out",
+        s(&glb),
+    ]);
+    let report: serde_json::Value = serde_json::from_str(&report).unwrap();
+    assert_eq!(report["frames"], 30);
+    assert_eq!(report["morph_targets"], 19);
+    let bytes = std::fs::read(&glb).unwrap();
+    assert_eq!(&bytes[..4], b"glTF");
+    assert_eq!(report["bytes"], bytes.len());
+    let posed = dir.path().join("posed.glb");
+    ok(&[
+        "export",
+        "gltf",
+        "--model",
+        &model,
+        "--poses",
+        &repo("host/tests/gltf/poses.json"),
+        "--fps",
+        "24",
+        "--out",
+        s(&posed),
+    ]);
+
+    // Bad input: the file and line named, nothing written.
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(
+        &bad,
+        "Timecode,BlendshapeCount,JawOpen\n00:00:00:00.000,1,0.5\nx,1,half\n",
+    )
+    .unwrap();
+    let e = err(&[
+        "play",
+        "--model",
+        &model,
+        "--arkit",
+        s(&bad),
+        "--out",
+        s(&dir.path().join("no")),
+    ]);
+    assert!(
+        e.contains("bad.csv:3: JawOpen: `half` is not a finite number"),
+        "{e}"
+    );
+    let none = dir.path().join("none.glb");
+    let e = err(&[
+        "export",
+        "gltf",
+        "--model",
+        &model,
+        "--arkit",
+        s(&bad),
+        "--out",
+        s(&none),
+    ]);
+    assert!(e.contains("bad.csv:3"), "{e}");
+    assert!(!none.exists());
+    let e = err(&["export", "gltf", "--model", &capture, "--out", s(&none)]);
+    assert!(e.contains("arkit-sample.csv"), "{e}");
+    let e = err(&["play", "--model", &model, "--out", s(&frames)]);
+    assert!(e.contains("--poses") || e.contains("--arkit"), "{e}");
+}

@@ -20,7 +20,7 @@ const HOST_LAYERS: &[&[&str]] = &[
     &["figures"],
     &["anatomy", "training"],
     &["aim", "s2d", "fit"],
-    &["replay"],
+    &["replay", "export"],
     &["view"],
     &["cli"],
 ];

@@ -2,6 +2,7 @@
 //! set, the five-network model, its training (eqs. 11–16), baking into the core's format and the
 //! accuracy report.
 
+pub mod arkit;
 pub mod bake;
 pub mod commands;
 pub mod config;

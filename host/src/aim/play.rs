@@ -73,16 +73,26 @@ pub fn play(model: &Path, poses: &Path, out: &Path, template: Option<&Mesh>) -> 
     let actor =
         AimActor::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
     let file = PoseFile::read(poses, actor.shape_count())?;
+    play_frames(&actor, &file.frames, out, template)
+}
+
+/// Poses `frames` through the core and writes `frame_NNNNN.obj` into `out`.
+pub fn play_frames(
+    actor: &AimActor<'_>,
+    frames: &[Frame],
+    out: &Path,
+    template: Option<&Mesh>,
+) -> Result<usize> {
     let mesh = match template {
         Some(t) => t.clone(),
-        None => mesh_of(&actor),
+        None => mesh_of(actor),
     };
     std::fs::create_dir_all(out)
         .with_context(|| format!("{}: cannot create folder", out.display()))?;
     let mut buf = vec![0.0; 3 * actor.vertex_count()];
     // The core's f32 posing, as `sinew_core::replay::pose_frame` does it in f32 mode, without
     // the normals an OBJ does not carry.
-    for (i, f) in file.frames.iter().enumerate() {
+    for (i, f) in frames.iter().enumerate() {
         let pose = actor.pose_from_9d(&f.jaw, &f.head);
         actor
             .pose(&pose, &f.weights, &mut buf)
@@ -91,7 +101,22 @@ pub fn play(model: &Path, poses: &Path, out: &Path, template: Option<&Mesh>) -> 
         mesh.with_positions(positions)
             .write(&out.join(format!("frame_{i:05}.obj")))?;
     }
-    Ok(file.frames.len())
+    Ok(frames.len())
+}
+
+/// The names of the actor's corrective shapes (metadata `shapes` without the neutral), or
+/// `shape_1` … `shape_M` when the artefact does not record them.
+pub fn corrective_names(actor: &AimActor<'_>) -> Vec<String> {
+    let m = actor.shape_count();
+    let recorded: Option<Vec<String>> = actor
+        .file()
+        .metadata()
+        .get("shapes")
+        .map(|s| s.split(',').skip(1).map(|n| n.trim().to_string()).collect());
+    match recorded {
+        Some(names) if names.len() == m => names,
+        _ => (1..=m).map(|j| format!("shape_{j}")).collect(),
+    }
 }
 
 /// The baked template as a triangle mesh.

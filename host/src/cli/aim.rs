@@ -54,8 +54,13 @@ pub(crate) struct PlayArgs {
     #[arg(long)]
     model: PathBuf,
     /// Pose file: {"frames": [{"head": [9], "jaw": [9], "weights": [M]}, ...]}.
+    #[arg(long, required_unless_present = "arkit", conflicts_with = "arkit")]
+    poses: Option<PathBuf>,
+    /// Live Link Face capture (CSV): each ARKit channel drives the actor's shape of that name
+    /// (`_L`/`_R` for Left/Right); the mapping and the channels the actor cannot play go to
+    /// OUT/arkit.json.
     #[arg(long)]
-    poses: PathBuf,
+    arkit: Option<PathBuf>,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -298,7 +303,20 @@ pub(crate) fn bake(args: BakeArgs) -> Result<()> {
 
 /// `sinew play`.
 pub(crate) fn play(args: PlayArgs) -> Result<()> {
-    let n = sinew_host::aim::play::play(&args.model, &args.poses, &args.out, None)?;
+    let n = match (&args.poses, &args.arkit) {
+        (Some(poses), _) => sinew_host::aim::play::play(&args.model, poses, &args.out, None)?,
+        (None, Some(capture)) => {
+            let playback = sinew_host::aim::arkit::play_arkit(&args.model, capture, &args.out)?;
+            if !playback.mapping.unplayable.is_empty() {
+                eprintln!(
+                    "the actor cannot play these capture channels: {}",
+                    playback.mapping.unplayable.join(", ")
+                );
+            }
+            playback.frames.len()
+        }
+        (None, None) => anyhow::bail!("give --poses or --arkit"),
+    };
     println!("{n} frames written to {}", args.out.display());
     Ok(())
 }

@@ -4,6 +4,7 @@
 
 mod aim;
 mod bones;
+mod export;
 mod fit;
 mod replay;
 mod s2d;
@@ -35,8 +36,12 @@ enum Command {
     Eval(Eval),
     /// Re-bake a model from a training checkpoint.
     Bake(aim::BakeArgs),
-    /// Pose a baked actor through sinew-core, one OBJ per frame.
+    /// Pose a baked actor through sinew-core, one OBJ per frame, from a pose file or an ARKit
+    /// capture.
     Play(aim::PlayArgs),
+    /// Write a baked actor in another engine's format.
+    #[command(subcommand)]
+    Export(export::Export),
     /// Show what a .sinew file holds: kind, version, sections, shapes, sizes, checksum status.
     Inspect {
         /// The .sinew file.
@@ -102,6 +107,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Fit(args) => fit::fit(args),
         Command::Bake(args) => aim::bake(args),
         Command::Play(args) => aim::play(args),
+        Command::Export(cmd) => export::run(cmd),
         Command::Inspect { file, json } => {
             let report = sinew_host::io::inspect::inspect(&file)?;
             if json {

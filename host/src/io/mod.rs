@@ -1,7 +1,8 @@
-//! Files in and out: meshes (OBJ, PLY), the ICT-FaceKit reader, the `.sinew` writer and
+//! Files in and out: meshes (OBJ, PLY), the ICT-FaceKit reader, ARKit captures (Live Link Face CSV), the `.sinew` writer and
 //! inspector, the real-data folder, and atomic outputs. The lowest layer of the host: it imports
 //! nothing else of the crate.
 
+pub mod arkit;
 pub mod atomic;
 pub mod container;
 pub mod data;

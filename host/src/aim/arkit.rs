@@ -1,0 +1,444 @@
+//! ARKit captures driving a baked actor: which capture channel plays which of the actor's shapes,
+//! and the capture's rows as pose frames.
+//!
+//! ICT-FaceKit names its shapes after ARKit's blendshapes in camelCase and splits the sided ones
+//! with `_L`/`_R` (`mouthSmile_L`), where a Live Link Face capture writes PascalCase with a
+//! `Left`/`Right` suffix (`MouthSmileLeft`). A channel plays
+//! 1. the shape of the same name, ignoring ASCII case (`JawOpen` → `jawOpen`); otherwise, only
+//!    when the actor names sided shapes with `_L`/`_R`,
+//! 2. the sided shape: `MouthSmileLeft` → `mouthSmile_L`;
+//! 3. both sides of a shape ARKit does not split: `BrowInnerUp` → `browInnerUp_L` and
+//!    `browInnerUp_R` (ICT-FaceKit splits `browInnerUp` and `cheekPuff`).
+//!
+//! A channel that plays none of the actor's shapes (the head and eye rotations, and every shape
+//! the actor was not trained on) is reported, never silently dropped. The jaw channels
+//! (`jawOpen`, `jawLeft`, `jawRight`, `jawForward`) also move the jaw: each blends the jaw
+//! transform learned for its shape (`train.jaw`) in from the identity by its weight, as
+//! `sinew demo` opens the jaw.
+
+use std::path::Path;
+
+use anyhow::{Result, bail};
+use serde::Serialize;
+use sinew_core::aim::AimActor;
+
+use crate::aim::model::IDENTITY_9D;
+use crate::aim::play::Frame;
+use crate::io::arkit::{Capture, CaptureFrame, LIVE_LINK_FACE_CHANNELS};
+
+/// Which capture channel drives which corrective shape.
+#[derive(Clone, Debug, Serialize)]
+pub struct Mapping {
+    /// `(capture channel, actor shape)` pairs: the channel's value is the shape's coefficient.
+    pub played: Vec<(String, String)>,
+    /// Capture channels that drive none of the actor's shapes, in capture order.
+    pub unplayable: Vec<String>,
+    /// The actor's corrective shapes that no channel drives (they stay at rest).
+    pub at_rest: Vec<String>,
+    /// Shapes whose learned jaw transform the capture blends in (the jaw channels the actor has
+    /// and carries a training pose for).
+    pub jaw_shapes: Vec<String>,
+    #[serde(skip)]
+    routes: Vec<(usize, usize)>,
+}
+
+impl Mapping {
+    /// Maps capture `channels` onto the actor's corrective `shapes` (neutral excluded); `path`
+    /// names the capture in the error when no channel plays any shape.
+    pub fn new(path: &Path, channels: &[String], shapes: &[String]) -> Result<Self> {
+        let find = |name: &str| shapes.iter().position(|s| s.eq_ignore_ascii_case(name));
+        let sided = shapes
+            .iter()
+            .any(|s| s.ends_with("_L") || s.ends_with("_R"));
+        let mut routes = Vec::new();
+        let mut unplayable = Vec::new();
+        for (c, name) in channels.iter().enumerate() {
+            let before = routes.len();
+            if let Some(s) = find(name) {
+                routes.push((c, s));
+            } else if sided {
+                let side =
+                    [("Left", "_L"), ("Right", "_R")]
+                        .into_iter()
+                        .find_map(|(suffix, kit)| {
+                            let cut = name.len().checked_sub(suffix.len())?;
+                            let (stem, end) = (name.get(..cut)?, name.get(cut..)?);
+                            (!stem.is_empty() && end.eq_ignore_ascii_case(suffix))
+                                .then(|| format!("{stem}{kit}"))
+                        });
+                match side {
+                    Some(kit_name) => routes.extend(find(&kit_name).map(|s| (c, s))),
+                    None => {
+                        for kit in ["_L", "_R"] {
+                            routes.extend(find(&format!("{name}{kit}")).map(|s| (c, s)));
+                        }
+                    }
+                }
+            }
+            if routes.len() == before {
+                unplayable.push(name.clone());
+            }
+        }
+        if routes.is_empty() {
+            bail!(
+                "{}: no capture channel matches any of the actor's shapes (channels {}; shapes {})",
+                path.display(),
+                channels.join(","),
+                shapes.join(",")
+            );
+        }
+        let at_rest = (0..shapes.len())
+            .filter(|s| !routes.iter().any(|r| r.1 == *s))
+            .map(|s| shapes[s].clone())
+            .collect();
+        Ok(Self {
+            played: routes
+                .iter()
+                .map(|&(c, s)| (channels[c].clone(), shapes[s].clone()))
+                .collect(),
+            unplayable,
+            at_rest,
+            jaw_shapes: Vec::new(),
+            routes,
+        })
+    }
+
+    /// One frame's coefficients (`[M]`) from a capture row.
+    pub fn weights(&self, row: &CaptureFrame, shapes: usize) -> Vec<f32> {
+        let mut w = vec![0.0; shapes];
+        for &(c, s) in &self.routes {
+            w[s] = row.values[c];
+        }
+        w
+    }
+}
+
+/// A capture turned into an actor's pose frames, with the mapping that did it.
+#[derive(Clone, Debug)]
+pub struct Playback {
+    /// The mapping from capture channels to shapes.
+    pub mapping: Mapping,
+    /// One pose frame per capture row (head at rest: the capture's head rotation is reported
+    /// as unplayable).
+    pub frames: Vec<Frame>,
+}
+
+/// Shapes whose learned jaw transform moves the jaw when they play.
+const JAW_SHAPES: [&str; 4] = ["jawOpen", "jawLeft", "jawRight", "jawForward"];
+
+/// Reads a Live Link Face capture and maps it onto `actor`.
+pub fn playback(actor: &AimActor<'_>, capture_path: &Path) -> Result<Playback> {
+    let capture = Capture::read(capture_path)?;
+    playback_of(actor, capture_path, &capture)
+}
+
+/// Maps a parsed capture onto `actor`; `path` names the capture in errors.
+pub fn playback_of(actor: &AimActor<'_>, path: &Path, capture: &Capture) -> Result<Playback> {
+    let shapes = crate::aim::play::corrective_names(actor);
+    let mut mapping = Mapping::new(path, &capture.channels, &shapes)?;
+    // The learned jaw transforms, when the artefact records them (every trained actor does).
+    let poses = crate::aim::eval::training_poses(actor).ok();
+    let jaw: Vec<(usize, [f32; 9])> = match &poses {
+        Some(p) => JAW_SHAPES
+            .iter()
+            .filter_map(|n| shapes.iter().position(|s| s == n))
+            .filter(|s| mapping.routes.iter().any(|r| r.1 == *s))
+            .map(|s| (s, p[s + 1]))
+            .collect(),
+        None => Vec::new(),
+    };
+    mapping.jaw_shapes = jaw.iter().map(|(s, _)| shapes[*s].clone()).collect();
+    let frames = capture
+        .frames
+        .iter()
+        .map(|row| {
+            let weights = mapping.weights(row, shapes.len());
+            let mut jaw9 = IDENTITY_9D;
+            for (s, learned) in &jaw {
+                for (j, v) in jaw9.iter_mut().enumerate() {
+                    *v += weights[*s] * (learned[j] - IDENTITY_9D[j]);
+                }
+            }
+            Frame {
+                head: IDENTITY_9D,
+                jaw: jaw9,
+                weights,
+            }
+        })
+        .collect();
+    Ok(Playback { mapping, frames })
+}
+
+/// `sinew play --arkit`: poses the baked actor from a Live Link Face capture, one OBJ per frame,
+/// and writes the channel mapping to `arkit.json` beside them.
+pub fn play_arkit(model: &Path, capture: &Path, out: &Path) -> Result<Playback> {
+    let bytes = crate::io::container::read(model)?;
+    let actor =
+        AimActor::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
+    let playback = playback(&actor, capture)?;
+    crate::aim::play::play_frames(&actor, &playback.frames, out, None)?;
+    let summary = serde_json::json!({
+        "capture": capture.display().to_string(),
+        "frames": playback.frames.len(),
+        "mapping": playback.mapping,
+    });
+    crate::io::atomic::write(
+        &out.join("arkit.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    Ok(playback)
+}
+
+/// The sample capture `tests/data/arkit-sample.csv`: 30 frames at 30 fps of Live Link Face's 61
+/// channels, zero except smooth curves on a few: the jaw opening and closing, a smile rising on
+/// both sides, the inner brows, a blink, a cheek puff, and two channels the golden ICT actor
+/// cannot play (`MouthClose`, the head's yaw).
+pub fn sample_capture() -> Capture {
+    let channels: Vec<String> = LIVE_LINK_FACE_CHANNELS.map(String::from).to_vec();
+    type Curve = fn(f64) -> f64;
+    let curves: [(&str, Curve); 8] = [
+        ("JawOpen", |t| (std::f64::consts::PI * t).sin() * 0.8),
+        ("MouthSmileLeft", |t| t * t),
+        ("MouthSmileRight", |t| t * t * 0.9),
+        ("BrowInnerUp", |t| {
+            0.5 - 0.5 * (2.0 * std::f64::consts::PI * t).cos()
+        }),
+        ("EyeBlinkRight", |t| (-((t - 0.5) / 0.08).powi(2)).exp()),
+        ("CheekPuff", |t| 0.6 * t),
+        ("MouthClose", |t| 0.3 * (std::f64::consts::PI * t).sin()),
+        ("HeadYaw", |t| 0.2 * (2.0 * std::f64::consts::PI * t).sin()),
+    ];
+    let frames = (0..30)
+        .map(|f| {
+            let t = f as f64 / 29.0;
+            let mut values = vec![0.0f32; channels.len()];
+            for (name, curve) in &curves {
+                if let Some(c) = channels.iter().position(|n| n == name) {
+                    // Four decimals, as the CSV stores them, so the file reads back exactly (and
+                    // `+ 0.0` turns a rounded −0 into 0).
+                    values[c] = ((curve(t) * 1e4).round() / 1e4) as f32 + 0.0;
+                }
+            }
+            CaptureFrame {
+                timecode: format!("00:00:01:{f:02}.000"),
+                values,
+            }
+        })
+        .collect();
+    Capture { channels, frames }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn repo(path: &str) -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(path)
+    }
+
+    fn golden() -> Vec<u8> {
+        std::fs::read(repo("tests/data/aim-ict.sinew")).unwrap()
+    }
+
+    /// The committed sample is what [`sample_capture`] makes; only `UPDATE_EXPECT=1` rewrites it.
+    #[test]
+    fn sample_capture_is_the_committed_file() {
+        let path = repo("tests/data/arkit-sample.csv");
+        let made = sample_capture().to_csv();
+        if std::env::var_os("UPDATE_EXPECT").is_some_and(|v| v == "1") {
+            crate::io::atomic::write(&path, made.as_bytes()).unwrap();
+        }
+        let committed = std::fs::read_to_string(&path)
+            .unwrap_or_else(|e| panic!("{}: {e} (UPDATE_EXPECT=1 writes it)", path.display()));
+        assert_eq!(committed, made, "{} is stale", path.display());
+        assert_eq!(Capture::read(&path).unwrap(), sample_capture());
+    }
+
+    #[test]
+    fn maps_live_link_names_onto_the_kit_shapes() {
+        let bytes = golden();
+        let actor = AimActor::from_bytes(&bytes).unwrap();
+        let capture = sample_capture();
+        let p = playback_of(&actor, Path::new("sample.csv"), &capture).unwrap();
+        let pair = |c: &str, s: &str| (c.to_string(), s.to_string());
+        for want in [
+            pair("JawOpen", "jawOpen"),
+            pair("MouthSmileLeft", "mouthSmile_L"),
+            pair("MouthSmileRight", "mouthSmile_R"),
+            pair("BrowInnerUp", "browInnerUp_L"),
+            pair("CheekPuff", "cheekPuff_L"),
+            pair("EyeBlinkRight", "eyeBlink_R"),
+            pair("MouthRollLower", "mouthRollLower"),
+        ] {
+            assert!(
+                p.mapping.played.contains(&want),
+                "{want:?} not in {:?}",
+                p.mapping.played
+            );
+        }
+        // The actor learned all 19 of its shapes from ARKit-named kit shapes: a full capture
+        // drives each of them.
+        assert_eq!(p.mapping.played.len(), 19);
+        assert!(p.mapping.at_rest.is_empty(), "{:?}", p.mapping.at_rest);
+        for lost in [
+            "MouthClose",
+            "HeadYaw",
+            "EyeBlinkLeft",
+            "TongueOut",
+            "RightEyeRoll",
+        ] {
+            assert!(
+                p.mapping.unplayable.iter().any(|c| c == lost),
+                "{lost} should be unplayable"
+            );
+        }
+        assert_eq!(p.mapping.unplayable.len(), 61 - 19);
+        assert_eq!(
+            p.mapping.jaw_shapes,
+            ["jawOpen", "jawLeft", "jawRight", "jawForward"]
+        );
+    }
+
+    #[test]
+    fn frames_move_where_the_capture_says() {
+        let bytes = golden();
+        let actor = AimActor::from_bytes(&bytes).unwrap();
+        let capture = sample_capture();
+        let p = playback_of(&actor, Path::new("sample.csv"), &capture).unwrap();
+        assert_eq!(p.frames.len(), 30);
+        let shapes = crate::aim::play::corrective_names(&actor);
+        let s = |n: &str| shapes.iter().position(|x| x == n).unwrap();
+        let c = |n: &str| capture.channel(n).unwrap();
+        // The first frame is at rest: no weight, the jaw and head the identity.
+        assert!(p.frames[0].weights.iter().all(|w| *w == 0.0));
+        assert_eq!(p.frames[0].jaw, IDENTITY_9D);
+        let learned = crate::aim::eval::training_poses(&actor).unwrap()[s("jawOpen") + 1];
+        for (f, (frame, row)) in p.frames.iter().zip(&capture.frames).enumerate() {
+            assert_eq!(
+                frame.weights[s("jawOpen")],
+                row.values[c("JawOpen")],
+                "frame {f}"
+            );
+            assert_eq!(
+                frame.weights[s("mouthSmile_L")],
+                row.values[c("MouthSmileLeft")]
+            );
+            assert_eq!(
+                frame.weights[s("browInnerUp_L")],
+                row.values[c("BrowInnerUp")]
+            );
+            assert_eq!(
+                frame.weights[s("eyeBlink_R")],
+                row.values[c("EyeBlinkRight")]
+            );
+            assert_eq!(frame.weights[s("noseSneer_R")], 0.0);
+            assert_eq!(frame.head, IDENTITY_9D);
+            let open = row.values[c("JawOpen")];
+            for j in 0..9 {
+                let want = IDENTITY_9D[j] + open * (learned[j] - IDENTITY_9D[j]);
+                assert!((frame.jaw[j] - want).abs() < 1e-6, "frame {f}, jaw[{j}]");
+            }
+        }
+        // Posed through the core, the blink at mid-sequence moves the right eyelid: the vertex
+        // that moves most between the first frame and the blink's peak (frame 14, where the
+        // brows are also up and the jaw open) lies in the upper face, and the right lid (x < 0:
+        // x points to the actor's left) moves while the left one stays.
+        let pose = |f: &Frame| {
+            let mut out = vec![0.0; 3 * actor.vertex_count()];
+            actor
+                .pose(&actor.pose_from_9d(&f.jaw, &f.head), &f.weights, &mut out)
+                .unwrap();
+            out
+        };
+        let rest = pose(&p.frames[0]);
+        let mut blink_only = p.frames[0].clone();
+        blink_only.weights[s("eyeBlink_R")] = p.frames[14].weights[s("eyeBlink_R")];
+        let blink = pose(&blink_only);
+        let moved: Vec<(usize, f32)> = (0..actor.vertex_count())
+            .map(|i| {
+                let d = (0..3)
+                    .map(|k| (blink[3 * i + k] - rest[3 * i + k]).powi(2))
+                    .sum::<f32>();
+                (i, d.sqrt())
+            })
+            .collect();
+        let (top, amount) = moved
+            .iter()
+            .copied()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap();
+        assert!(amount > 0.3, "the blink moves the lid by {amount} cm");
+        assert!(
+            rest[3 * top] < 0.0,
+            "the blink moves the actor's right side (x < 0)"
+        );
+        let mirrored_max = moved
+            .iter()
+            .filter(|(i, _)| rest[3 * i] > 1.0)
+            .map(|m| m.1)
+            .fold(0.0f32, f32::max);
+        assert!(
+            mirrored_max < 0.1 * amount,
+            "the left side moves {mirrored_max} cm"
+        );
+        // With the jaw open most (frame 15), the vertex that moves most lies below the jaw's
+        // pivot, and it moves down.
+        let open = pose(&p.frames[15]);
+        let lowest = (0..actor.vertex_count())
+            .max_by(|&a, &b| {
+                let d = |i: usize| {
+                    (0..3)
+                        .map(|k| (open[3 * i + k] - rest[3 * i + k]).powi(2))
+                        .sum::<f32>()
+                };
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap();
+        assert!(
+            rest[3 * lowest + 1] < actor.jaw_pivot().y,
+            "the lower face moves most"
+        );
+        assert!(
+            open[3 * lowest + 1] < rest[3 * lowest + 1] - 0.5,
+            "and it drops"
+        );
+    }
+
+    #[test]
+    fn a_capture_matching_no_shape_is_an_error_naming_the_file() {
+        let bytes = golden();
+        let actor = AimActor::from_bytes(&bytes).unwrap();
+        let capture = Capture::parse(
+            Path::new("odd.csv"),
+            "Timecode,BlendshapeCount,HeadYaw,TongueOut\na,2,0.1,0.2\n",
+        )
+        .unwrap();
+        let e = playback_of(&actor, Path::new("odd.csv"), &capture)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("odd.csv: no capture channel matches"), "{e}");
+    }
+
+    #[test]
+    fn sides_map_only_onto_sided_kits() {
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let channels = names(&["MouthSmileLeft", "BrowInnerUp", "JawOpen"]);
+        // A kit without `_L`/`_R` names: only exact names match.
+        let plain = Mapping::new(
+            Path::new("c.csv"),
+            &channels,
+            &names(&["jawopen", "mouthSmileLeft"]),
+        )
+        .unwrap();
+        assert_eq!(plain.routes, [(0, 1), (2, 0)]);
+        assert!(plain.unplayable == ["BrowInnerUp"]);
+        let sided = Mapping::new(
+            Path::new("c.csv"),
+            &channels,
+            &names(&["mouthSmile_L", "browInnerUp_L", "browInnerUp_R"]),
+        )
+        .unwrap();
+        assert_eq!(sided.routes, [(0, 0), (1, 1), (1, 2)]);
+        assert_eq!(sided.unplayable, ["JawOpen"]);
+    }
+}

@@ -1,0 +1,66 @@
+//! `sinew export gltf`: the arguments, and the hand-over to [`sinew_host::export`].
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Args, Subcommand};
+use sinew_host::export::gltf::Frames;
+
+#[derive(Debug, Subcommand)]
+pub(crate) enum Export {
+    /// A baked actor as a glTF 2.0 binary (.glb): the skin with normals, the correctives as
+    /// named morph targets, a head and jaw skin, and with --poses or --arkit an animation.
+    Gltf(GltfArgs),
+}
+
+/// `sinew export gltf`.
+#[derive(Debug, Args)]
+pub(crate) struct GltfArgs {
+    /// The baked actor.
+    #[arg(long)]
+    model: PathBuf,
+    /// Output .glb file.
+    #[arg(long)]
+    out: PathBuf,
+    /// Pose file to animate (as for `sinew play`).
+    #[arg(long, conflicts_with = "arkit")]
+    poses: Option<PathBuf>,
+    /// Live Link Face capture (CSV) to animate, mapped as for `sinew play --arkit`.
+    #[arg(long)]
+    arkit: Option<PathBuf>,
+    /// Frames per second of the animation.
+    #[arg(long, default_value_t = 30.0)]
+    fps: f32,
+    /// Add the anatomy surface (the learned bone points) as a second mesh.
+    #[arg(long)]
+    bones: bool,
+}
+
+/// Runs `sinew export …`.
+pub(crate) fn run(cmd: Export) -> Result<()> {
+    match cmd {
+        Export::Gltf(args) => {
+            let frames = match (&args.poses, &args.arkit) {
+                (Some(p), _) => Frames::Poses(p),
+                (None, Some(c)) => Frames::Arkit(c),
+                (None, None) => Frames::None,
+            };
+            let summary = sinew_host::export::gltf::export(
+                &args.model,
+                &args.out,
+                frames,
+                args.fps,
+                args.bones,
+            )?;
+            if !summary.unplayable.is_empty() {
+                eprintln!(
+                    "the actor cannot play these capture channels: {}",
+                    summary.unplayable.join(", ")
+                );
+            }
+            println!("{}", serde_json::to_string_pretty(&summary)?);
+            eprintln!("{} written", args.out.display());
+            Ok(())
+        }
+    }
+}

@@ -1,0 +1,579 @@
+//! `sinew export gltf`: a baked AIM actor as a glTF 2.0 rig (docs/ENGINES.md).
+//!
+//! - The skin's neutral s0 is the base mesh (positions, area-weighted normals, the template's
+//!   triangles); each corrective e_j is a morph target named after the actor's shape (mesh
+//!   `extras.targetNames`), with its normal change.
+//! - A skin of two joints: the root joint `head` (T_g: the node's rotation and translation) and
+//!   its child `jaw`, whose rest translation is the pivot p, so that its animated translation
+//!   p + t and rotation R give T_b(x) = R (x − p) + p + t through the inverse bind matrix
+//!   translate(−p). Each vertex is weighted k on the jaw and 1 − k on the head.
+//! - With frames, one animation: morph weights, the jaw's and the head's rotation (a unit
+//!   quaternion from the 6D rotation's matrix) and translation, keyed at frame i / fps.
+//!
+//! Coordinates are in metres (glTF's unit) from the artefact's `units`; the axes (x to the
+//! actor's left, y up, z forward) are glTF's already.
+//!
+//! glTF morphs before it skins, where AIM eq. 17 adds the correctives after the jaw's LBS, and
+//! glTF's skin weights lie in [0, 1] where the learned k may stray outside; docs/ENGINES.md and
+//! `training::tolerance::GLTF_RIG` give the difference both make.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use gltf_json as json;
+use json::validation::{Checked::Valid, USize64};
+use serde::Serialize;
+use sinew_core::aim::AimActor;
+use sinew_core::linalg::Mat3;
+
+use crate::aim::play::{Frame, PoseFile, corrective_names};
+
+/// Where the animation's frames come from.
+#[derive(Clone, Copy, Debug)]
+pub enum Frames<'a> {
+    /// No animation: the rig only.
+    None,
+    /// A pose file (`sinew play`'s format).
+    Poses(&'a Path),
+    /// A Live Link Face capture (`sinew play --arkit`'s mapping).
+    Arkit(&'a Path),
+}
+
+/// What an export wrote, for the command's report.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    /// Vertices of the base mesh.
+    pub vertices: usize,
+    /// Morph targets (the actor's corrective shapes).
+    pub morph_targets: usize,
+    /// Animation frames (0 without one).
+    pub frames: usize,
+    /// Vertices whose learned jaw weight k lies outside [0, 1], clamped for glTF.
+    pub clamped_weights: usize,
+    /// Largest |k − clamp(k)|.
+    pub max_clamp: f32,
+    /// Metres per model unit.
+    pub metres_per_unit: f32,
+    /// Capture channels the actor cannot play (ARKit frames only).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub unplayable: Vec<String>,
+    /// Bytes written.
+    pub bytes: usize,
+}
+
+/// `sinew export gltf`: reads the actor (and its frames), writes the `.glb` atomically.
+pub fn export(
+    model: &Path,
+    out: &Path,
+    frames: Frames<'_>,
+    fps: f32,
+    bones: bool,
+) -> Result<Summary> {
+    if !(fps.is_finite() && fps > 0.0) {
+        bail!("--fps must be a positive number, got {fps}");
+    }
+    let bytes = crate::io::container::read(model)?;
+    let actor =
+        AimActor::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
+    let (poses, unplayable) = match frames {
+        Frames::None => (Vec::new(), Vec::new()),
+        Frames::Poses(p) => (PoseFile::read(p, actor.shape_count())?.frames, Vec::new()),
+        Frames::Arkit(p) => {
+            let playback = crate::aim::arkit::playback(&actor, p)?;
+            (playback.frames, playback.mapping.unplayable)
+        }
+    };
+    let (glb, mut summary) = glb(&actor, &poses, fps, bones)
+        .with_context(|| format!("{}: cannot export", model.display()))?;
+    crate::io::atomic::write(out, &glb)?;
+    summary.unplayable = unplayable;
+    Ok(summary)
+}
+
+/// Metres per unit of the artefact's `units` metadata (1 when it records none).
+pub fn metres_per_unit(actor: &AimActor<'_>) -> Result<f32> {
+    match actor.file().metadata().get("units") {
+        Some(u) => {
+            let unit: crate::io::units::Unit = u.parse()?;
+            Ok((unit.mm() / 1000.0) as f32)
+        }
+        None => Ok(1.0),
+    }
+}
+
+/// The glTF skin weight of a learned k: clamped into [0, 1], since glTF's weights are convex.
+pub fn joint_weight(k: f32) -> f32 {
+    k.clamp(0.0, 1.0)
+}
+
+/// A unit quaternion `[x, y, z, w]` of a rotation matrix (Shepperd's method, in f64).
+pub fn quaternion(m: &Mat3) -> [f32; 4] {
+    let c = m.cols.map(|v| [v.x, v.y, v.z].map(f64::from));
+    // r[i][j]: row i, column j.
+    let r = |i: usize, j: usize| c[j][i];
+    let trace = r(0, 0) + r(1, 1) + r(2, 2);
+    let q = if trace > 0.0 {
+        let s = (trace + 1.0).sqrt() * 2.0;
+        [
+            (r(2, 1) - r(1, 2)) / s,
+            (r(0, 2) - r(2, 0)) / s,
+            (r(1, 0) - r(0, 1)) / s,
+            s / 4.0,
+        ]
+    } else if r(0, 0) > r(1, 1) && r(0, 0) > r(2, 2) {
+        let s = (1.0 + r(0, 0) - r(1, 1) - r(2, 2)).sqrt() * 2.0;
+        [
+            s / 4.0,
+            (r(0, 1) + r(1, 0)) / s,
+            (r(0, 2) + r(2, 0)) / s,
+            (r(2, 1) - r(1, 2)) / s,
+        ]
+    } else if r(1, 1) > r(2, 2) {
+        let s = (1.0 + r(1, 1) - r(0, 0) - r(2, 2)).sqrt() * 2.0;
+        [
+            (r(0, 1) + r(1, 0)) / s,
+            s / 4.0,
+            (r(1, 2) + r(2, 1)) / s,
+            (r(0, 2) - r(2, 0)) / s,
+        ]
+    } else {
+        let s = (1.0 + r(2, 2) - r(0, 0) - r(1, 1)).sqrt() * 2.0;
+        [
+            (r(0, 2) + r(2, 0)) / s,
+            (r(1, 2) + r(2, 1)) / s,
+            s / 4.0,
+            (r(1, 0) - r(0, 1)) / s,
+        ]
+    };
+    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    q.map(|v| (v / n) as f32)
+}
+
+/// The document under construction and its binary buffer.
+struct Builder {
+    root: json::Root,
+    bin: Vec<u8>,
+}
+
+impl Builder {
+    fn view(
+        &mut self,
+        bytes: &[u8],
+        target: Option<json::buffer::Target>,
+    ) -> json::Index<json::buffer::View> {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        let offset = self.bin.len();
+        self.bin.extend_from_slice(bytes);
+        self.root.push(json::buffer::View {
+            buffer: json::Index::new(0),
+            byte_length: USize64::from(bytes.len()),
+            byte_offset: Some(USize64::from(offset)),
+            byte_stride: None,
+            name: None,
+            target: target.map(Valid),
+            extensions: None,
+            extras: None,
+        })
+    }
+
+    /// An accessor over `values` of `kind` (VEC3, SCALAR, …), with min and max when `bounds`.
+    fn floats(
+        &mut self,
+        values: &[f32],
+        kind: json::accessor::Type,
+        bounds: bool,
+        target: Option<json::buffer::Target>,
+    ) -> json::Index<json::Accessor> {
+        let width = kind.multiplicity();
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.view(&bytes, target);
+        let (min, max) = if bounds {
+            let mut lo = vec![f32::INFINITY; width];
+            let mut hi = vec![f32::NEG_INFINITY; width];
+            for row in values.chunks_exact(width) {
+                for (i, v) in row.iter().enumerate() {
+                    lo[i] = lo[i].min(*v);
+                    hi[i] = hi[i].max(*v);
+                }
+            }
+            (Some(serde_json::json!(lo)), Some(serde_json::json!(hi)))
+        } else {
+            (None, None)
+        };
+        self.accessor(
+            view,
+            values.len() / width,
+            json::accessor::ComponentType::F32,
+            kind,
+            min,
+            max,
+        )
+    }
+
+    fn accessor(
+        &mut self,
+        view: json::Index<json::buffer::View>,
+        count: usize,
+        component: json::accessor::ComponentType,
+        kind: json::accessor::Type,
+        min: Option<serde_json::Value>,
+        max: Option<serde_json::Value>,
+    ) -> json::Index<json::Accessor> {
+        self.root.push(json::Accessor {
+            buffer_view: Some(view),
+            byte_offset: None,
+            count: USize64::from(count),
+            component_type: Valid(json::accessor::GenericComponentType(component)),
+            extensions: None,
+            extras: None,
+            type_: Valid(kind),
+            min,
+            max,
+            name: None,
+            normalized: false,
+            sparse: None,
+        })
+    }
+}
+
+fn node(name: &str) -> json::Node {
+    json::Node {
+        name: Some(name.to_string()),
+        ..Default::default()
+    }
+}
+
+/// Unit vertex normals of `positions` (`[V, 3]`); a vertex in no triangle gets +z (glTF requires
+/// unit normals on every vertex).
+fn unit_normals(actor: &AimActor<'_>, positions: &[f32]) -> Vec<f32> {
+    let mut n = vec![0.0; positions.len()];
+    // The buffers have the actor's vertex count, so the core cannot refuse them.
+    let _ = actor.normals(positions, &mut n);
+    for v in n.chunks_exact_mut(3) {
+        if v.iter().all(|x| *x == 0.0) {
+            v[2] = 1.0;
+        }
+    }
+    n
+}
+
+/// The `.glb` bytes of `actor` with an animation of `frames` (none when empty) at `fps`, and the
+/// anatomy surface (bone points b0) as a second mesh when `bones`.
+pub fn glb(
+    actor: &AimActor<'_>,
+    frames: &[Frame],
+    fps: f32,
+    bones: bool,
+) -> Result<(Vec<u8>, Summary)> {
+    use json::accessor::{ComponentType, Type};
+    use json::buffer::Target::{ArrayBuffer, ElementArrayBuffer};
+    let v = actor.vertex_count();
+    let m = actor.shape_count();
+    let scale = metres_per_unit(actor)?;
+    let metres = |x: f32| x * scale;
+    let file = actor.file();
+    let section = |name: &str, shape: &[u32]| {
+        file.f32_tensor(name, shape)
+            .map_err(|e| anyhow::anyhow!("{name}: {e}"))
+    };
+    let (v32, m32) = (v as u32, m as u32);
+    let correctives = section("cache.e", &[v32, m32, 3])?;
+    let rest: Vec<f32> = actor.rest().iter().collect();
+    let mut b = Builder {
+        root: json::Root {
+            asset: json::Asset {
+                version: "2.0".into(),
+                generator: Some(format!("sinew {}", env!("CARGO_PKG_VERSION"))),
+                copyright: None,
+                extensions: None,
+                extras: None,
+                min_version: None,
+            },
+            ..Default::default()
+        },
+        bin: Vec::new(),
+    };
+
+    // Base mesh.
+    let normals = unit_normals(actor, &rest);
+    let positions: Vec<f32> = rest.iter().map(|x| metres(*x)).collect();
+    let pos = b.floats(&positions, Type::Vec3, true, Some(ArrayBuffer));
+    let nrm = b.floats(&normals, Type::Vec3, false, Some(ArrayBuffer));
+    let tri: Vec<u8> = actor
+        .triangles()
+        .indices()
+        .iter()
+        .flat_map(|i| i.to_le_bytes())
+        .collect();
+    let tri_view = b.view(&tri, Some(ElementArrayBuffer));
+    let indices = b.accessor(
+        tri_view,
+        tri.len() / 4,
+        ComponentType::U32,
+        Type::Scalar,
+        None,
+        None,
+    );
+
+    // Skin weights: k on the jaw (joint 1), 1 − k on the head (joint 0). A vertex wholly on one
+    // joint names only that joint, since glTF's validator warns of joints used with zero weight.
+    let mut weights = Vec::with_capacity(4 * v);
+    let mut joint_ids = Vec::with_capacity(4 * v);
+    let (mut clamped, mut max_clamp) = (0, 0.0f32);
+    for k in actor.skinning_weights().iter() {
+        let w = joint_weight(k);
+        if w != k {
+            clamped += 1;
+            max_clamp = max_clamp.max((w - k).abs());
+        }
+        let (j, ws) = if w == 0.0 {
+            ([0u8, 0, 0, 0], [1.0, 0.0, 0.0, 0.0])
+        } else if w == 1.0 {
+            ([1, 0, 0, 0], [1.0, 0.0, 0.0, 0.0])
+        } else {
+            ([1, 0, 0, 0], [w, 1.0 - w, 0.0, 0.0])
+        };
+        joint_ids.extend_from_slice(&j);
+        weights.extend_from_slice(&ws);
+    }
+    let joints_view = b.view(&joint_ids, Some(ArrayBuffer));
+    let joints = b.accessor(joints_view, v, ComponentType::U8, Type::Vec4, None, None);
+    let skin_weights = b.floats(&weights, Type::Vec4, false, Some(ArrayBuffer));
+
+    // Morph targets: each corrective's displacement and the normal change it makes.
+    let mut targets = Vec::with_capacity(m);
+    let mut shaped = rest.clone();
+    for j in 0..m {
+        let delta: Vec<f32> = (0..v)
+            .flat_map(|i| (0..3).map(move |c| (i, c)))
+            .map(|(i, c)| correctives.at((i * m + j) * 3 + c))
+            .collect();
+        for ((s, r), d) in shaped.iter_mut().zip(&rest).zip(&delta) {
+            *s = r + d;
+        }
+        let moved = unit_normals(actor, &shaped);
+        let dn: Vec<f32> = moved.iter().zip(&normals).map(|(a, b)| a - b).collect();
+        let dp: Vec<f32> = delta.iter().map(|x| metres(*x)).collect();
+        targets.push(json::mesh::MorphTarget {
+            positions: Some(b.floats(&dp, Type::Vec3, true, Some(ArrayBuffer))),
+            normals: Some(b.floats(&dn, Type::Vec3, false, Some(ArrayBuffer))),
+            tangents: None,
+        });
+    }
+    let names = corrective_names(actor);
+    let primitive = |attributes: BTreeMap<_, _>, targets| json::mesh::Primitive {
+        attributes,
+        extensions: None,
+        extras: None,
+        indices: Some(indices),
+        material: None,
+        mode: Valid(json::mesh::Mode::Triangles),
+        targets,
+    };
+    let skinned = |p, n| {
+        BTreeMap::from([
+            (Valid(json::mesh::Semantic::Positions), p),
+            (Valid(json::mesh::Semantic::Normals), n),
+            (Valid(json::mesh::Semantic::Joints(0)), joints),
+            (Valid(json::mesh::Semantic::Weights(0)), skin_weights),
+        ])
+    };
+    let face = b.root.push(json::Mesh {
+        extensions: None,
+        extras: Some(serde_json::value::to_raw_value(
+            &serde_json::json!({ "targetNames": names }),
+        )?),
+        name: Some("face".into()),
+        primitives: vec![primitive(skinned(pos, nrm), Some(targets))],
+        weights: Some(vec![0.0; m]),
+    });
+
+    // Joints: head (root) and jaw at the pivot.
+    let pivot = actor.jaw_pivot();
+    let pivot_m = [pivot.x, pivot.y, pivot.z].map(metres);
+    let jaw = b.root.push(json::Node {
+        translation: Some(pivot_m),
+        ..node("jaw")
+    });
+    let head = b.root.push(json::Node {
+        children: Some(vec![jaw]),
+        ..node("head")
+    });
+    #[rustfmt::skip]
+    let ibm: [f32; 32] = [
+        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0,
+        -pivot_m[0], -pivot_m[1], -pivot_m[2], 1.0,
+    ];
+    let ibm = b.floats(&ibm, Type::Mat4, false, None);
+    let skin = b.root.push(json::Skin {
+        extensions: None,
+        extras: None,
+        inverse_bind_matrices: Some(ibm),
+        joints: vec![head, jaw],
+        name: Some("face".into()),
+        skeleton: Some(head),
+    });
+    let face_node = b.root.push(json::Node {
+        mesh: Some(face),
+        skin: Some(skin),
+        ..node("face")
+    });
+    let mut scene_nodes = vec![head, face_node];
+
+    if bones {
+        let bone: Vec<f32> = section("cache.b0", &[v32, 3])?.iter().collect();
+        let bn = unit_normals(actor, &bone);
+        let bp: Vec<f32> = bone.iter().map(|x| metres(*x)).collect();
+        let bpos = b.floats(&bp, Type::Vec3, true, Some(ArrayBuffer));
+        let bnrm = b.floats(&bn, Type::Vec3, false, Some(ArrayBuffer));
+        let mesh = b.root.push(json::Mesh {
+            extensions: None,
+            extras: None,
+            name: Some("bones".into()),
+            primitives: vec![primitive(skinned(bpos, bnrm), None)],
+            weights: None,
+        });
+        scene_nodes.push(b.root.push(json::Node {
+            mesh: Some(mesh),
+            skin: Some(skin),
+            ..node("bones")
+        }));
+    }
+
+    if !frames.is_empty() {
+        animate(
+            &mut b,
+            actor,
+            frames,
+            fps,
+            scale,
+            pivot_m,
+            [face_node, jaw, head],
+        )?;
+    }
+    let scene = b.root.push(json::Scene {
+        extensions: None,
+        extras: None,
+        name: Some("actor".into()),
+        nodes: scene_nodes,
+    });
+    b.root.scene = Some(scene);
+    while !b.bin.len().is_multiple_of(4) {
+        b.bin.push(0);
+    }
+    b.root.push(json::Buffer {
+        byte_length: USize64::from(b.bin.len()),
+        name: None,
+        uri: None,
+        extensions: None,
+        extras: None,
+    });
+    let text = json::serialize::to_vec(&b.root)?;
+    let glb = super::glb::write(&text, &b.bin)?;
+    let summary = Summary {
+        vertices: v,
+        morph_targets: m,
+        frames: frames.len(),
+        clamped_weights: clamped,
+        max_clamp,
+        metres_per_unit: scale,
+        unplayable: Vec::new(),
+        bytes: glb.len(),
+    };
+    Ok((glb, summary))
+}
+
+/// One animation over `frames`: morph weights on the face node, the jaw's and the head's
+/// rotation and translation.
+fn animate(
+    b: &mut Builder,
+    actor: &AimActor<'_>,
+    frames: &[Frame],
+    fps: f32,
+    scale: f32,
+    pivot_m: [f32; 3],
+    [face, jaw, head]: [json::Index<json::Node>; 3],
+) -> Result<()> {
+    use json::accessor::Type;
+    use json::animation::Property;
+    let times: Vec<f32> = (0..frames.len()).map(|i| i as f32 / fps).collect();
+    let input = b.floats(&times, Type::Scalar, true, None);
+    let mut weights = Vec::new();
+    let (mut jt, mut jr, mut ht, mut hr) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for f in frames {
+        weights.extend_from_slice(&f.weights);
+        let pose = actor.pose_from_9d(&f.jaw, &f.head);
+        let t = pose.jaw.rigid.trans;
+        jt.extend(
+            [t.x, t.y, t.z]
+                .iter()
+                .zip(pivot_m)
+                .map(|(t, p)| p + t * scale),
+        );
+        jr.extend(quaternion(&pose.jaw.rigid.rot));
+        let t = pose.head.trans;
+        ht.extend([t.x, t.y, t.z].map(|x| x * scale));
+        hr.extend(quaternion(&pose.head.rot));
+    }
+    let outputs = [
+        (
+            face,
+            Property::MorphTargetWeights,
+            b.floats(&weights, Type::Scalar, false, None),
+        ),
+        (
+            jaw,
+            Property::Translation,
+            b.floats(&jt, Type::Vec3, false, None),
+        ),
+        (
+            jaw,
+            Property::Rotation,
+            b.floats(&jr, Type::Vec4, false, None),
+        ),
+        (
+            head,
+            Property::Translation,
+            b.floats(&ht, Type::Vec3, false, None),
+        ),
+        (
+            head,
+            Property::Rotation,
+            b.floats(&hr, Type::Vec4, false, None),
+        ),
+    ];
+    let mut samplers = Vec::new();
+    let mut channels = Vec::new();
+    for (i, (node, path, output)) in outputs.into_iter().enumerate() {
+        samplers.push(json::animation::Sampler {
+            extensions: None,
+            extras: None,
+            input,
+            interpolation: Valid(json::animation::Interpolation::Linear),
+            output,
+        });
+        channels.push(json::animation::Channel {
+            sampler: json::Index::new(i as u32),
+            target: json::animation::Target {
+                extensions: None,
+                extras: None,
+                node,
+                path: Valid(path),
+            },
+            extensions: None,
+            extras: None,
+        });
+    }
+    b.root.push(json::Animation {
+        extensions: None,
+        extras: None,
+        channels,
+        name: Some("performance".into()),
+        samplers,
+    });
+    Ok(())
+}
