@@ -100,6 +100,7 @@ pub mod layout;
 pub mod linalg;
 pub mod network;
 pub mod nn;
+pub mod performance;
 pub mod q16;
 pub mod replay;
 pub mod rotation;

@@ -944,3 +944,109 @@ fn play_arkit_and_export_gltf_on_the_golden_actor() {
     let e = err(&["play", "--model", &model, "--out", s(&frames)]);
     assert!(e.contains("--poses") || e.contains("--arkit"), "{e}");
 }
+
+#[test]
+fn play_performance_plays_the_golden_fit_and_refuses_another_actor() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("frames");
+    let perf = repo("tests/data/fit-ict.sinew");
+    let said = ok(&[
+        "play",
+        "--model",
+        &repo("tests/data/aim-ict.sinew"),
+        "--performance",
+        &perf,
+        "--out",
+        s(&out),
+    ]);
+    assert!(said.contains("4 frames"), "{said}");
+    let mesh = std::fs::read_to_string(out.join("frame_00003.obj")).unwrap();
+    assert_eq!(mesh.lines().filter(|l| l.starts_with("v ")).count(), 4705);
+    assert!(!out.join("frame_00004.obj").exists());
+
+    let e = err(&[
+        "play",
+        "--model",
+        &repo("tests/data/aim-procedural.sinew"),
+        "--performance",
+        &perf,
+        "--out",
+        s(&dir.path().join("other")),
+    ]);
+    assert!(e.contains("fit-ict.sinew") && e.contains("model"), "{e}");
+    let e = err(&[
+        "play",
+        "--model",
+        &repo("tests/data/aim-ict.sinew"),
+        "--performance",
+        &repo("tests/data/aim-ict.f32.replay.sinew"),
+        "--out",
+        s(&dir.path().join("other")),
+    ]);
+    assert!(
+        e.contains("aim-ict.f32.replay.sinew") && e.contains("kind"),
+        "{e}"
+    );
+}
+
+#[test]
+fn fit_bakes_a_performance_that_play_reproduces() {
+    let Some(root) = sinew_host::io::data::data_dir() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let perf = dir.path().join("perf");
+    let model = repo("tests/data/aim-ict.sinew");
+    ok(&[
+        "data",
+        "performance",
+        "--data",
+        s(&root.join("ict-facekit")),
+        "--actor",
+        &model,
+        "--frames",
+        "2",
+        "--out",
+        s(&perf),
+    ]);
+    let fit = dir.path().join("fit.sinew");
+    let report = dir.path().join("report.json");
+    ok(&[
+        "fit",
+        "--model",
+        &model,
+        "--target",
+        s(&perf),
+        "--out",
+        s(&fit),
+        "--report",
+        s(&report),
+        "--iterations",
+        "20",
+        "--hidden",
+        "16",
+        "--code",
+        "4",
+    ]);
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(r["frames"], 2);
+    let played = dir.path().join("played");
+    ok(&[
+        "play",
+        "--model",
+        &model,
+        "--performance",
+        s(&fit),
+        "--out",
+        s(&played),
+    ]);
+    for f in 0..2 {
+        let name = format!("frame_{f:05}.obj");
+        assert_eq!(
+            std::fs::read(played.join(&name)).unwrap(),
+            std::fs::read(dir.path().join("fit.meshes").join(&name)).unwrap(),
+            "{name}: the fit's meshes are the core's playback"
+        );
+    }
+}

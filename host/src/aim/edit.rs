@@ -7,7 +7,7 @@ use anyhow::{Context, Result, bail};
 use serde::Deserialize;
 use sinew_core::aim::AimActor;
 
-use crate::aim::play::mesh_of;
+use crate::io::mesh::Mesh;
 
 /// Reads a region file: JSON, either a list of vertex indices (weight 1) or an object
 /// `{"weights": [w_0, …, w_{V−1}]}`; returns per-vertex weights in [0, 1].
@@ -69,7 +69,7 @@ pub fn edit_thickness(model: &Path, region: &Path, scale: f32, out: &Path) -> Re
     actor
         .edit_thickness(&mask, scale, &mut edited)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let mesh = mesh_of(&actor);
+    let mesh = Mesh::of_actor(&actor);
     let before: Vec<[f32; 3]> = crate::io::mesh::points(actor.rest().iter());
     let after: Vec<[f32; 3]> = crate::io::mesh::points(edited.iter().copied());
     std::fs::create_dir_all(out)

@@ -85,7 +85,7 @@ pub fn play_frames(
 ) -> Result<usize> {
     let mesh = match template {
         Some(t) => t.clone(),
-        None => mesh_of(actor),
+        None => Mesh::of_actor(actor),
     };
     std::fs::create_dir_all(out)
         .with_context(|| format!("{}: cannot create folder", out.display()))?;
@@ -117,17 +117,4 @@ pub fn corrective_names(actor: &AimActor<'_>) -> Vec<String> {
         Some(names) if names.len() == m => names,
         _ => (1..=m).map(|j| format!("shape_{j}")).collect(),
     }
-}
-
-/// The baked template as a triangle mesh.
-pub fn mesh_of(actor: &AimActor<'_>) -> Mesh {
-    let t = actor.triangles().indices();
-    let positions = crate::io::mesh::points(actor.template().iter());
-    let polygons = t
-        .iter()
-        .collect::<Vec<u32>>()
-        .chunks_exact(3)
-        .map(<[u32]>::to_vec)
-        .collect();
-    Mesh::new(positions, polygons)
 }

@@ -54,13 +54,17 @@ pub(crate) struct PlayArgs {
     #[arg(long)]
     model: PathBuf,
     /// Pose file: {"frames": [{"head": [9], "jaw": [9], "weights": [M]}, ...]}.
-    #[arg(long, required_unless_present = "arkit", conflicts_with = "arkit")]
+    #[arg(long, required_unless_present_any = ["arkit", "performance"], conflicts_with_all = ["arkit", "performance"])]
     poses: Option<PathBuf>,
     /// Live Link Face capture (CSV): each ARKit channel drives the actor's shape of that name
     /// (`_L`/`_R` for Left/Right); the mapping and the channels the actor cannot play go to
     /// OUT/arkit.json.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "performance")]
     arkit: Option<PathBuf>,
+    /// A fitted performance (`sinew fit --out FIT.sinew`) of this actor, local coefficients
+    /// evaluated per vertex by the core.
+    #[arg(long)]
+    performance: Option<PathBuf>,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -303,9 +307,12 @@ pub(crate) fn bake(args: BakeArgs) -> Result<()> {
 
 /// `sinew play`.
 pub(crate) fn play(args: PlayArgs) -> Result<()> {
-    let n = match (&args.poses, &args.arkit) {
-        (Some(poses), _) => sinew_host::aim::play::play(&args.model, poses, &args.out, None)?,
-        (None, Some(capture)) => {
+    let n = match (&args.poses, &args.arkit, &args.performance) {
+        (Some(poses), _, _) => sinew_host::aim::play::play(&args.model, poses, &args.out, None)?,
+        (None, None, Some(perf)) => {
+            sinew_host::fit::commands::play_performance(&args.model, perf, &args.out)?
+        }
+        (None, Some(capture), _) => {
             let playback = sinew_host::aim::arkit::play_arkit(&args.model, capture, &args.out)?;
             if !playback.mapping.unplayable.is_empty() {
                 eprintln!(
@@ -315,7 +322,7 @@ pub(crate) fn play(args: PlayArgs) -> Result<()> {
             }
             playback.frames.len()
         }
-        (None, None) => anyhow::bail!("give --poses or --arkit"),
+        (None, None, None) => anyhow::bail!("give --poses, --arkit or --performance"),
     };
     println!("{n} frames written to {}", args.out.display());
     Ok(())

@@ -69,6 +69,12 @@ pub(crate) struct FitOptions {
     /// Template points constrained per step (every frame at once).
     #[arg(long, default_value_t = FitConfig::default().points)]
     points: usize,
+    /// Frame code size f.
+    #[arg(long, default_value_t = FitConfig::default().code)]
+    code: usize,
+    /// Hidden width of F_T and F_W.
+    #[arg(long, default_value_t = FitConfig::default().hidden)]
+    hidden: usize,
     /// Seed of the fit's initial weights and point draws.
     #[arg(long, env = "SINEW_SEED", default_value_t = FitConfig::default().seed)]
     seed: u64,
@@ -82,6 +88,8 @@ impl FitOptions {
         FitConfig {
             iterations: self.iterations,
             points: self.points,
+            code: self.code,
+            hidden: self.hidden,
             seed: self.seed,
             coefficients,
             ..FitConfig::default()
@@ -98,8 +106,8 @@ pub(crate) struct FitArgs {
     /// The performance folder (`sinew data performance`).
     #[arg(long)]
     target: PathBuf,
-    /// Output FIT.json (per-frame head, jaw and, with --global, coefficients); the fitted meshes
-    /// go to FIT.meshes/ beside it.
+    /// Output FIT.sinew: the fit baked for playback (`sinew play --performance`, `sinew view`,
+    /// sinew-core); the core's playback of it goes to FIT.meshes/ beside it.
     #[arg(long)]
     out: PathBuf,
     /// Report JSON (errors, timing, loss history).

@@ -28,7 +28,7 @@ use sinew_core::nn::Activation;
 use crate::fit::baseline::{mean_error_mm, performance_unit};
 use crate::fit::performance::Performance;
 use crate::training::backend::Backend;
-use crate::training::nn::{Mlp, tensor, to_vec};
+use crate::training::nn::{LayerWeights, Mlp, tensor, to_vec};
 use crate::training::rotation::rotate_6d;
 
 /// How the corrective coefficients vary.
@@ -106,8 +106,12 @@ pub struct ActorCache {
     pub correctives: Vec<f32>,
     /// Jaw pivot, mm.
     pub pivot: [f32; 3],
-    /// Template points normalised to [−1, 1] (bounding-box centre, half the largest extent).
+    /// Template points normalised to [−1, 1]: `(c − centre) / half`.
     pub normalised: Vec<f32>,
+    /// The template's bounding-box centre (the actor's units).
+    pub centre: [f32; 3],
+    /// Half the bounding box's largest extent (the actor's units).
+    pub half: f32,
     /// Millimetres per unit of the actor.
     pub mm: f32,
 }
@@ -138,6 +142,8 @@ impl ActorCache {
             correctives: scaled(actor.correctives()),
             pivot: actor.jaw_pivot().to_array().map(|x| x * unit_mm),
             normalised,
+            centre,
+            half,
             mm: unit_mm,
         }
     }
@@ -267,6 +273,15 @@ pub struct FitResult {
     /// Per frame, the fitted skin `[V]` in the actor's units.
     #[serde(skip)]
     pub meshes: Vec<Vec<[f32; 3]>>,
+    /// The frame codes z_j, `[J, f]` row-major.
+    #[serde(skip)]
+    pub codes: Vec<f32>,
+    /// F_W's weights in the core's layout.
+    #[serde(skip)]
+    pub fw: Vec<LayerWeights>,
+    /// The normalisation of template points F_W saw: centre x, y, z and half extent.
+    #[serde(skip)]
+    pub normalisation: [f32; 4],
 }
 
 /// Fits `actor` (its bytes, `unit_mm` millimetres per unit) to every frame of `perf`.
@@ -341,6 +356,14 @@ pub fn fit(
         jaw: Vec::new(),
         weights: None,
         meshes: Vec::new(),
+        codes: Vec::new(),
+        fw: Vec::new(),
+        normalisation: [
+            cache.centre[0],
+            cache.centre[1],
+            cache.centre[2],
+            cache.half,
+        ],
     };
     let evaluate = |net: &FitNet| -> (Vec<Vec<[f32; 3]>>, Vec<f64>) {
         evaluate(net, &fx, config.coefficients, perf, unit, mm)
@@ -413,6 +436,8 @@ pub fn fit(
         result.head.push(add(0));
         result.jaw.push(add(9));
     }
+    result.codes = to_vec(net.codes.val());
+    result.fw = net.fw.weights();
     if config.coefficients == Coefficients::Global {
         let w = to_vec(net.fw.forward(net.codes.val()));
         result.weights = Some(w.chunks_exact(m.max(1)).map(<[f32]>::to_vec).collect());

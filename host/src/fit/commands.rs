@@ -1,43 +1,18 @@
 //! The work behind `sinew fit` and `sinew eval fit`.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use anyhow::{Result, anyhow};
+use anyhow::{Context, Result, anyhow};
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
 
 use crate::fit::aim::{Coefficients, FitConfig, FitResult, fit};
+use crate::fit::bake::{bake, play};
 use crate::fit::baseline::{Basis, Gbs, PATCH_GRID, Pbs, actor_shape_names, fit_performance};
 use crate::fit::performance::Performance;
 use crate::io::mesh::Mesh;
 use crate::training::backend::Backend;
-
-/// One frame of `FIT.json`.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct FittedFrame {
-    /// Head: 6D rotation + translation (the actor's units).
-    pub head: [f32; 9],
-    /// Jaw about the actor's pivot: 6D rotation + translation.
-    pub jaw: [f32; 9],
-    /// The global coefficients (global fits only; a local fit's vary per point).
-    pub weights: Option<Vec<f32>>,
-    /// The fitted mesh, relative to `FIT.json`'s folder.
-    pub mesh: String,
-}
-
-/// `FIT.json`.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct FitFile {
-    /// The actor.
-    pub model: PathBuf,
-    /// The performance.
-    pub target: PathBuf,
-    /// The fit's settings.
-    pub config: FitConfig,
-    /// Per frame.
-    pub frames: Vec<FittedFrame>,
-}
 
 /// The `sinew fit` report: the fit without its meshes.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -55,8 +30,9 @@ fn read_actor(model: &Path) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// `sinew fit`: fits the actor to the performance; writes `out` (per-frame parameters), the
-/// fitted meshes into `OUT_STEM.meshes/` and the report.
+/// `sinew fit`: fits the actor to the performance; bakes the fit into `out` (a `.sinew`
+/// performance, docs/FORMAT.md), writes the core's playback of it into `OUT_STEM.meshes/` and
+/// the report (with per-frame head, jaw and, for a global fit, coefficients).
 pub fn fit_command(
     model: &Path,
     target: &Path,
@@ -69,35 +45,49 @@ pub fn fit_command(
     let actor = AimActor::from_bytes(&bytes).map_err(|e| anyhow!("{}: {e}", model.display()))?;
     let perf = Performance::read(target)?;
     let result = fit(&actor, &perf, config, backend)?;
+    let baked = bake(&bytes, &result)?;
+    let (played, _) = play(&bytes, &baked)?;
     let stem = out
         .file_stem()
         .map_or_else(|| "fit".into(), |s| s.to_string_lossy().into_owned());
-    let mesh_dir = format!("{stem}.meshes");
-    let base = out.parent().unwrap_or(Path::new("."));
-    let mut frames = Vec::new();
-    for (f, mesh) in result.meshes.iter().enumerate() {
-        let name = format!("{mesh_dir}/frame_{f:05}.obj");
-        Mesh::new(mesh.clone(), perf.polygons.clone()).write(&base.join(&name))?;
-        frames.push(FittedFrame {
-            head: result.head[f],
-            jaw: result.jaw[f],
-            weights: result.weights.as_ref().map(|w| w[f].clone()),
-            mesh: name,
-        });
+    let mesh_dir = out
+        .parent()
+        .unwrap_or(Path::new("."))
+        .join(format!("{stem}.meshes"));
+    for (f, mesh) in played.iter().enumerate() {
+        let vertices = mesh.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
+        Mesh::new(vertices, perf.polygons.clone())
+            .write(&mesh_dir.join(format!("frame_{f:05}.obj")))?;
     }
-    let file = FitFile {
-        model: model.to_owned(),
-        target: target.to_owned(),
-        config: config.clone(),
-        frames,
-    };
-    crate::io::atomic::write(out, &serde_json::to_vec_pretty(&file)?)?;
+    crate::io::atomic::write(out, &baked)?;
     let r = FitReport {
         frames: perf.frames.len(),
         fit: result,
     };
     crate::io::atomic::write(report, &serde_json::to_vec_pretty(&r)?)?;
     Ok(r)
+}
+
+/// `sinew play --performance`: plays a baked performance on its actor through the core, one OBJ
+/// per frame in `out`; returns the frame count.
+pub fn play_performance(model: &Path, performance: &Path, out: &Path) -> Result<usize> {
+    let bytes = read_actor(model)?;
+    let actor = AimActor::from_bytes(&bytes).map_err(|e| anyhow!("{}: {e}", model.display()))?;
+    let baked = crate::io::container::read(performance)?;
+    let (frames, _) = play(&bytes, &baked).with_context(|| {
+        format!(
+            "{}: cannot play on {}",
+            performance.display(),
+            model.display()
+        )
+    })?;
+    let mesh = Mesh::of_actor(&actor);
+    for (f, positions) in frames.iter().enumerate() {
+        let p = crate::io::mesh::points(positions.iter().copied());
+        mesh.with_positions(p)
+            .write(&out.join(format!("frame_{f:05}.obj")))?;
+    }
+    Ok(frames.len())
 }
 
 /// One method's line of the `sinew eval fit` report.

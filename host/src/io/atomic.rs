@@ -22,8 +22,13 @@ pub fn write_with(
     };
     std::fs::create_dir_all(dir)
         .with_context(|| format!("{}: cannot create folder", dir.display()))?;
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".sinew-tmp-")
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".sinew-tmp-");
+    // A finished output is an ordinary file: readable by others as the umask allows, not the
+    // owner-only mode a temporary file starts with.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder
         .tempfile_in(dir)
         .with_context(|| format!("{}: cannot create a temporary file", dir.display()))?;
     {
@@ -55,6 +60,16 @@ mod tests {
         write(&p, b"first version, longer").unwrap();
         write(&p, b"second").unwrap();
         assert_eq!(std::fs::read(&p).unwrap(), b"second");
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&p).unwrap().permissions().mode();
+            assert_ne!(
+                mode & 0o044,
+                0,
+                "{mode:o}: the group or others cannot read it"
+            );
+        }
         let names: Vec<_> = std::fs::read_dir(p.parent().unwrap())
             .unwrap()
             .map(|e| e.unwrap().file_name())

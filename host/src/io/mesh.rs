@@ -364,6 +364,14 @@ impl Mesh {
         tris
     }
 
+    /// A baked actor's template as a triangle mesh (its `tpl.pos` and `tpl.tri`).
+    pub fn of_actor(actor: &sinew_core::aim::AimActor<'_>) -> Mesh {
+        let t: Vec<u32> = actor.triangles().indices().iter().collect();
+        let positions = points(actor.template().iter());
+        let polygons = t.chunks_exact(3).map(<[u32]>::to_vec).collect();
+        Mesh::new(positions, polygons)
+    }
+
     /// The same topology and texture coordinates with new positions.
     ///
     /// # Panics

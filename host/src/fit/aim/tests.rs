@@ -51,6 +51,22 @@ fn the_fit_reduces_its_error_and_beats_zero_coefficients() {
         );
         assert_eq!(r.meshes.len(), 3);
         assert_eq!(r.weights.is_some(), c == Coefficients::Global);
+        // Baked, the fit plays through the core as burn evaluated it.
+        let baked = crate::fit::bake::bake(&bytes, &r).unwrap();
+        let (played, hashes) = crate::fit::bake::play(&bytes, &baked).unwrap();
+        let core: Vec<f32> = played.concat();
+        let burn: Vec<f32> = r.meshes.iter().flatten().flatten().copied().collect();
+        let worst = core
+            .iter()
+            .zip(&burn)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        eprintln!("{c:?}: burn vs core playback, max difference {worst:e}");
+        let tol = crate::training::tolerance::FIT_PLAYBACK;
+        assert_eq!(tol.first_violation(&core, &burn), None, "{c:?}");
+        let perf = sinew_core::performance::Performance::from_bytes(&baked).unwrap();
+        assert_eq!(perf.is_local(), c == Coefficients::Local);
+        assert_eq!(perf.expected(2), Some(hashes[2]));
         errors.push(r.mean_error_mm);
     }
     assert!(errors[1] < errors[0] && errors[2] < errors[0], "{errors:?}");
