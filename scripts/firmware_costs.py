@@ -140,7 +140,8 @@ def main() -> None:
     lines += [
         "",
         "Whole frames as the replays run them (f32 and fast: pose + normals + hash; q16: pose +",
-        "hash; S2D: decode + hash), mean over the 16 frames:",
+        "hash; S2D: decode + hash; fit-ict, the golden fitted performance: F_W at every vertex +",
+        "pose + normals + hash), mean over each replay's frames (16; fit-ict 4):",
         "",
         "| replay | Cortex-M4F | RISC-V |",
         "|---|---|---|",

@@ -25,7 +25,7 @@ use crate::hash::FrameHasher;
 use crate::linalg::Vec3;
 use crate::network::load_mlp;
 use crate::nn::Mlp;
-use crate::replay::{AIM_POSE_LEN, ReplayError, model_hash};
+use crate::replay::{AIM_POSE_LEN, FrameCheck, ReplayError, model_hash};
 use crate::skinning::skin_vertex;
 use crate::tensor::{F32s, U32s};
 
@@ -352,4 +352,27 @@ pub fn frame_hash(
     h.write_f32s(positions);
     h.write_f32s(normals);
     Ok(h.finish())
+}
+
+/// Plays frame `f` ([`frame_hash`]) and compares its hash with the one baked into the file: the
+/// step of every target's performance loop. A performance without baked hashes compares
+/// against the complement of the computed hash, so the check fails rather than passing
+/// vacuously. Call [`Performance::check_actor`] once before the first frame.
+///
+/// # Errors
+/// As [`frame_hash`].
+pub fn check_frame(
+    perf: &Performance<'_>,
+    actor: &AimActor<'_>,
+    f: usize,
+    scratch: &mut [f32],
+    positions: &mut [f32],
+    normals: &mut [f32],
+) -> Result<FrameCheck, BufferError> {
+    let hash = frame_hash(perf, actor, f, scratch, positions, normals)?;
+    Ok(FrameCheck {
+        frame: f,
+        hash,
+        expected: perf.expected(f).unwrap_or(!hash),
+    })
 }

@@ -1,4 +1,4 @@
-// Runs the golden AIM and S2D replays compiled to wasm32-unknown-unknown under node.
+// Runs the golden AIM and S2D replays and the golden fitted performance compiled to wasm32-unknown-unknown under node.
 //
 // Usage: node run.mjs [path/to/sinew_firmware_wasm.wasm]
 // Without a path it looks in ../target (run.sh's shared target directory), then ./target.
@@ -66,5 +66,20 @@ const s2dFrames = frames.slice(aimFrames);
 const s2dBad = s2dFrames.filter((f) => !f.ok).length;
 console.log(`sinew-firmware-wasm: ${s2dFrames.length - s2dBad}/${s2dFrames.length} S2D frames bit-identical to the host`);
 if (s2d !== 0 || s2dBad !== 0 || s2dFrames.length === 0) {
+  process.exit(1);
+}
+// The fitted performance (reported as frames 7:0…).
+const before = frames.length;
+const fitted = instance.exports.sinew_replay_performance() >>> 0;
+if (fitted === LOAD_ERROR) {
+  console.error("sinew-firmware-wasm: the fitted performance could not load the actor or the performance");
+  process.exit(1);
+}
+const fittedFrames = frames.slice(before);
+const fittedBad = fittedFrames.filter((f) => !f.ok).length;
+console.log(
+  `sinew-firmware-wasm: ${fittedFrames.length - fittedBad}/${fittedFrames.length} fitted-performance frames bit-identical to the host`,
+);
+if (fitted !== 0 || fittedBad !== 0 || fittedFrames.length === 0) {
   process.exit(1);
 }

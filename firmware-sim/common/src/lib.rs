@@ -1,4 +1,5 @@
-//! The golden replays every firmware simulator runs: each is a baked actor and a replay recorded
+//! The golden replays every firmware simulator runs (and, in [`performance`], the golden fitted
+//! performance): each is a baked actor and a replay recorded
 //! on the x86_64 host (`tests/data/*.replay.sinew`: the model's content hash, the pose of every
 //! frame and the hash the host computed for it, in one numeric mode). A target plays each frame
 //! through `sinew-core` ([`sinew_core::replay::check_frame`], the step of the host's
@@ -36,6 +37,10 @@
 extern crate std;
 
 pub mod kernels;
+pub mod performance;
+mod s2d;
+
+pub use s2d::{S2dCosts, S2dRun, replay_s2d, s2d_costs};
 
 use core::fmt;
 
@@ -43,11 +48,7 @@ use sinew_core::FormatError;
 use sinew_core::aim::{AimActor, MAX_SHAPES};
 use sinew_core::q16::Q16;
 pub use sinew_core::replay::FrameCheck;
-use sinew_core::replay::{
-    AimReplay, FrameBuffers, ReplayError, S2dBuffers, S2dReplay, check_frame, check_model,
-    check_s2d_frame, check_s2d_model, decode_frame,
-};
-use sinew_core::s2d::S2dDecoder;
+use sinew_core::replay::{AimReplay, FrameBuffers, ReplayError, check_frame, check_model};
 
 /// A golden model and one of its replays.
 #[derive(Clone, Copy, Debug)]
@@ -113,7 +114,7 @@ pub const S2D_GOLDENS: [Golden; 1] = [Golden {
 pub const MAX_VERTICES: usize = 5120;
 
 /// `f32` values an S2D replay may use (the AIM positions and normals buffers): input, neutral,
-/// decoded vertices and [`S2dDecoder::scratch_len`] together.
+/// decoded vertices and [`sinew_core::s2d::S2dDecoder::scratch_len`] together.
 pub const S2D_ARENA: usize = 6 * MAX_VERTICES;
 
 /// Caller-owned buffers for one frame.
@@ -124,6 +125,8 @@ pub struct Scratch {
     positions_q16: [Q16; 3 * MAX_VERTICES],
     weights: [f32; MAX_SHAPES],
     weights_q16: [Q16; MAX_SHAPES],
+    /// A fitted performance's coefficients, F_W's input and scratch.
+    performance: [f32; performance::PERFORMANCE_SCRATCH],
 }
 
 impl Scratch {
@@ -134,6 +137,7 @@ impl Scratch {
             positions_q16: [Q16::ZERO; 3 * MAX_VERTICES],
             weights: [0.0; MAX_SHAPES],
             weights_q16: [Q16::ZERO; MAX_SHAPES],
+            performance: [0.0; performance::PERFORMANCE_SCRATCH],
         }
     }
 
@@ -173,6 +177,12 @@ pub enum Error {
     /// The replay does not fit the model (another model's content hash, coefficient count,
     /// mode unavailable), or a buffer length is wrong.
     Playback(ReplayError),
+    /// A fitted performance needs more scratch values than
+    /// [`performance::PERFORMANCE_SCRATCH`].
+    ScratchTooSmall {
+        /// Values needed.
+        values: usize,
+    },
     /// An S2D decoder needs more buffer values than [`S2D_ARENA`].
     S2dTooLarge {
         /// Values needed: input, neutral, decoded vertices and the decoder's scratch.
@@ -190,6 +200,11 @@ impl fmt::Display for Error {
                 "golden model has {vertices} vertices, more than the {MAX_VERTICES} the firmware holds"
             ),
             Self::Playback(e) => write!(f, "{e}"),
+            Self::ScratchTooSmall { values } => write!(
+                f,
+                "golden performance needs {values} scratch values, more than the {} the firmware holds",
+                performance::PERFORMANCE_SCRATCH
+            ),
             Self::S2dTooLarge { values } => write!(
                 f,
                 "golden S2D decoder needs {values} buffer values, more than the {S2D_ARENA} the firmware holds"
@@ -312,166 +327,6 @@ fn summarise(
         summary.add(&r);
     }
     Ok(summary)
-}
-
-/// An S2D replay in progress: an iterator over its frames, so that a firmware can time each
-/// frame on its own.
-#[derive(Debug)]
-pub struct S2dRun<'s> {
-    decoder: S2dDecoder<'static>,
-    replay: S2dReplay<'static>,
-    next: usize,
-    arena: &'s mut [f32; S2D_ARENA],
-}
-
-impl<'s> S2dRun<'s> {
-    /// Validates the golden's decoder and replay, checks that the replay was recorded with this
-    /// decoder (content hash) and fits it, that the buffers fit in `scratch`, and copies the
-    /// replay's neutral into them.
-    pub fn new(golden: &Golden, scratch: &'s mut Scratch) -> Result<Self, Error> {
-        let decoder = S2dDecoder::from_bytes(golden.model).map_err(Error::Model)?;
-        let replay = S2dReplay::from_bytes(golden.replay).map_err(Error::Replay)?;
-        check_s2d_model(golden.model, &decoder, &replay).map_err(Error::Playback)?;
-        let mut run = Self {
-            decoder,
-            replay,
-            next: 0,
-            arena: &mut scratch.frame,
-        };
-        let values = run.needed();
-        let Some(buf) = run.buffers() else {
-            return Err(Error::S2dTooLarge { values });
-        };
-        replay
-            .copy_neutral(buf.neutral)
-            .map_err(|e| Error::Playback(ReplayError::Buffer(e)))?;
-        Ok(run)
-    }
-
-    /// The loaded decoder.
-    pub const fn decoder(&self) -> &S2dDecoder<'static> {
-        &self.decoder
-    }
-
-    /// The loaded replay.
-    pub const fn replay(&self) -> &S2dReplay<'static> {
-        &self.replay
-    }
-
-    /// Buffer values the replay needs: input, neutral (if the replay has one), decoded
-    /// vertices, the decoder's scratch.
-    pub fn needed(&self) -> usize {
-        let v = 3 * self.decoder.vertex_count();
-        let neutral = if self.replay.neutral().is_some() {
-            v
-        } else {
-            0
-        };
-        self.decoder.input_len() + neutral + v + self.decoder.scratch_len()
-    }
-
-    /// The arena carved into input | neutral | vertices | scratch (`None` if it is too small).
-    fn buffers(&mut self) -> Option<S2dBuffers<'_>> {
-        let v = 3 * self.decoder.vertex_count();
-        let neutral = if self.replay.neutral().is_some() {
-            v
-        } else {
-            0
-        };
-        let (input, rest) = self.arena.split_at_mut_checked(self.decoder.input_len())?;
-        let (neutral, rest) = rest.split_at_mut_checked(neutral)?;
-        let (vertices, rest) = rest.split_at_mut_checked(v)?;
-        let scratch = rest.get_mut(..self.decoder.scratch_len())?;
-        Some(S2dBuffers {
-            input,
-            neutral,
-            scratch,
-            vertices,
-        })
-    }
-
-    /// Plays frame `f` with the core's [`check_s2d_frame`], the step of the host's
-    /// verification.
-    fn play(&mut self, f: usize) -> Result<FrameCheck, Error> {
-        let (replay, decoder) = (self.replay, self.decoder.clone());
-        let values = self.needed();
-        let Some(mut buf) = self.buffers() else {
-            return Err(Error::S2dTooLarge { values });
-        };
-        check_s2d_frame(&decoder, &replay, f, &mut buf).map_err(Error::Playback)
-    }
-}
-
-impl Iterator for S2dRun<'_> {
-    type Item = Result<FrameCheck, Error>;
-
-    fn next(&mut self) -> Option<Self::Item> {
-        let f = self.next;
-        if f >= self.replay.frames() {
-            return None;
-        }
-        self.next += 1;
-        Some(self.play(f))
-    }
-}
-
-/// Plays every frame of the S2D `golden`, calling `report` after each one, and returns the
-/// totals.
-pub fn replay_s2d(
-    golden: &Golden,
-    scratch: &mut Scratch,
-    report: impl FnMut(&FrameCheck),
-) -> Result<Summary, Error> {
-    summarise(S2dRun::new(golden, scratch)?, report)
-}
-
-/// What one S2D frame costs, in the units of the counter given to [`s2d_costs`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub struct S2dCosts {
-    /// Decoding: the fully connected layer, up-samplings and spiral convolutions, and adding the
-    /// neutral.
-    pub decode: u64,
-    /// Hashing the decoded vertices (the replay check, not playback).
-    pub hash: u64,
-}
-
-impl fmt::Display for S2dCosts {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "decode={} hash={}", self.decode, self.hash)
-    }
-}
-
-/// Measures decoding and hashing of frame `frame` of the S2D `golden` separately with `now`.
-///
-/// Decoding is the core's [`decode_frame`], the first half of
-/// [`sinew_core::replay::s2d_frame_hash`]; the hashing half is repeated here only so that the
-/// counter can be read between the two.
-pub fn s2d_costs(
-    golden: &Golden,
-    frame: usize,
-    scratch: &mut Scratch,
-    mut now: impl FnMut() -> u64,
-) -> Result<S2dCosts, Error> {
-    use sinew_core::hash::FrameHasher;
-    let mut run = S2dRun::new(golden, scratch)?;
-    let (replay, decoder) = (run.replay, run.decoder.clone());
-    let values = run.needed();
-    let Some(mut buf) = run.buffers() else {
-        return Err(Error::S2dTooLarge { values });
-    };
-    if replay.frame(frame, buf.input).is_none() {
-        return Err(Error::Replay(FormatError::IncompatibleShapes));
-    }
-    let mut costs = S2dCosts::default();
-    let t = now();
-    decode_frame(&decoder, &mut buf).map_err(Error::Playback)?;
-    costs.decode = now() - t;
-    let t = now();
-    let mut h = FrameHasher::new();
-    h.write_f32s(buf.vertices);
-    core::hint::black_box(h.finish());
-    costs.hash = now() - t;
-    Ok(costs)
 }
 
 /// What one frame of a golden actor costs, phase by phase, in the units of the counter given to

@@ -13,6 +13,7 @@ use cortex_m_rt::{ExceptionFrame, entry, exception};
 use cortex_m_semihosting::{debug, heprintln, hprintln};
 use panic_semihosting as _;
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
+use sinew_firmware_common::performance::{PERFORMANCE_GOLDENS, PerformanceRun};
 use sinew_firmware_common::{
     Error, FrameCheck, GOLDENS, Replay, S2D_GOLDENS, S2dRun, Scratch, Summary, phase_costs,
     s2d_costs,
@@ -234,6 +235,32 @@ fn run() -> bool {
         s2d.frames - s2d.mismatches,
         s2d.frames
     );
+    // The fitted performance: F_W evaluated at every vertex, in the same frame buffers.
+    let mut fitted = Summary::default();
+    for golden in &PERFORMANCE_GOLDENS {
+        let mut run = match PerformanceRun::new(golden, scratch) {
+            Ok(r) => r,
+            Err(e) => {
+                heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
+                return false;
+            }
+        };
+        hprintln!(
+            "sinew-firmware-sim: cortex-m4f, {}: {} vertices, {} shapes, {} frames",
+            golden.name,
+            run.actor().vertex_count(),
+            run.actor().shape_count(),
+            run.performance().frames()
+        );
+        if !timed_frames(golden.name, &mut run, &mut fitted) {
+            return false;
+        }
+    }
+    hprintln!(
+        "sinew-firmware-sim: {}/{} fitted-performance frames bit-identical to the host",
+        fitted.frames - fitted.mismatches,
+        fitted.frames
+    );
     // Cost of each phase of one frame, per golden actor (the f32 replay stands for its model).
     for golden in GOLDENS.iter().filter(|g| g.name.ends_with(".f32")) {
         let mut clock = Clock {
@@ -262,7 +289,7 @@ fn run() -> bool {
         }
     }
     hprintln!("stack high-water {} bytes", stack_high_water());
-    total.passed() && s2d.passed()
+    total.passed() && s2d.passed() && fitted.passed()
 }
 
 /// A fault (bad memory access, undefined instruction, …) ends the run with a failure instead of

@@ -10,6 +10,7 @@
 use riscv::register::{mcause, mepc, minstret, mtval};
 use semihosting::{eprintln, println, process};
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
+use sinew_firmware_common::performance::{PERFORMANCE_GOLDENS, PerformanceRun};
 use sinew_firmware_common::{
     Error, FrameCheck, GOLDENS, Replay, S2D_GOLDENS, S2dRun, Scratch, Summary, phase_costs,
     s2d_costs,
@@ -136,6 +137,32 @@ fn run() -> bool {
         s2d.frames - s2d.mismatches,
         s2d.frames
     );
+    // The fitted performance: F_W evaluated at every vertex, in the same frame buffers.
+    let mut fitted = Summary::default();
+    for golden in &PERFORMANCE_GOLDENS {
+        let mut run = match PerformanceRun::new(golden, scratch) {
+            Ok(r) => r,
+            Err(e) => {
+                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
+                return false;
+            }
+        };
+        println!(
+            "sinew-firmware-sim-riscv: rv32imac, {}: {} vertices, {} shapes, {} frames",
+            golden.name,
+            run.actor().vertex_count(),
+            run.actor().shape_count(),
+            run.performance().frames()
+        );
+        if !timed_frames(golden.name, &mut run, &mut fitted) {
+            return false;
+        }
+    }
+    println!(
+        "sinew-firmware-sim-riscv: {}/{} fitted-performance frames bit-identical to the host",
+        fitted.frames - fitted.mismatches,
+        fitted.frames
+    );
     // Cost of each phase of one frame, per golden actor (the f32 replay stands for its model).
     for golden in GOLDENS.iter().filter(|g| g.name.ends_with(".f32")) {
         match phase_costs(golden, 8, scratch, minstret::read64) {
@@ -155,7 +182,7 @@ fn run() -> bool {
             }
         }
     }
-    total.passed() && s2d.passed()
+    total.passed() && s2d.passed() && fitted.passed()
 }
 
 /// Any trap (bad memory access, illegal instruction, …) ends the run with a failure instead of

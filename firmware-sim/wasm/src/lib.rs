@@ -1,6 +1,7 @@
 //! Golden AIM and S2D replays in WebAssembly (wasm32-unknown-unknown, no_std): the module
 //! exports [`sinew_replay`], which plays every golden AIM replay, and [`sinew_replay_s2d`], the
-//! golden S2D replay (`tests/data/*.replay.sinew`) with
+//! golden S2D replay (`tests/data/*.replay.sinew`), and [`sinew_replay_performance`], the golden
+//! fitted performance (`tests/data/fit-ict.sinew`), with
 //! `sinew-core` and returns how many frames' hashes differ from those recorded on the x86_64
 //! host. Each frame is also handed to the host through the import `sinew.report`, so `run.mjs`
 //! can print it.
@@ -8,6 +9,7 @@
 #![deny(unsafe_code)]
 
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
+use sinew_firmware_common::performance::{PERFORMANCE_GOLDENS, replay_performance};
 use sinew_firmware_common::{GOLDENS, S2D_GOLDENS, Scratch, Summary, replay, replay_s2d};
 
 /// What [`sinew_replay`] returns when the replay could not run (bad model, malformed or empty
@@ -79,6 +81,35 @@ pub extern "C" fn sinew_replay_s2d() -> u32 {
         let summary = replay_s2d(golden, &mut scratch, |r| {
             report(
                 u32::try_from(8000 + r.frame).unwrap_or(u32::MAX),
+                r.hash,
+                r.expected,
+            );
+        });
+        match summary {
+            Ok(s) => {
+                total.frames += s.frames;
+                total.mismatches += s.mismatches;
+            }
+            Err(_) => return LOAD_ERROR,
+        }
+    }
+    outcome(&total)
+}
+
+/// Plays the golden fitted performance; returns the number of mismatching frames, or
+/// [`LOAD_ERROR`]. Frames are reported with 7000 added to the frame number.
+// Safety: `no_mangle` exports the function under its own name; no other symbol in the module
+// is called `sinew_replay_performance`.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_replay_performance() -> u32 {
+    // On the stack, as in `sinew_replay`.
+    let mut scratch = Scratch::new();
+    let mut total = Summary::default();
+    for golden in &PERFORMANCE_GOLDENS {
+        let summary = replay_performance(golden, &mut scratch, |r| {
+            report(
+                u32::try_from(7000 + r.frame).unwrap_or(u32::MAX),
                 r.hash,
                 r.expected,
             );
