@@ -1049,4 +1049,36 @@ fn fit_bakes_a_performance_that_play_reproduces() {
             "{name}: the fit's meshes are the core's playback"
         );
     }
+    // A global fit animates a glTF rig.
+    let global = dir.path().join("global.sinew");
+    ok(&[
+        "fit",
+        "--model",
+        &model,
+        "--target",
+        s(&perf),
+        "--out",
+        s(&global),
+        "--report",
+        s(&report),
+        "--iterations",
+        "20",
+        "--hidden",
+        "16",
+        "--global",
+    ]);
+    let glb = dir.path().join("fit.glb");
+    let summary = ok(&[
+        "export",
+        "gltf",
+        "--model",
+        &model,
+        "--performance",
+        s(&global),
+        "--out",
+        s(&glb),
+    ]);
+    let summary: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    assert_eq!(summary["frames"], 2);
+    assert_eq!(&std::fs::read(&glb).unwrap()[..4], b"glTF");
 }

@@ -9,7 +9,8 @@ use sinew_host::export::gltf::Frames;
 #[derive(Debug, Subcommand)]
 pub(crate) enum Export {
     /// A baked actor as a glTF 2.0 binary (.glb): the skin with normals, the correctives as
-    /// named morph targets, a head and jaw skin, and with --poses or --arkit an animation.
+    /// named morph targets, a head and jaw skin, and with --poses, --arkit or --performance an
+    /// animation.
     Gltf(GltfArgs),
 }
 
@@ -23,11 +24,14 @@ pub(crate) struct GltfArgs {
     #[arg(long)]
     out: PathBuf,
     /// Pose file to animate (as for `sinew play`).
-    #[arg(long, conflicts_with = "arkit")]
+    #[arg(long, conflicts_with_all = ["arkit", "performance"])]
     poses: Option<PathBuf>,
     /// Live Link Face capture (CSV) to animate, mapped as for `sinew play --arkit`.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "performance")]
     arkit: Option<PathBuf>,
+    /// A global fit of this actor (`sinew fit --global --out FIT.sinew`) to animate.
+    #[arg(long)]
+    performance: Option<PathBuf>,
     /// Frames per second of the animation.
     #[arg(long, default_value_t = 30.0)]
     fps: f32,
@@ -40,10 +44,11 @@ pub(crate) struct GltfArgs {
 pub(crate) fn run(cmd: Export) -> Result<()> {
     match cmd {
         Export::Gltf(args) => {
-            let frames = match (&args.poses, &args.arkit) {
-                (Some(p), _) => Frames::Poses(p),
-                (None, Some(c)) => Frames::Arkit(c),
-                (None, None) => Frames::None,
+            let frames = match (&args.poses, &args.arkit, &args.performance) {
+                (Some(p), _, _) => Frames::Poses(p),
+                (None, Some(c), _) => Frames::Arkit(c),
+                (None, None, Some(f)) => Frames::Performance(f),
+                (None, None, None) => Frames::None,
             };
             let summary = sinew_host::export::gltf::export(
                 &args.model,

@@ -38,6 +38,9 @@ pub enum Frames<'a> {
     Poses(&'a Path),
     /// A Live Link Face capture (`sinew play --arkit`'s mapping).
     Arkit(&'a Path),
+    /// A fitted performance of this actor (`sinew fit --out FIT.sinew`) with one coefficient
+    /// vector per frame.
+    Performance(&'a Path),
 }
 
 /// What an export wrote, for the command's report.
@@ -83,12 +86,40 @@ pub fn export(
             let playback = crate::aim::arkit::playback(&actor, p)?;
             (playback.frames, playback.mapping.unplayable)
         }
+        Frames::Performance(p) => (performance_frames(&bytes, &actor, p)?, Vec::new()),
     };
     let (glb, mut summary) = glb(&actor, &poses, fps, bones)
         .with_context(|| format!("{}: cannot export", model.display()))?;
     crate::io::atomic::write(out, &glb)?;
     summary.unplayable = unplayable;
     Ok(summary)
+}
+
+/// The frames of a global fit of `actor` (whose bytes are `actor_bytes`); a local fit is refused:
+/// its coefficients vary over the face, and glTF's morph weights are one per mesh.
+fn performance_frames(actor_bytes: &[u8], actor: &AimActor<'_>, path: &Path) -> Result<Vec<Frame>> {
+    let bytes = crate::io::container::read(path)?;
+    let perf = sinew_core::performance::Performance::from_bytes(&bytes)
+        .map_err(|e| anyhow::anyhow!("{}: not a fitted performance: {e}", path.display()))?;
+    perf.check_actor(actor_bytes, actor)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    if perf.is_local() {
+        bail!(
+            "{}: a local fit's coefficients vary over the face, which glTF's per-mesh morph \
+             weights cannot carry; fit with --global for an engine, or write the meshes with \
+             sinew play --performance",
+            path.display()
+        );
+    }
+    (0..perf.frames())
+        .map(|f| {
+            let mut weights = vec![0.0; perf.shape_count()];
+            let (head, jaw) = perf.head_jaw(f).unwrap_or_default();
+            perf.global_weights(f, &mut weights)
+                .ok_or_else(|| anyhow::anyhow!("{}: frame {f} unreadable", path.display()))?;
+            Ok(Frame { head, jaw, weights })
+        })
+        .collect()
 }
 
 /// Metres per unit of the artefact's `units` metadata (1 when it records none).
