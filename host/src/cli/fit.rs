@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use sinew_host::fit::aim::{Coefficients, FitConfig};
+use sinew_host::fit::aim::{Coefficients, Constrain, FitConfig, Mode};
 use sinew_host::fit::commands::{eval_fit, fit_command};
 use sinew_host::fit::performance::{PerformanceConfig, generate};
 use sinew_host::training::backend::Backend;
@@ -116,6 +116,14 @@ pub(crate) struct FitArgs {
     /// One coefficient vector per frame (the paper's "(G)") instead of per template point.
     #[arg(long)]
     global: bool,
+    /// Fit the meshes (3d, eq. 20) or the 68 landmark tracks through the performance's camera
+    /// (2d, eq. 21).
+    #[arg(long, value_enum, default_value_t = Mode::ThreeD)]
+    mode: Mode,
+    /// Vertices constraining a 3d fit: all, landmarks (the 68), or a fraction in (0, 1] drawn
+    /// once with the seed (AIM Fig. 7).
+    #[arg(long, default_value = "all")]
+    constrain: Constrain,
     #[command(flatten)]
     options: FitOptions,
 }
@@ -133,6 +141,10 @@ pub(crate) struct EvalFitArgs {
     /// aim_local.
     #[arg(long)]
     report: PathBuf,
+    /// Also fit to 10 % of the vertices, to the 68 landmarks and to the 2D landmark tracks
+    /// (aim_local_10pct, aim_local_landmarks, aim_local_2d; AIM Fig. 7).
+    #[arg(long)]
+    constraints: bool,
     #[command(flatten)]
     options: FitOptions,
 }
@@ -144,7 +156,11 @@ pub(crate) fn fit(args: FitArgs) -> Result<()> {
     } else {
         Coefficients::Local
     };
-    let config = args.options.config(c);
+    let config = FitConfig {
+        mode: args.mode,
+        constrain: args.constrain,
+        ..args.options.config(c)
+    };
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
     let r = fit_command(
         &args.model,
@@ -155,10 +171,14 @@ pub(crate) fn fit(args: FitArgs) -> Result<()> {
         args.options.backend,
     )?;
     println!(
-        "{}: {} frames, mean error {:.3} mm, {:.2} s per frame",
+        "{}: {} frames, mean error {:.3} mm, reprojection {:.2} px, worst edge change {:.1} % \
+         (the performance's own: {:.1} %), {:.2} s per frame",
         args.out.display(),
         r.frames,
         r.fit.mean_error_mm,
+        r.fit.reprojection_px,
+        100.0 * r.fit.worst_edge_change,
+        100.0 * r.fit.target_worst_edge_change,
         r.fit.seconds_per_frame
     );
     Ok(())
@@ -173,14 +193,26 @@ pub(crate) fn eval(args: EvalFitArgs) -> Result<()> {
         &args.target,
         &args.report,
         &config,
+        args.constraints,
         args.options.backend,
     )?;
-    println!("{} frames; mean error (mm), seconds per frame:", r.frames);
+    println!(
+        "{} frames; mean error (mm), seconds per frame, reprojection (px), worst edge change:",
+        r.frames
+    );
     for (name, m) in &r.methods {
+        let px = m.reprojection_px.map_or("-".into(), |p| format!("{p:.2}"));
+        let edge = m
+            .worst_edge_change
+            .map_or("-".into(), |e| format!("{:.1} %", 100.0 * e));
         println!(
-            "  {name:<10} {:.3}  {:.3}",
+            "  {name:<20} {:.3}  {:.3}  {px}  {edge}",
             m.mean_error_mm, m.seconds_per_frame
         );
     }
+    println!(
+        "  the performance's own worst edge change: {:.1} %",
+        100.0 * r.target_worst_edge_change
+    );
     Ok(())
 }

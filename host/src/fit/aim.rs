@@ -44,6 +44,51 @@ pub enum Coefficients {
     Zero,
 }
 
+/// What the fit is constrained by (AIM Sec. 4.2.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// 3D positions of the performance's meshes (eq. 20).
+    #[default]
+    #[value(name = "3d")]
+    #[serde(rename = "3d")]
+    ThreeD,
+    /// The 68 landmarks' pixels through the performance's camera (eq. 21).
+    #[value(name = "2d")]
+    #[serde(rename = "2d")]
+    TwoD,
+}
+
+/// Which vertices of the meshes constrain a 3D fit (AIM Fig. 7).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Constrain {
+    /// Every vertex (dense).
+    #[default]
+    All,
+    /// The 68 landmark vertices.
+    Landmarks,
+    /// A seeded random fraction in (0, 1] of the vertices.
+    Fraction(f32),
+}
+
+impl std::str::FromStr for Constrain {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "all" => Ok(Self::All),
+            "landmarks" => Ok(Self::Landmarks),
+            _ => match s.parse::<f32>() {
+                Ok(f) if f > 0.0 && f <= 1.0 => Ok(Self::Fraction(f)),
+                _ => Err(format!(
+                    "{s:?}: expected all, landmarks or a fraction in (0, 1]"
+                )),
+            },
+        }
+    }
+}
+
 /// The fit's settings (the paper's unless said otherwise).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FitConfig {
@@ -63,8 +108,15 @@ pub struct FitConfig {
     pub lambda_w: f64,
     /// λ_T of eq. 23 (the paper: 0.05).
     pub lambda_t: f64,
+    /// λ_2D of eq. 21 (not given in the paper; pixels², where 1 mm at the camera's 60 cm is
+    /// about 2 px).
+    pub lambda_2d: f64,
     /// Local, global or no coefficients.
     pub coefficients: Coefficients,
+    /// 3D meshes or 2D landmarks.
+    pub mode: Mode,
+    /// Which vertices constrain a 3D fit.
+    pub constrain: Constrain,
     /// Seed of the initial weights, the codes and the point draws.
     pub seed: u64,
 }
@@ -80,7 +132,10 @@ impl Default for FitConfig {
             lambda_3d: 1.0,
             lambda_w: 0.75,
             lambda_t: 0.05,
+            lambda_2d: 0.25,
             coefficients: Coefficients::Local,
+            mode: Mode::ThreeD,
+            constrain: Constrain::All,
             seed: 1,
         }
     }
@@ -270,6 +325,14 @@ pub struct FitResult {
     pub jaw: Vec<[f32; 9]>,
     /// Per frame, the global coefficients (global fits only).
     pub weights: Option<Vec<Vec<f32>>>,
+    /// Mean distance in pixels between the fitted meshes' landmarks, projected by the
+    /// performance's camera, and the landmark tracks.
+    pub reprojection_px: f64,
+    /// Plausibility (AIM Fig. 7): how far edges stretch or shrink from the actor's neutral over
+    /// the fitted frames, the 99th percentile over edges of `max_frames |ℓ/ℓ0 − 1|`.
+    pub worst_edge_change: f64,
+    /// The same for the performance's own meshes, the scale to read it against.
+    pub target_worst_edge_change: f64,
     /// Per frame, the fitted skin `[V]` in the actor's units.
     #[serde(skip)]
     pub meshes: Vec<Vec<[f32; 3]>>,
@@ -355,6 +418,9 @@ pub fn fit(
         head: Vec::new(),
         jaw: Vec::new(),
         weights: None,
+        reprojection_px: 0.0,
+        worst_edge_change: 0.0,
+        target_worst_edge_change: 0.0,
         meshes: Vec::new(),
         codes: Vec::new(),
         fw: Vec::new(),
@@ -372,20 +438,35 @@ pub fn fit(
     result.error_history.push((0, mean(&errors)));
     let start = Instant::now();
     let bar = crate::training::progress::bar(config.iterations as u64, true);
+    let subset = constrained_vertices(perf, config, &mut rng)?;
+    let camera = TwoDTargets::new(perf, config, mm, &device)?;
     for step in 0..config.iterations {
-        let draw: Vec<i64> = (0..config.points)
-            .map(|_| ((u128::from(rng.next_u64()) * v as u128) >> 64) as i64)
-            .collect();
-        let idx = Tensor::<1, Int>::from_data(TensorData::new(draw, [config.points]), &device);
+        let draw: Vec<i64> = match &subset {
+            None => (0..config.points)
+                .map(|_| ((u128::from(rng.next_u64()) * v as u128) >> 64) as i64)
+                .collect(),
+            Some(s) if s.len() <= config.points || camera.is_some() => s.clone(),
+            Some(s) => (0..config.points)
+                .map(|_| s[((u128::from(rng.next_u64()) * s.len() as u128) >> 64) as usize])
+                .collect(),
+        };
+        let n = draw.len();
+        let idx = Tensor::<1, Int>::from_data(TensorData::new(draw, [n]), &device);
         let posed = pose(&net, &fx, idx.clone(), config.coefficients);
-        let gt = fx
-            .targets
-            .clone()
-            .select(1, idx)
-            .reshape([j * config.points, 3]);
-        let sq = |a: Tensor<2>| (a - gt.clone()).square().sum_dim(1).mean();
-        // AIM eq. 20
-        let mut total = (sq(posed.skin) + sq(posed.lbs)).mul_scalar(config.lambda_3d);
+        let mut total = match &camera {
+            None => {
+                let gt = fx.targets.clone().select(1, idx).reshape([j * n, 3]);
+                let sq = |a: Tensor<2>| (a - gt.clone()).square().sum_dim(1).mean();
+                // AIM eq. 20
+                (sq(posed.skin) + sq(posed.lbs)).mul_scalar(config.lambda_3d)
+            }
+            Some(c) => {
+                let sq =
+                    |a: Tensor<2>| (c.project(a) - c.pixels.clone()).square().sum_dim(1).mean();
+                // AIM eq. 21
+                (sq(posed.skin) + sq(posed.lbs)).mul_scalar(config.lambda_2d)
+            }
+        };
         // AIM eq. 22
         if let Some(w) = posed.weights {
             total = total + w.square().sum_dim(1).mean().mul_scalar(config.lambda_w);
@@ -422,6 +503,14 @@ pub fn fit(
         ));
     }
     result.frame_error_mm = errors;
+    result.reprojection_px = reprojection_px(perf, &meshes);
+    let neutral: Vec<[f32; 3]> = cache
+        .rest
+        .chunks_exact(3)
+        .map(|p| [p[0] / mm, p[1] / mm, p[2] / mm])
+        .collect();
+    result.worst_edge_change = worst_edge_change(&perf.polygons, &neutral, &meshes);
+    result.target_worst_edge_change = worst_edge_change(&perf.polygons, &neutral, &perf.frames);
     result.meshes = meshes;
     let t = to_vec(net.ft.forward(net.codes.val()));
     for (row, frame) in t.chunks_exact(18).zip(0..j) {
@@ -443,6 +532,158 @@ pub fn fit(
         result.weights = Some(w.chunks_exact(m.max(1)).map(<[f32]>::to_vec).collect());
     }
     Ok(result)
+}
+
+/// The vertices a 3D fit may draw from (`None`: all of them), or the landmark vertices of a 2D
+/// fit; a fraction is drawn once, seeded.
+fn constrained_vertices(
+    perf: &Performance,
+    config: &FitConfig,
+    rng: &mut rand_pcg::Pcg64,
+) -> Result<Option<Vec<i64>>> {
+    let v = perf.frames.first().map_or(0, Vec::len);
+    let landmarks = || -> Result<Vec<i64>> {
+        let l = &perf.manifest.landmarks.vertices;
+        ensure!(
+            !l.is_empty() && l.iter().all(|&i| (i as usize) < v),
+            "{}: the landmark vertices do not index the meshes",
+            perf.dir.join("performance.json").display()
+        );
+        Ok(l.iter().map(|&i| i64::from(i)).collect())
+    };
+    Ok(match (config.mode, config.constrain) {
+        (Mode::TwoD, _) | (Mode::ThreeD, Constrain::Landmarks) => Some(landmarks()?),
+        (Mode::ThreeD, Constrain::All) => None,
+        (Mode::ThreeD, Constrain::Fraction(p)) => {
+            let n = ((p * v as f32).round() as usize).clamp(1, v.max(1));
+            // A seeded partial Fisher–Yates shuffle: the first n of a random permutation.
+            let mut all: Vec<i64> = (0..v as i64).collect();
+            for i in 0..n {
+                let r = i + ((u128::from(rng.next_u64()) * (v - i) as u128) >> 64) as usize;
+                all.swap(i, r);
+            }
+            all.truncate(n);
+            Some(all)
+        }
+    })
+}
+
+/// A 2D fit's targets: the landmarks' pixels per frame and the camera, in mm.
+struct TwoDTargets {
+    /// `[J·L, 2]`, frame-major as `pose` orders its rows.
+    pixels: Tensor<2>,
+    /// Camera centre in mm, `[1, 3]`.
+    position: Tensor<2>,
+    focal: [f32; 2],
+    principal: [f32; 2],
+}
+
+impl TwoDTargets {
+    fn new(
+        perf: &Performance,
+        config: &FitConfig,
+        mm: f32,
+        device: &Device,
+    ) -> Result<Option<Self>> {
+        if config.mode != Mode::TwoD {
+            return Ok(None);
+        }
+        let m = &perf.manifest;
+        let l = m.landmarks.vertices.len();
+        let pixels: Vec<f32> = m
+            .landmarks
+            .pixels
+            .iter()
+            .flatten()
+            .flatten()
+            .copied()
+            .collect();
+        ensure!(
+            m.landmarks.pixels.len() == perf.frames.len()
+                && pixels.len() == perf.frames.len() * l * 2,
+            "{}: the landmark tracks do not have one pixel per landmark and frame",
+            perf.dir.join("performance.json").display()
+        );
+        let c = &m.camera;
+        Ok(Some(Self {
+            pixels: tensor(pixels, [perf.frames.len() * l, 2], device),
+            position: tensor(c.position.iter().map(|x| x * mm).collect(), [1, 3], device),
+            focal: [c.fx, c.fy],
+            principal: [c.cx, c.cy],
+        }))
+    }
+
+    /// `Camera::project` on rows of mm positions: `[n, 3]` → `[n, 2]`.
+    fn project(&self, x: Tensor<2>) -> Tensor<2> {
+        let rel = x - self.position.clone();
+        let depth = rel.clone().narrow(1, 2, 1).neg();
+        let u = (rel.clone().narrow(1, 0, 1) / depth.clone())
+            .mul_scalar(self.focal[0])
+            .add_scalar(self.principal[0]);
+        let v = (rel.narrow(1, 1, 1) / depth)
+            .mul_scalar(-self.focal[1])
+            .add_scalar(self.principal[1]);
+        Tensor::cat(vec![u, v], 1)
+    }
+}
+
+/// Mean pixel distance between the landmark vertices of `meshes`, projected by the performance's
+/// camera, and its landmark tracks (a vertex behind the camera counts as infinitely far).
+pub fn reprojection_px(perf: &Performance, meshes: &[Vec<[f32; 3]>]) -> f64 {
+    let l = &perf.manifest.landmarks;
+    let mut sum = 0.0;
+    let mut n = 0usize;
+    for (mesh, track) in meshes.iter().zip(&l.pixels) {
+        for (&i, px) in l.vertices.iter().zip(track) {
+            let d = mesh
+                .get(i as usize)
+                .and_then(|&p| perf.manifest.camera.project(p))
+                .map_or(f64::INFINITY, |uv| {
+                    f64::from(uv[0] - px[0]).hypot(f64::from(uv[1] - px[1]))
+                });
+            sum += d;
+            n += 1;
+        }
+    }
+    sum / n.max(1) as f64
+}
+
+/// The 99th percentile over the polygons' edges of each edge's largest `|ℓ/ℓ0 − 1|` over the
+/// frames, ℓ0 on `neutral` (a percentile, so that a few slivers of the template do not decide).
+pub fn worst_edge_change(
+    polygons: &[Vec<u32>],
+    neutral: &[[f32; 3]],
+    frames: &[Vec<[f32; 3]>],
+) -> f64 {
+    let len = |m: &[[f32; 3]], a: u32, b: u32| -> Option<f64> {
+        let (p, q) = (m.get(a as usize)?, m.get(b as usize)?);
+        Some(
+            (0..3)
+                .map(|c| f64::from(p[c] - q[c]).powi(2))
+                .sum::<f64>()
+                .sqrt(),
+        )
+    };
+    let mut edges = Vec::new();
+    for poly in polygons {
+        for (k, &a) in poly.iter().enumerate() {
+            let b = poly[(k + 1) % poly.len()];
+            let Some(l0) = len(neutral, a, b).filter(|&l| l > 0.0) else {
+                continue;
+            };
+            let worst = frames
+                .iter()
+                .filter_map(|f| len(f, a, b))
+                .map(|l| (l / l0 - 1.0).abs())
+                .fold(0.0f64, f64::max);
+            edges.push(worst);
+        }
+    }
+    if edges.is_empty() {
+        return 0.0;
+    }
+    edges.sort_by(f64::total_cmp);
+    edges[(edges.len() - 1) * 99 / 100]
 }
 
 fn mean(x: &[f64]) -> f64 {

@@ -7,7 +7,7 @@ use anyhow::{Context, Result, anyhow};
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
 
-use crate::fit::aim::{Coefficients, FitConfig, FitResult, fit};
+use crate::fit::aim::{Coefficients, Constrain, FitConfig, FitResult, Mode, fit};
 use crate::fit::bake::{bake, play};
 use crate::fit::baseline::{Basis, Gbs, PATCH_GRID, Pbs, actor_shape_names, fit_performance};
 use crate::fit::performance::Performance;
@@ -97,6 +97,23 @@ pub struct MethodLine {
     pub mean_error_mm: f64,
     /// Wall-clock seconds per frame.
     pub seconds_per_frame: f64,
+    /// AIM fits: mean landmark reprojection error, pixels.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub reprojection_px: Option<f64>,
+    /// AIM fits: the largest relative edge-length change from the actor's neutral.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub worst_edge_change: Option<f64>,
+}
+
+impl MethodLine {
+    fn of_fit(r: &FitResult) -> Self {
+        Self {
+            mean_error_mm: r.mean_error_mm,
+            seconds_per_frame: r.seconds_per_frame,
+            reprojection_px: Some(r.reprojection_px),
+            worst_edge_change: Some(r.worst_edge_change),
+        }
+    }
 }
 
 /// The `sinew eval fit` report (AIM's Table 1).
@@ -108,14 +125,48 @@ pub struct EvalReport {
     pub methods: BTreeMap<String, MethodLine>,
     /// The AIM fits' settings (`coefficients` aside).
     pub aim_config: FitConfig,
+    /// The performance's own worst edge-length change from the actor's neutral, to read the
+    /// fits' against.
+    pub target_worst_edge_change: f64,
 }
 
-/// `sinew eval fit`: GBS, PBS and the global and local AIM fits on one performance.
+/// The AIM fits `sinew eval fit` runs: Table 1's two, and with `constraints` Fig. 7's sparse
+/// and 2D ones.
+fn aim_rows(config: &FitConfig, constraints: bool) -> Vec<(&'static str, FitConfig)> {
+    let with = |coefficients, mode, constrain| FitConfig {
+        coefficients,
+        mode,
+        constrain,
+        ..config.clone()
+    };
+    let (local, all, three) = (Coefficients::Local, Constrain::All, Mode::ThreeD);
+    let mut rows = vec![
+        ("aim_global", with(Coefficients::Global, three, all)),
+        ("aim_local", with(local, three, all)),
+    ];
+    if constraints {
+        rows.push((
+            "aim_local_10pct",
+            with(local, three, Constrain::Fraction(0.1)),
+        ));
+        rows.push((
+            "aim_local_landmarks",
+            with(local, three, Constrain::Landmarks),
+        ));
+        rows.push(("aim_local_2d", with(local, Mode::TwoD, all)));
+    }
+    rows
+}
+
+/// `sinew eval fit`: GBS, PBS and the global and local AIM fits on one performance; with
+/// `constraints` also the local fit to 10 % of the vertices, to the 68 landmarks, and to the 2D
+/// landmark tracks (AIM Fig. 7, Sec. 4.2.1).
 pub fn eval_fit(
     model: &Path,
     target: &Path,
     report: &Path,
     config: &FitConfig,
+    constraints: bool,
     backend: Backend,
 ) -> Result<EvalReport> {
     let bytes = read_actor(model)?;
@@ -132,30 +183,22 @@ pub fn eval_fit(
             MethodLine {
                 mean_error_mm: r.mean_error_mm,
                 seconds_per_frame: r.seconds_per_frame,
+                reprojection_px: None,
+                worst_edge_change: None,
             },
         );
     }
-    for (name, c) in [
-        ("aim_global", Coefficients::Global),
-        ("aim_local", Coefficients::Local),
-    ] {
-        let cfg = FitConfig {
-            coefficients: c,
-            ..config.clone()
-        };
+    let mut target_worst_edge_change = 0.0;
+    for (name, cfg) in aim_rows(config, constraints) {
         let r = fit(&actor, &perf, &cfg, backend)?;
-        methods.insert(
-            name.to_owned(),
-            MethodLine {
-                mean_error_mm: r.mean_error_mm,
-                seconds_per_frame: r.seconds_per_frame,
-            },
-        );
+        target_worst_edge_change = r.target_worst_edge_change;
+        methods.insert(name.to_owned(), MethodLine::of_fit(&r));
     }
     let r = EvalReport {
         frames: perf.frames.len(),
         methods,
         aim_config: config.clone(),
+        target_worst_edge_change,
     };
     crate::io::atomic::write(report, &serde_json::to_vec_pretty(&r)?)?;
     Ok(r)

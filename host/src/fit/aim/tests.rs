@@ -1,4 +1,5 @@
 use super::*;
+use crate::fit::aim::{Constrain, Mode, worst_edge_change};
 use crate::fit::performance::tests::golden_actor;
 use crate::fit::performance::{PerformanceConfig, generate};
 use crate::io::data::data_dir;
@@ -88,4 +89,90 @@ fn frames_of_another_topology_are_refused_naming_the_file() {
     let e = fit(&actor, &perf, &short(Coefficients::Local), Backend::Flex).unwrap_err();
     let e = format!("{e:#}");
     assert!(e.contains("frame_00000.obj") && e.contains("4705"), "{e}");
+}
+
+#[test]
+fn constraints_parse_and_refuse_nonsense() {
+    assert_eq!("all".parse::<Constrain>(), Ok(Constrain::All));
+    assert_eq!("landmarks".parse::<Constrain>(), Ok(Constrain::Landmarks));
+    assert_eq!("0.1".parse::<Constrain>(), Ok(Constrain::Fraction(0.1)));
+    assert_eq!("1".parse::<Constrain>(), Ok(Constrain::Fraction(1.0)));
+    for bad in ["0", "-0.5", "1.5", "NaN", "some"] {
+        let e = bad.parse::<Constrain>().unwrap_err();
+        assert!(e.contains(bad) && e.contains("fraction"), "{e}");
+    }
+}
+
+#[test]
+fn edge_change_is_the_largest_relative_stretch() {
+    // Four edges: the 99th percentile of four is the largest.
+    let square = vec![vec![0, 1, 2, 3]];
+    let neutral = vec![
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    assert_eq!(
+        worst_edge_change(&square, &neutral, std::slice::from_ref(&neutral)),
+        0.0
+    );
+    // One frame stretched by 10 % along x, another squeezed by 30 % along y.
+    let wide: Vec<[f32; 3]> = neutral.iter().map(|p| [1.1 * p[0], p[1], p[2]]).collect();
+    let flat: Vec<[f32; 3]> = neutral.iter().map(|p| [p[0], 0.7 * p[1], p[2]]).collect();
+    let w = worst_edge_change(&square, &neutral, &[wide, flat]);
+    assert!((w - 0.3).abs() < 1e-6, "{w}");
+}
+
+#[test]
+fn sparse_and_2d_fits_recover_the_face_from_little() {
+    let Some(data) = data_dir() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let config = PerformanceConfig {
+        seed: 4,
+        frames: 2,
+        ..PerformanceConfig::default()
+    };
+    generate(
+        &data.join("ict-facekit"),
+        Some(&golden_actor()),
+        &config,
+        dir.path(),
+    )
+    .unwrap();
+    let perf = Performance::read(dir.path()).unwrap();
+    let bytes = std::fs::read(golden_actor()).unwrap();
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    for (mode, constrain) in [
+        (Mode::ThreeD, Constrain::Landmarks),
+        (Mode::ThreeD, Constrain::Fraction(0.1)),
+        (Mode::TwoD, Constrain::All),
+    ] {
+        let cfg = FitConfig {
+            mode,
+            constrain,
+            ..short(Coefficients::Local)
+        };
+        let r = fit(&actor, &perf, &cfg, Backend::Flex).unwrap();
+        eprintln!(
+            "{mode:?} {constrain:?}: {:?}, {:.2} px, edges {:.2} (target {:.2})",
+            r.error_history, r.reprojection_px, r.worst_edge_change, r.target_worst_edge_change
+        );
+        // Fitting a few points still moves the whole face towards the performance.
+        let first = r.error_history[0].1;
+        assert!(
+            r.mean_error_mm < 0.7 * first,
+            "{mode:?} {constrain:?}: {:?}",
+            r.error_history
+        );
+        assert!(r.reprojection_px.is_finite() && r.reprojection_px < 10.0);
+        // No broken shapes: no edge stretches further than the performance's own do.
+        // No broken shapes: edges stretch about as far as the performance's own do.
+        assert!(
+            r.worst_edge_change < 1.25 * r.target_worst_edge_change,
+            "{mode:?} {constrain:?}: edges {} against {}",
+            r.worst_edge_change,
+            r.target_worst_edge_change
+        );
+    }
 }
