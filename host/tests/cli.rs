@@ -51,7 +51,7 @@ fn demo_then_every_command_on_its_outputs() {
     ] {
         assert!(report.get(key).is_some(), "report lacks {key}");
     }
-    assert_eq!(report["shapes"], 7);
+    assert_eq!(report["shapes"], 20);
     assert_eq!(report["iterations"], 20);
     for f in [
         "actor.sinew",

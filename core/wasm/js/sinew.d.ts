@@ -42,6 +42,8 @@ export class Model {
   landmarkVertices(): Uint32Array;
   /** `[vertexCount * 3]` an AIM actor's neutral skin, an S2D decoder's template. */
   neutral(): Float32Array;
+  /** AIM: `[vertexCount]` the soft-tissue thickness at each vertex, in the actor's unit. */
+  thickness(): Float32Array;
   /**
    * AIM: `[vertexCount * 3]` posed positions. `head`, `jaw`: 9 values each (6D rotation, then
    * translation; the jaw about the actor's pivot); `coefficients`: `[shapeCount]`.

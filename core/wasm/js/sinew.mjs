@@ -201,6 +201,10 @@ export class Model extends Handle {
   neutral() {
     return takeF32(exports().sinew_array(this._h, 2));
   }
+  /** An AIM actor's soft-tissue thickness at each vertex, in the actor's unit. */
+  thickness() {
+    return takeF32(exports().sinew_array(this._h, 4));
+  }
 
   /** Poses an AIM actor: head and jaw as 9 values (6D rotation, translation), the coefficients. */
   pose(head, jaw, coefficients) {

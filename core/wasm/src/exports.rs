@@ -267,6 +267,9 @@ pub const ARRAY_NEUTRAL: u32 = 2;
 /// `which` of [`sinew_array`]: an S2D replay's neutral (`f32`).
 pub const ARRAY_REPLAY_NEUTRAL: u32 = 3;
 
+/// `which` of [`sinew_array`]: an AIM actor's soft-tissue thickness per vertex (`f32`).
+pub const ARRAY_THICKNESS: u32 = 4;
+
 /// Puts one of the object's arrays (`ARRAY_*`) in the I/O area.
 // Safety: exported under its own name; no other symbol in the module is called so.
 #[allow(unsafe_code)]
@@ -276,6 +279,7 @@ pub extern "C" fn sinew_array(handle: i32, which: u32) -> i32 {
         ARRAY_TRIANGLES => with_model(handle, |m| Ok(u32_bytes(&m.triangles()))),
         ARRAY_LANDMARKS => with_model(handle, |m| Ok(u32_bytes(&m.landmark_vertices()))),
         ARRAY_NEUTRAL => with_model(handle, |m| Ok(f32_bytes(&m.neutral()))),
+        ARRAY_THICKNESS => with_model(handle, |m| Ok(f32_bytes(&m.thickness()?))),
         ARRAY_REPLAY_NEUTRAL => with_replay(handle, |r| {
             r.neutral()
                 .map(|n| f32_bytes(&n))

@@ -287,6 +287,11 @@ impl Model {
         }
     }
 
+    /// An AIM actor's cached soft-tissue thickness d0 at each vertex, `[V]`, in the actor's unit.
+    pub fn thickness(&self) -> Result<Vec<f32>, Error> {
+        Ok(self.aim("thickness")?.thickness().iter().collect())
+    }
+
     fn aim(&self, call: &str) -> Result<&AimActor<'_>, Error> {
         match &self.inner {
             ModelInner::Aim(c) => Ok(c.borrow_dependent()),

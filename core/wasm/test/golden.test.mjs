@@ -87,10 +87,19 @@ test("model sizes and arrays match the files' headers in the hash lists", () => 
   assert.equal(rest.length, neutral.length);
   const worst = rest.reduce((m, x, i) => Math.max(m, Math.abs(x - neutral[i])), 0);
   assert.ok(worst < 1e-5, `identity pose moved a vertex by ${worst} cm`);
+  // The thickness: one value per vertex, under 3 cm (the constraints' deepest is 2.5 cm), a few
+  // millimetres below zero at worst (this actor was trained with the paper's unbounded
+  // thickness), and about a centimetre on average.
+  const thickness = aim.thickness();
+  assert.equal(thickness.length, aim.vertexCount);
+  assert.ok(thickness.every((d) => d > -0.5 && d < 3), "thickness out of (-0.5, 3) cm");
+  const mean = thickness.reduce((a, d) => a + d, 0) / thickness.length;
+  assert.ok(mean > 0.3 && mean < 1.5, `mean thickness ${mean} cm`);
   const s2d = Model.load(data("s2d-ict.sinew"));
   assert.match(data("s2d-ict.hashes").toString(), new RegExp(`^# s2d-ict.sinew: ${s2d.vertexCount} vertices, ${s2d.inputLength} inputs`));
   assert.equal(s2d.landmarkCount * 3, s2d.inputLength);
   assert.equal(s2d.triangleCount, 0);
+  assert.throws(() => s2d.thickness(), /thickness needs/);
   assert.equal(s2d.landmarkVertices().length, s2d.landmarkCount);
   assert.ok(s2d.landmarkVertices().every((i) => i < s2d.vertexCount));
 });

@@ -265,7 +265,7 @@ impl AimConfig {
             batch: 2048,
             symmetry_batch: 256,
             forehead_batch: 256,
-            iterations: 1500,
+            iterations: 3000,
             lr: 1e-3,
             lr_end: 1e-4,
             anneal_fraction: 0.0,

@@ -1,5 +1,5 @@
-//! `sinew demo`: the built-in actor trained, baked, measured, played back and pictured, with no
-//! data files.
+//! `sinew demo`: the built-in face (the ICT-FaceKit face region, [`super::demo_face`]) trained,
+//! baked, measured, played back and pictured, with no data files.
 
 use std::path::Path;
 
@@ -8,28 +8,26 @@ use sinew_core::aim::AimActor;
 
 use crate::aim::AimConfig;
 use crate::aim::commands::train_aim;
-use crate::aim::data::training_set;
 use crate::aim::play::play;
 use crate::aim::run::{Outputs, Report};
+use crate::figures::render::{Image, View, render};
 use crate::io::mesh::Mesh;
 use crate::training::backend::Backend;
 
-/// `sinew demo`: the procedural actor, trained small with `config` (normally
-/// [`AimConfig::demo`]), baked, measured, played back and pictured.
+/// Skin colour of the playback pictures.
+const SKIN: [u8; 3] = [226, 190, 168];
+
+/// Frames of the playback sequence shown in `playback.png`: rest, jaw half open, jaw open with a
+/// smile, and the smile fading.
+const STRIP_FRAMES: [usize; 4] = [0, 8, 16, 20];
+
+/// `sinew demo`: the built-in face, trained small with `config` (normally [`AimConfig::demo`]),
+/// baked, measured, played back and pictured.
 pub fn demo(out: &Path, config: &AimConfig, quiet: bool) -> Result<Report> {
-    let (actor, bones) = crate::aim::procedural::actor(crate::aim::procedural::DEFAULT_RESOLUTION);
     config.validate()?;
-    let set = training_set(
-        &actor,
-        &bones.skull,
-        &bones.jaw,
-        Some(bones.jaw_pivot),
-        config.max_constraint_depth,
-    )?;
+    let set = crate::aim::demo_face::builtin()?;
     std::fs::create_dir_all(out)
         .with_context(|| format!("{}: cannot create folder", out.display()))?;
-    bones.skull.write(&out.join("bone_skull.obj"))?;
-    bones.jaw.write(&out.join("bone_jaw.obj"))?;
     let model = out.join("actor.sinew");
     let outputs = Outputs {
         model: model.clone(),
@@ -55,7 +53,7 @@ pub fn demo(out: &Path, config: &AimConfig, quiet: bool) -> Result<Report> {
                     *v += t * (poses[i][j] - crate::aim::model::IDENTITY_9D[j]);
                 }
             }
-            for name in ["smile_L", "smile_R"] {
+            for name in ["mouthSmile_L", "mouthSmile_R"] {
                 if let Some(i) = index(name) {
                     w[i - 1] = if f >= 12 { t } else { 0.0 };
                 }
@@ -71,24 +69,29 @@ pub fn demo(out: &Path, config: &AimConfig, quiet: bool) -> Result<Report> {
     let play_dir = out.join("play");
     play(&model, &poses_path, &play_dir, Some(&set.template))?;
     let tri = set.template.triangles();
-    let view = crate::figures::render::View {
-        yaw_deg: 25.0,
-        pitch_deg: 0.0,
-        width: 320,
-        height: 320,
-    };
-    let strip: Vec<crate::figures::render::Image> = [0, 8, 16, 20]
+    let frames: Vec<Mesh> = STRIP_FRAMES
         .iter()
-        .map(|f| {
-            let m = Mesh::read(&play_dir.join(format!("frame_{f:05}.obj")))?;
-            Ok(crate::figures::render::render(
-                &m.positions,
-                &tri,
-                &[],
-                &view,
-            ))
-        })
+        .map(|f| Ok(Mesh::read(&play_dir.join(format!("frame_{f:05}.obj")))?))
         .collect::<Result<_>>()?;
-    crate::figures::render::Image::hstack(&strip).write_png(&out.join("playback.png"))?;
+    let colors = vec![SKIN; set.vertices()];
+    // One row from the front, one from three-quarters.
+    let rows: Vec<Image> = crate::aim::run::VIEWS
+        .iter()
+        .map(|&(yaw_deg, _)| {
+            let view = View {
+                yaw_deg,
+                pitch_deg: 0.0,
+                width: 320,
+                height: 320,
+            };
+            Image::hstack(
+                &frames
+                    .iter()
+                    .map(|m| render(&m.positions, &tri, &colors, &view))
+                    .collect::<Vec<_>>(),
+            )
+        })
+        .collect();
+    Image::vstack(&rows).write_png(&out.join("playback.png"))?;
     Ok(report)
 }

@@ -8,6 +8,7 @@ pub mod commands;
 pub mod config;
 pub mod data;
 pub mod demo;
+pub mod demo_face;
 pub mod edit;
 pub mod eval;
 pub mod model;

@@ -179,20 +179,19 @@ pub fn evaluate(
     })
 }
 
-/// The pictures people look at: error heatmap (0–1 mm), anatomy surface with thickness, skinning
-/// weights; and OBJs of the skin and the anatomy surface.
+/// The views every figure shows, as (yaw in degrees, name): the front and a three-quarter view.
+pub const VIEWS: [(f32, &str); 2] = [(0.0, "front"), (-35.0, "three-quarter")];
+
+/// The pictures people look at, each from the front and from three-quarters: error heatmaps
+/// (0–1 mm) of the neutral and the worst expression (`error.png`), the anatomy surface coloured by
+/// thickness and the skin by skinning weight (`anatomy.png`); and OBJs of the skin and the
+/// anatomy surface.
 pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<()> {
     let actor = AimActor::from_bytes(bytes).map_err(|e| anyhow::anyhow!("model: {e}"))?;
     std::fs::create_dir_all(dir)
         .with_context(|| format!("{}: cannot create folder", dir.display()))?;
     let errors = shape_errors(&actor, &set.names, &set.shapes, set.mm_per_unit)?;
     let tri = set.template.triangles();
-    let view = View {
-        yaw_deg: 20.0,
-        pitch_deg: 0.0,
-        width: 640,
-        height: 640,
-    };
     let skin: Vec<[f32; 3]> = crate::io::mesh::points(actor.rest().iter());
     let worst = errors
         .per_shape
@@ -204,27 +203,38 @@ pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<()> {
     let poses = super::eval::training_poses(&actor)?;
     let posed = super::eval::pose_training_shape(&actor, &poses[worst], worst);
     let posed: Vec<[f32; 3]> = crate::io::mesh::points(posed.iter().copied());
-    let err_neutral = render_heatmap(
+    // Each figure from the front and from three-quarters, side by side.
+    let both = |positions: &[[f32; 3]], values: &[f32], hi: f32, label: &str, title: &str| {
+        let panels: Vec<Image> = VIEWS
+            .iter()
+            .map(|&(yaw_deg, side)| {
+                let view = View {
+                    yaw_deg,
+                    pitch_deg: 0.0,
+                    width: 480,
+                    height: 480,
+                };
+                let title = format!("{title}, {side}");
+                render_heatmap(positions, &tri, values, 0.0, hi, label, &title, &view)
+            })
+            .collect();
+        Image::hstack(&panels)
+    };
+    let neutral = both(
         &skin,
-        &tri,
         &errors.per_shape_vertex[0],
-        0.0,
         1.0,
         "error mm",
         "neutral: error",
-        &view,
     );
-    let err_worst = render_heatmap(
+    let worst_img = both(
         &posed,
-        &tri,
         &errors.per_shape_vertex[worst],
-        0.0,
         1.0,
         "error mm",
         &format!("{}: error", set.names[worst]),
-        &view,
     );
-    Image::hstack(&[err_neutral, err_worst]).write_png(&dir.join("error.png"))?;
+    Image::vstack(&[neutral, worst_img]).write_png(&dir.join("error.png"))?;
 
     let anatomy = anatomy_surface(bytes)?;
     let d_mm: Vec<f32> = actor
@@ -233,19 +243,36 @@ pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<()> {
         .map(|d| d * set.mm_per_unit)
         .collect();
     let hi = d_mm.iter().copied().fold(1.0f32, f32::max);
-    let thick = render_heatmap(
-        &anatomy,
-        &tri,
-        &d_mm,
-        0.0,
-        hi,
-        "thickness mm",
-        "learned anatomy",
-        &view,
-    );
+    // The anatomy is drawn where it is bone: see [`bone_triangles`].
+    let bone_tri = bone_triangles(&set.anchors, &skin, &anatomy, &tri);
+    let thick = {
+        let panels: Vec<Image> = VIEWS
+            .iter()
+            .map(|&(yaw_deg, side)| {
+                let view = View {
+                    yaw_deg,
+                    pitch_deg: 0.0,
+                    width: 480,
+                    height: 480,
+                };
+                let title = format!("learned anatomy under bone, {side}");
+                render_heatmap(
+                    &anatomy,
+                    &bone_tri,
+                    &d_mm,
+                    0.0,
+                    hi,
+                    "thickness mm",
+                    &title,
+                    &view,
+                )
+            })
+            .collect();
+        Image::hstack(&panels)
+    };
     let k: Vec<f32> = actor.skinning_weights().iter().collect();
-    let weights = render_heatmap(&skin, &tri, &k, 0.0, 1.0, "k", "jaw skinning weight", &view);
-    Image::hstack(&[thick, weights]).write_png(&dir.join("anatomy.png"))?;
+    let weights = both(&skin, &k, 1.0, "k (0-1)", "jaw skinning weight");
+    Image::vstack(&[thick, weights]).write_png(&dir.join("anatomy.png"))?;
     set.template
         .with_positions(skin)
         .write(&dir.join("skin.obj"))?;
@@ -253,6 +280,47 @@ pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<()> {
         .with_positions(anatomy)
         .write(&dir.join("anatomy.obj"))?;
     Ok(())
+}
+
+/// Largest ratio of a triangle edge's length on the anatomy surface to its length on the skin for
+/// [`bone_triangles`].
+pub const MAX_BONE_STRETCH: f32 = 3.0;
+
+/// The triangles of the anatomy figure: those whose three corners have a bone constraint and
+/// whose edges on the anatomy surface `bone` are at most [`MAX_BONE_STRETCH`] times as long as on
+/// the `skin`. The others are not a bone surface: where no bone lies within
+/// `max_constraint_depth` (nose cartilage, eyelids, lips, ears, the neck) only L_D acts and the
+/// learned thickness goes to zero, so b0 sits on the skin beside constrained neighbours up to
+/// 2.5 cm deeper; and neighbouring constraints whose rays reach different bones (the nasal bone
+/// and the maxilla behind the piriform aperture, the zygoma and the orbit floor) are joined by
+/// triangles across the gap. Drawn, both made the spikes of earlier anatomy pictures
+/// (docs/AIM.md, "The anatomy picture").
+pub fn bone_triangles(
+    anchors: &[Option<super::Anchor>],
+    skin: &[[f32; 3]],
+    bone: &[[f32; 3]],
+    triangles: &[[u32; 3]],
+) -> Vec<[u32; 3]> {
+    let dist = |p: &[[f32; 3]], a: usize, b: usize| -> Option<f32> {
+        let (a, b) = (p.get(a)?, p.get(b)?);
+        Some((0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f32>().sqrt())
+    };
+    triangles
+        .iter()
+        .copied()
+        .filter(|t| {
+            let v = t.map(|i| i as usize);
+            v.iter()
+                .all(|&i| anchors.get(i).is_some_and(Option::is_some))
+                && (0..3).all(|e| {
+                    let (a, b) = (v[e], v[(e + 1) % 3]);
+                    matches!(
+                        (dist(bone, a, b), dist(skin, a, b)),
+                        (Some(db), Some(ds)) if db <= MAX_BONE_STRETCH * ds
+                    )
+                })
+        })
+        .collect()
 }
 
 /// The learned anatomy surface b0 at the template vertices.
@@ -264,4 +332,44 @@ pub fn anatomy_surface(bytes: &[u8]) -> Result<Vec<[f32; 3]>> {
         .and_then(|s| s.f32s())
         .context("model has no cache.b0")?;
     Ok(crate::io::mesh::points(b.iter()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::anatomy::constraints::Bone;
+
+    #[test]
+    fn the_anatomy_figure_keeps_bone_and_drops_the_gaps() {
+        // Four skin vertices in a unit square over a bone 1 cm deep; vertex 3 has no constraint.
+        let skin = [
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [0.0, 1.0, 1.0],
+            [1.0, 1.0, 1.0],
+        ];
+        let anchor = |p: [f32; 3]| {
+            Some(super::super::Anchor {
+                bone: [p[0], p[1], 0.0],
+                thickness: 1.0,
+                normal: [0.0, 0.0, 1.0],
+                on: Bone::Skull,
+            })
+        };
+        let mut anchors: Vec<_> = skin.iter().map(|&p| anchor(p)).collect();
+        anchors[3] = None;
+        let tri = [[0, 1, 2], [1, 3, 2]];
+        let mut bone: Vec<[f32; 3]> = skin.iter().map(|p| [p[0], p[1], 0.0]).collect();
+        assert_eq!(
+            bone_triangles(&anchors, &skin, &bone, &tri),
+            vec![[0, 1, 2]]
+        );
+        // All constrained: both stay, until a bone point jumps 5 cm deeper than its neighbours.
+        anchors[3] = anchor(skin[3]);
+        assert_eq!(bone_triangles(&anchors, &skin, &bone, &tri).len(), 2);
+        bone[1][2] = -5.0;
+        assert!(bone_triangles(&anchors, &skin, &bone, &tri).is_empty());
+        // Indices beyond the vertices drop the triangle rather than panic.
+        assert!(bone_triangles(&anchors, &skin, &bone, &[[0, 2, 9]]).is_empty());
+    }
 }

@@ -25,8 +25,9 @@ pub(crate) struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// The built-in demo: train a small AIM on a procedural face, bake it, play it back through
-    /// sinew-core, and write the report, pictures and OBJs. Needs no data files.
+    /// The built-in demo: train a small AIM on the built-in face (the ICT-FaceKit face region,
+    /// decimated), bake it, play it back through sinew-core, and write the report, pictures and
+    /// OBJs. Needs no data files.
     Demo(aim::DemoArgs),
     /// Train a model.
     #[command(subcommand)]

@@ -51,6 +51,19 @@ pub(crate) enum Data {
     /// trajectories of all 53 expression weights, the jaw and the head; one OBJ per frame,
     /// performance.json with the ground truth, the camera and 68 projected landmarks.
     Performance(super::fit::PerformanceArgs),
+    /// The face `sinew demo` trains on: the ICT-FaceKit face region decimated to about 1,500
+    /// vertices with its 20 default shapes and the bone constraints AIM trains on, as compact
+    /// gzipped JSON (the repository's copy is host/data/demo-face.json.gz).
+    DemoFace {
+        /// ICT-FaceKit folder.
+        #[arg(long)]
+        data: PathBuf,
+        #[command(flatten)]
+        templates: super::bones::TemplatesArg,
+        /// Output file.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 #[derive(Debug, Subcommand)]
@@ -279,6 +292,20 @@ pub(crate) fn data(cmd: Data) -> Result<()> {
             );
         }
         Data::Performance(args) => super::fit::performance(args)?,
+        Data::DemoFace {
+            data,
+            templates,
+            out,
+        } => {
+            let set = sinew_host::aim::demo_face::write(&data, &templates.path, &out)?;
+            println!(
+                "{}: {} vertices, {} shapes, {:.0} % of the vertices constrained",
+                out.display(),
+                set.vertices(),
+                set.shapes.len(),
+                100.0 * set.constrained_fraction()
+            );
+        }
     }
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! Pictures of faces: an RGB image type with PNG output and a tiny bitmap font, and a small,
-//! deterministic software rasteriser (orthographic camera, z-buffer, flat Lambert shading) for
-//! meshes coloured per vertex, with a heat-map colour scale and colour bar for error figures.
+//! deterministic software rasteriser (orthographic camera, z-buffer, Lambert shading smoothed by
+//! per-vertex normals, 3×3 supersampling) for meshes coloured per vertex, with a heat-map colour
+//! scale and colour bar for error figures.
 //!
 //! Everything here is plain `f32` arithmetic in a fixed order with no threads, so the same input
 //! gives the same bytes on every run of the same build.
@@ -157,6 +158,51 @@ impl Image {
         out
     }
 
+    /// The pictures one above the other, left-aligned, on [`BACKGROUND`].
+    pub fn vstack(images: &[Image]) -> Image {
+        let width = images.iter().map(|i| i.width).max().unwrap_or(0);
+        let height = images.iter().map(|i| i.height).sum();
+        let mut out = Image::new(width, height, BACKGROUND);
+        let mut y = 0i64;
+        for im in images {
+            out.blit(im, 0, y);
+            y += i64::from(im.height);
+        }
+        out
+    }
+
+    /// The picture shrunk by `factor` in each direction, each pixel the mean of the `factor` ×
+    /// `factor` block it covers (a box filter, rounded to nearest); a partial block at the right or
+    /// bottom edge is dropped. A factor of 0 or 1 returns the picture unchanged.
+    pub fn downsample(&self, factor: u32) -> Image {
+        if factor <= 1 {
+            return self.clone();
+        }
+        let (w, h) = (self.width / factor, self.height / factor);
+        let mut out = Image::new(w, h, BACKGROUND);
+        let n = factor * factor;
+        for y in 0..h {
+            for x in 0..w {
+                let mut sum = [0u32; 3];
+                for dy in 0..factor {
+                    let row = (y * factor + dy) as usize * self.width as usize;
+                    for dx in 0..factor {
+                        let i = (row + (x * factor + dx) as usize) * 3;
+                        for (s, &v) in sum.iter_mut().zip(&self.rgb[i..i + 3]) {
+                            *s += u32::from(v);
+                        }
+                    }
+                }
+                out.set(
+                    i64::from(x),
+                    i64::from(y),
+                    sum.map(|v| ((v + n / 2) / n) as u8),
+                );
+            }
+        }
+        out
+    }
+
     /// Writes the picture as an 8-bit RGB PNG, atomically (temporary file, then rename).
     pub fn write_png(&self, path: &Path) -> Result<()> {
         let expected = self.width as usize * self.height as usize * 3;
@@ -222,99 +268,10 @@ pub fn text_scale(width: u32, height: u32) -> u32 {
     (width.min(height) / 600 + 1).max(1)
 }
 
-/// The built-in font: each glyph is up to 8 rows of 5 columns (`#` = ink), rows separated by
-/// spaces. Rows 0–6 hold capitals and digits; row 7 is for descenders. Hand-drawn, so it is
-/// checked for shape and coverage by a test.
-const FONT: &[(char, &str)] = &[
-    (' ', ""),
-    ('0', ".###. #...# #..## #.#.# ##..# #...# .###."),
-    ('1', "..#.. .##.. ..#.. ..#.. ..#.. ..#.. .###."),
-    ('2', ".###. #...# ....# ...#. ..#.. .#... #####"),
-    ('3', "##### ...#. ..#.. ...#. ....# #...# .###."),
-    ('4', "...#. ..##. .#.#. #..#. ##### ...#. ...#."),
-    ('5', "##### #.... ####. ....# ....# #...# .###."),
-    ('6', "..##. .#... #.... ####. #...# #...# .###."),
-    ('7', "##### ....# ...#. ..#.. .#... .#... .#..."),
-    ('8', ".###. #...# #...# .###. #...# #...# .###."),
-    ('9', ".###. #...# #...# .#### ....# ...#. .##.."),
-    ('A', ".###. #...# #...# ##### #...# #...# #...#"),
-    ('B', "####. #...# #...# ####. #...# #...# ####."),
-    ('C', ".###. #...# #.... #.... #.... #...# .###."),
-    ('D', "###.. #..#. #...# #...# #...# #..#. ###.."),
-    ('E', "##### #.... #.... ####. #.... #.... #####"),
-    ('F', "##### #.... #.... ####. #.... #.... #...."),
-    ('G', ".###. #...# #.... #.### #...# #...# .####"),
-    ('H', "#...# #...# #...# ##### #...# #...# #...#"),
-    ('I', ".###. ..#.. ..#.. ..#.. ..#.. ..#.. .###."),
-    ('J', "..### ...#. ...#. ...#. ...#. #..#. .##.."),
-    ('K', "#...# #..#. #.#.. ##... #.#.. #..#. #...#"),
-    ('L', "#.... #.... #.... #.... #.... #.... #####"),
-    ('M', "#...# ##.## #.#.# #.#.# #...# #...# #...#"),
-    ('N', "#...# #...# ##..# #.#.# #..## #...# #...#"),
-    ('O', ".###. #...# #...# #...# #...# #...# .###."),
-    ('P', "####. #...# #...# ####. #.... #.... #...."),
-    ('Q', ".###. #...# #...# #...# #.#.# #..#. .##.#"),
-    ('R', "####. #...# #...# ####. #.#.. #..#. #...#"),
-    ('S', ".#### #.... #.... .###. ....# ....# ####."),
-    ('T', "##### ..#.. ..#.. ..#.. ..#.. ..#.. ..#.."),
-    ('U', "#...# #...# #...# #...# #...# #...# .###."),
-    ('V', "#...# #...# #...# #...# #...# .#.#. ..#.."),
-    ('W', "#...# #...# #...# #.#.# #.#.# #.#.# .#.#."),
-    ('X', "#...# #...# .#.#. ..#.. .#.#. #...# #...#"),
-    ('Y', "#...# #...# .#.#. ..#.. ..#.. ..#.. ..#.."),
-    ('Z', "##### ....# ...#. ..#.. .#... #.... #####"),
-    ('a', "..... ..... .###. ....# .#### #...# .####"),
-    ('b', "#.... #.... #.##. ##..# #...# #...# ####."),
-    ('c', "..... ..... .###. #.... #.... #...# .###."),
-    ('d', "....# ....# .##.# #..## #...# #...# .####"),
-    ('e', "..... ..... .###. #...# ##### #.... .###."),
-    ('f', "..##. .#..# .#... ###.. .#... .#... .#..."),
-    ('g', "..... ..... .#### #...# #...# .#### ....# .###."),
-    ('h', "#.... #.... #.##. ##..# #...# #...# #...#"),
-    ('i', "..#.. ..... .##.. ..#.. ..#.. ..#.. .###."),
-    ('j', "...#. ..... ..##. ...#. ...#. ...#. #..#. .##.."),
-    ('k', "#.... #.... #..#. #.#.. ##... #.#.. #..#."),
-    ('l', ".##.. ..#.. ..#.. ..#.. ..#.. ..#.. .###."),
-    ('m', "..... ..... ##.#. #.#.# #.#.# #.#.# #.#.#"),
-    ('n', "..... ..... #.##. ##..# #...# #...# #...#"),
-    ('o', "..... ..... .###. #...# #...# #...# .###."),
-    ('p', "..... ..... ####. #...# #...# ####. #.... #...."),
-    ('q', "..... ..... .#### #...# #...# .#### ....# ....#"),
-    ('r', "..... ..... #.##. ##..# #.... #.... #...."),
-    ('s', "..... ..... .###. #.... .###. ....# ####."),
-    ('t', ".#... .#... ###.. .#... .#... .#..# ..##."),
-    ('u', "..... ..... #...# #...# #...# #..## .##.#"),
-    ('v', "..... ..... #...# #...# #...# .#.#. ..#.."),
-    ('w', "..... ..... #...# #...# #.#.# #.#.# .#.#."),
-    ('x', "..... ..... #...# .#.#. ..#.. .#.#. #...#"),
-    ('y', "..... ..... #...# #...# #...# .#### ....# .###."),
-    ('z', "..... ..... ##### ...#. ..#.. .#... #####"),
-    ('.', "..... ..... ..... ..... ..... .##.. .##.."),
-    (',', "..... ..... ..... ..... ..... .##.. ..#.. .#..."),
-    ('-', "..... ..... ..... ##### ..... ..... ....."),
-    ('+', "..... ..#.. ..#.. ##### ..#.. ..#.. ....."),
-    ('=', "..... ..... ##### ..... ##### ..... ....."),
-    ('_', "..... ..... ..... ..... ..... ..... #####"),
-    (':', "..... .##.. .##.. ..... .##.. .##.. ....."),
-    ('/', "....# ....# ...#. ..#.. .#... #.... #...."),
-    ('%', "##... ##..# ...#. ..#.. .#... #..## ...##"),
-    ('(', "...#. ..#.. .#... .#... .#... ..#.. ...#."),
-    (')', ".#... ..#.. ...#. ...#. ...#. ..#.. .#..."),
-    ('[', ".###. .#... .#... .#... .#... .#... .###."),
-    (']', ".###. ...#. ...#. ...#. ...#. ...#. .###."),
-    ('<', "...#. ..#.. .#... #.... .#... ..#.. ...#."),
-    ('>', ".#... ..#.. ...#. ....# ...#. ..#.. .#..."),
-    ('*', "..... ..#.. #.#.# .###. #.#.# ..#.. ....."),
-    ('\'', "..#.. ..#.. .#..."),
-    ('|', "..#.. ..#.. ..#.. ..#.. ..#.. ..#.. ..#.."),
-    ('°', ".##.. #..#. #..#. .##.."),
-    ('?', ".###. #...# ....# ...#. ..#.. ..... ..#.."),
-];
-
-fn glyph(ch: char) -> &'static str {
-    let find = |c: char| FONT.iter().find(|(k, _)| *k == c).map(|(_, g)| *g);
-    find(ch).or_else(|| find('?')).unwrap_or("")
-}
+mod font;
+#[cfg(test)]
+use font::FONT;
+use font::glyph;
 
 /// An orthographic camera. The mesh is turned by `yaw_deg` about the y axis (positive turns its
 /// +z side toward +x, the right of the picture), then by `pitch_deg` about the x axis (positive
@@ -355,16 +312,75 @@ const AMBIENT: f32 = 0.4;
 /// yet far enough off-axis to show the shape.
 const LIGHT: [f32; 3] = [-0.268_328_16, 0.357_770_9, 0.894_427_2];
 
+/// Supersampling factor of [`render`]: every picture is drawn at 3 × 3 times its size and
+/// box-filtered down, so edges and silhouettes are anti-aliased.
+pub const SUPERSAMPLE: u32 = 3;
+
 /// Rasterises the mesh as seen by `view`: vertices turned and fitted as [`View`] describes,
-/// triangles filled where pixel centres fall inside them (z-buffered, the nearer surface wins; on
-/// exact ties the earlier triangle stays), colours interpolated barycentrically from the
-/// per-vertex `colors`, then shaded by `AMBIENT + (1 − AMBIENT)·|n·l|` with the triangle's own
-/// normal `n` (two-sided, so open meshes and inward-wound faces light the same).
+/// triangles filled where sample centres fall inside them (z-buffered, the nearer surface wins;
+/// on exact ties the earlier triangle stays), colours interpolated barycentrically from the
+/// per-vertex `colors`, then shaded by `AMBIENT + (1 − AMBIENT)·|n·l|` with `n` the
+/// barycentric blend of the vertex normals (area-weighted triangle normals around each vertex;
+/// two-sided, so open meshes and inward-wound faces light the same): smooth shading, no facets.
+/// Drawn at [`SUPERSAMPLE`] times the size in each direction and box-filtered down
+/// ([`Image::downsample`]).
 ///
 /// Bad input never panics: triangles with an out-of-range index or a non-finite corner, and
 /// degenerate (zero-area) ones, are skipped; vertices beyond `colors` are drawn light grey; the
 /// fit uses only finite vertices. An empty mesh gives a plain [`BACKGROUND`] picture.
 pub fn render(
+    positions: &[[f32; 3]],
+    triangles: &[[u32; 3]],
+    colors: &[[u8; 3]],
+    view: &View,
+) -> Image {
+    let (Some(width), Some(height)) = (
+        view.width.checked_mul(SUPERSAMPLE),
+        view.height.checked_mul(SUPERSAMPLE),
+    ) else {
+        return Image::new(view.width, view.height, BACKGROUND);
+    };
+    let big = View {
+        width,
+        height,
+        ..*view
+    };
+    rasterise(positions, triangles, colors, &big).downsample(SUPERSAMPLE)
+}
+
+/// Area-weighted vertex normals of the drawable triangles (unit length, or zero for a vertex in
+/// none of them): each triangle adds its unnormalised normal to its corners.
+fn vertex_normals(turned: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<[f32; 3]> {
+    let mut normals = vec![[0.0f32; 3]; turned.len()];
+    for tri in triangles {
+        let idx = tri.map(|i| i as usize);
+        if idx.iter().any(|&i| i >= turned.len()) {
+            continue;
+        }
+        let (a, b, c) = (turned[idx[0]], turned[idx[1]], turned[idx[2]]);
+        let n = cross(sub(b, a), sub(c, a));
+        if !n.iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        for &i in &idx {
+            for k in 0..3 {
+                normals[i][k] += n[k];
+            }
+        }
+    }
+    for n in &mut normals {
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        *n = if len > 0.0 && len.is_finite() {
+            n.map(|v| v / len)
+        } else {
+            [0.0; 3]
+        };
+    }
+    normals
+}
+
+/// [`render`] without the supersampling: one sample at each pixel centre.
+fn rasterise(
     positions: &[[f32; 3]],
     triangles: &[[u32; 3]],
     colors: &[[u8; 3]],
@@ -418,6 +434,7 @@ pub fn render(
         })
         .collect();
 
+    let normals = vertex_normals(&turned, triangles);
     let mut depth = vec![f32::NEG_INFINITY; view.width as usize * view.height as usize];
     let vcolor = |i: usize| -> [f32; 3] {
         let c = colors.get(i).copied().unwrap_or(DEFAULT_COLOR);
@@ -448,16 +465,10 @@ pub fn render(
         };
         let area = area.abs();
 
-        // Flat shading from the turned (view-space) triangle normal; |n·l| makes it two-sided.
+        // The triangle's own (view-space) normal stands in where the vertex normals cancel out.
         let (ta, tb, tc) = (turned[idx[0]], turned[idx[1]], turned[idx[2]]);
-        let n = cross(sub(tb, ta), sub(tc, ta));
-        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-        let lambert = if len > 0.0 && len.is_finite() {
-            ((n[0] * LIGHT[0] + n[1] * LIGHT[1] + n[2] * LIGHT[2]) / len).abs()
-        } else {
-            1.0
-        };
-        let shade = AMBIENT + (1.0 - AMBIENT) * lambert;
+        let face = cross(sub(tb, ta), sub(tc, ta));
+        let (na, nb, nc) = (normals[idx[0]], normals[ib], normals[ic]);
         let (ca, cb, cc) = (vcolor(idx[0]), vcolor(ib), vcolor(ic));
 
         let x0 = (a[0].min(b[0]).min(c[0]).floor() as i64).max(0);
@@ -481,6 +492,23 @@ pub fn render(
                     continue;
                 }
                 depth[di] = z;
+                // Smooth shading: the vertex normals blended like the colours; |n·l| makes it
+                // two-sided.
+                let mut n = [0.0f32; 3];
+                for k in 0..3 {
+                    n[k] = la * na[k] + lb * nb[k] + lc * nc[k];
+                }
+                let mut len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                if !(len > 1e-6 && len.is_finite()) {
+                    n = face;
+                    len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                }
+                let lambert = if len > 0.0 && len.is_finite() {
+                    ((n[0] * LIGHT[0] + n[1] * LIGHT[1] + n[2] * LIGHT[2]) / len).abs()
+                } else {
+                    1.0
+                };
+                let shade = AMBIENT + (1.0 - AMBIENT) * lambert;
                 let mut rgb = [0u8; 3];
                 for k in 0..3 {
                     let v = (la * ca[k] + lb * cb[k] + lc * cc[k]) * shade;

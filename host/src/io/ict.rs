@@ -45,7 +45,7 @@ pub const DEFAULT_SHAPES: [&str; 19] = [
 ];
 
 /// Attribution carried into every ICT actor's provenance text.
-const ICT_ATTRIBUTION: &str = "ICT-FaceKit Light face model (github ICT-VGL/ICT-FaceKit), \
+pub const ICT_ATTRIBUTION: &str = "ICT-FaceKit Light face model (github ICT-VGL/ICT-FaceKit), \
      Copyright (c) 2020 USC Institute for Creative Technologies, MIT licence";
 
 /// An actor: a template mesh and its blendshapes, one set of vertices shared by all.

@@ -211,6 +211,28 @@ try {
   }
   const share = face / (canvasPng.width * canvasPng.height);
   check(share >= 0.1, `the face covers ${(100 * share).toFixed(1)} % of the canvas (at least 10 %)`);
+
+  // The thickness heatmap: the toggle recolours the face from the skin to the heat-map scale
+  // (blue where the tissue is thin), shows its range in mm, and back again restores the skin.
+  await page.check("#thickness");
+  await nextPaint();
+  const heat = await canvas.screenshot();
+  check(!heat.equals(turned), "the thickness toggle recolours the face");
+  const heatPng = PNG.sync.read(heat);
+  let blue = 0;
+  for (let i = 0; i < heatPng.data.length; i += 4) {
+    const [r, g, b] = [heatPng.data[i], heatPng.data[i + 1], heatPng.data[i + 2]];
+    if (b > r + 40 && b > 60) blue++;
+  }
+  check(blue / (heatPng.width * heatPng.height) > 0.02, `the heatmap is blue where thin (${blue} pixels)`);
+  const range = await page.locator("#thickness-range").textContent();
+  check(
+    (await page.locator("#thickness-scale").isVisible()) && /^0 – \d+\.\d mm$/.test(range),
+    `the heatmap's range is shown in mm (${range})`,
+  );
+  await page.uncheck("#thickness");
+  await nextPaint();
+  check((await canvas.screenshot()).equals(turned), "turning it off restores the skin");
   writeFileSync(screenshotPath, await page.screenshot());
   console.log(`e2e: screenshot ${screenshotPath}`);
   check(errors.length === 0, `no errors in the page${errors.length ? `: ${errors.join("; ")}` : ""}`);

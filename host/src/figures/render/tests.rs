@@ -314,3 +314,70 @@ fn hstack_and_colorbar() {
     assert_eq!(format_value(0.0123), "0.0123");
     assert_eq!(format_value(1e5), "1e5");
 }
+
+#[test]
+fn a_coarse_sphere_shades_smoothly() {
+    // 12 × 24 facets: flat shading would step by tens of levels from facet to facet.
+    let (pos, tri) = uv_sphere(12, 24);
+    let img = render(&pos, &tri, &[[200, 200, 200]; 300], &View::front(200, 200));
+    let lum = |x: i64, y: i64| {
+        let p = img.get(x, y).unwrap();
+        p.iter().map(|&v| i32::from(v)).sum::<i32>()
+    };
+    // Inside the disc (radius 90 px about the centre), away from the silhouette: neighbouring
+    // pixels differ by a few levels at most.
+    let mut worst = 0;
+    for y in 30..170 {
+        for x in 30..169 {
+            let r = |x: i64| ((x as f64 - 100.0).powi(2) + (y as f64 - 100.0).powi(2)).sqrt();
+            if r(x) < 75.0 && r(x + 1) < 75.0 {
+                worst = worst.max((lum(x, y) - lum(x + 1, y)).abs());
+            }
+        }
+    }
+    assert!(
+        worst <= 9,
+        "neighbouring pixels differ by {worst} (sum of RGB)"
+    );
+}
+
+#[test]
+fn edges_are_anti_aliased() {
+    let pos = [[-1.0, -1.0, 0.0], [1.0, -0.9, 0.0], [0.2, 1.0, 0.0]];
+    let red = [255, 0, 0];
+    let img = render(&pos, &[[0, 1, 2]], &[red; 3], &View::front(64, 64));
+    // Facing the light's direction only partly, the inside is one shade of red; pixels the edges
+    // cross mix it with the background, and only those.
+    let inside = img.get(32, 40).unwrap();
+    let mixed: Vec<[u8; 3]> = img
+        .rgb
+        .chunks(3)
+        .map(|p| [p[0], p[1], p[2]])
+        .filter(|&p| p != inside && p != BACKGROUND)
+        .collect();
+    assert!(mixed.len() > 40, "{} edge pixels", mixed.len());
+    // Mixtures of red and the grey background: green and blue equal, red between the two.
+    assert!(mixed.iter().all(|p| p[1] == p[2] && p[1] < BACKGROUND[1]));
+    let total = count_non_bg(&img);
+    assert!(mixed.len() * 4 < total, "{} of {total}", mixed.len());
+}
+
+#[test]
+fn downsample_averages_blocks_and_vstack_stacks() {
+    let mut img = Image::new(4, 2, [0, 0, 0]);
+    img.set(0, 0, [255, 255, 255]);
+    img.set(1, 1, [100, 0, 4]);
+    img.set(3, 0, [7, 8, 9]);
+    let d = img.downsample(2);
+    assert_eq!((d.width, d.height), (2, 1));
+    // (255 + 100) / 4 = 88.75, (255 + 0) / 4 = 63.75, (255 + 4) / 4 = 64.75: rounded.
+    assert_eq!(d.get(0, 0), Some([89, 64, 65]));
+    assert_eq!(d.get(1, 0), Some([2, 2, 2]));
+    assert_eq!(img.downsample(1), img);
+
+    let v = Image::vstack(&[Image::new(3, 1, [1, 1, 1]), Image::new(2, 2, [2, 2, 2])]);
+    assert_eq!((v.width, v.height), (3, 3));
+    assert_eq!(v.get(2, 0), Some([1, 1, 1]));
+    assert_eq!(v.get(1, 2), Some([2, 2, 2]));
+    assert_eq!(v.get(2, 2), Some(BACKGROUND));
+}

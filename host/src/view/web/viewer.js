@@ -17,6 +17,42 @@ const FPS = 30;
 const IDENTITY_9D = [1, 0, 0, 0, 1, 0, 0, 0, 0];
 /** How many recent per-frame times the mean shown is over. */
 const TIME_WINDOW = 30;
+/** The skin's colour (linear RGB). */
+const SKIN = [0.82, 0.66, 0.58];
+/** Heat-map stops (position, sRGB 0–255), low to high, as the host's figures draw them. */
+const RAMP = [
+  [0.0, [15, 25, 110]],
+  [0.2, [30, 90, 220]],
+  [0.45, [20, 210, 230]],
+  [0.72, [250, 225, 40]],
+  [1.0, [205, 20, 20]],
+];
+/** Millimetres per unit of the `units` metadata. */
+const MM = { mm: 1, cm: 10, m: 1000 };
+
+/** The heat-map colour at t in [0, 1] (clamped), in linear RGB for the shader. */
+function ramp(t) {
+  t = Math.min(1, Math.max(0, t));
+  let i = 0;
+  while (i + 2 < RAMP.length && t > RAMP[i + 1][0]) i++;
+  const [[t0, c0], [t1, c1]] = [RAMP[i], RAMP[i + 1]];
+  const f = (t - t0) / (t1 - t0);
+  return c0.map((c, k) => Math.pow((c + (c1[k] - c) * f) / 255, 2.2));
+}
+
+/**
+ * Per-vertex colours: the skin, or the actor's soft-tissue thickness d0 (from the core) on the
+ * heat-map scale from 0 to its largest value, with that range in mm.
+ */
+function thicknessColours(model) {
+  const d = model.thickness();
+  const mm = MM[model.metadata.units] ?? 1;
+  const hi = d.reduce((m, x) => Math.max(m, x), 0) * mm || 1;
+  const colours = new Float32Array(d.length * 3);
+  d.forEach((x, v) => colours.set(ramp((x * mm) / hi), v * 3));
+  const unit = model.metadata.units in MM ? "mm" : model.metadata.units ?? "units";
+  return { colours, label: `0 – ${hi.toFixed(1)} ${unit}` };
+}
 
 async function bytes(url) {
   const response = await fetch(url);
@@ -60,6 +96,17 @@ async function main() {
   }
 
   const view = new FaceView($("face"), model);
+  const skin = new Float32Array(model.vertexCount * 3);
+  for (let v = 0; v < model.vertexCount; v++) skin.set(SKIN, v * 3);
+  const heat = thicknessColours(model);
+  const toggle = $("thickness");
+  const showThickness = () => {
+    view.setColours(toggle.checked ? heat.colours : skin);
+    $("thickness-scale").hidden = !toggle.checked;
+    $("thickness-range").textContent = heat.label;
+  };
+  toggle.addEventListener("change", showThickness);
+  showThickness();
   const rig = new Rig(model.shapeCount, () => show(rig.pose(), null));
   const times = [];
   /** Hashes of the frames played, by source and frame index. */
@@ -123,6 +170,8 @@ async function main() {
     /** Milliseconds of pose + normals, for every frame computed since the page loaded. */
     frameTimes: () => times.slice(),
     playing: () => player.playing,
+    /** The thickness heatmap's range as shown, e.g. "0 – 28.6 mm". */
+    thicknessRange: () => heat.label,
   };
 }
 
@@ -249,11 +298,14 @@ class Rig {
 const VERTEX_SHADER = `#version 300 es
 in vec3 position;
 in vec3 normal;
+in vec3 tint;
 uniform mat4 viewProjection;
 uniform mat4 view;
 out vec3 viewNormal;
 out vec3 viewPosition;
+out vec3 albedo;
 void main() {
+  albedo = tint;
   vec4 p = view * vec4(position, 1.0);
   viewPosition = p.xyz;
   viewNormal = mat3(view) * normal;
@@ -264,8 +316,8 @@ const FRAGMENT_SHADER = `#version 300 es
 precision highp float;
 in vec3 viewNormal;
 in vec3 viewPosition;
+in vec3 albedo;
 out vec4 colour;
-const vec3 skin = vec3(0.82, 0.66, 0.58);
 void main() {
   vec3 n = normalize(viewNormal);
   vec3 v = normalize(-viewPosition);
@@ -275,7 +327,7 @@ void main() {
   float diffuse = max(dot(n, key), 0.0) * 0.75 + max(dot(n, fill), 0.0) * 0.25;
   float sky = 0.5 + 0.5 * n.y;
   float specular = pow(max(dot(n, normalize(key + v)), 0.0), 40.0) * 0.25;
-  vec3 c = skin * (0.06 + 0.08 * sky + 0.85 * diffuse) + vec3(specular);
+  vec3 c = albedo * (0.06 + 0.08 * sky + 0.85 * diffuse) + vec3(specular);
   colour = vec4(pow(c, vec3(1.0 / 2.2)), 1.0);
 }`;
 
@@ -293,6 +345,7 @@ class FaceView {
     gl.bindVertexArray(this.vao);
     this.positionBuffer = attribute(gl, this.program, "position");
     this.normalBuffer = attribute(gl, this.program, "normal");
+    this.colourBuffer = attribute(gl, this.program, "tint");
     gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, gl.createBuffer());
     gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, triangles, gl.STATIC_DRAW);
 
@@ -342,12 +395,21 @@ class FaceView {
     new ResizeObserver(() => this.redraw()).observe(c);
   }
 
+  /** Sets the per-vertex colours (linear RGB, 3 per vertex) and redraws. */
+  setColours(colours) {
+    const gl = this.gl;
+    gl.bindBuffer(gl.ARRAY_BUFFER, this.colourBuffer);
+    gl.bufferData(gl.ARRAY_BUFFER, colours, gl.STATIC_DRAW);
+    if (this.drawn) this.redraw();
+  }
+
   draw(positions, normals) {
     const gl = this.gl;
     gl.bindBuffer(gl.ARRAY_BUFFER, this.positionBuffer);
     gl.bufferData(gl.ARRAY_BUFFER, positions, gl.DYNAMIC_DRAW);
     gl.bindBuffer(gl.ARRAY_BUFFER, this.normalBuffer);
     gl.bufferData(gl.ARRAY_BUFFER, normals, gl.DYNAMIC_DRAW);
+    this.drawn = true;
     this.redraw();
   }
 

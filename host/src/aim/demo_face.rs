@@ -1,0 +1,379 @@
+//! The demo's face: the ICT-FaceKit face region decimated by Sinew with its default 20 shapes and
+//! the bone constraints AIM trains on, stored compactly in the repository
+//! (`host/data/demo-face.json.gz`, listed in NOTICE) and built into the binary, so that
+//! `sinew demo` trains on a human face with no data files.
+//!
+//! `sinew data demo-face` makes the file from ICT-FaceKit and the template bones: the actor of
+//! the default protocol (generic neutral, [`DEFAULT_SHAPES`], [`FACE_REGION`]), quadric decimation
+//! of its neutral to [`TARGET_VERTICES`] (every kept vertex is an original vertex, so each shape is
+//! an exact selection), landmarks moved to the nearest kept vertex, and Wu et al.'s constraints
+//! against the bones fitted to the full neutral (`sinew bones fit`'s fit). Coordinates are stored
+//! as integers in units of [`QUANTUM_CM`] (0.01 mm), the neutral as positions and the expressions
+//! as offsets from it, mostly zeros, which gzip shrinks well. Each constraint is stored as its
+//! bone point and bone; its thickness and normal follow from the skin vertex, as
+//! [`crate::anatomy::constraints::anchors`] defines them.
+
+use std::io::{Read, Write};
+use std::path::Path;
+
+use anyhow::{Context, Result, bail, ensure};
+use serde::{Deserialize, Serialize};
+
+use super::data::{forehead, jaw_pivot, symmetry_plane};
+use super::{Anchor, TrainingSet};
+use crate::anatomy::constraints::{Bone, anchors};
+use crate::io::ict::{DEFAULT_SHAPES, FACE_REGION, ICT_ATTRIBUTION, IctFaceKit};
+use crate::io::mesh::Mesh;
+
+/// Where the file lives in the repository, for messages and the regeneration command.
+pub const PATH: &str = "host/data/demo-face.json.gz";
+
+/// The built-in file.
+const EMBEDDED: &[u8] = include_bytes!("../../data/demo-face.json.gz");
+
+/// Vertices of the decimated face region (9,409 in ICT-FaceKit's).
+pub const TARGET_VERTICES: usize = 1500;
+
+/// The coordinate step of the stored file, in cm: 0.01 mm, a tenth of the demo's accuracy goal.
+pub const QUANTUM_CM: f64 = 1e-3;
+
+/// The `format` field of the file.
+const FORMAT: &str = "sinew-demo-face/1";
+
+/// Deepest constraint kept (cm), [`super::AimConfig`]'s default `max_constraint_depth`.
+const MAX_DEPTH_CM: f32 = 2.5;
+
+/// The file's JSON (before gzip).
+#[derive(Debug, Serialize, Deserialize)]
+struct Stored {
+    format: String,
+    source: String,
+    quantum_cm: f64,
+    names: Vec<String>,
+    triangles: Vec<[u32; 3]>,
+    neutral: Vec<[i32; 3]>,
+    /// Per expression (names[1..]), per vertex: the offset from the neutral.
+    deltas: Vec<Vec<[i32; 3]>>,
+    landmarks: Vec<Option<u32>>,
+    /// Per vertex: the bone point of its constraint and the bone, if it has one.
+    bones: Vec<Option<(Bone, [i32; 3])>>,
+    jaw_pivot: [i32; 3],
+}
+
+fn quantise(p: [f32; 3]) -> [i32; 3] {
+    p.map(|v| (f64::from(v) / QUANTUM_CM).round() as i32)
+}
+
+fn position(q: [i32; 3]) -> [f32; 3] {
+    q.map(|v| (f64::from(v) * QUANTUM_CM) as f32)
+}
+
+/// Makes the demo face's file bytes from the ICT-FaceKit folder `data` and the template bones
+/// in `templates` (`artisynth-jaw/`, `skull-odedstein/`). The same inputs give the same bytes.
+pub fn make(data: &Path, templates: &Path) -> Result<Vec<u8>> {
+    let kit = IctFaceKit::open(data)?;
+    let actor = kit.actor(&[], &DEFAULT_SHAPES, FACE_REGION)?;
+    let templates = crate::anatomy::fit::bone_templates(templates)?;
+    let fitted = crate::anatomy::fit::fit_bones(kit.neutral(), &kit.landmarks68()?, &templates)?;
+
+    let tris = actor.template.triangles();
+    let (kept, triangles) =
+        crate::geometry::qem::decimate(&actor.template.positions, &tris, TARGET_VERTICES)
+            .context("decimating the ICT-FaceKit face region")?;
+    let pick =
+        |shape: &[[f32; 3]]| -> Vec<[f32; 3]> { kept.iter().map(|&v| shape[v as usize]).collect() };
+    let neutral = pick(&actor.template.positions);
+    let template = Mesh::new(
+        neutral.clone(),
+        triangles.iter().map(|t| t.to_vec()).collect(),
+    );
+    template
+        .validate()
+        .context("the decimated ICT-FaceKit face region")?;
+    let nearest = |p: [f32; 3]| -> u32 {
+        let d = |q: &[f32; 3]| (0..3).map(|i| (p[i] - q[i]).powi(2)).sum::<f32>();
+        (0..neutral.len())
+            .min_by(|&a, &b| d(&neutral[a]).total_cmp(&d(&neutral[b])))
+            .map_or(0, |v| v as u32)
+    };
+    let landmarks = actor
+        .landmarks
+        .iter()
+        .map(|l| l.map(|l| nearest(actor.template.positions[l as usize])))
+        .collect();
+
+    let qn: Vec<[i32; 3]> = neutral.iter().map(|&p| quantise(p)).collect();
+    let deltas = actor.shapes[1..]
+        .iter()
+        .map(|s| {
+            pick(s)
+                .iter()
+                .zip(&qn)
+                .map(|(&p, n)| {
+                    let q = quantise(p);
+                    [q[0] - n[0], q[1] - n[1], q[2] - n[2]]
+                })
+                .collect()
+        })
+        .collect();
+    let bones = anchors(&template, &fitted.skull, &fitted.jaw, MAX_DEPTH_CM)
+        .iter()
+        .map(|a| a.map(|a| (a.on, quantise(a.bone))))
+        .collect();
+    let stored = Stored {
+        format: FORMAT.into(),
+        // No path in it: the file must not depend on where the kit was read from.
+        source: format!(
+            "{ICT_ATTRIBUTION}; generic neutral and its {} default expressions, vertex region \
+             {FACE_REGION:?} decimated to {} vertices by Sinew; bone constraints against \
+             ArtiSynth's jaw (BSD-style) and the odedstein skull (CC BY 3.0) fitted by Sinew",
+            DEFAULT_SHAPES.len(),
+            neutral.len()
+        ),
+        quantum_cm: QUANTUM_CM,
+        names: actor.names.clone(),
+        triangles,
+        neutral: qn,
+        deltas,
+        landmarks,
+        bones,
+        jaw_pivot: quantise(jaw_pivot(&fitted.jaw)),
+    };
+    let json = serde_json::to_vec(&stored)?;
+    // No file name and no time in the header, so the bytes depend on the content alone.
+    let mut gz = flate2::GzBuilder::new()
+        .mtime(0)
+        .write(Vec::new(), flate2::Compression::best());
+    gz.write_all(&json)?;
+    Ok(gz.finish()?)
+}
+
+/// `sinew data demo-face`: [`make`], written atomically to `out`.
+pub fn write(data: &Path, templates: &Path, out: &Path) -> Result<TrainingSet> {
+    let bytes = make(data, templates)?;
+    let set = load(&bytes, &out.display().to_string())?;
+    crate::io::atomic::write(out, &bytes)?;
+    Ok(set)
+}
+
+/// The built-in demo face's training set.
+pub fn builtin() -> Result<TrainingSet> {
+    load(EMBEDDED, &format!("{PATH} (built in)"))
+}
+
+/// Reads a demo face file (gzipped JSON) into a training set; `name` names it in errors.
+pub fn load(bytes: &[u8], name: &str) -> Result<TrainingSet> {
+    let mut json = Vec::new();
+    flate2::read::GzDecoder::new(bytes)
+        .read_to_end(&mut json)
+        .with_context(|| format!("{name}: not a gzip file"))?;
+    let s: Stored =
+        serde_json::from_slice(&json).with_context(|| format!("{name}: not a demo face file"))?;
+    check(&s).with_context(|| format!("{name}: invalid demo face"))?;
+    let neutral: Vec<[f32; 3]> = s.neutral.iter().map(|&q| position(q)).collect();
+    let template = Mesh::new(
+        neutral.clone(),
+        s.triangles.iter().map(|t| t.to_vec()).collect(),
+    );
+    template
+        .validate()
+        .with_context(|| format!("{name}: invalid face mesh"))?;
+    let mut shapes = vec![neutral.clone()];
+    shapes.extend(s.deltas.iter().map(|d| {
+        s.neutral
+            .iter()
+            .zip(d)
+            .map(|(n, d)| position([n[0] + d[0], n[1] + d[1], n[2] + d[2]]))
+            .collect()
+    }));
+    // As `constraints::anchors` defines them: the normal points from the bone point to the skin
+    // vertex and the thickness is their distance.
+    let anchors = s
+        .bones
+        .iter()
+        .zip(&neutral)
+        .map(|(b, skin)| {
+            b.and_then(|(on, q)| {
+                let bone = position(q);
+                let d = [0, 1, 2].map(|i| skin[i] - bone[i]);
+                let len = d.iter().map(|v| v * v).sum::<f32>().sqrt();
+                (len > 0.0).then(|| Anchor {
+                    bone,
+                    thickness: len,
+                    normal: d.map(|v| v / len),
+                    on,
+                })
+            })
+        })
+        .collect();
+    let set = TrainingSet {
+        forehead: forehead(&neutral, &s.landmarks),
+        symmetry: symmetry_plane(&neutral, &s.landmarks),
+        template,
+        shapes,
+        names: s.names,
+        anchors,
+        jaw_pivot: position(s.jaw_pivot),
+        units: crate::io::units::Unit::Centimetre,
+        mm_per_unit: 10.0,
+        source: s.source,
+    };
+    set.validate().with_context(|| name.to_owned())?;
+    Ok(set)
+}
+
+/// Every count and index of a stored face, before anything is built from it.
+fn check(s: &Stored) -> Result<()> {
+    ensure!(
+        s.format == FORMAT,
+        "format {:?}, expected {FORMAT:?}",
+        s.format
+    );
+    ensure!(
+        s.quantum_cm == QUANTUM_CM,
+        "coordinate step {} cm, expected {QUANTUM_CM}",
+        s.quantum_cm
+    );
+    let v = s.neutral.len();
+    ensure!(v > 0, "no vertices");
+    ensure!(
+        s.names.len() == s.deltas.len() + 1,
+        "{} shape names for {} expressions and the neutral",
+        s.names.len(),
+        s.deltas.len()
+    );
+    for (d, name) in s.deltas.iter().zip(&s.names[1..]) {
+        ensure!(
+            d.len() == v,
+            "expression {name} has {} offsets for {v} vertices",
+            d.len()
+        );
+    }
+    ensure!(
+        s.bones.len() == v,
+        "{} bone entries for {v} vertices",
+        s.bones.len()
+    );
+    if let Some(t) = s
+        .triangles
+        .iter()
+        .find(|t| t.iter().any(|&i| i as usize >= v))
+    {
+        bail!("triangle {t:?} refers to a vertex beyond the {v} there are");
+    }
+    if let Some(l) = s.landmarks.iter().flatten().find(|&&l| l as usize >= v) {
+        bail!("landmark vertex {l} is beyond the {v} vertices");
+    }
+    // Sums of stored integers must not overflow when the shapes are rebuilt.
+    let limit = 1 << 28;
+    let big = |q: &[i32; 3]| q.iter().any(|c| c.abs() > limit);
+    ensure!(
+        !s.neutral.iter().chain(s.deltas.iter().flatten()).any(big),
+        "a coordinate beyond {} cm",
+        f64::from(limit) * QUANTUM_CM
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_builtin_face_is_the_ict_face_region_with_its_bones() {
+        let set = builtin().unwrap();
+        let v = set.vertices();
+        assert!((1000..=2000).contains(&v), "{v} vertices");
+        assert_eq!(set.names.len(), 20);
+        assert_eq!(set.names[0], "neutral");
+        assert_eq!(set.names[1..], DEFAULT_SHAPES);
+        // A human head in cm (face, ears and neck): about 18 cm wide and 29 tall, symmetric
+        // about x = 0.
+        let (lo, hi) = set.template.bounds();
+        let size = [0, 1, 2].map(|i| hi[i] - lo[i]);
+        assert!((15.0..22.0).contains(&size[0]), "{size:?}");
+        assert!((24.0..34.0).contains(&size[1]), "{size:?}");
+        assert!(set.symmetry.normal[0].abs() > 0.99, "{:?}", set.symmetry);
+        // Most of the face is constrained, a good part of it to the jaw, at plausible depths.
+        assert!(
+            set.constrained_fraction() > 0.4,
+            "{}",
+            set.constrained_fraction()
+        );
+        assert!(set.jaw_constrained().len() > 100);
+        let depth: Vec<f32> = set.anchors.iter().flatten().map(|a| a.thickness).collect();
+        let mean = depth.iter().sum::<f32>() / depth.len() as f32;
+        assert!((0.3..1.5).contains(&mean), "mean depth {mean} cm");
+        assert!(!set.forehead.is_empty());
+        // jawOpen moves the chin down by centimetres; the neutral is the template itself.
+        let open = &set.shapes[1];
+        let drop = set.shapes[0]
+            .iter()
+            .zip(open)
+            .map(|(a, b)| a[1] - b[1])
+            .fold(0.0f32, f32::max);
+        assert!(drop > 2.0, "jawOpen lowers the chin by {drop} cm");
+        assert_eq!(set.shapes[0], set.template.positions);
+    }
+
+    #[test]
+    fn bad_files_are_refused_with_their_name() {
+        let err = load(b"not gzip", "face.gz").unwrap_err();
+        assert!(
+            format!("{err:#}").starts_with("face.gz: not a gzip file"),
+            "{err:#}"
+        );
+
+        let mut json = Vec::new();
+        flate2::read::GzDecoder::new(EMBEDDED)
+            .read_to_end(&mut json)
+            .unwrap();
+        let gz = |s: &Stored| {
+            let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+            e.write_all(&serde_json::to_vec(s).unwrap()).unwrap();
+            e.finish().unwrap()
+        };
+        let good: Stored = serde_json::from_slice(&json).unwrap();
+        assert!(load(&gz(&good), "ok").is_ok());
+
+        let mut s: Stored = serde_json::from_slice(&json).unwrap();
+        s.triangles[3][1] = 1_000_000;
+        let err = format!("{:#}", load(&gz(&s), "face.gz").unwrap_err());
+        assert!(
+            err.contains("face.gz: invalid demo face") && err.contains("1000000"),
+            "{err}"
+        );
+
+        let mut s: Stored = serde_json::from_slice(&json).unwrap();
+        s.deltas[4].pop();
+        let err = format!("{:#}", load(&gz(&s), "face.gz").unwrap_err());
+        assert!(
+            err.contains(&format!("expression {}", DEFAULT_SHAPES[4])),
+            "{err}"
+        );
+
+        let mut s: Stored = serde_json::from_slice(&json).unwrap();
+        s.format = "other/2".into();
+        let err = format!("{:#}", load(&gz(&s), "face.gz").unwrap_err());
+        assert!(err.contains("other/2"), "{err}");
+
+        let err = format!("{:#}", load(&gz(&good)[..200], "cut.gz").unwrap_err());
+        assert!(err.starts_with("cut.gz:"), "{err}");
+    }
+
+    /// The committed file is what `sinew data demo-face` makes from the shared data today.
+    #[test]
+    fn regenerating_from_ict_facekit_reproduces_the_committed_file() {
+        let Some(root) = crate::io::data::data_dir() else {
+            return;
+        };
+        let made = make(&root.join("ict-facekit"), &root).unwrap();
+        assert!(
+            made == EMBEDDED,
+            "{PATH} differs from what `sinew data demo-face` makes now ({} bytes against {}); \
+             regenerate it with the command in docs/AIM.md",
+            made.len(),
+            EMBEDDED.len()
+        );
+    }
+}
