@@ -14,13 +14,17 @@ fn short(coefficients: Coefficients) -> FitConfig {
     }
 }
 
-#[test]
-fn the_fit_reduces_its_error_and_beats_zero_coefficients() {
-    let Some(data) = data_dir() else { return };
+/// A synthetic performance of `frames` frames (seeded) on the golden actor, in a temporary
+/// folder, and the actor's bytes; `None` without the data.
+fn golden_performance(
+    seed: u64,
+    frames: usize,
+) -> Option<(tempfile::TempDir, Performance, Vec<u8>)> {
+    let data = data_dir()?;
     let dir = tempfile::tempdir().unwrap();
     let config = PerformanceConfig {
-        seed: 9,
-        frames: 3,
+        seed,
+        frames,
         ..PerformanceConfig::default()
     };
     generate(
@@ -31,7 +35,14 @@ fn the_fit_reduces_its_error_and_beats_zero_coefficients() {
     )
     .unwrap();
     let perf = Performance::read(dir.path()).unwrap();
-    let bytes = std::fs::read(golden_actor()).unwrap();
+    Some((dir, perf, std::fs::read(golden_actor()).unwrap()))
+}
+
+#[test]
+fn the_fit_reduces_its_error_and_beats_zero_coefficients() {
+    let Some((_dir, perf, bytes)) = golden_performance(9, 3) else {
+        return;
+    };
     let actor = AimActor::from_bytes(&bytes).unwrap();
     let mut errors = Vec::new();
     for c in [
@@ -126,22 +137,9 @@ fn edge_change_is_the_largest_relative_stretch() {
 
 #[test]
 fn sparse_and_2d_fits_recover_the_face_from_little() {
-    let Some(data) = data_dir() else { return };
-    let dir = tempfile::tempdir().unwrap();
-    let config = PerformanceConfig {
-        seed: 4,
-        frames: 2,
-        ..PerformanceConfig::default()
+    let Some((_dir, perf, bytes)) = golden_performance(4, 2) else {
+        return;
     };
-    generate(
-        &data.join("ict-facekit"),
-        Some(&golden_actor()),
-        &config,
-        dir.path(),
-    )
-    .unwrap();
-    let perf = Performance::read(dir.path()).unwrap();
-    let bytes = std::fs::read(golden_actor()).unwrap();
     let actor = AimActor::from_bytes(&bytes).unwrap();
     for (mode, constrain) in [
         (Mode::ThreeD, Constrain::Landmarks),
