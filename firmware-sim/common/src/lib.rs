@@ -39,6 +39,7 @@ extern crate std;
 pub mod kernels;
 pub mod performance;
 mod s2d;
+pub mod suite;
 
 pub use s2d::{S2dCosts, S2dRun, replay_s2d, s2d_costs};
 

@@ -10,10 +10,9 @@
 use riscv::register::{mcause, mepc, minstret, mtval};
 use semihosting::{eprintln, println, process};
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
-use sinew_firmware_common::performance::{PERFORMANCE_GOLDENS, PerformanceRun};
+use sinew_firmware_common::suite::{Run, Suite};
 use sinew_firmware_common::{
-    Error, FrameCheck, GOLDENS, Replay, S2D_GOLDENS, S2dRun, Scratch, Summary, phase_costs,
-    s2d_costs,
+    Error, FrameCheck, GOLDENS, S2D_GOLDENS, Scratch, Summary, phase_costs, s2d_costs,
 };
 
 /// Plays `frames` to the end, printing each frame's check and cost in instructions retired (exact
@@ -84,85 +83,34 @@ fn run() -> bool {
             return false;
         }
     }
-    let mut total = Summary::default();
-    for golden in &GOLDENS {
-        let mut replay = match Replay::new(golden, scratch) {
-            Ok(r) => r,
-            Err(e) => {
-                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
+    // The AIM replays, the S2D replay and the fitted performance, in the same frame buffers.
+    let mut passed = true;
+    for suite in Suite::ALL {
+        let mut summary = Summary::default();
+        for golden in suite.goldens() {
+            let mut run = match Run::new(suite, golden, scratch) {
+                Ok(r) => r,
+                Err(e) => {
+                    eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
+                    return false;
+                }
+            };
+            println!(
+                "sinew-firmware-sim-riscv: rv32imac, {}: {}",
+                golden.name, run
+            );
+            if !timed_frames(golden.name, &mut run, &mut summary) {
                 return false;
             }
-        };
-        println!(
-            "sinew-firmware-sim-riscv: rv32imac, {}: {} vertices, {} shapes, {} frames",
-            golden.name,
-            replay.actor().vertex_count(),
-            replay.actor().shape_count(),
-            replay.replay().frames()
-        );
-        if !timed_frames(golden.name, &mut replay, &mut total) {
-            return false;
         }
-    }
-    println!(
-        "sinew-firmware-sim-riscv: {}/{} frames of {} replays bit-identical to the host",
-        total.frames - total.mismatches,
-        total.frames,
-        GOLDENS.len()
-    );
-    // The S2D decoder, in the same frame buffers.
-    let mut s2d = Summary::default();
-    for golden in &S2D_GOLDENS {
-        let mut run = match S2dRun::new(golden, scratch) {
-            Ok(r) => r,
-            Err(e) => {
-                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
-                return false;
-            }
-        };
         println!(
-            "sinew-firmware-sim-riscv: rv32imac, {}: {} vertices, {} inputs, {} frames, {} buffer values",
-            golden.name,
-            run.decoder().vertex_count(),
-            run.decoder().input_len(),
-            run.replay().frames(),
-            run.needed()
+            "sinew-firmware-sim-riscv: {}/{} {} bit-identical to the host",
+            summary.frames - summary.mismatches,
+            summary.frames,
+            suite.frames_label()
         );
-        if !timed_frames(golden.name, &mut run, &mut s2d) {
-            return false;
-        }
+        passed &= summary.passed();
     }
-    println!(
-        "sinew-firmware-sim-riscv: {}/{} S2D frames bit-identical to the host",
-        s2d.frames - s2d.mismatches,
-        s2d.frames
-    );
-    // The fitted performance: F_W evaluated at every vertex, in the same frame buffers.
-    let mut fitted = Summary::default();
-    for golden in &PERFORMANCE_GOLDENS {
-        let mut run = match PerformanceRun::new(golden, scratch) {
-            Ok(r) => r,
-            Err(e) => {
-                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
-                return false;
-            }
-        };
-        println!(
-            "sinew-firmware-sim-riscv: rv32imac, {}: {} vertices, {} shapes, {} frames",
-            golden.name,
-            run.actor().vertex_count(),
-            run.actor().shape_count(),
-            run.performance().frames()
-        );
-        if !timed_frames(golden.name, &mut run, &mut fitted) {
-            return false;
-        }
-    }
-    println!(
-        "sinew-firmware-sim-riscv: {}/{} fitted-performance frames bit-identical to the host",
-        fitted.frames - fitted.mismatches,
-        fitted.frames
-    );
     // Cost of each phase of one frame, per golden actor (the f32 replay stands for its model).
     for golden in GOLDENS.iter().filter(|g| g.name.ends_with(".f32")) {
         match phase_costs(golden, 8, scratch, minstret::read64) {
@@ -182,7 +130,7 @@ fn run() -> bool {
             }
         }
     }
-    total.passed() && s2d.passed() && fitted.passed()
+    passed
 }
 
 /// Any trap (bad memory access, illegal instruction, …) ends the run with a failure instead of

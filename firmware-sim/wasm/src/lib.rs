@@ -9,8 +9,8 @@
 #![deny(unsafe_code)]
 
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
-use sinew_firmware_common::performance::{PERFORMANCE_GOLDENS, replay_performance};
-use sinew_firmware_common::{GOLDENS, S2D_GOLDENS, Scratch, Summary, replay, replay_s2d};
+use sinew_firmware_common::suite::{Run, Suite};
+use sinew_firmware_common::{Scratch, Summary};
 
 /// What [`sinew_replay`] returns when the replay could not run (bad model, malformed or empty
 /// hash list).
@@ -35,24 +35,30 @@ unsafe extern "C" {
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_replay() -> u32 {
+    play(Suite::Aim, |i| i * 1000)
+}
+
+/// Plays every golden of `suite`, reporting each frame with `base(golden index)` added to its
+/// number; returns the mismatching frames ([`outcome`]), or [`LOAD_ERROR`].
+fn play(suite: Suite, base: impl Fn(usize) -> usize) -> u32 {
     // On the stack (180 KiB of the 1 MiB wasm stack): a `static` would need `static mut` or a
     // lock, and the module runs one replay at a time anyway.
     let mut scratch = Scratch::new();
     let mut total = Summary::default();
-    for (i, golden) in GOLDENS.iter().enumerate() {
-        let summary = replay(golden, &mut scratch, |r| {
+    for (i, golden) in suite.goldens().iter().enumerate() {
+        let Ok(run) = Run::new(suite, golden, &mut scratch) else {
+            return LOAD_ERROR;
+        };
+        for check in run {
+            let Ok(check) = check else {
+                return LOAD_ERROR;
+            };
             report(
-                u32::try_from(i * 1000 + r.frame).unwrap_or(u32::MAX),
-                r.hash,
-                r.expected,
+                u32::try_from(base(i) + check.frame).unwrap_or(u32::MAX),
+                check.hash,
+                check.expected,
             );
-        });
-        match summary {
-            Ok(s) => {
-                total.frames += s.frames;
-                total.mismatches += s.mismatches;
-            }
-            Err(_) => return LOAD_ERROR,
+            total.add(&check);
         }
     }
     outcome(&total)
@@ -74,26 +80,7 @@ fn outcome(total: &Summary) -> u32 {
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_replay_s2d() -> u32 {
-    // On the stack, as in `sinew_replay`.
-    let mut scratch = Scratch::new();
-    let mut total = Summary::default();
-    for golden in &S2D_GOLDENS {
-        let summary = replay_s2d(golden, &mut scratch, |r| {
-            report(
-                u32::try_from(8000 + r.frame).unwrap_or(u32::MAX),
-                r.hash,
-                r.expected,
-            );
-        });
-        match summary {
-            Ok(s) => {
-                total.frames += s.frames;
-                total.mismatches += s.mismatches;
-            }
-            Err(_) => return LOAD_ERROR,
-        }
-    }
-    outcome(&total)
+    play(Suite::S2d, |_| 8000)
 }
 
 /// Plays the golden fitted performance; returns the number of mismatching frames, or
@@ -103,26 +90,7 @@ pub extern "C" fn sinew_replay_s2d() -> u32 {
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_replay_performance() -> u32 {
-    // On the stack, as in `sinew_replay`.
-    let mut scratch = Scratch::new();
-    let mut total = Summary::default();
-    for golden in &PERFORMANCE_GOLDENS {
-        let summary = replay_performance(golden, &mut scratch, |r| {
-            report(
-                u32::try_from(7000 + r.frame).unwrap_or(u32::MAX),
-                r.hash,
-                r.expected,
-            );
-        });
-        match summary {
-            Ok(s) => {
-                total.frames += s.frames;
-                total.mismatches += s.mismatches;
-            }
-            Err(_) => return LOAD_ERROR,
-        }
-    }
-    outcome(&total)
+    play(Suite::Performance, |_| 7000)
 }
 
 /// Runs the core kernel suite on seeded weights; returns the number of cases whose hash differs

@@ -1,0 +1,138 @@
+//! Every golden a target plays, as suites a firmware loops over in one way: the AIM replays
+//! ([`Replay`]), the S2D replay ([`S2dRun`]) and the fitted performance ([`PerformanceRun`]),
+//! each started with [`Run::new`], described for the log by its `Display` and played frame by
+//! frame as an iterator.
+
+use core::fmt;
+
+use crate::performance::{PERFORMANCE_GOLDENS, PerformanceRun};
+use crate::{Error, FrameCheck, GOLDENS, Golden, Replay, S2D_GOLDENS, S2dRun, Scratch};
+
+/// A kind of golden.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Suite {
+    /// The AIM actors' replays ([`GOLDENS`]).
+    Aim,
+    /// The S2D decoder's replay ([`S2D_GOLDENS`]).
+    S2d,
+    /// The fitted performance ([`PERFORMANCE_GOLDENS`]).
+    Performance,
+}
+
+impl Suite {
+    /// Every suite, in the order the targets play them.
+    pub const ALL: [Self; 3] = [Self::Aim, Self::S2d, Self::Performance];
+
+    /// The suite's goldens.
+    pub const fn goldens(self) -> &'static [Golden] {
+        match self {
+            Self::Aim => &GOLDENS,
+            Self::S2d => &S2D_GOLDENS,
+            Self::Performance => &PERFORMANCE_GOLDENS,
+        }
+    }
+
+    /// What its frames are called in the log's totals.
+    pub const fn frames_label(self) -> &'static str {
+        match self {
+            Self::Aim => "AIM replay frames",
+            Self::S2d => "S2D frames",
+            Self::Performance => "fitted-performance frames",
+        }
+    }
+}
+
+/// A golden in progress, of any suite.
+// One run lives at a time, on the stack; boxing the larger variants would need an allocator.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug)]
+pub enum Run<'s> {
+    /// An AIM replay.
+    Aim(Replay<'s>),
+    /// An S2D replay.
+    S2d(S2dRun<'s>),
+    /// A fitted performance.
+    Performance(PerformanceRun<'s>),
+}
+
+impl<'s> Run<'s> {
+    /// Validates and starts `golden` of `suite` in `scratch`.
+    pub fn new(suite: Suite, golden: &Golden, scratch: &'s mut Scratch) -> Result<Self, Error> {
+        Ok(match suite {
+            Suite::Aim => Self::Aim(Replay::new(golden, scratch)?),
+            Suite::S2d => Self::S2d(S2dRun::new(golden, scratch)?),
+            Suite::Performance => Self::Performance(PerformanceRun::new(golden, scratch)?),
+        })
+    }
+}
+
+/// The log's description: sizes and frames (`scripts/firmware_costs.py` reads it).
+impl fmt::Display for Run<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Aim(r) => write!(
+                f,
+                "{} vertices, {} shapes, {} frames",
+                r.actor().vertex_count(),
+                r.actor().shape_count(),
+                r.replay().frames()
+            ),
+            Self::S2d(r) => write!(
+                f,
+                "{} vertices, {} inputs, {} frames, {} buffer values",
+                r.decoder().vertex_count(),
+                r.decoder().input_len(),
+                r.replay().frames(),
+                r.needed()
+            ),
+            Self::Performance(r) => write!(
+                f,
+                "{} vertices, {} shapes, {} frames",
+                r.actor().vertex_count(),
+                r.actor().shape_count(),
+                r.performance().frames()
+            ),
+        }
+    }
+}
+
+impl Iterator for Run<'_> {
+    type Item = Result<FrameCheck, Error>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        match self {
+            Self::Aim(r) => r.next(),
+            Self::S2d(r) => r.next(),
+            Self::Performance(r) => r.next(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::boxed::Box;
+    use std::format;
+
+    #[test]
+    fn every_suite_plays_through_one_loop() {
+        let mut scratch = Box::<Scratch>::default();
+        for suite in Suite::ALL {
+            assert!(!suite.goldens().is_empty(), "{suite:?}");
+            for golden in suite.goldens() {
+                let run = Run::new(suite, golden, &mut scratch).unwrap();
+                let said = format!("{run}");
+                assert!(
+                    said.contains("vertices") && said.contains("frames"),
+                    "{said}"
+                );
+                let mut frames = 0;
+                for check in run {
+                    assert!(check.unwrap().ok(), "{}", golden.name);
+                    frames += 1;
+                }
+                assert!(frames >= 4, "{}", golden.name);
+            }
+        }
+    }
+}
