@@ -107,6 +107,7 @@ pub mod s2d;
 pub mod skinning;
 pub mod sparse;
 pub mod spiral;
+pub mod srvf;
 pub mod tensor;
 
 pub use error::{BufferError, FormatError};

@@ -1,0 +1,5 @@
+//! Motion3DGAN's side of S2D ("Sparse to Dense Dynamic 3D Facial Expression Generation",
+//! sections 3.1, 4.3 and 4.4): labelled landmark motions, their square-root velocity functions on
+//! the unit hypersphere, and what is built on them. See docs/MOTION.md.
+
+pub mod srvf;
