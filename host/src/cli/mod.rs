@@ -6,6 +6,7 @@ mod aim;
 mod bones;
 mod export;
 mod fit;
+mod motion;
 mod replay;
 mod s2d;
 mod view;

@@ -51,6 +51,11 @@ pub(crate) enum Data {
     /// trajectories of all 53 expression weights, the jaw and the head; one OBJ per frame,
     /// performance.json with the ground truth, the camera and 68 projected landmarks.
     Performance(super::fit::PerformanceArgs),
+    /// Synthetic labelled landmark motions for Motion3DGAN: CoMA's 12 expression classes played
+    /// from neutral to apex on ICT-FaceKit identities (identity-specific deltas), with random
+    /// intensity, timing, easing and noise; the first sequence of each identity and class is the
+    /// test set.
+    Motions(super::motion::MotionsArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -279,6 +284,7 @@ pub(crate) fn data(cmd: Data) -> Result<()> {
             );
         }
         Data::Performance(args) => super::fit::performance(args)?,
+        Data::Motions(args) => super::motion::motions(args)?,
     }
     Ok(())
 }
