@@ -1,5 +1,6 @@
-//! `sinew data motions` as a user runs it: a small motion set from the real ICT-FaceKit, read back
-//! by the library with its seeded split, and clear errors on bad input.
+//! `sinew data motions` and `sinew train motion` as a user runs them: a small motion set from the
+//! real ICT-FaceKit, read back by the library with its seeded split, a few training steps with a
+//! checkpoint resumed, and clear errors on bad input.
 
 use std::process::{Command, Output};
 
@@ -65,6 +66,66 @@ fn data_motions_writes_a_seeded_split_set() {
             "{file}"
         );
     }
+
+    // A few training steps: the generator, its loss curves, the report and a checkpoint.
+    let model = dir.path().join("gen.sinew");
+    let report = dir.path().join("gen.json");
+    let train = |extra: &[&str]| {
+        let mut a = vec![
+            "train",
+            "motion",
+            "--motions",
+            out.to_str().unwrap(),
+            "--out",
+            model.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+            "--steps",
+            "3",
+            "--batch",
+            "4",
+            "--hidden",
+            "16,16",
+            "--checkpoint-every",
+            "2",
+            "--quiet",
+        ];
+        a.extend_from_slice(extra);
+        sinew(&a)
+    };
+    let run = train(&[]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let first = std::fs::read(&model).unwrap();
+    let file = sinew_core::SinewFile::from_bytes_of_kind(
+        &first,
+        sinew_core::ArtifactKind::MotionGenerator,
+    )
+    .unwrap();
+    assert_eq!(file.metadata().get("content"), Some("motion-generator"));
+    assert!(dir.path().join("gen.losses.png").is_file());
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(json["history"].as_array().unwrap().len(), 3);
+    // Resuming the finished run's checkpoint bakes the same generator.
+    let ckpt = dir.path().join("gen.ckpt");
+    let run = train(&["--resume", ckpt.to_str().unwrap()]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert_eq!(std::fs::read(&model).unwrap(), first);
+    // Resuming with other settings is refused, naming the checkpoint state.
+    let run = train(&["--resume", ckpt.to_str().unwrap(), "--lr", "0.01"]);
+    assert!(!run.status.success());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("state.json") && stderr.contains("other settings"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -96,6 +157,21 @@ fn data_motions_names_bad_input() {
     assert!(!run.status.success());
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(stderr.contains("at least 2 sequences"), "{stderr}");
+    // Training on a folder that holds no motion set names its manifest.
+    let run = sinew(&[
+        "train",
+        "motion",
+        "--motions",
+        missing.to_str().unwrap(),
+        "--out",
+        dir.path().join("g.sinew").to_str().unwrap(),
+    ]);
+    assert!(!run.status.success());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("no-kit-here") && stderr.contains("manifest.json"),
+        "{stderr}"
+    );
     // Reading a folder that holds no motion set names the manifest.
     let err = format!("{:#}", MotionSet::read(dir.path()).unwrap_err());
     assert!(err.contains("manifest.json"), "{err}");

@@ -83,6 +83,10 @@ enum Train {
     /// bake each fold's model, and compare it with the PCA baselines on the held-out pairs
     /// (report JSON, and a cumulative-error PNG beside it).
     S2d(s2d::TrainS2dArgs),
+    /// Train Motion3DGAN (conditional WGAN-GP on SRVF tangent vectors) on a motion set from
+    /// `sinew data motions`, with checkpoints and --resume; bake the generator (.sinew) and
+    /// write the loss curves beside it.
+    Motion(motion::TrainMotionArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -102,6 +106,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Demo(args) => aim::demo(args),
         Command::Train(Train::Aim(args)) => aim::train(args),
         Command::Train(Train::S2d(args)) => s2d::train(args),
+        Command::Train(Train::Motion(args)) => motion::train(args),
         Command::Eval(Eval::S2d(args)) => s2d::eval(args),
         Command::Eval(Eval::Aim(args)) => aim::eval(args),
         Command::Eval(Eval::Fit(args)) => fit::eval(args),

@@ -3,6 +3,9 @@
 //! the unit hypersphere, and what is built on them. See docs/MOTION.md.
 
 pub mod classes;
+pub mod commands;
 pub mod data;
+pub mod gan;
 pub mod motions_file;
 pub mod srvf;
+pub mod train;
