@@ -61,7 +61,9 @@ impl Default for GanConfig {
     fn default() -> Self {
         Self {
             seed: 1,
-            steps: 4000,
+            // About 26 minutes on 2 cores (docs/MOTION.md, "Training time"): the budget
+            // for the default run is 30.
+            steps: 1500,
             batch: 64,
             critic_steps: 4,
             lr: 1e-4,
