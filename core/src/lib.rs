@@ -98,6 +98,7 @@ pub mod format;
 pub mod hash;
 pub mod layout;
 pub mod linalg;
+pub mod motion;
 pub mod network;
 pub mod nn;
 pub mod q16;

@@ -69,6 +69,13 @@ enum Command {
     /// Generate data sets.
     #[command(subcommand)]
     Data(s2d::Data),
+    /// A label and a seed become a 4D expression of a face: a baked Motion3DGAN generator makes
+    /// the landmark motion on the neutral, a baked S2D-Dec the meshes (frame_01.obj to
+    /// frame_30.obj and strip.png), all through sinew-core.
+    Generate(motion::GenerateLabelArgs),
+    /// Two labels' motions (same seed) joined along the hypersphere's geodesic: each step's apex
+    /// as a mesh (frame_NN.obj) and strip.png.
+    Interpolate(motion::InterpolateArgs),
     /// Show a baked actor in a web browser: serves a page on 127.0.0.1 that poses it through
     /// sinew-core compiled to WebAssembly (sliders, orbit, replay playback). Prints the page's
     /// address as its first line; stops on Ctrl-C.
@@ -128,6 +135,8 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Replay(cmd) => replay::run(cmd),
         Command::S2d(cmd) => s2d::run(cmd),
         Command::Data(cmd) => s2d::data(cmd),
+        Command::Generate(args) => motion::generate(args),
+        Command::Interpolate(args) => motion::interpolate(args),
         Command::View(args) => view::run(args),
     }
 }

@@ -1,5 +1,5 @@
-//! `sinew data motions` and `sinew train motion`: Motion3DGAN's data and training
-//! (docs/MOTION.md).
+//! `sinew data motions`, `sinew train motion`, `sinew generate` and `sinew interpolate`:
+//! Motion3DGAN's data, training and generation (docs/MOTION.md).
 
 use std::path::PathBuf;
 
@@ -8,6 +8,7 @@ use clap::Args;
 use sinew_host::motion::commands::{TrainMotion, train_motion};
 use sinew_host::motion::data::{MotionsConfig, Split, generate_to};
 use sinew_host::motion::gan::GanConfig;
+use sinew_host::motion::generate::Generate;
 use sinew_host::training::backend::Backend;
 
 /// `sinew data motions`'s options.
@@ -128,6 +129,109 @@ pub(crate) fn train(args: TrainMotionArgs) -> Result<()> {
         last.wasserstein,
         last.penalty,
         last.reconstruction
+    );
+    Ok(())
+}
+
+/// `sinew generate` and `sinew interpolate`'s shared options.
+#[derive(Debug, Args)]
+pub(crate) struct GenerateArgs {
+    /// The baked generator (from `sinew train motion`).
+    #[arg(long)]
+    model: PathBuf,
+    /// The baked S2D decoder (from `sinew train s2d`), whose landmarks the generator moves.
+    #[arg(long)]
+    decoder: PathBuf,
+    /// Seed of the noise.
+    #[arg(long, env = "SINEW_SEED", default_value_t = 1)]
+    seed: u64,
+    /// The neutral face (.obj or .ply) in the decoder's topology.
+    #[arg(long)]
+    neutral: PathBuf,
+    /// Scale of the motion (eq. 5; 1 is the training motions' mean length).
+    #[arg(long, default_value_t = 1.0)]
+    intensity: f32,
+    /// Output folder: frame_NN.obj and strip.png.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+impl GenerateArgs {
+    fn options(&self) -> Generate {
+        Generate {
+            model: self.model.clone(),
+            decoder: self.decoder.clone(),
+            neutral: self.neutral.clone(),
+            seed: self.seed,
+            intensity: self.intensity,
+            out: self.out.clone(),
+        }
+    }
+}
+
+/// `sinew generate`'s options.
+#[derive(Debug, Args)]
+pub(crate) struct GenerateLabelArgs {
+    /// The expression label (one of CoMA's twelve, e.g. mouth_open).
+    #[arg(long)]
+    label: String,
+    #[command(flatten)]
+    common: GenerateArgs,
+}
+
+/// `sinew interpolate`'s options.
+#[derive(Debug, Args)]
+pub(crate) struct InterpolateArgs {
+    /// The label the geodesic starts at.
+    #[arg(long)]
+    from: String,
+    /// The label it ends at.
+    #[arg(long)]
+    to: String,
+    /// Points along the geodesic, ends included.
+    #[arg(long, default_value_t = 8)]
+    steps: usize,
+    #[command(flatten)]
+    common: GenerateArgs,
+}
+
+/// `sinew generate`.
+pub(crate) fn generate(args: GenerateLabelArgs) -> Result<()> {
+    eprintln!(
+        "seed {} (override with --seed or SINEW_SEED)",
+        args.common.seed
+    );
+    sinew_host::motion::generate::generate(&args.common.options(), &args.label)?;
+    println!(
+        "{}: {} frames of {} (frame_01.obj to frame_{:02}.obj) and strip.png",
+        args.common.out.display(),
+        sinew_core::srvf::FRAMES,
+        args.label,
+        sinew_core::srvf::FRAMES
+    );
+    Ok(())
+}
+
+/// `sinew interpolate`.
+pub(crate) fn interpolate(args: InterpolateArgs) -> Result<()> {
+    eprintln!(
+        "seed {} (override with --seed or SINEW_SEED)",
+        args.common.seed
+    );
+    sinew_host::motion::generate::interpolate(
+        &args.common.options(),
+        &args.from,
+        &args.to,
+        args.steps,
+    )?;
+    println!(
+        "{}: {} apexes from {} to {} along the geodesic (frame_01.obj to frame_{:02}.obj) and \
+         strip.png",
+        args.common.out.display(),
+        args.steps,
+        args.from,
+        args.to,
+        args.steps
     );
     Ok(())
 }

@@ -6,6 +6,7 @@ pub mod classes;
 pub mod commands;
 pub mod data;
 pub mod gan;
+pub mod generate;
 pub mod motions_file;
 pub mod srvf;
 pub mod train;

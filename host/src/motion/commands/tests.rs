@@ -1,9 +1,9 @@
 use super::*;
 use crate::motion::train::TangentData;
 
-/// Unit motions of two labels with 2 coordinates per frame.
+/// Unit motions of two labels with 6 coordinates (2 landmarks) per frame.
 fn toy() -> TangentData {
-    let d = FRAMES * 2;
+    let d = FRAMES * 6;
     let qs: Vec<Vec<f32>> = (0..12)
         .map(|k| {
             let v: Vec<f32> = (0..d)
@@ -100,9 +100,69 @@ fn the_baked_generator_is_a_motion_generator_the_core_reads() {
     assert_eq!(mlp.inputs(), config.noise + LABELS.len());
     assert_eq!(mlp.outputs(), data.dims());
     let p: Vec<f32> = file
-        .f32_tensor("motion.p", &[FRAMES as u32, 2])
+        .f32_tensor("motion.p", &[FRAMES as u32, 6])
         .unwrap()
         .iter()
         .collect();
     assert_eq!(p, data.p);
+
+    // The core generates what burn's generator gives for the core's noise, then the exp map.
+    let core = sinew_core::motion::MotionGenerator::from_bytes(&bytes).unwrap();
+    assert_eq!(core.noise_len(), config.noise);
+    let mut scratch = vec![0.0f32; core.scratch_len()];
+    let mut q = vec![0.0f32; core.motion_len()];
+    for (label, seed) in [(0usize, 42u64), (1, 7), (11, 7)] {
+        core.motion(label, seed, &mut scratch, &mut q).unwrap();
+        let mut z = vec![0.0f32; config.noise];
+        sinew_core::motion::gaussian_noise(seed, &mut z);
+        let input = burn::tensor::Tensor::cat(
+            vec![
+                crate::training::nn::tensor(z, [1, config.noise], &device),
+                crate::motion::gan::one_hot(&[label], LABELS.len(), &device),
+            ],
+            1,
+        );
+        let p_t = crate::training::nn::tensor(data.p.clone(), [1, data.dims()], &device);
+        let s = crate::training::nn::to_vec(run.generator.forward(input, p_t));
+        let expected = crate::motion::srvf::exp(&data.p, &s).unwrap();
+        let worst = q
+            .iter()
+            .zip(&expected)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(
+            worst < 1e-4,
+            "label {label} seed {seed}: core differs from burn by {worst}"
+        );
+        assert!((sinew_core::srvf::norm(&q).unwrap() - 1.0).abs() < 1e-5);
+        // Bit for bit again, and another seed gives another motion.
+        let mut again = vec![0.0f32; q.len()];
+        core.motion(label, seed, &mut scratch, &mut again).unwrap();
+        assert_eq!(again, q);
+        core.motion(label, seed + 1, &mut scratch, &mut again)
+            .unwrap();
+        assert_ne!(again, q);
+    }
+    // Landmarks: frame 0 is the neutral, and the intensity scales the motion.
+    let neutral = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0];
+    let mut curve = vec![0.0f32; core.curve_len()];
+    let mut half = curve.clone();
+    core.landmarks(3, 9, 1.0, &neutral, &mut scratch, &mut curve)
+        .unwrap();
+    core.landmarks(3, 9, 0.5, &neutral, &mut scratch, &mut half)
+        .unwrap();
+    assert_eq!(&curve[..6], &neutral);
+    let last = FRAMES * 6;
+    for k in 0..6 {
+        let full = curve[last + k] - neutral[k];
+        assert!((half[last + k] - neutral[k] - 0.5 * full).abs() < 1e-5);
+    }
+    assert_eq!(
+        core.motion(12, 1, &mut scratch, &mut q),
+        Err(sinew_core::BufferError::Input)
+    );
+    assert_eq!(
+        core.landmarks(0, 1, 1.0, &neutral[..3], &mut scratch, &mut curve),
+        Err(sinew_core::BufferError::Input)
+    );
 }
