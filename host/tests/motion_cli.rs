@@ -1,6 +1,7 @@
-//! `sinew data motions` and `sinew train motion` as a user runs them: a small motion set from the
-//! real ICT-FaceKit, read back by the library with its seeded split, a few training steps with a
-//! checkpoint resumed, and clear errors on bad input.
+//! `sinew data motions`, `train motion`, `generate` and `interpolate` as a user runs them: a small
+//! motion set from the real ICT-FaceKit, read back by the library with its seeded split, a few
+//! training steps with a checkpoint resumed, meshes generated through the golden S2D decoder,
+//! and clear errors on bad input.
 
 use std::process::{Command, Output};
 
@@ -126,6 +127,145 @@ fn data_motions_writes_a_seeded_split_set() {
         stderr.contains("state.json") && stderr.contains("other settings"),
         "{stderr}"
     );
+
+    generate_and_interpolate(dir.path(), &model);
+}
+
+/// `sinew generate` and `sinew interpolate` with the just-trained generator and the golden S2D
+/// decoder (68 ICT landmarks), on the decoder's own neutral written as an OBJ.
+fn generate_and_interpolate(dir: &std::path::Path, model: &std::path::Path) {
+    let decoder = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/s2d-ict.sinew");
+    let bytes = std::fs::read(decoder).unwrap();
+    let dec = sinew_core::s2d::S2dDecoder::from_bytes(&bytes).unwrap();
+    let pos: Vec<f32> = dec.neutral().iter().collect();
+    let neutral = dir.join("neutral.obj");
+    // The golden decoder stores no triangles; any faces do for the strip's pictures.
+    let n = pos.len() as u32 / 3;
+    let mesh = sinew_host::io::mesh::Mesh::new(
+        sinew_host::io::mesh::points(pos),
+        (0..n - 2)
+            .step_by(3)
+            .map(|i| vec![i, i + 1, i + 2])
+            .collect(),
+    );
+    mesh.write(&neutral).unwrap();
+    let (m, n) = (model.to_str().unwrap(), neutral.to_str().unwrap());
+    let frames = dir.join("frames");
+    let gen_args = |out: &std::path::Path, label: &str| {
+        sinew(&[
+            "generate",
+            "--model",
+            m,
+            "--decoder",
+            decoder,
+            "--label",
+            label,
+            "--seed",
+            "7",
+            "--neutral",
+            n,
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let run = gen_args(&frames, "mouth_open");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for f in 1..=30 {
+        let obj = frames.join(format!("frame_{f:02}.obj"));
+        let frame = sinew_host::io::mesh::Mesh::read(&obj).unwrap();
+        assert_eq!(frame.positions.len(), mesh.positions.len());
+    }
+    assert!(!frames.join("frame_31.obj").exists());
+    assert!(frames.join("strip.png").is_file());
+    // The same seed gives the same bytes; the apex moved away from the neutral.
+    let again = dir.join("again-frames");
+    assert!(gen_args(&again, "mouth_open").status.success());
+    let apex = std::fs::read(frames.join("frame_30.obj")).unwrap();
+    assert_eq!(apex, std::fs::read(again.join("frame_30.obj")).unwrap());
+    let moved = sinew_host::io::mesh::Mesh::read(&frames.join("frame_30.obj")).unwrap();
+    let read_back = sinew_host::io::mesh::Mesh::read(&neutral).unwrap();
+    assert!(moved.positions != read_back.positions);
+
+    let between = dir.join("between");
+    let run = sinew(&[
+        "interpolate",
+        "--model",
+        m,
+        "--decoder",
+        decoder,
+        "--from",
+        "mouth_open",
+        "--to",
+        "eyebrow",
+        "--steps",
+        "4",
+        "--seed",
+        "7",
+        "--neutral",
+        n,
+        "--out",
+        between.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(between.join("frame_04.obj").is_file() && !between.join("frame_05.obj").exists());
+    assert!(between.join("strip.png").is_file());
+
+    // Bad input: an unknown label, a generator of another kind, a neutral of another size.
+    let run = gen_args(&dir.join("x"), "smile");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("unknown label \"smile\""),
+        "{stderr}"
+    );
+    assert!(stderr.contains("gen.sinew"), "{stderr}");
+    let run = sinew(&[
+        "generate",
+        "--model",
+        decoder,
+        "--decoder",
+        decoder,
+        "--label",
+        "mouth_open",
+        "--neutral",
+        n,
+        "--out",
+        dir.join("y").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("not a Motion3DGAN generator"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("s2d-ict.sinew"), "{stderr}");
+    let small = dir.join("small.obj");
+    std::fs::write(&small, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let run = sinew(&[
+        "generate",
+        "--model",
+        m,
+        "--decoder",
+        decoder,
+        "--label",
+        "mouth_open",
+        "--neutral",
+        small.to_str().unwrap(),
+        "--out",
+        dir.join("z").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("small.obj"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("the decoder's template has"), "{stderr}");
 }
 
 #[test]
