@@ -245,6 +245,25 @@ fn generate_and_interpolate(dir: &std::path::Path, model: &std::path::Path) {
         "{stderr}"
     );
     assert!(stderr.contains("s2d-ict.sinew"), "{stderr}");
+    let run = sinew(&[
+        "generate",
+        "--model",
+        m,
+        "--decoder",
+        decoder,
+        "--label",
+        "mouth_open",
+        "--neutral",
+        n,
+        "--intensity=-1",
+        "--out",
+        dir.join("w").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("--intensity -1"),
+        "{stderr}"
+    );
     let small = dir.join("small.obj");
     std::fs::write(&small, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     let run = sinew(&[

@@ -48,6 +48,13 @@ struct Loaded<'a> {
 }
 
 fn load<'a>(opts: &Generate, gen_bytes: &'a [u8], dec_bytes: &'a [u8]) -> Result<Loaded<'a>> {
+    if !(opts.intensity.is_finite() && opts.intensity >= 0.0) {
+        bail!(
+            "--intensity {} must be a finite number of at least 0 (1 is the training motions' \
+             mean)",
+            opts.intensity
+        );
+    }
     let generator = MotionGenerator::from_bytes(gen_bytes).map_err(|e| {
         anyhow!(
             "{}: not a Motion3DGAN generator (from `sinew train motion`): {e}",
