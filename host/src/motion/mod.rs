@@ -5,6 +5,7 @@
 pub mod classes;
 pub mod commands;
 pub mod data;
+pub mod diversity;
 pub mod gan;
 pub mod generate;
 pub mod motions_file;

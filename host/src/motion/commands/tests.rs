@@ -165,4 +165,25 @@ fn the_baked_generator_is_a_motion_generator_the_core_reads() {
         core.landmarks(0, 1, 1.0, &neutral[..3], &mut scratch, &mut curve),
         Err(sinew_core::BufferError::Input)
     );
+
+    // Diversity: different seeds give different motions of one label, at a positive mean
+    // geodesic distance, per label and overall.
+    let (per_label, mean) = crate::motion::diversity::diversity(&core, 4).unwrap();
+    assert_eq!(per_label.len(), LABELS.len());
+    assert!(
+        per_label
+            .iter()
+            .all(|&d| d > 0.0 && d < std::f32::consts::PI)
+    );
+    let mut a = vec![0.0f32; core.motion_len()];
+    let mut b = a.clone();
+    let mut sum = 0.0f64;
+    for (i, j) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+        core.motion(5, i, &mut scratch, &mut a).unwrap();
+        core.motion(5, j, &mut scratch, &mut b).unwrap();
+        sum += f64::from(crate::motion::srvf::distance(&a, &b).unwrap());
+    }
+    assert!((per_label[5] - (sum / 6.0) as f32).abs() < 1e-6);
+    assert!((mean - per_label.iter().sum::<f32>() / 12.0).abs() < 1e-5);
+    assert!(crate::motion::diversity::diversity(&core, 1).is_err());
 }
