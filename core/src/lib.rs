@@ -98,6 +98,7 @@ pub mod format;
 pub mod hash;
 pub mod layout;
 pub mod linalg;
+pub mod motion;
 pub mod network;
 pub mod nn;
 pub mod performance;
@@ -108,6 +109,7 @@ pub mod s2d;
 pub mod skinning;
 pub mod sparse;
 pub mod spiral;
+pub mod srvf;
 pub mod tensor;
 
 pub use error::{BufferError, FormatError};

@@ -13,6 +13,7 @@ pub mod figures;
 pub mod fit;
 pub mod geometry;
 pub mod io;
+pub mod motion;
 pub mod replay;
 pub mod s2d;
 pub mod training;

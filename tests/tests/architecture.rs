@@ -19,7 +19,7 @@ const HOST_LAYERS: &[&[&str]] = &[
     &["geometry"],
     &["figures"],
     &["anatomy", "training"],
-    &["aim", "s2d", "fit"],
+    &["aim", "s2d", "fit", "motion"],
     &["replay", "export"],
     &["view"],
     &["cli"],

@@ -6,6 +6,7 @@ mod aim;
 mod bones;
 mod export;
 mod fit;
+mod motion;
 mod replay;
 mod s2d;
 mod view;
@@ -69,6 +70,13 @@ enum Command {
     /// Generate data sets.
     #[command(subcommand)]
     Data(s2d::Data),
+    /// A label and a seed become a 4D expression of a face: a baked Motion3DGAN generator makes
+    /// the landmark motion on the neutral, a baked S2D-Dec the meshes (frame_01.obj to
+    /// frame_30.obj and strip.png), all through sinew-core.
+    Generate(motion::GenerateLabelArgs),
+    /// Two labels' motions (same seed) joined along the hypersphere's geodesic: each step's apex
+    /// as a mesh (frame_NN.obj) and strip.png.
+    Interpolate(motion::InterpolateArgs),
     /// Show a baked actor in a web browser: serves a page on 127.0.0.1 that poses it through
     /// sinew-core compiled to WebAssembly (sliders, orbit, replay playback). Prints the page's
     /// address as its first line; stops on Ctrl-C.
@@ -83,6 +91,10 @@ enum Train {
     /// bake each fold's model, and compare it with the PCA baselines on the held-out pairs
     /// (report JSON, and a cumulative-error PNG beside it).
     S2d(s2d::TrainS2dArgs),
+    /// Train Motion3DGAN (conditional WGAN-GP on SRVF tangent vectors) on a motion set from
+    /// `sinew data motions`, with checkpoints and --resume; bake the generator (.sinew) and
+    /// write the loss curves beside it.
+    Motion(motion::TrainMotionArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -102,6 +114,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Demo(args) => aim::demo(args),
         Command::Train(Train::Aim(args)) => aim::train(args),
         Command::Train(Train::S2d(args)) => s2d::train(args),
+        Command::Train(Train::Motion(args)) => motion::train(args),
         Command::Eval(Eval::S2d(args)) => s2d::eval(args),
         Command::Eval(Eval::Aim(args)) => aim::eval(args),
         Command::Eval(Eval::Fit(args)) => fit::eval(args),
@@ -123,6 +136,8 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Replay(cmd) => replay::run(cmd),
         Command::S2d(cmd) => s2d::run(cmd),
         Command::Data(cmd) => s2d::data(cmd),
+        Command::Generate(args) => motion::generate(args),
+        Command::Interpolate(args) => motion::interpolate(args),
         Command::View(args) => view::run(args),
     }
 }

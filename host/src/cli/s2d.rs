@@ -64,6 +64,11 @@ pub(crate) enum Data {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Synthetic labelled landmark motions for Motion3DGAN: CoMA's 12 expression classes played
+    /// from neutral to apex on ICT-FaceKit identities (identity-specific deltas), with random
+    /// intensity, timing, easing and noise; the first sequence of each identity and class is the
+    /// test set.
+    Motions(super::motion::MotionsArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -306,6 +311,7 @@ pub(crate) fn data(cmd: Data) -> Result<()> {
                 100.0 * set.constrained_fraction()
             );
         }
+        Data::Motions(args) => super::motion::motions(args)?,
     }
     Ok(())
 }

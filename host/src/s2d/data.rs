@@ -14,7 +14,7 @@
 //! holds the same number of pairs, ±1.
 //!
 //! With [`Expressions::Transferred`] every expression delta is first deformation-transferred onto
-//! every identity's neutral ([`super::deformation`]), so each identity performs the expressions
+//! every identity's neutral ([`crate::geometry::deformation`]), so each identity performs the expressions
 //! in its own way; the kit's deltas are otherwise shared by all identities.
 //!
 //! On disk a data set is a folder with `pairs.sinew` (the numbers: identities' neutrals,
@@ -55,7 +55,7 @@ pub enum Expressions {
     /// model).
     Shared,
     /// Each delta transferred onto each identity's neutral by deformation transfer
-    /// ([`super::deformation`]): the expression deforms the identity's own triangles as it
+    /// ([`crate::geometry::deformation`]): the expression deforms the identity's own triangles as it
     /// deforms the generic neutral's, so displacements differ between identities.
     Transferred,
 }
@@ -419,9 +419,14 @@ fn transferred(
         .par_iter()
         .enumerate()
         .map(|(i, n)| {
-            super::deformation::Transfer::new(base, n, triangles, &format!("identity {i}"))?
-                .apply(&sources)
-                .with_context(|| format!("transferring the expressions onto identity {i}"))
+            crate::geometry::deformation::Transfer::new(
+                base,
+                n,
+                triangles,
+                &format!("identity {i}"),
+            )?
+            .apply(&sources)
+            .with_context(|| format!("transferring the expressions onto identity {i}"))
         })
         .collect::<Result<_>>()?;
     Ok(per_identity.into_iter().flatten().collect())

@@ -55,7 +55,6 @@ pub mod baseline;
 pub mod checkpoint;
 pub mod data;
 pub mod decoder;
-pub mod deformation;
 pub mod experiment;
 pub mod hierarchy;
 pub mod objective;

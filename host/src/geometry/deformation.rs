@@ -4,8 +4,8 @@
 //! and the target vertices that match those maps best in the least-squares sense are found by one
 //! sparse solve.
 //!
-//! Used to make ICT-FaceKit's expressions identity-specific (`data::Expressions::Transferred`):
-//! the kit's 53 expression deltas are the same vectors for every identity, so a smile moves a
+//! Used to make ICT-FaceKit's expressions identity-specific (`s2d::data::Expressions::Transferred`
+//! and the motions of `sinew data motions`): the kit's 53 expression deltas are the same vectors for every identity, so a smile moves a
 //! narrow and a wide mouth by the same centimetres; transferred onto an identity, the smile
 //! stretches that identity's own triangles the way it stretches the generic neutral's.
 //!

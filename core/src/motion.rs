@@ -1,0 +1,233 @@
+// S2D eq. 8 (exp map) and eq. 5 (decoding) after the generator G(z, c) of section 3.1.
+//! A baked Motion3DGAN generator (S2D section 3.1): a label and a seed become a landmark motion,
+//! the same bits on every target.
+//!
+//! The path: seed → PCG-32 (`rand_pcg`, a portable, maintained `no_std` generator) → standard
+//! Gaussian noise by Box–Muller through `libm` ([`gaussian_noise`]) → the generator MLP on
+//! `[z ‖ one-hot label]` → its output projected onto the tangent space at the reference motion p
+//! → the exponential map ([`crate::srvf::exp_map`], a unit SRVF) → decoding onto a neutral's
+//! landmarks ([`crate::srvf::decode`]). No allocation: every buffer is the caller's, sized by
+//! [`MotionGenerator::scratch_len`].
+
+use rand_core::{RngCore, SeedableRng};
+
+use crate::error::{BufferError, FormatError};
+use crate::format::{ArtifactKind, SinewFile};
+use crate::network::load_mlp;
+use crate::nn::Mlp;
+use crate::srvf::{FRAMES, decode, exp_map, project_tangent};
+use crate::tensor::F32s;
+
+/// The number of labels (CoMA's twelve expression classes), the one-hot code's width.
+pub const LABELS: usize = 12;
+/// `content` metadata of a baked generator.
+pub const CONTENT: &str = "motion-generator";
+
+/// Fills `out` with standard normal values drawn from a PCG-32 seeded with `seed`
+/// (`Pcg32::seed_from_u64`): per value, two 32-bit draws `a`, `b`, `u1 = ((a >> 8) + 1) / 2²⁴`
+/// in (0, 1], `u2 = (b >> 8) / 2²⁴`, and `z = √(−2 ln u1) · cos(2π u2)`, all in f32 through
+/// `libm`, so the noise is the same on every target.
+pub fn gaussian_noise(seed: u64, out: &mut [f32]) {
+    let mut rng = rand_pcg::Pcg32::seed_from_u64(seed);
+    let scale = 1.0 / 16_777_216.0f32;
+    for o in out {
+        let u1 = ((rng.next_u32() >> 8) + 1) as f32 * scale;
+        let u2 = (rng.next_u32() >> 8) as f32 * scale;
+        *o = libm::sqrtf(-2.0 * libm::logf(u1)) * libm::cosf(core::f32::consts::TAU * u2);
+    }
+}
+
+/// A validated generator.
+#[derive(Debug)]
+pub struct MotionGenerator<'a> {
+    mlp: Mlp<'a>,
+    p: F32s<'a>,
+    length: f32,
+    noise: usize,
+    dims: usize,
+}
+
+impl<'a> MotionGenerator<'a> {
+    /// Validates `bytes` as a motion generator: kind, `content` metadata, the MLP `motion.g`
+    /// (inputs = noise + [`LABELS`], outputs = `FRAMES × dims`), the reference motion `motion.p`
+    /// `[FRAMES, dims]` with `dims` whole 3D points, and a finite, positive `motion.length`.
+    pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
+        let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::MotionGenerator)?;
+        if file.metadata().get("content") != Some(CONTENT) {
+            return Err(FormatError::BadMetadata);
+        }
+        let mlp = load_mlp(&file, "motion.g")?;
+        let (shape, rank) = file.dims_of("motion.p")?;
+        let [frames, dims, ..] = shape;
+        if rank != 2 || frames as usize != FRAMES || dims == 0 || dims % 3 != 0 {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        let p = file.f32_tensor("motion.p", &[frames, dims])?;
+        let dims = dims as usize;
+        if mlp.inputs() <= LABELS || mlp.outputs() != FRAMES * dims {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        if !p.iter().all(f32::is_finite) {
+            return Err(FormatError::NonFinite);
+        }
+        let length = file
+            .f32_tensor("motion.length", &[1])?
+            .iter()
+            .next()
+            .ok_or(FormatError::IncompatibleShapes)?;
+        if !(length.is_finite() && length > 0.0) {
+            return Err(FormatError::NonFinite);
+        }
+        Ok(Self {
+            noise: mlp.inputs() - LABELS,
+            mlp,
+            p,
+            length,
+            dims,
+        })
+    }
+
+    /// Noise dimensions.
+    pub fn noise_len(&self) -> usize {
+        self.noise
+    }
+
+    /// Coordinates per frame (3 × landmarks).
+    pub fn dims(&self) -> usize {
+        self.dims
+    }
+
+    /// Length of a motion, `FRAMES × dims`.
+    pub fn motion_len(&self) -> usize {
+        FRAMES * self.dims
+    }
+
+    /// Length of a decoded landmark curve, `(FRAMES + 1) × dims` (frame 0 the neutral).
+    pub fn curve_len(&self) -> usize {
+        (FRAMES + 1) * self.dims
+    }
+
+    /// The default intensity (the training curves' mean arc length).
+    pub fn length(&self) -> f32 {
+        self.length
+    }
+
+    /// Scratch length [`MotionGenerator::motion`] and [`MotionGenerator::landmarks`] need.
+    pub fn scratch_len(&self) -> usize {
+        self.mlp.inputs() + 3 * self.motion_len() + self.mlp.scratch_len()
+    }
+
+    /// The motion of `label` from `seed`: `exp_p(project_p(G([z ‖ one-hot(label)])))`, a unit
+    /// SRVF, into `out` (`[FRAMES × dims]`).
+    ///
+    /// # Errors
+    /// [`BufferError::Input`] for a label not below [`LABELS`]; [`BufferError::Output`],
+    /// [`BufferError::Scratch`] for wrong buffer lengths.
+    pub fn motion(
+        &self,
+        label: usize,
+        seed: u64,
+        scratch: &mut [f32],
+        out: &mut [f32],
+    ) -> Result<(), BufferError> {
+        if label >= LABELS {
+            return Err(BufferError::Input);
+        }
+        if out.len() != self.motion_len() {
+            return Err(BufferError::Output);
+        }
+        if scratch.len() < self.scratch_len() {
+            return Err(BufferError::Scratch);
+        }
+        self.motion_into(label, seed, scratch, out)
+    }
+
+    /// The landmark curve of `label` from `seed` on `neutral` (`[dims]`, the face's landmarks):
+    /// [`MotionGenerator::motion`] decoded with length `intensity × length()` into `out`
+    /// (`[(FRAMES + 1) × dims]`, frame 0 the neutral).
+    ///
+    /// # Errors
+    /// [`BufferError::Input`] for a label not below [`LABELS`] or a neutral of another length;
+    /// [`BufferError::Output`], [`BufferError::Scratch`] for wrong buffer lengths.
+    pub fn landmarks(
+        &self,
+        label: usize,
+        seed: u64,
+        intensity: f32,
+        neutral: &[f32],
+        scratch: &mut [f32],
+        out: &mut [f32],
+    ) -> Result<(), BufferError> {
+        if neutral.len() != self.dims {
+            return Err(BufferError::Input);
+        }
+        if scratch.len() < self.scratch_len() {
+            return Err(BufferError::Scratch);
+        }
+        // The motion itself lives in the first motion-sized part of the scratch.
+        let (q, rest) = scratch.split_at_mut(self.motion_len());
+        self.motion_into(label, seed, rest, q)?;
+        decode(q, neutral, intensity * self.length, out)
+    }
+
+    /// [`MotionGenerator::motion`] with scratch of at least `scratch_len() − motion_len()`.
+    fn motion_into(
+        &self,
+        label: usize,
+        seed: u64,
+        scratch: &mut [f32],
+        out: &mut [f32],
+    ) -> Result<(), BufferError> {
+        if label >= LABELS {
+            return Err(BufferError::Input);
+        }
+        let need = self.mlp.inputs() + 2 * self.motion_len() + self.mlp.scratch_len();
+        let scratch = scratch.get_mut(..need).ok_or(BufferError::Scratch)?;
+        let (input, rest) = scratch.split_at_mut(self.mlp.inputs());
+        let (s, rest) = rest.split_at_mut(self.motion_len());
+        let (p, rest) = rest.split_at_mut(self.motion_len());
+        let (noise, code) = input.split_at_mut(self.noise);
+        gaussian_noise(seed, noise);
+        for (k, c) in code.iter_mut().enumerate() {
+            *c = if k == label { 1.0 } else { 0.0 };
+        }
+        for (d, v) in p.iter_mut().zip(self.p.iter()) {
+            *d = v;
+        }
+        self.mlp.eval(input, s, rest)?;
+        project_tangent(p, s)?;
+        exp_map(p, s, out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::vec;
+
+    #[test]
+    fn gaussian_noise_is_seeded_and_standard() {
+        let mut a = vec![0.0f32; 20_000];
+        let mut b = a.clone();
+        gaussian_noise(7, &mut a);
+        gaussian_noise(7, &mut b);
+        assert_eq!(a, b);
+        gaussian_noise(8, &mut b);
+        assert_ne!(a, b);
+        let n = a.len() as f32;
+        let mean = a.iter().sum::<f32>() / n;
+        let var = a.iter().map(|x| (x - mean) * (x - mean)).sum::<f32>() / n;
+        assert!(mean.abs() < 0.03, "{mean}");
+        assert!((var - 1.0).abs() < 0.05, "{var}");
+        assert!(a.iter().all(|x| x.is_finite()));
+    }
+
+    #[test]
+    fn other_kinds_are_refused() {
+        let s2d = include_bytes!("../../tests/data/s2d-ict.sinew");
+        assert_eq!(
+            MotionGenerator::from_bytes(s2d).err(),
+            Some(FormatError::WrongKind)
+        );
+    }
+}

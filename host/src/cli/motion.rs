@@ -1,0 +1,237 @@
+//! `sinew data motions`, `sinew train motion`, `sinew generate` and `sinew interpolate`:
+//! Motion3DGAN's data, training and generation (docs/MOTION.md).
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+use sinew_host::motion::commands::{TrainMotion, train_motion};
+use sinew_host::motion::data::{MotionsConfig, Split, generate_to};
+use sinew_host::motion::gan::GanConfig;
+use sinew_host::motion::generate::Generate;
+use sinew_host::training::backend::Backend;
+
+/// `sinew data motions`'s options.
+#[derive(Debug, Args)]
+pub(crate) struct MotionsArgs {
+    /// ICT-FaceKit folder.
+    #[arg(long)]
+    data: PathBuf,
+    /// Output folder (motions.sinew and manifest.json).
+    #[arg(long)]
+    out: PathBuf,
+    /// Seed of the identities, the sequences' timing and the noise.
+    #[arg(long, env = "SINEW_SEED", default_value_t = MotionsConfig::default().seed)]
+    seed: u64,
+    /// Number of identities.
+    #[arg(long, default_value_t = MotionsConfig::default().identities)]
+    identities: usize,
+    /// Sequences per identity and label; the first of each is a test sequence.
+    #[arg(long, default_value_t = MotionsConfig::default().per_class)]
+    per_class: usize,
+}
+
+/// `sinew data motions`.
+pub(crate) fn motions(args: MotionsArgs) -> Result<()> {
+    let config = MotionsConfig {
+        seed: args.seed,
+        identities: args.identities,
+        per_class: args.per_class,
+    };
+    config.validate()?;
+    eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
+    let set = generate_to(&args.data, &args.out, &config)?;
+    println!(
+        "{}: {} synthetic sequences ({} train, {} test) of {} identities in 12 classes over {} \
+         expression deltas, {} vertices, 68 landmarks",
+        args.out.display(),
+        set.len(),
+        set.split(Split::Train).len(),
+        set.split(Split::Test).len(),
+        set.neutrals.len(),
+        set.manifest.expressions.len(),
+        set.vertices()
+    );
+    Ok(())
+}
+
+/// `sinew train motion`'s options.
+#[derive(Debug, Args)]
+pub(crate) struct TrainMotionArgs {
+    /// Motion set folder (from `sinew data motions`); its training sequences train.
+    #[arg(long)]
+    motions: PathBuf,
+    /// The baked generator to write (`.sinew`); the loss curves go beside it
+    /// (`OUT.losses.png`), checkpoints into `OUT.ckpt/`.
+    #[arg(long)]
+    out: PathBuf,
+    /// JSON report (settings, losses per step, time).
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Continue from this checkpoint folder (same settings and motions).
+    #[arg(long)]
+    resume: Option<PathBuf>,
+    /// Seed of the weights, the noise and the batches.
+    #[arg(long, env = "SINEW_SEED", default_value_t = GanConfig::default().seed)]
+    seed: u64,
+    /// Generator steps (each after 4 critic steps).
+    #[arg(long, default_value_t = GanConfig::default().steps)]
+    steps: usize,
+    /// Sequences per batch.
+    #[arg(long, default_value_t = GanConfig::default().batch)]
+    batch: usize,
+    /// Adam's learning rate (β = 0.5, 0.9).
+    #[arg(long, default_value_t = GanConfig::default().lr)]
+    lr: f64,
+    /// Hidden widths of the generator and the critic, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = GanConfig::default().hidden)]
+    hidden: Vec<usize>,
+    /// Generator steps between checkpoints.
+    #[arg(long, default_value_t = 500)]
+    checkpoint_every: usize,
+    /// burn backend.
+    #[arg(long, value_enum, default_value_t = Backend::Flex)]
+    backend: Backend,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// `sinew train motion`.
+pub(crate) fn train(args: TrainMotionArgs) -> Result<()> {
+    let config = GanConfig {
+        seed: args.seed,
+        steps: args.steps,
+        batch: args.batch,
+        lr: args.lr,
+        hidden: args.hidden,
+        ..GanConfig::default()
+    };
+    eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
+    let report = train_motion(&TrainMotion {
+        motions: args.motions,
+        out: args.out.clone(),
+        report: args.report,
+        resume: args.resume,
+        config,
+        checkpoint_every: args.checkpoint_every,
+        backend: args.backend,
+        quiet: args.quiet,
+    })?;
+    let last = report.history.last().copied().unwrap_or_default();
+    println!(
+        "{}: Motion3DGAN generator, {} steps on {} training sequences in {:.1} s; last step: \
+         Wasserstein estimate {:.4}, gradient penalty {:.4}, L_r {:.5}",
+        args.out.display(),
+        report.history.len(),
+        report.sequences,
+        report.seconds,
+        last.wasserstein,
+        last.penalty,
+        last.reconstruction
+    );
+    Ok(())
+}
+
+/// `sinew generate` and `sinew interpolate`'s shared options.
+#[derive(Debug, Args)]
+pub(crate) struct GenerateArgs {
+    /// The baked generator (from `sinew train motion`).
+    #[arg(long)]
+    model: PathBuf,
+    /// The baked S2D decoder (from `sinew train s2d`), whose landmarks the generator moves.
+    #[arg(long)]
+    decoder: PathBuf,
+    /// Seed of the noise.
+    #[arg(long, env = "SINEW_SEED", default_value_t = 1)]
+    seed: u64,
+    /// The neutral face (.obj or .ply) in the decoder's topology.
+    #[arg(long)]
+    neutral: PathBuf,
+    /// Scale of the motion (eq. 5; 1 is the training motions' mean length).
+    #[arg(long, default_value_t = 1.0)]
+    intensity: f32,
+    /// Output folder: frame_NN.obj and strip.png.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+impl GenerateArgs {
+    fn options(&self) -> Generate {
+        Generate {
+            model: self.model.clone(),
+            decoder: self.decoder.clone(),
+            neutral: self.neutral.clone(),
+            seed: self.seed,
+            intensity: self.intensity,
+            out: self.out.clone(),
+        }
+    }
+}
+
+/// `sinew generate`'s options.
+#[derive(Debug, Args)]
+pub(crate) struct GenerateLabelArgs {
+    /// The expression label (one of CoMA's twelve, e.g. mouth_open).
+    #[arg(long)]
+    label: String,
+    #[command(flatten)]
+    common: GenerateArgs,
+}
+
+/// `sinew interpolate`'s options.
+#[derive(Debug, Args)]
+pub(crate) struct InterpolateArgs {
+    /// The label the geodesic starts at.
+    #[arg(long)]
+    from: String,
+    /// The label it ends at.
+    #[arg(long)]
+    to: String,
+    /// Points along the geodesic, ends included.
+    #[arg(long, default_value_t = 8)]
+    steps: usize,
+    #[command(flatten)]
+    common: GenerateArgs,
+}
+
+/// `sinew generate`.
+pub(crate) fn generate(args: GenerateLabelArgs) -> Result<()> {
+    eprintln!(
+        "seed {} (override with --seed or SINEW_SEED)",
+        args.common.seed
+    );
+    sinew_host::motion::generate::generate(&args.common.options(), &args.label)?;
+    println!(
+        "{}: {} frames of {} (frame_01.obj to frame_{:02}.obj) and strip.png",
+        args.common.out.display(),
+        sinew_core::srvf::FRAMES,
+        args.label,
+        sinew_core::srvf::FRAMES
+    );
+    Ok(())
+}
+
+/// `sinew interpolate`.
+pub(crate) fn interpolate(args: InterpolateArgs) -> Result<()> {
+    eprintln!(
+        "seed {} (override with --seed or SINEW_SEED)",
+        args.common.seed
+    );
+    sinew_host::motion::generate::interpolate(
+        &args.common.options(),
+        &args.from,
+        &args.to,
+        args.steps,
+    )?;
+    println!(
+        "{}: {} apexes from {} to {} along the geodesic (frame_01.obj to frame_{:02}.obj) and \
+         strip.png",
+        args.common.out.display(),
+        args.steps,
+        args.from,
+        args.to,
+        args.steps
+    );
+    Ok(())
+}

@@ -1,0 +1,189 @@
+use super::*;
+use crate::motion::train::TangentData;
+
+/// Unit motions of two labels with 6 coordinates (2 landmarks) per frame.
+fn toy() -> TangentData {
+    let d = FRAMES * 6;
+    let qs: Vec<Vec<f32>> = (0..12)
+        .map(|k| {
+            let v: Vec<f32> = (0..d)
+                .map(|i| ((i * (k % 2 + 1)) as f32 * 0.1 + k as f32 * 0.01).cos() + 0.5)
+                .collect();
+            let n = sinew_core::srvf::norm(&v).unwrap();
+            v.into_iter().map(|x| x / n).collect()
+        })
+        .collect();
+    TangentData::from_motions(&qs, (0..12).map(|k| k % 2).collect()).unwrap()
+}
+
+fn config() -> GanConfig {
+    GanConfig {
+        seed: 11,
+        steps: 6,
+        batch: 4,
+        lr: 1e-3,
+        noise: 4,
+        hidden: vec![16],
+        ..GanConfig::default()
+    }
+}
+
+fn run_to(data: &TangentData, config: &GanConfig, run: Run, until: usize) -> Run {
+    let device = Backend::Flex.autodiff_device(config.seed).unwrap();
+    run.advance(
+        data,
+        config,
+        &device,
+        until,
+        &mut |_: usize, _: &StepLosses| {},
+        &mut || false,
+    )
+}
+
+#[test]
+fn a_resumed_run_continues_bit_for_bit() {
+    eprintln!("seed {}", config().seed);
+    let (data, config) = (toy(), config());
+    let device = Backend::Flex.autodiff_device(config.seed).unwrap();
+    let half = run_to(&data, &config, Run::new(&data, &config, &device), 3);
+    let dir = tempfile::tempdir().unwrap();
+    save_checkpoint(dir.path(), &half, &config, &data).unwrap();
+    let straight = run_to(&data, &config, half, 6);
+
+    let loaded = load_checkpoint(
+        dir.path(),
+        Run::new(&data, &config, &device),
+        &config,
+        &data,
+    )
+    .unwrap();
+    assert_eq!(loaded.step, 3);
+    let resumed = run_to(&data, &config, loaded, 6);
+    let bits = |h: &[StepLosses]| -> Vec<u32> {
+        h.iter()
+            .flat_map(|l| [l.critic, l.generator, l.penalty, l.reconstruction])
+            .map(f32::to_bits)
+            .collect()
+    };
+    assert_eq!(resumed.history.len(), 6);
+    assert_eq!(bits(&resumed.history), bits(&straight.history));
+    assert_eq!(
+        bake(&resumed.generator, &data, &config).unwrap(),
+        bake(&straight.generator, &data, &config).unwrap()
+    );
+
+    // Another run's settings are refused, naming the state file.
+    let other = GanConfig {
+        lr: 2e-3,
+        ..config.clone()
+    };
+    let err = format!(
+        "{:#}",
+        load_checkpoint(dir.path(), Run::new(&data, &other, &device), &other, &data).unwrap_err()
+    );
+    assert!(
+        err.contains(STATE_FILE) && err.contains("other settings"),
+        "{err}"
+    );
+}
+
+#[test]
+fn the_baked_generator_is_a_motion_generator_the_core_reads() {
+    let (data, config) = (toy(), config());
+    let device = Backend::Flex.autodiff_device(config.seed).unwrap();
+    let run = run_to(&data, &config, Run::new(&data, &config, &device), 1);
+    let bytes = bake(&run.generator, &data, &config).unwrap();
+    let file =
+        sinew_core::SinewFile::from_bytes_of_kind(&bytes, ArtifactKind::MotionGenerator).unwrap();
+    assert_eq!(file.metadata().get("content"), Some(CONTENT));
+    let mlp = sinew_core::network::load_mlp(&file, "motion.g").unwrap();
+    assert_eq!(mlp.inputs(), config.noise + LABELS.len());
+    assert_eq!(mlp.outputs(), data.dims());
+    let p: Vec<f32> = file
+        .f32_tensor("motion.p", &[FRAMES as u32, 6])
+        .unwrap()
+        .iter()
+        .collect();
+    assert_eq!(p, data.p);
+
+    // The core generates what burn's generator gives for the core's noise, then the exp map.
+    let core = sinew_core::motion::MotionGenerator::from_bytes(&bytes).unwrap();
+    assert_eq!(core.noise_len(), config.noise);
+    let mut scratch = vec![0.0f32; core.scratch_len()];
+    let mut q = vec![0.0f32; core.motion_len()];
+    for (label, seed) in [(0usize, 42u64), (1, 7), (11, 7)] {
+        core.motion(label, seed, &mut scratch, &mut q).unwrap();
+        let mut z = vec![0.0f32; config.noise];
+        sinew_core::motion::gaussian_noise(seed, &mut z);
+        let input = burn::tensor::Tensor::cat(
+            vec![
+                crate::training::nn::tensor(z, [1, config.noise], &device),
+                crate::motion::gan::one_hot(&[label], LABELS.len(), &device),
+            ],
+            1,
+        );
+        let p_t = crate::training::nn::tensor(data.p.clone(), [1, data.dims()], &device);
+        let s = crate::training::nn::to_vec(run.generator.forward(input, p_t));
+        let expected = crate::motion::srvf::exp(&data.p, &s).unwrap();
+        let worst = q
+            .iter()
+            .zip(&expected)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(
+            worst < 1e-4,
+            "label {label} seed {seed}: core differs from burn by {worst}"
+        );
+        assert!((sinew_core::srvf::norm(&q).unwrap() - 1.0).abs() < 1e-5);
+        // Bit for bit again, and another seed gives another motion.
+        let mut again = vec![0.0f32; q.len()];
+        core.motion(label, seed, &mut scratch, &mut again).unwrap();
+        assert_eq!(again, q);
+        core.motion(label, seed + 1, &mut scratch, &mut again)
+            .unwrap();
+        assert_ne!(again, q);
+    }
+    // Landmarks: frame 0 is the neutral, and the intensity scales the motion.
+    let neutral = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0];
+    let mut curve = vec![0.0f32; core.curve_len()];
+    let mut half = curve.clone();
+    core.landmarks(3, 9, 1.0, &neutral, &mut scratch, &mut curve)
+        .unwrap();
+    core.landmarks(3, 9, 0.5, &neutral, &mut scratch, &mut half)
+        .unwrap();
+    assert_eq!(&curve[..6], &neutral);
+    let last = FRAMES * 6;
+    for k in 0..6 {
+        let full = curve[last + k] - neutral[k];
+        assert!((half[last + k] - neutral[k] - 0.5 * full).abs() < 1e-5);
+    }
+    assert_eq!(
+        core.motion(12, 1, &mut scratch, &mut q),
+        Err(sinew_core::BufferError::Input)
+    );
+    assert_eq!(
+        core.landmarks(0, 1, 1.0, &neutral[..3], &mut scratch, &mut curve),
+        Err(sinew_core::BufferError::Input)
+    );
+
+    // Diversity: different seeds give different motions of one label, at a positive mean
+    // geodesic distance, per label and overall.
+    let (per_label, mean) = crate::motion::diversity::diversity(&core, 4).unwrap();
+    assert_eq!(per_label.len(), LABELS.len());
+    assert!(
+        per_label
+            .iter()
+            .all(|&d| d > 0.0 && d < std::f32::consts::PI)
+    );
+    let mut a = vec![0.0f32; core.motion_len()];
+    let mut b = a.clone();
+    let mut sum = 0.0f64;
+    for (i, j) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+        core.motion(5, i, &mut scratch, &mut a).unwrap();
+        core.motion(5, j, &mut scratch, &mut b).unwrap();
+        sum += f64::from(crate::motion::srvf::distance(&a, &b).unwrap());
+    }
+    assert!((per_label[5] - (sum / 6.0) as f32).abs() < 1e-6);
+    assert!((mean - per_label.iter().sum::<f32>() / 12.0).abs() < 1e-5);
+    assert!(crate::motion::diversity::diversity(&core, 1).is_err());
+}

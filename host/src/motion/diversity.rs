@@ -1,0 +1,40 @@
+//! Diversity of a generator (S2D section 4.3, Table 3's "diversity"): the mean geodesic distance
+//! between motions of one label generated from different seeds, through the core's generator. A
+//! deterministic generator (the LSTM baseline) scores 0.
+
+use anyhow::{Result, anyhow, ensure};
+use sinew_core::motion::{LABELS, MotionGenerator};
+
+use super::srvf;
+
+/// Per label, the mean geodesic distance over every pair of the motions generated from seeds
+/// `0..seeds`; then their mean over the labels, last.
+///
+/// # Errors
+/// Fewer than 2 seeds, or a generation error.
+pub fn diversity(generator: &MotionGenerator<'_>, seeds: u64) -> Result<(Vec<f32>, f32)> {
+    ensure!(seeds >= 2, "diversity needs at least 2 seeds");
+    let mut scratch = vec![0.0f32; generator.scratch_len()];
+    let mut per_label = Vec::with_capacity(LABELS);
+    for label in 0..LABELS {
+        let motions = (0..seeds)
+            .map(|seed| {
+                let mut q = vec![0.0f32; generator.motion_len()];
+                generator
+                    .motion(label, seed, &mut scratch, &mut q)
+                    .map(|()| q)
+                    .map_err(|e| anyhow!("generating label {label}, seed {seed}: {e}"))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let (mut sum, mut pairs) = (0.0f64, 0usize);
+        for a in 0..motions.len() {
+            for b in a + 1..motions.len() {
+                sum += f64::from(srvf::distance(&motions[a], &motions[b])?);
+                pairs += 1;
+            }
+        }
+        per_label.push((sum / pairs as f64) as f32);
+    }
+    let mean = per_label.iter().map(|&d| f64::from(d)).sum::<f64>() / LABELS as f64;
+    Ok((per_label, mean as f32))
+}

@@ -1,0 +1,313 @@
+// S2D eq. 2–4: L_adv (WGAN-GP on log maps, eq. 2–3) and L_r (eq. 4), L_M = α1 L_adv + α2 L_r.
+//! Motion3DGAN's conditional Wasserstein GAN with gradient penalty on burn (S2D section 3.1):
+//! a generator G(z, c) of tangent vectors at the reference motion p, and a critic D(s, c) on
+//! tangent vectors, the label c one-hot.
+//!
+//! burn 0.22 differentiates once only, so the gradient penalty cannot differentiate autodiff's
+//! own input gradient. The critic is an MLP with leaky-ReLU hidden layers, whose input gradient
+//! is the product `∇ₓD = W₀ᵀ diag(m₀) W₁ᵀ diag(m₁) … W_Lᵀ` of its weight matrices and the
+//! (detached, piecewise-constant) activation slopes m; [`Critic::input_gradient`] writes it as
+//! ordinary tensor operations, which autodiff then differentiates with respect to the weights.
+//! A test checks it against finite differences.
+//!
+//! Differences from the TensorFlow reference, and why: both networks are MLPs (the reference's
+//! generator is a 2-D convolutional up-sampler and its critic has strided convolutions with batch
+//! normalisation), because `sinew-core` must evaluate the generator with its existing MLP kernel
+//! and the explicit input gradient is a product of matrices only for a critic without batch
+//! normalisation; the label joins the input only (the reference concatenates it after every
+//! layer). The generator's output is projected onto the tangent space at p (`s − ⟨s, p⟩ p`,
+//! `sinew_core::srvf::project_tangent` at playback), so `log_p(exp_p(G))` is G itself for
+//! ‖G‖ < π and eq. 2 and 4 use G directly.
+
+use burn::module::Module;
+use burn::nn::Linear;
+use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::tensor::{Device, Tensor};
+use serde::{Deserialize, Serialize};
+use sinew_core::nn::Activation;
+use sinew_core::srvf::FRAMES;
+
+use crate::training::nn::{Mlp, pytorch_linear, tensor, to_vec};
+
+/// The training settings (the paper's where it gives them, section 4.2).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GanConfig {
+    /// Seed of the weights, the noise and the batches.
+    pub seed: u64,
+    /// Generator steps.
+    pub steps: usize,
+    /// Sequences per batch.
+    pub batch: usize,
+    /// Critic steps per generator step (4).
+    pub critic_steps: usize,
+    /// Adam's learning rate (β = (0.5, 0.9)).
+    pub lr: f64,
+    /// α1, the adversarial loss's weight (1).
+    pub alpha_adv: f32,
+    /// α2, the reconstruction loss's weight (10).
+    pub alpha_rec: f32,
+    /// λ, the gradient penalty's weight (10).
+    pub lambda: f32,
+    /// Noise dimensions (128).
+    pub noise: usize,
+    /// Hidden widths of the generator and of the critic.
+    pub hidden: Vec<usize>,
+    /// Slope of the leaky ReLUs.
+    pub slope: f32,
+}
+
+impl Default for GanConfig {
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            // About 26 minutes on 2 cores (docs/MOTION.md, "Training time"): the budget
+            // for the default run is 30.
+            steps: 1500,
+            batch: 64,
+            critic_steps: 4,
+            lr: 1e-4,
+            alpha_adv: 1.0,
+            alpha_rec: 10.0,
+            lambda: 10.0,
+            noise: 128,
+            hidden: vec![512, 512],
+            slope: 0.2,
+        }
+    }
+}
+
+/// The critic: an MLP with leaky-ReLU hidden layers and one linear output.
+#[derive(Module, Debug)]
+pub struct Critic {
+    /// The hidden affine layers, first to last, each followed by a leaky ReLU.
+    pub hidden: Vec<Linear>,
+    /// The output layer (one score).
+    pub out: Linear,
+    /// Slope of the leaky ReLUs.
+    #[module(skip)]
+    pub slope: f32,
+}
+
+impl Critic {
+    /// A critic of `inputs` inputs with the given hidden widths (PyTorch's initialisation).
+    pub fn new(inputs: usize, hidden: &[usize], slope: f32, device: &Device) -> Self {
+        let widths: Vec<usize> = std::iter::once(inputs)
+            .chain(hidden.iter().copied())
+            .collect();
+        Self {
+            hidden: widths
+                .windows(2)
+                .map(|w| pytorch_linear(w[0], w[1], device))
+                .collect(),
+            out: pytorch_linear(widths[widths.len() - 1], 1, device),
+            slope,
+        }
+    }
+
+    /// The scores and each hidden layer's activation slopes (1 where the pre-activation is
+    /// positive, `slope` elsewhere; detached).
+    ///
+    /// # Shapes
+    /// - x: `[n, inputs]`
+    /// - scores: `[n, 1]`; slopes: one `[n, width]` per hidden layer
+    pub fn forward_with_slopes(&self, x: Tensor<2>) -> (Tensor<2>, Vec<Tensor<2>>) {
+        let mut slopes = Vec::with_capacity(self.hidden.len());
+        let mut h = x;
+        for layer in &self.hidden {
+            let pre = layer.forward(h);
+            let positive = pre.clone().detach().greater_elem(0.0).float();
+            let m = positive.mul_scalar(1.0 - self.slope).add_scalar(self.slope);
+            h = pre * m.clone();
+            slopes.push(m);
+        }
+        (self.out.forward(h), slopes)
+    }
+
+    /// The scores.
+    ///
+    /// # Shapes
+    /// - x: `[n, inputs]` → `[n, 1]`
+    pub fn forward(&self, x: Tensor<2>) -> Tensor<2> {
+        self.forward_with_slopes(x).0
+    }
+
+    /// `∂D/∂x` for each row, from the slopes of [`Critic::forward_with_slopes`] at that x:
+    /// `W_outᵀ`, then for each hidden layer from the last, `⊙ m_i` and `· W_iᵀ`. Differentiable
+    /// with respect to the weights.
+    ///
+    /// # Shapes
+    /// - slopes: one `[n, width]` per hidden layer → `[n, inputs]`
+    pub fn input_gradient(&self, slopes: &[Tensor<2>]) -> Tensor<2> {
+        // The output layer is [width, 1] in burn's [in, out] layout: its transpose is ∂D/∂h.
+        let mut g = self.out.weight.val().transpose();
+        for (layer, m) in self.hidden.iter().zip(slopes).rev() {
+            g = (g * m.clone()).matmul(layer.weight.val().transpose());
+        }
+        g
+    }
+}
+
+/// The generator: an MLP from `[z ‖ one-hot label]` to a tangent vector at p.
+#[derive(Module, Debug)]
+pub struct Generator {
+    /// The MLP (leaky ReLU hidden layers, a linear output of `FRAMES · dims`).
+    pub mlp: Mlp,
+}
+
+impl Generator {
+    /// A generator of `noise + labels` inputs and `outputs` outputs.
+    pub fn new(
+        noise: usize,
+        labels: usize,
+        outputs: usize,
+        hidden: &[usize],
+        slope: f32,
+        device: &Device,
+    ) -> Self {
+        let widths: Vec<usize> = std::iter::once(noise + labels)
+            .chain(hidden.iter().copied())
+            .chain(std::iter::once(outputs))
+            .collect();
+        let mut activations = vec![Activation::LeakyRelu { slope }; hidden.len()];
+        activations.push(Activation::Identity);
+        Self {
+            mlp: Mlp::new(&widths, &activations, device),
+        }
+    }
+
+    /// The tangent vectors: the MLP's output less its component along `p`.
+    ///
+    /// # Shapes
+    /// - input: `[n, noise + labels]`, p: `[1, outputs]` → `[n, outputs]`
+    pub fn forward(&self, input: Tensor<2>, p: Tensor<2>) -> Tensor<2> {
+        project(self.mlp.forward(input), p)
+    }
+}
+
+/// `s − ⟨s, p⟩ p` row by row, with the hypersphere's inner product (`Σ / FRAMES`).
+///
+/// # Shapes
+/// - s: `[n, d]`, p: `[1, d]` → `[n, d]`
+pub fn project(s: Tensor<2>, p: Tensor<2>) -> Tensor<2> {
+    let a = (s.clone() * p.clone()).sum_dim(1).div_scalar(FRAMES as f64);
+    s - a * p
+}
+
+/// Adam with the reference's β = (0.5, 0.9).
+pub fn optimizer() -> ModuleOptimizer {
+    AdamConfig::new().with_beta_1(0.5).with_beta_2(0.9).init()
+}
+
+/// One batch: real tangent vectors, their one-hot labels, the generator's noise and the
+/// penalty's mixing weights (drawn by the caller, so that a step's randomness is its own).
+#[derive(Clone, Debug)]
+pub struct Batch {
+    /// `[n, d]`.
+    pub real: Tensor<2>,
+    /// `[n, labels]`.
+    pub labels: Tensor<2>,
+    /// z ~ N(0, 1), `[n, noise]`.
+    pub noise: Tensor<2>,
+    /// τ ~ U(0, 1) of eq. 3, `[n, 1]`.
+    pub tau: Tensor<2>,
+}
+
+/// One-hot rows of `labels` over `classes`.
+pub fn one_hot(labels: &[usize], classes: usize, device: &Device) -> Tensor<2> {
+    let mut v = vec![0.0f32; labels.len() * classes];
+    for (row, &l) in labels.iter().enumerate() {
+        v[row * classes + l] = 1.0;
+    }
+    tensor(v, [labels.len(), classes], device)
+}
+
+/// The losses of one step, detached.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StepLosses {
+    /// The critic's loss, `E[D(fake)] − E[D(real)] + λ GP`.
+    pub critic: f32,
+    /// The Wasserstein estimate `E[D(real)] − E[D(fake)]`.
+    pub wasserstein: f32,
+    /// The gradient penalty.
+    pub penalty: f32,
+    /// The generator's loss, `α1 L_adv + α2 L_r`.
+    pub generator: f32,
+    /// L_r, the mean absolute difference from the real tangent vectors.
+    pub reconstruction: f32,
+}
+
+fn scalar(t: Tensor<1>) -> f32 {
+    to_vec(t).first().copied().unwrap_or(f32::NAN)
+}
+
+/// One critic step (eq. 2, 3): returns the critic and its losses.
+pub fn critic_step(
+    generator: &Generator,
+    critic: Critic,
+    optim: &mut ModuleOptimizer,
+    batch: &Batch,
+    p: &Tensor<2>,
+    config: &GanConfig,
+) -> (Critic, StepLosses) {
+    let [_, d] = batch.real.dims();
+    let fake = generator
+        .forward(
+            Tensor::cat(vec![batch.noise.clone(), batch.labels.clone()], 1),
+            p.clone(),
+        )
+        .detach();
+    let with = |x: Tensor<2>| Tensor::cat(vec![x, batch.labels.clone()], 1);
+    let d_real = critic.forward(with(batch.real.clone())).mean();
+    let d_fake = critic.forward(with(fake.clone())).mean();
+    let tau = batch.tau.clone();
+    let mixed = batch.real.clone() * tau.clone() + fake * tau.neg().add_scalar(1.0);
+    let (_, slopes) = critic.forward_with_slopes(with(mixed));
+    let grad = critic.input_gradient(&slopes).narrow(1, 0, d);
+    let penalty = (grad.powi_scalar(2).sum_dim(1).sqrt().sub_scalar(1.0))
+        .powi_scalar(2)
+        .mean();
+    let wasserstein = d_real.clone() - d_fake.clone();
+    let loss = d_fake - d_real + penalty.clone().mul_scalar(config.lambda as f64);
+    let losses = StepLosses {
+        critic: scalar(loss.clone().detach()),
+        wasserstein: scalar(wasserstein.detach()),
+        penalty: scalar(penalty.detach()),
+        ..StepLosses::default()
+    };
+    let grads = GradientsParams::from_grads(loss.backward(), &critic);
+    (optim.step(config.lr, critic, grads), losses)
+}
+
+/// One generator step (`L_M = α1 L_adv + α2 L_r`, eq. 2, 4): returns the generator and its
+/// losses.
+pub fn generator_step(
+    generator: Generator,
+    critic: &Critic,
+    optim: &mut ModuleOptimizer,
+    batch: &Batch,
+    p: &Tensor<2>,
+    config: &GanConfig,
+) -> (Generator, StepLosses) {
+    let fake = generator.forward(
+        Tensor::cat(vec![batch.noise.clone(), batch.labels.clone()], 1),
+        p.clone(),
+    );
+    let adv = critic
+        .forward(Tensor::cat(vec![fake.clone(), batch.labels.clone()], 1))
+        .mean()
+        .neg();
+    let rec = (fake - batch.real.clone()).abs().mean();
+    let loss =
+        adv.mul_scalar(config.alpha_adv as f64) + rec.clone().mul_scalar(config.alpha_rec as f64);
+    let losses = StepLosses {
+        generator: scalar(loss.clone().detach()),
+        reconstruction: scalar(rec.detach()),
+        ..StepLosses::default()
+    };
+    let grads = GradientsParams::from_grads(loss.backward(), &generator);
+    (optim.step(config.lr, generator, grads), losses)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,13 @@
+//! Motion3DGAN's side of S2D ("Sparse to Dense Dynamic 3D Facial Expression Generation",
+//! sections 3.1, 4.3 and 4.4): labelled landmark motions, their square-root velocity functions on
+//! the unit hypersphere, and what is built on them. See docs/MOTION.md.
+
+pub mod classes;
+pub mod commands;
+pub mod data;
+pub mod diversity;
+pub mod gan;
+pub mod generate;
+pub mod motions_file;
+pub mod srvf;
+pub mod train;

@@ -1,0 +1,272 @@
+//! Training Motion3DGAN: the training sequences as tangent vectors at the reference motion, and
+//! the loop of 4 critic steps per generator step (S2D section 4.2).
+
+use anyhow::{Context, Result, ensure};
+use burn::optim::ModuleOptimizer;
+use burn::tensor::{Device, Tensor};
+use rand_core::{RngCore, SeedableRng};
+use serde::{Deserialize, Serialize};
+use sinew_core::srvf::FRAMES;
+
+use super::classes::LABELS;
+use super::data::{MotionSet, Split};
+use super::gan::{
+    Batch, Critic, GanConfig, Generator, StepLosses, critic_step, generator_step, one_hot,
+    optimizer,
+};
+use super::srvf;
+use crate::training::nn::tensor;
+
+/// The training sequences as the GAN sees them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TangentData {
+    /// The reference motion p: the training SRVFs' mean, scaled back onto the sphere (the paper
+    /// takes "the mean SRVF of the CoMA data").
+    pub p: Vec<f32>,
+    /// Each training sequence's `log_p(q)`.
+    pub tangents: Vec<Vec<f32>>,
+    /// Each one's label index.
+    pub labels: Vec<usize>,
+    /// The mean arc length of the training curves: the decoding's default intensity.
+    pub length: f32,
+}
+
+impl TangentData {
+    /// The training side of `set`, encoded (eq. 1) and log-mapped at the mean (eq. 8).
+    ///
+    /// # Errors
+    /// If a sequence cannot be encoded (it does not move), naming it.
+    pub fn from_set(set: &MotionSet) -> Result<Self> {
+        let train = set.split(Split::Train);
+        ensure!(
+            !train.is_empty(),
+            "the motion set has no training sequences"
+        );
+        let mut qs = Vec::with_capacity(train.len());
+        let mut length = 0.0f64;
+        for &s in &train {
+            let e = srvf::encode(&set.landmark_frames(s))
+                .with_context(|| format!("encoding sequence {s}"))?;
+            length += f64::from(e.length);
+            qs.push(e.q);
+        }
+        let labels = train.iter().map(|&s| set.label(s)).collect();
+        let mut data = Self::from_motions(&qs, labels)?;
+        data.length = (length / train.len() as f64) as f32;
+        Ok(data)
+    }
+
+    /// Motions `qs` (unit SRVFs of one shape) with their labels, log-mapped at their mean; the
+    /// length is 1.
+    ///
+    /// # Errors
+    /// If there are no motions, or they differ in shape, or their mean is zero.
+    pub fn from_motions(qs: &[Vec<f32>], labels: Vec<usize>) -> Result<Self> {
+        ensure!(
+            !qs.is_empty() && qs.len() == labels.len(),
+            "no motions, or labels not one per motion"
+        );
+        let d = qs[0].len();
+        ensure!(
+            d > 0 && d.is_multiple_of(FRAMES) && qs.iter().all(|q| q.len() == d),
+            "motions of different shapes"
+        );
+        let mut mean = vec![0.0f64; d];
+        for q in qs {
+            for (m, x) in mean.iter_mut().zip(q) {
+                *m += f64::from(*x);
+            }
+        }
+        let n = (mean.iter().map(|x| x * x).sum::<f64>() / FRAMES as f64).sqrt();
+        ensure!(n > 0.0, "the motions' mean is zero");
+        let p: Vec<f32> = mean.iter().map(|x| (x / n) as f32).collect();
+        let tangents = qs
+            .iter()
+            .map(|q| srvf::log_map(&p, q))
+            .collect::<Result<_, _>>()?;
+        Ok(Self {
+            p,
+            tangents,
+            labels,
+            length: 1.0,
+        })
+    }
+
+    /// Coordinates of one tangent vector (`FRAMES × dims`).
+    pub fn dims(&self) -> usize {
+        self.p.len()
+    }
+}
+
+/// Per-step state the loop reports (for a progress bar).
+pub trait Observer {
+    /// After generator step `step` (0-based) with its losses.
+    fn step(&mut self, step: usize, losses: &StepLosses);
+}
+
+impl<F: FnMut(usize, &StepLosses)> Observer for F {
+    fn step(&mut self, step: usize, losses: &StepLosses) {
+        self(step, losses)
+    }
+}
+
+/// The randomness of generator step `step`, critic step `k` (`k = critic_steps` for the
+/// generator's own batch), from a PCG-64 seeded by (seed, step, k) alone, so a resumed run draws
+/// what an uninterrupted one would: `size` sample indices uniform with replacement below `n`,
+/// then `size × noise` standard normals (Box–Muller), then `size` uniforms in [0, 1).
+pub fn draw(
+    n: usize,
+    size: usize,
+    noise: usize,
+    seed: u64,
+    step: usize,
+    k: usize,
+) -> (Vec<usize>, Vec<f32>, Vec<f32>) {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(
+        seed ^ (step as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ ((k as u64) << 56),
+    );
+    let indices = (0..size)
+        .map(|_| ((u128::from(rng.next_u64()) * n as u128) >> 64) as usize)
+        .collect();
+    let mut uniform = || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+    let z = (0..size * noise)
+        .map(|_| {
+            let u1 = 1.0 - uniform();
+            let u2 = uniform();
+            ((-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()) as f32
+        })
+        .collect();
+    let tau = (0..size).map(|_| uniform() as f32).collect();
+    (indices, z, tau)
+}
+
+/// The sample indices of [`draw`].
+pub fn batch_indices(n: usize, size: usize, seed: u64, step: usize, k: usize) -> Vec<usize> {
+    draw(n, size, 0, seed, step, k).0
+}
+
+fn batch(data: &TangentData, config: &GanConfig, step: usize, k: usize, device: &Device) -> Batch {
+    let d = data.dims();
+    let n = data.tangents.len();
+    let size = config.batch.min(n).max(1);
+    let (indices, z, tau) = draw(n, size, config.noise, config.seed, step, k);
+    let real: Vec<f32> = indices
+        .iter()
+        .flat_map(|&i| data.tangents[i].iter().copied())
+        .collect();
+    let labels: Vec<usize> = indices.iter().map(|&i| data.labels[i]).collect();
+    Batch {
+        real: tensor(real, [size, d], device),
+        labels: one_hot(&labels, LABELS.len(), device),
+        noise: tensor(z, [size, config.noise], device),
+        tau: tensor(tau, [size, 1], device),
+    }
+}
+
+/// A training run: both networks, both optimisers, and where it stands.
+pub struct Run {
+    /// The generator.
+    pub generator: Generator,
+    /// The critic.
+    pub critic: Critic,
+    /// The generator's Adam.
+    pub g_optim: ModuleOptimizer,
+    /// The critic's Adam.
+    pub c_optim: ModuleOptimizer,
+    /// Generator steps done.
+    pub step: usize,
+    /// Per generator step: the last critic step's losses with the generator's.
+    pub history: Vec<StepLosses>,
+}
+
+impl std::fmt::Debug for Run {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Run")
+            .field("step", &self.step)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Run {
+    /// A fresh run for `data` on the autodiff `device` (seed the device first).
+    pub fn new(data: &TangentData, config: &GanConfig, device: &Device) -> Self {
+        let d = data.dims();
+        Self {
+            generator: Generator::new(
+                config.noise,
+                LABELS.len(),
+                d,
+                &config.hidden,
+                config.slope,
+                device,
+            ),
+            critic: Critic::new(d + LABELS.len(), &config.hidden, config.slope, device),
+            g_optim: optimizer(),
+            c_optim: optimizer(),
+            step: 0,
+            history: Vec::new(),
+        }
+    }
+
+    /// Runs generator steps (each after `critic_steps` critic steps) until `until` steps are
+    /// done or `stop` says so after a step.
+    pub fn advance(
+        mut self,
+        data: &TangentData,
+        config: &GanConfig,
+        device: &Device,
+        until: usize,
+        observer: &mut dyn Observer,
+        stop: &mut dyn FnMut() -> bool,
+    ) -> Self {
+        let p: Tensor<2> = tensor(data.p.clone(), [1, data.dims()], device);
+        while self.step < until {
+            let step = self.step;
+            let mut losses = StepLosses::default();
+            for k in 0..config.critic_steps {
+                let b = batch(data, config, step, k, device);
+                let (c, l) = critic_step(
+                    &self.generator,
+                    self.critic,
+                    &mut self.c_optim,
+                    &b,
+                    &p,
+                    config,
+                );
+                self.critic = c;
+                losses = l;
+            }
+            let b = batch(data, config, step, config.critic_steps, device);
+            let (g, l) = generator_step(
+                self.generator,
+                &self.critic,
+                &mut self.g_optim,
+                &b,
+                &p,
+                config,
+            );
+            self.generator = g;
+            losses.generator = l.generator;
+            losses.reconstruction = l.reconstruction;
+            observer.step(step, &losses);
+            self.history.push(losses);
+            self.step += 1;
+            if stop() {
+                break;
+            }
+        }
+        self
+    }
+}
+
+/// The run's record, saved beside the model.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct TrainRecord {
+    /// The settings.
+    pub config: GanConfig,
+    /// Per generator step.
+    pub history: Vec<StepLosses>,
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,337 @@
+//! `sinew data motions`, `train motion`, `generate` and `interpolate` as a user runs them: a small
+//! motion set from the real ICT-FaceKit, read back by the library with its seeded split, a few
+//! training steps with a checkpoint resumed, meshes generated through the golden S2D decoder,
+//! and clear errors on bad input.
+
+use std::process::{Command, Output};
+
+use sinew_host::motion::data::{MotionSet, Split};
+
+fn sinew(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sinew"))
+        .args(args)
+        .env_remove("SINEW_SEED")
+        .output()
+        .expect("run sinew")
+}
+
+#[test]
+fn data_motions_writes_a_seeded_split_set() {
+    let Some(root) = sinew_host::io::data::data_dir() else {
+        return;
+    };
+    let kit = root.join("ict-facekit");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("motions");
+    let args = [
+        "data",
+        "motions",
+        "--data",
+        kit.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--seed",
+        "3",
+        "--identities",
+        "1",
+        "--per-class",
+        "2",
+    ];
+    let run = sinew(&args);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("seed 3"), "the seed is printed: {stderr}");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        stdout.contains("24 synthetic sequences (12 train, 12 test)"),
+        "{stdout}"
+    );
+    let set = MotionSet::read(&out).unwrap();
+    assert_eq!(set.manifest.config.seed, 3);
+    let test = set.split(Split::Test);
+    assert_eq!(test.len(), 12);
+    // One test sequence per label, each the first of its label.
+    for (k, &s) in test.iter().enumerate() {
+        assert_eq!(set.label(s), k);
+        assert_eq!(set.manifest.sequences[s].repetition, 0);
+    }
+    // Same seed, same bytes.
+    let again = dir.path().join("again");
+    let mut args2 = args;
+    args2[5] = again.to_str().unwrap();
+    assert!(sinew(&args2).status.success());
+    for file in ["motions.sinew", "manifest.json"] {
+        assert_eq!(
+            std::fs::read(out.join(file)).unwrap(),
+            std::fs::read(again.join(file)).unwrap(),
+            "{file}"
+        );
+    }
+
+    // A few training steps: the generator, its loss curves, the report and a checkpoint.
+    let model = dir.path().join("gen.sinew");
+    let report = dir.path().join("gen.json");
+    let train = |extra: &[&str]| {
+        let mut a = vec![
+            "train",
+            "motion",
+            "--motions",
+            out.to_str().unwrap(),
+            "--out",
+            model.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+            "--steps",
+            "3",
+            "--batch",
+            "4",
+            "--hidden",
+            "16,16",
+            "--checkpoint-every",
+            "2",
+            "--quiet",
+        ];
+        a.extend_from_slice(extra);
+        sinew(&a)
+    };
+    let run = train(&[]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let first = std::fs::read(&model).unwrap();
+    let file = sinew_core::SinewFile::from_bytes_of_kind(
+        &first,
+        sinew_core::ArtifactKind::MotionGenerator,
+    )
+    .unwrap();
+    assert_eq!(file.metadata().get("content"), Some("motion-generator"));
+    assert!(dir.path().join("gen.losses.png").is_file());
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(json["history"].as_array().unwrap().len(), 3);
+    // Resuming the finished run's checkpoint bakes the same generator.
+    let ckpt = dir.path().join("gen.ckpt");
+    let run = train(&["--resume", ckpt.to_str().unwrap()]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert_eq!(std::fs::read(&model).unwrap(), first);
+    // Resuming with other settings is refused, naming the checkpoint state.
+    let run = train(&["--resume", ckpt.to_str().unwrap(), "--lr", "0.01"]);
+    assert!(!run.status.success());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("state.json") && stderr.contains("other settings"),
+        "{stderr}"
+    );
+
+    generate_and_interpolate(dir.path(), &model);
+}
+
+/// `sinew generate` and `sinew interpolate` with the just-trained generator and the golden S2D
+/// decoder (68 ICT landmarks), on the decoder's own neutral written as an OBJ.
+fn generate_and_interpolate(dir: &std::path::Path, model: &std::path::Path) {
+    let decoder = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/s2d-ict.sinew");
+    let bytes = std::fs::read(decoder).unwrap();
+    let dec = sinew_core::s2d::S2dDecoder::from_bytes(&bytes).unwrap();
+    let pos: Vec<f32> = dec.neutral().iter().collect();
+    let neutral = dir.join("neutral.obj");
+    // The golden decoder stores no triangles; any faces do for the strip's pictures.
+    let n = pos.len() as u32 / 3;
+    let mesh = sinew_host::io::mesh::Mesh::new(
+        sinew_host::io::mesh::points(pos),
+        (0..n - 2)
+            .step_by(3)
+            .map(|i| vec![i, i + 1, i + 2])
+            .collect(),
+    );
+    mesh.write(&neutral).unwrap();
+    let (m, n) = (model.to_str().unwrap(), neutral.to_str().unwrap());
+    let frames = dir.join("frames");
+    let gen_args = |out: &std::path::Path, label: &str| {
+        sinew(&[
+            "generate",
+            "--model",
+            m,
+            "--decoder",
+            decoder,
+            "--label",
+            label,
+            "--seed",
+            "7",
+            "--neutral",
+            n,
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let run = gen_args(&frames, "mouth_open");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for f in 1..=30 {
+        let obj = frames.join(format!("frame_{f:02}.obj"));
+        let frame = sinew_host::io::mesh::Mesh::read(&obj).unwrap();
+        assert_eq!(frame.positions.len(), mesh.positions.len());
+    }
+    assert!(!frames.join("frame_31.obj").exists());
+    assert!(frames.join("strip.png").is_file());
+    // The same seed gives the same bytes; the apex moved away from the neutral.
+    let again = dir.join("again-frames");
+    assert!(gen_args(&again, "mouth_open").status.success());
+    let apex = std::fs::read(frames.join("frame_30.obj")).unwrap();
+    assert_eq!(apex, std::fs::read(again.join("frame_30.obj")).unwrap());
+    let moved = sinew_host::io::mesh::Mesh::read(&frames.join("frame_30.obj")).unwrap();
+    let read_back = sinew_host::io::mesh::Mesh::read(&neutral).unwrap();
+    assert!(moved.positions != read_back.positions);
+
+    let between = dir.join("between");
+    let run = sinew(&[
+        "interpolate",
+        "--model",
+        m,
+        "--decoder",
+        decoder,
+        "--from",
+        "mouth_open",
+        "--to",
+        "eyebrow",
+        "--steps",
+        "4",
+        "--seed",
+        "7",
+        "--neutral",
+        n,
+        "--out",
+        between.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(between.join("frame_04.obj").is_file() && !between.join("frame_05.obj").exists());
+    assert!(between.join("strip.png").is_file());
+
+    // Bad input: an unknown label, a generator of another kind, a neutral of another size.
+    let run = gen_args(&dir.join("x"), "smile");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("unknown label \"smile\""),
+        "{stderr}"
+    );
+    assert!(stderr.contains("gen.sinew"), "{stderr}");
+    let run = sinew(&[
+        "generate",
+        "--model",
+        decoder,
+        "--decoder",
+        decoder,
+        "--label",
+        "mouth_open",
+        "--neutral",
+        n,
+        "--out",
+        dir.join("y").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("not a Motion3DGAN generator"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("s2d-ict.sinew"), "{stderr}");
+    let run = sinew(&[
+        "generate",
+        "--model",
+        m,
+        "--decoder",
+        decoder,
+        "--label",
+        "mouth_open",
+        "--neutral",
+        n,
+        "--intensity=-1",
+        "--out",
+        dir.join("w").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("--intensity -1"),
+        "{stderr}"
+    );
+    let small = dir.join("small.obj");
+    std::fs::write(&small, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let run = sinew(&[
+        "generate",
+        "--model",
+        m,
+        "--decoder",
+        decoder,
+        "--label",
+        "mouth_open",
+        "--neutral",
+        small.to_str().unwrap(),
+        "--out",
+        dir.join("z").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("small.obj"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("the decoder's template has"), "{stderr}");
+}
+
+#[test]
+fn data_motions_names_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("no-kit-here");
+    let out = dir.path().join("motions");
+    let run = sinew(&[
+        "data",
+        "motions",
+        "--data",
+        missing.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!run.status.success());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(stderr.contains("no-kit-here"), "{stderr}");
+    let run = sinew(&[
+        "data",
+        "motions",
+        "--data",
+        missing.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--per-class",
+        "1",
+    ]);
+    assert!(!run.status.success());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(stderr.contains("at least 2 sequences"), "{stderr}");
+    // Training on a folder that holds no motion set names its manifest.
+    let run = sinew(&[
+        "train",
+        "motion",
+        "--motions",
+        missing.to_str().unwrap(),
+        "--out",
+        dir.path().join("g.sinew").to_str().unwrap(),
+    ]);
+    assert!(!run.status.success());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("no-kit-here") && stderr.contains("manifest.json"),
+        "{stderr}"
+    );
+    // Reading a folder that holds no motion set names the manifest.
+    let err = format!("{:#}", MotionSet::read(dir.path()).unwrap_err());
+    assert!(err.contains("manifest.json"), "{err}");
+}
