@@ -145,6 +145,10 @@ pub(crate) struct EvalFitArgs {
     /// (aim_local_10pct, aim_local_landmarks, aim_local_2d; AIM Fig. 7).
     #[arg(long)]
     constraints: bool,
+    /// Write heatmap_FFFFF.png into this folder for the first, middle and last frames: GBS, PBS,
+    /// AIM (G) and AIM side by side, each vertex coloured by its error (0–1 mm).
+    #[arg(long)]
+    heatmaps: Option<PathBuf>,
     #[command(flatten)]
     options: FitOptions,
 }
@@ -194,6 +198,7 @@ pub(crate) fn eval(args: EvalFitArgs) -> Result<()> {
         &args.report,
         &config,
         args.constraints,
+        args.heatmaps.as_deref(),
         args.options.backend,
     )?;
     println!(

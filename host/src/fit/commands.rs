@@ -160,13 +160,15 @@ fn aim_rows(config: &FitConfig, constraints: bool) -> Vec<(&'static str, FitConf
 
 /// `sinew eval fit`: GBS, PBS and the global and local AIM fits on one performance; with
 /// `constraints` also the local fit to 10 % of the vertices, to the 68 landmarks, and to the 2D
-/// landmark tracks (AIM Fig. 7, Sec. 4.2.1).
+/// landmark tracks (AIM Fig. 7, Sec. 4.2.1); with `heatmaps` the four methods' error heatmaps of
+/// the first, middle and last frames side by side in that folder.
 pub fn eval_fit(
     model: &Path,
     target: &Path,
     report: &Path,
     config: &FitConfig,
     constraints: bool,
+    heatmaps: Option<&Path>,
     backend: Backend,
 ) -> Result<EvalReport> {
     let bytes = read_actor(model)?;
@@ -175,8 +177,8 @@ pub fn eval_fit(
     let names = actor_shape_names(model, &bytes)?;
     let basis = Basis::of_performance(&perf, &names)?;
     let mut methods = BTreeMap::new();
-    let (_, gbs) = fit_performance(&Gbs::new(basis.clone()), &perf)?;
-    let (_, pbs) = fit_performance(&Pbs::new(basis, PATCH_GRID), &perf)?;
+    let (gbs_meshes, gbs) = fit_performance(&Gbs::new(basis.clone()), &perf)?;
+    let (pbs_meshes, pbs) = fit_performance(&Pbs::new(basis, PATCH_GRID), &perf)?;
     for (name, r) in [("gbs", gbs), ("pbs", pbs)] {
         methods.insert(
             name.to_owned(),
@@ -189,10 +191,24 @@ pub fn eval_fit(
         );
     }
     let mut target_worst_edge_change = 0.0;
+    let mut fitted = vec![("GBS", gbs_meshes), ("PBS", pbs_meshes)];
     for (name, cfg) in aim_rows(config, constraints) {
         let r = fit(&actor, &perf, &cfg, backend)?;
         target_worst_edge_change = r.target_worst_edge_change;
         methods.insert(name.to_owned(), MethodLine::of_fit(&r));
+        match name {
+            "aim_global" => fitted.push(("AIM (G)", r.meshes)),
+            "aim_local" => fitted.push(("AIM", r.meshes)),
+            _ => {}
+        }
+    }
+    if let Some(dir) = heatmaps {
+        let j = perf.frames.len();
+        let mut frames = vec![0, j / 2, j.saturating_sub(1)];
+        frames.dedup();
+        let panels: Vec<(&str, &[Vec<[f32; 3]>])> =
+            fitted.iter().map(|(n, m)| (*n, m.as_slice())).collect();
+        crate::fit::heatmaps::write(&perf, &panels, &frames, dir)?;
     }
     let r = EvalReport {
         frames: perf.frames.len(),
