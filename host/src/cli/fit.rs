@@ -124,6 +124,10 @@ pub(crate) struct FitArgs {
     /// once with the seed (AIM Fig. 7).
     #[arg(long, default_value = "all")]
     constrain: Constrain,
+    /// Continue the fit saved in this checkpoint folder (FIT.ckpt/, written every 200 steps and
+    /// on Ctrl-C) with the same settings; --iterations may be raised.
+    #[arg(long)]
+    resume: Option<PathBuf>,
     #[command(flatten)]
     options: FitOptions,
 }
@@ -166,12 +170,14 @@ pub(crate) fn fit(args: FitArgs) -> Result<()> {
         ..args.options.config(c)
     };
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
+    sinew_host::training::interrupt::watch_ctrl_c();
     let r = fit_command(
         &args.model,
         &args.target,
         &args.out,
         &args.report,
         &config,
+        args.resume.as_deref(),
         args.options.backend,
     )?;
     println!(

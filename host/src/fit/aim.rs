@@ -18,14 +18,16 @@ use std::time::Instant;
 
 use anyhow::{Result, anyhow, bail, ensure};
 use burn::module::{Module, Param};
-use burn::optim::{AdamConfig, GradientsParams};
+use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Distribution, Int, Tensor, TensorData};
 use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
 use sinew_core::nn::Activation;
+use sinew_core::replay::model_hash;
 
 use crate::fit::baseline::{mean_error_mm, performance_unit};
+use crate::fit::checkpoint::{CHECKPOINT_FORMAT, Checkpointing, EVERY, FitState, target_crc};
 use crate::fit::performance::Performance;
 use crate::training::backend::Backend;
 use crate::training::nn::{LayerWeights, Mlp, tensor, to_vec};
@@ -354,6 +356,18 @@ pub fn fit(
     config: &FitConfig,
     backend: Backend,
 ) -> Result<FitResult> {
+    fit_resumable(actor, perf, config, backend, None)
+}
+
+/// [`fit`] with checkpoints: every [`EVERY`] steps and when Ctrl-C is pressed (the fit then
+/// stops with an error that says how to resume), and from a checkpoint when `resume` is set.
+pub fn fit_resumable(
+    actor: &AimActor<'_>,
+    perf: &Performance,
+    config: &FitConfig,
+    backend: Backend,
+    checkpoints: Option<Checkpointing<'_>>,
+) -> Result<FitResult> {
     ensure!(
         config.iterations > 0 && config.points > 0 && config.code > 0 && config.hidden > 0,
         "the fit needs at least one iteration, point, code dimension and hidden unit"
@@ -403,11 +417,7 @@ pub fn fit(
         ft: gelu_mlp(config.code, config.hidden, 18, &device),
         fw: gelu_mlp(fw_inputs, config.hidden, m.max(1), &device),
     };
-    let mut optim = AdamConfig::new().with_epsilon(1e-8).init();
-    let mut rng = rand_pcg::Pcg64::new(
-        u128::from(config.seed) << 64 | 0xf17,
-        0x00a0_2bdb_0000_0000_0000_0000_0000_0001,
-    );
+    let mut optim: ModuleOptimizer = AdamConfig::new().with_epsilon(1e-8).init();
     let mut result = FitResult {
         config: config.clone(),
         mean_error_mm: 0.0,
@@ -434,13 +444,39 @@ pub fn fit(
     let evaluate = |net: &FitNet| -> (Vec<Vec<[f32; 3]>>, Vec<f64>) {
         evaluate(net, &fx, config.coefficients, perf, unit, mm)
     };
-    let (_, errors) = evaluate(&net);
-    result.error_history.push((0, mean(&errors)));
+    let mut state = FitState {
+        format: CHECKPOINT_FORMAT.to_owned(),
+        config: config.clone(),
+        actor: format!("{:016x}", model_hash(actor.file().bytes())),
+        target_crc: target_crc(perf),
+        steps_done: 0,
+        loss_history: Vec::new(),
+        error_history: Vec::new(),
+        seconds: 0.0,
+        files: Default::default(),
+    };
+    match checkpoints {
+        Some(c) if c.resume => {
+            let (n, o, s) = crate::fit::checkpoint::load(c.dir, net, optim, &state)?;
+            (net, optim) = (n, o);
+            result.loss_history = s.loss_history.clone();
+            result.error_history = s.error_history.clone();
+            state = s;
+            state.config = config.clone();
+        }
+        _ => {
+            let (_, errors) = evaluate(&net);
+            result.error_history.push((0, mean(&errors)));
+        }
+    }
     let start = Instant::now();
     let bar = crate::training::progress::bar(config.iterations as u64, true);
-    let subset = constrained_vertices(perf, config, &mut rng)?;
+    bar.set_position(state.steps_done as u64);
+    let subset = constrained_vertices(perf, config, &mut step_rng(config.seed, u64::MAX))?;
     let camera = TwoDTargets::new(perf, config, mm, &device)?;
-    for step in 0..config.iterations {
+    for step in state.steps_done..config.iterations {
+        // Each step's draw is its own (seed, step), so a resumed fit draws what an unbroken one does.
+        let mut rng = step_rng(config.seed, step as u64);
         let draw: Vec<i64> = match &subset {
             None => (0..config.points)
                 .map(|_| ((u128::from(rng.next_u64()) * v as u128) >> 64) as i64)
@@ -488,9 +524,34 @@ pub fn fit(
             let (_, errors) = evaluate(&net);
             result.error_history.push((step + 1, mean(&errors)));
         }
+        if let Some(c) = checkpoints {
+            let stop = crate::training::interrupt::take_stop_request();
+            if stop || (step + 1) % EVERY == 0 || step + 1 == config.iterations {
+                state.steps_done = step + 1;
+                state.loss_history = result.loss_history.clone();
+                state.error_history = result.error_history.clone();
+                let seconds = state.seconds + start.elapsed().as_secs_f64();
+                let saved = FitState {
+                    seconds,
+                    ..state.clone()
+                };
+                crate::fit::checkpoint::save(c.dir, &net, &optim, saved)?;
+                if stop {
+                    bar.finish_and_clear();
+                    bail!(
+                        "stopped after step {} of {}; the fit is saved in {}: continue with \
+                         --resume {}",
+                        step + 1,
+                        config.iterations,
+                        c.dir.display(),
+                        c.dir.display()
+                    );
+                }
+            }
+        }
     }
     bar.finish_and_clear();
-    result.seconds_per_frame = start.elapsed().as_secs_f64() / j as f64;
+    result.seconds_per_frame = (state.seconds + start.elapsed().as_secs_f64()) / j as f64;
     let (meshes, errors) = evaluate(&net);
     result.mean_error_mm = mean(&errors);
     result
@@ -684,6 +745,14 @@ pub fn worst_edge_change(
     }
     edges.sort_by(f64::total_cmp);
     edges[(edges.len() - 1) * 99 / 100]
+}
+
+/// The random stream of one step of a fit (and `u64::MAX`'s, the constrained subset's).
+fn step_rng(seed: u64, step: u64) -> rand_pcg::Pcg64 {
+    rand_pcg::Pcg64::new(
+        u128::from(seed) << 64 | u128::from(step),
+        0x00a0_2bdb_0000_0000_0000_0000_0000_0f17,
+    )
 }
 
 fn mean(x: &[f64]) -> f64 {

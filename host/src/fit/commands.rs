@@ -7,9 +7,10 @@ use anyhow::{Context, Result, anyhow};
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
 
-use crate::fit::aim::{Coefficients, Constrain, FitConfig, FitResult, Mode, fit};
+use crate::fit::aim::{Coefficients, Constrain, FitConfig, FitResult, Mode, fit, fit_resumable};
 use crate::fit::bake::{bake, play};
 use crate::fit::baseline::{Basis, Gbs, PATCH_GRID, Pbs, actor_shape_names, fit_performance};
+use crate::fit::checkpoint::Checkpointing;
 use crate::fit::performance::Performance;
 use crate::io::mesh::Mesh;
 use crate::training::backend::Backend;
@@ -30,21 +31,28 @@ fn read_actor(model: &Path) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// `sinew fit`: fits the actor to the performance; bakes the fit into `out` (a `.sinew`
-/// performance, docs/FORMAT.md), writes the core's playback of it into `OUT_STEM.meshes/` and
-/// the report (with per-frame head, jaw and, for a global fit, coefficients).
+/// `sinew fit`: fits the actor to the performance, checkpointing into `OUT.ckpt/` (or
+/// continuing from `resume`); bakes the fit into `out` (a `.sinew` performance, docs/FORMAT.md),
+/// writes the core's playback of it into `OUT_STEM.meshes/` and the report (with per-frame head,
+/// jaw and, for a global fit, coefficients).
 pub fn fit_command(
     model: &Path,
     target: &Path,
     out: &Path,
     report: &Path,
     config: &FitConfig,
+    resume: Option<&Path>,
     backend: Backend,
 ) -> Result<FitReport> {
     let bytes = read_actor(model)?;
     let actor = AimActor::from_bytes(&bytes).map_err(|e| anyhow!("{}: {e}", model.display()))?;
     let perf = Performance::read(target)?;
-    let result = fit(&actor, &perf, config, backend)?;
+    let own = crate::training::checkpoint::checkpoint_dir_for(out);
+    let checkpoints = Checkpointing {
+        dir: resume.unwrap_or(&own),
+        resume: resume.is_some(),
+    };
+    let result = fit_resumable(&actor, &perf, config, backend, Some(checkpoints))?;
     let baked = bake(&bytes, &result)?;
     let (played, _) = play(&bytes, &baked)?;
     let stem = out

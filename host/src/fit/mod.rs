@@ -7,6 +7,7 @@
 pub mod aim;
 pub mod bake;
 pub mod baseline;
+pub mod checkpoint;
 pub mod commands;
 pub mod heatmaps;
 pub mod performance;

@@ -174,3 +174,37 @@ fn sparse_and_2d_fits_recover_the_face_from_little() {
         );
     }
 }
+
+#[test]
+fn a_resumed_fit_ends_where_an_unbroken_one_does() {
+    use crate::fit::checkpoint::Checkpointing;
+    let Some((dir, perf, bytes)) = golden_performance(6, 2) else {
+        return;
+    };
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let config = |iterations| FitConfig {
+        iterations,
+        hidden: 16,
+        code: 8,
+        points: 256,
+        ..FitConfig::default()
+    };
+    let (a_dir, b_dir) = (dir.path().join("a.ckpt"), dir.path().join("b.ckpt"));
+    fn ck(dir: &std::path::Path, resume: bool) -> Option<Checkpointing<'_>> {
+        Some(Checkpointing { dir, resume })
+    }
+    let a = fit_resumable(&actor, &perf, &config(40), Backend::Flex, ck(&a_dir, false)).unwrap();
+    // Stopped at step 20, then continued to 40.
+    fit_resumable(&actor, &perf, &config(20), Backend::Flex, ck(&b_dir, false)).unwrap();
+    let b = fit_resumable(&actor, &perf, &config(40), Backend::Flex, ck(&b_dir, true)).unwrap();
+    assert_eq!(a.meshes, b.meshes, "the resumed fit differs");
+    assert_eq!(a.loss_history, b.loss_history);
+    // Other settings are refused, naming the checkpoint's state file.
+    let other = FitConfig {
+        hidden: 32,
+        ..config(40)
+    };
+    let e = fit_resumable(&actor, &perf, &other, Backend::Flex, ck(&b_dir, true)).unwrap_err();
+    let e = format!("{e:#}");
+    assert!(e.contains("state.json") && e.contains("settings"), "{e}");
+}
