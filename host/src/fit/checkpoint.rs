@@ -10,8 +10,8 @@ use burn::module::Module;
 use burn::optim::ModuleOptimizer;
 use serde::{Deserialize, Serialize};
 
-use crate::fit::aim::{FitConfig, FitNet};
 use crate::fit::performance::Performance;
+use crate::fit::setup::{FitConfig, FitNet};
 use crate::training::checkpoint::{self, STATE_FILE, WeightFiles};
 
 /// `format` of a fit checkpoint's `state.json`.

@@ -1,6 +1,6 @@
 //! Fitting a baked AIM actor to performances (AIM Sec. 4.2, 5.3): synthetic performances to fit
 //! (`performance`), the blendshape baselines of Table 1 (`baseline`), the AIM fit on burn
-//! (`aim`), a fit baked into a `.sinew` performance and played through the core (`bake`) the
+//! (`aim`, its settings and variables in `setup`), a fit baked into a `.sinew` performance and played through the core (`bake`) the
 //! per-frame error heatmaps of several fits side by side (`heatmaps`) and the commands' work
 //! (`commands`).
 
@@ -11,3 +11,4 @@ pub mod checkpoint;
 pub mod commands;
 pub mod heatmaps;
 pub mod performance;
+pub mod setup;
