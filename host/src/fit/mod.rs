@@ -1,8 +1,8 @@
 //! Fitting a baked AIM actor to performances (AIM Sec. 4.2, 5.3): synthetic performances to fit
 //! (`performance`), the blendshape baselines of Table 1 (`baseline`), the AIM fit on burn
-//! (`aim`, its settings and variables in `setup`), a fit baked into a `.sinew` performance and played through the core (`bake`) the
-//! per-frame error heatmaps of several fits side by side (`heatmaps`) and the commands' work
-//! (`commands`).
+//! (`aim`; its settings and variables in `setup`, its checkpoints in `checkpoint`), a fit baked
+//! into a `.sinew` performance and played through the core (`bake`), per-frame error heatmaps
+//! of several fits side by side (`heatmaps`) and the commands' work (`commands`).
 
 pub mod aim;
 pub mod bake;
