@@ -465,6 +465,13 @@ fn centred_difference(
 
 /// Mean of a `[K, 3]` set and the reciprocal of its centred Frobenius norm (1 for a zero norm).
 fn centre_scale(points: &[f32]) -> ([f32; 3], f32) {
+    let (c, norm) = centre_size(points);
+    (c, if norm > 0.0 { 1.0 / norm } else { 1.0 })
+}
+
+/// Mean of a `[K, 3]` set and its centred Frobenius norm, summed in point order (the landmark
+/// size both the decoder's input and the SRVF encoding divide by).
+pub(crate) fn centre_size(points: &[f32]) -> ([f32; 3], f32) {
     let k = (points.len() / 3).max(1) as f32;
     let mut c = [0.0f32; 3];
     for p in points.chunks_exact(3) {
@@ -482,8 +489,7 @@ fn centre_scale(points: &[f32]) -> ([f32; 3], f32) {
             sq += d * d;
         }
     }
-    let norm = libm::sqrtf(sq);
-    (c, if norm > 0.0 { 1.0 / norm } else { 1.0 })
+    (c, libm::sqrtf(sq))
 }
 
 #[cfg(test)]

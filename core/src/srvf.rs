@@ -93,24 +93,7 @@ pub fn project_tangent(p: &[f32], s: &mut [f32]) -> Result<(), BufferError> {
 /// Centred Frobenius norm of a `[K, 3]` landmark set (the size the encoding divides each frame
 /// by); 0 for an empty or degenerate set.
 pub fn landmark_size(points: &[f32]) -> f32 {
-    let k = (points.len() / 3).max(1) as f32;
-    let mut c = [0.0f32; 3];
-    for p in points.chunks_exact(3) {
-        for (ci, pi) in c.iter_mut().zip(p) {
-            *ci += *pi;
-        }
-    }
-    for ci in &mut c {
-        *ci /= k;
-    }
-    let mut sq = 0.0f32;
-    for p in points.chunks_exact(3) {
-        for (pi, ci) in p.iter().zip(&c) {
-            let d = *pi - *ci;
-            sq += d * d;
-        }
-    }
-    libm::sqrtf(sq)
+    crate::s2d::centre_size(points).1
 }
 
 /// Decodes the motion `q` onto the landmarks `neutral` (S2D eq. 5, `α(t) = ∫₀ᵗ ‖q(s)‖ q(s) ds +
