@@ -4,60 +4,69 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# Each step's heading says how far into the run it starts.
+step() { echo "== $* (${SECONDS}s)"; }
+
 rustup component add rustfmt clippy >/dev/null 2>&1 || true
 rustup target add thumbv7em-none-eabihf wasm32-unknown-unknown >/dev/null
 
-echo "== fmt"
+step "fmt"
 cargo fmt --all --check
 (cd core/fuzz && cargo fmt --check)
 
-echo "== clippy"
+step "clippy"
 # The ndarray backend is linted here (once), so its narrow deprecation allowance stays checked.
 cargo clippy --workspace --all-targets --locked --features sinew-host/ndarray -- -D warnings
 
-echo "== docs (rustdoc, warnings are errors)"
+step "docs (rustdoc, warnings are errors)"
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace --locked
 
-echo "== no_std core for thumbv7em-none-eabihf"
+step "no_std core for thumbv7em-none-eabihf"
 cargo build -p sinew-core --target thumbv7em-none-eabihf --locked
 
-echo "== tests"
+step "tests"
 cargo test --workspace --locked
 
-echo "== glTF: the golden ICT actor exported (poses; ARKit capture with bones), Khronos validator"
+# The steps below run the `sinew` binary that `cargo test --workspace` built. A `cargo build -p
+# sinew-host` here would resolve features without the workspace's dev-dependencies and recompile
+# burn and everything under it a second time.
+sinew="$(cd "${CARGO_TARGET_DIR:-target}" && pwd)/debug/sinew"
+
+step "glTF: the golden ICT actor exported (poses; ARKit capture with bones), Khronos validator"
 if ! command -v npm >/dev/null; then
   apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq nodejs npm >/dev/null
 fi
 gltf_dir=$(mktemp -d)
-cargo run -q --locked -p sinew-host --bin sinew -- export gltf --model tests/data/aim-ict.sinew \
+"$sinew" export gltf --model tests/data/aim-ict.sinew \
   --poses host/tests/gltf/poses.json --out "$gltf_dir/poses.glb" >/dev/null
-cargo run -q --locked -p sinew-host --bin sinew -- export gltf --model tests/data/aim-ict.sinew \
+"$sinew" export gltf --model tests/data/aim-ict.sinew \
   --arkit tests/data/arkit-sample.csv --bones --out "$gltf_dir/arkit.glb" >/dev/null
 (cd host/tests/gltf && npm ci --no-audit --no-fund --silent && node validate.mjs "$gltf_dir/poses.glb" "$gltf_dir/arkit.glb")
 rm -rf "$gltf_dir"
 
-echo "== C API: the golden replays from C (core/ffi/examples/replay.c)"
+step "C API: the golden replays from C (core/ffi/examples/replay.c)"
 if ! command -v cc >/dev/null; then
   apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gcc >/dev/null
 fi
 bash core/ffi/run-example.sh
 
-echo "== wasm package: build, then the golden replays through the JavaScript API (node)"
+step "wasm package: build, then the golden replays through the JavaScript API (node)"
 if ! command -v node >/dev/null; then
   apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends nodejs
 fi
 bash core/wasm/build.sh
 node --test core/wasm/test/*.test.mjs
 
-echo "== sinew view: the page in headless chromium plays the golden replay (host/tests/view/e2e.mjs)"
+step "sinew view: the page in headless chromium plays the golden replay (host/tests/view/e2e.mjs)"
 for tool in chromium npm; do
   if ! command -v "$tool" >/dev/null; then
     apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$tool" >/dev/null
   fi
 done
 (cd host/tests/view && npm ci --no-audit --no-fund)
-cargo build -p sinew-host --locked
-node host/tests/view/e2e.mjs
+SINEW_BIN="$sinew" node host/tests/view/e2e.mjs
 
-echo "== firmware-sim: golden replays on Cortex-M4F, RISC-V (QEMU) and wasm (node)"
+step "firmware-sim: golden replays on Cortex-M4F, RISC-V (QEMU) and wasm (node)"
 bash firmware-sim/run.sh
+
+step "all checks passed"
