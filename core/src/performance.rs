@@ -16,7 +16,11 @@
 //! - global: `perf.w`: `f32 [J, M]`;
 //! - local: `perf.z`: `f32 [J, f]`; `perf.box`: `f32 [4]` (centre x, y, z, half extent); the MLP
 //!   `perf.fw` ([`crate::network`]) with `f + 3` inputs and `M` outputs;
-//! - optional `perf.hash`: `u32 [J, 2]`, each frame's f32 hash ([`frame_hash`]) as baked.
+//! - optional `perf.hash`: `u32 [J, 2]`, each frame's f32 hash ([`frame_hash`]) as baked;
+//! - optional, local only: `perf.points`: `f32 [V, 3]`, the template points `F_W` is evaluated
+//!   at when they are not the actor's own: a performance retargeted from another actor in
+//!   correspondence (AIM Sec. 5.4) evaluates `w_j(c)` at the source actor's points, where the fit
+//!   learned it, and plays it on the target's vertices of the same index.
 
 use crate::aim::{AimActor, MAX_SHAPES};
 use crate::error::{BufferError, FormatError};
@@ -43,6 +47,9 @@ pub const BOX: &str = "perf.box";
 pub const F_W: &str = "perf.fw";
 /// Per-frame f32 hashes, `[J, 2]` (optional).
 pub const HASHES: &str = "perf.hash";
+/// The points `F_W` is evaluated at, `[V, 3]` (optional, local only; default: the actor's
+/// template).
+pub const POINTS: &str = "perf.points";
 
 /// Longest frame code this build accepts.
 pub const MAX_CODE: usize = 1024;
@@ -66,6 +73,8 @@ pub enum Coefficients<'a> {
         half: f32,
         /// F_W: `f + 3` inputs, `M` outputs.
         fw: Mlp<'a>,
+        /// The points F_W is evaluated at (`[V, 3]`), when not the actor's template.
+        points: Option<F32s<'a>>,
     },
 }
 
@@ -114,6 +123,10 @@ impl<'a> Performance<'a> {
             (None, Some(_)) => local(&file, frames)?,
             _ => return Err(FormatError::MissingSection),
         };
+        if file.section(POINTS).is_some() && !matches!(coefficients, Coefficients::Local { .. }) {
+            // A global fit has no per-point coefficients to evaluate anywhere.
+            return Err(FormatError::IncompatibleShapes);
+        }
         let hashes = match file.section(HASHES) {
             Some(_) => Some(file.u32_tensor(HASHES, &[frames, 2])?),
             None => None,
@@ -154,10 +167,12 @@ impl<'a> Performance<'a> {
         matches!(self.coefficients, Coefficients::Local { .. })
     }
 
-    /// Checks that this performance was fitted to the actor whose bytes are `model_bytes`.
+    /// Checks that this performance was fitted (or retargeted) to the actor whose bytes are
+    /// `model_bytes`.
     ///
     /// # Errors
-    /// [`ReplayError::WrongModel`] or [`ReplayError::ShapeCount`].
+    /// [`ReplayError::WrongModel`], [`ReplayError::ShapeCount`], or
+    /// [`ReplayError::PointCount`] when the file's own points do not number the actor's vertices.
     pub fn check_actor(&self, model_bytes: &[u8], actor: &AimActor<'_>) -> Result<(), ReplayError> {
         let found = model_hash(model_bytes);
         if found != self.model_hash {
@@ -172,7 +187,25 @@ impl<'a> Performance<'a> {
                 actor: actor.shape_count(),
             });
         }
+        if let Some(n) = self.point_count()
+            && n != actor.vertex_count()
+        {
+            return Err(ReplayError::PointCount {
+                performance: n,
+                actor: actor.vertex_count(),
+            });
+        }
         Ok(())
+    }
+
+    /// How many points the file carries for F_W (`perf.points`), if it carries its own.
+    pub fn point_count(&self) -> Option<usize> {
+        match &self.coefficients {
+            Coefficients::Local {
+                points: Some(p), ..
+            } => Some(p.len() / 3),
+            _ => None,
+        }
     }
 
     /// Frame `f`'s head and jaw (6D rotation + translation each), `None` past the end.
@@ -217,10 +250,12 @@ impl<'a> Performance<'a> {
     /// and coefficients, the local ones evaluated per template point by F_W (eq. 19).
     ///
     /// The actor must be the one this performance was fitted to ([`Self::check_actor`]); with
-    /// another of the same coefficient count the result is defined but meaningless.
+    /// another of the same coefficient count the result is defined but meaningless. F_W sees the
+    /// file's own points (`perf.points`) where it carries them, else the actor's template.
     ///
     /// # Errors
-    /// [`BufferError::Input`] if `f` is past the end or the actor's coefficient count differs;
+    /// [`BufferError::Input`] if `f` is past the end, the actor's coefficient count differs or
+    /// the file's points number other than the actor's vertices;
     /// [`BufferError::Scratch`] if `scratch` is shorter than [`Self::scratch_len`];
     /// [`BufferError::Output`] if `out` is not `[V, 3]`.
     pub fn pose(
@@ -250,21 +285,22 @@ impl<'a> Performance<'a> {
                 centre,
                 half,
                 fw,
+                points,
             } => {
                 let v = actor.vertex_count();
                 if out.len() != 3 * v {
                     return Err(BufferError::Output);
                 }
+                let tpl = match points {
+                    Some(p) if p.len() != 3 * v => return Err(BufferError::Input),
+                    Some(p) => *p,
+                    None => actor.template(),
+                };
                 let (input, mlp) = rest.split_at_mut(code_len + 3);
                 for (i, x) in input.iter_mut().take(*code_len).enumerate() {
                     *x = codes.at(f * code_len + i);
                 }
-                let (tpl, s0, k, e) = (
-                    actor.template(),
-                    actor.rest(),
-                    actor.skinning_weights(),
-                    actor.correctives(),
-                );
+                let (s0, k, e) = (actor.rest(), actor.skinning_weights(), actor.correctives());
                 let per_vertex = 3 * self.shapes;
                 for (i, o) in out.chunks_exact_mut(3).enumerate() {
                     let point = input.iter_mut().skip(*code_len).zip(centre).enumerate();
@@ -318,6 +354,20 @@ fn local<'a>(file: &SinewFile<'a>, frames: u32) -> Result<(Coefficients<'a>, usi
     if fw.inputs() != code_len + 3 {
         return Err(FormatError::IncompatibleShapes);
     }
+    let points = match file.section(POINTS) {
+        Some(_) => {
+            let (shape, rank) = file.dims_of(POINTS)?;
+            if rank != 2 || shape[0] == 0 || shape[1] != 3 {
+                return Err(FormatError::IncompatibleShapes);
+            }
+            let p = file.f32_tensor(POINTS, &[shape[0], 3])?;
+            if !p.iter().all(f32::is_finite) {
+                return Err(FormatError::NonFinite);
+            }
+            Some(p)
+        }
+        None => None,
+    };
     if shapes > MAX_SHAPES {
         return Err(FormatError::LimitExceeded);
     }
@@ -328,6 +378,7 @@ fn local<'a>(file: &SinewFile<'a>, frames: u32) -> Result<(Coefficients<'a>, usi
             centre,
             half,
             fw,
+            points,
         },
         shapes,
     ))

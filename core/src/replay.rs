@@ -236,6 +236,13 @@ pub enum ReplayError {
         /// Vertices the decoder outputs.
         model: usize,
     },
+    /// A performance's own template points number differently from the actor's vertices.
+    PointCount {
+        /// The performance's points.
+        performance: usize,
+        /// The actor's vertices.
+        actor: usize,
+    },
     /// A caller buffer has the wrong length.
     Buffer(BufferError),
 }
@@ -259,6 +266,11 @@ impl fmt::Display for ReplayError {
             Self::NeutralVertices { replay, model } => write!(
                 f,
                 "replay's neutral has {replay} vertices, the S2D decoder's template {model}"
+            ),
+            Self::PointCount { performance, actor } => write!(
+                f,
+                "performance evaluates its coefficients at {performance} points, the actor has \
+                 {actor} vertices"
             ),
             Self::Buffer(e) => write!(f, "{e}"),
         }

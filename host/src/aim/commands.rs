@@ -15,16 +15,18 @@ use crate::io::mesh::Mesh;
 use crate::training::backend::Backend;
 use crate::training::checkpoint::checkpoint_dir_for;
 
-/// The ICT-FaceKit actor of the default protocol (generic neutral, the 19 default expressions,
-/// the face region) with bones from `bones_dir` (`skull.obj`, `jaw.obj`) or fitted now.
+/// The ICT-FaceKit actor of the default protocol (the 19 default expressions, the face region) of
+/// an identity (weights of the kit's identity modes; empty: the generic neutral), with bones
+/// from `bones_dir` (`skull.obj`, `jaw.obj`) or fitted now.
 pub fn ict_training_set(
     data: &Path,
+    identity: &[f32],
     bones_dir: Option<&Path>,
     templates: &Path,
     config: &AimConfig,
 ) -> Result<(TrainingSet, String)> {
     let kit = IctFaceKit::open(data)?;
-    let actor = kit.actor(&[], &DEFAULT_SHAPES, FACE_REGION)?;
+    let actor = kit.actor(identity, &DEFAULT_SHAPES, FACE_REGION)?;
     let (skull, jaw, said) = match bones_dir {
         Some(dir) => {
             let skull = Mesh::read(&dir.join("skull.obj"))?;
@@ -33,7 +35,11 @@ pub fn ict_training_set(
         }
         None => {
             let templates_dir = bone_templates(templates)?;
-            let fitted = fit_bones(kit.neutral(), &kit.landmarks68()?, &templates_dir)?;
+            let fitted = fit_bones(
+                &kit.neutral_of(identity)?,
+                &kit.landmarks68()?,
+                &templates_dir,
+            )?;
             (
                 fitted.skull,
                 fitted.jaw,
@@ -68,10 +74,12 @@ pub fn train_aim(
     run(set, config, &options, out)
 }
 
-/// `sinew eval aim`: the baked actor against its ICT-FaceKit training shapes.
+/// `sinew eval aim`: the baked actor against its ICT-FaceKit training shapes (of `identity`, as
+/// it was trained).
 pub fn eval_aim(
     model: &Path,
     data: &Path,
+    identity: &[f32],
     bones: Option<&Path>,
     templates: &Path,
 ) -> Result<Report> {
@@ -84,7 +92,7 @@ pub fn eval_aim(
             .with_context(|| format!("{}: invalid config metadata", model.display()))?,
         None => AimConfig::default(),
     };
-    let (set, said) = ict_training_set(data, bones, templates, &config)?;
+    let (set, said) = ict_training_set(data, identity, bones, templates, &config)?;
     eprintln!("{said}");
     if let Some(names) = file.metadata().get("shapes") {
         let names: Vec<&str> = names.split(',').collect();

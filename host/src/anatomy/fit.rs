@@ -22,16 +22,19 @@ pub fn fit_bones(
     crate::anatomy::bones::fit(neutral, &skin, &t)
 }
 
-/// `sinew bones fit`: fits template bones to the ICT neutral and writes `skull.obj`, `jaw.obj`,
+/// `sinew bones fit`: fits template bones to the ICT neutral of `identity` (weights of the kit's
+/// identity modes; empty: the generic neutral) and writes `skull.obj`, `jaw.obj`,
 /// `fit.json` and a picture (`bones.png`: the bones, and the skin coloured by the tissue
 /// thickness of its constraints).
 pub fn bones_fit(
     data: &Path,
+    identity: &[f32],
     templates: &Path,
     out: &Path,
 ) -> Result<crate::anatomy::bones::FitReport> {
     let kit = IctFaceKit::open(data)?;
-    let fitted = fit_bones(kit.neutral(), &kit.landmarks68()?, templates)?;
+    let neutral = kit.neutral_of(identity)?;
+    let fitted = fit_bones(&neutral, &kit.landmarks68()?, templates)?;
     std::fs::create_dir_all(out)
         .with_context(|| format!("{}: cannot create folder", out.display()))?;
     fitted.skull.write(&out.join("skull.obj"))?;
@@ -40,7 +43,7 @@ pub fn bones_fit(
         &out.join("fit.json"),
         serde_json::to_string_pretty(&fitted.report)?.as_bytes(),
     )?;
-    let (face, _) = kit.neutral().submesh(|v| FACE_REGION.contains(&v));
+    let (face, _) = neutral.submesh(|v| FACE_REGION.contains(&v));
     let anchors = crate::anatomy::constraints::anchors(
         &face,
         &fitted.skull,

@@ -87,6 +87,8 @@ pub(crate) struct EvalAim {
     bones: Option<PathBuf>,
     #[command(flatten)]
     templates: super::bones::TemplatesArg,
+    #[command(flatten)]
+    identity: super::bones::IdentityArg,
 }
 
 #[derive(Debug, Args)]
@@ -115,6 +117,8 @@ pub(crate) struct TrainAim {
     bones: Option<PathBuf>,
     #[command(flatten)]
     templates: super::bones::TemplatesArg,
+    #[command(flatten)]
+    identity: super::bones::IdentityArg,
     /// burn backend.
     #[arg(long, value_enum, default_value_t = Backend::Flex)]
     backend: Backend,
@@ -236,6 +240,7 @@ pub(crate) fn train(args: TrainAim) -> Result<()> {
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
     let (set, said) = sinew_host::aim::commands::ict_training_set(
         &args.data,
+        &args.identity.weights,
         args.bones.as_deref(),
         &args.templates.path,
         &config,
@@ -278,8 +283,15 @@ pub(crate) fn eval(args: EvalAim) -> Result<()> {
         report,
         bones,
         templates,
+        identity,
     } = args;
-    let r = sinew_host::aim::commands::eval_aim(&model, &data, bones.as_deref(), &templates.path)?;
+    let r = sinew_host::aim::commands::eval_aim(
+        &model,
+        &data,
+        &identity.weights,
+        bones.as_deref(),
+        &templates.path,
+    )?;
     sinew_host::io::atomic::write(&report, serde_json::to_string_pretty(&r)?.as_bytes())?;
     println!(
         "{}: mean {:.3} mm, median {:.3} mm, p95 {:.3} mm, max {:.3} mm",

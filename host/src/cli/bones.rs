@@ -18,6 +18,20 @@ pub(crate) struct TemplatesArg {
     pub(crate) path: PathBuf,
 }
 
+/// Which ICT-FaceKit identity an actor is: the generic neutral plus these multiples of the
+/// kit's identity modes.
+#[derive(Debug, Args)]
+pub(crate) struct IdentityArg {
+    /// Identity weights in standard deviations of the kit's first identity modes, comma
+    /// separated (e.g. `1.5,-1,0.8`); none: the generic neutral.
+    #[arg(
+        long = "identity",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    pub(crate) weights: Vec<f32>,
+}
+
 #[derive(Debug, Subcommand)]
 pub(crate) enum Bones {
     /// Register the template skull and jaw to an ICT-FaceKit neutral (similarity from landmarks
@@ -28,6 +42,8 @@ pub(crate) enum Bones {
         data: PathBuf,
         #[command(flatten)]
         templates: TemplatesArg,
+        #[command(flatten)]
+        identity: IdentityArg,
         /// Output folder.
         #[arg(long)]
         out: PathBuf,
@@ -40,10 +56,12 @@ pub(crate) fn run(cmd: Bones) -> Result<()> {
         Bones::Fit {
             data,
             templates,
+            identity,
             out,
         } => {
             let templates = sinew_host::anatomy::fit::bone_templates(&templates.path)?;
-            let report = sinew_host::anatomy::fit::bones_fit(&data, &templates, &out)?;
+            let report =
+                sinew_host::anatomy::fit::bones_fit(&data, &identity.weights, &templates, &out)?;
             println!("{}", serde_json::to_string_pretty(&report)?);
             eprintln!("bones written to {}", out.display());
         }

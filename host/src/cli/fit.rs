@@ -8,6 +8,7 @@ use clap::Args;
 use sinew_host::fit::aim::{Coefficients, Constrain, FitConfig, Mode};
 use sinew_host::fit::commands::{eval_fit, fit_command};
 use sinew_host::fit::performance::{PerformanceConfig, generate};
+use sinew_host::fit::retarget::{SourceFit, retarget_command};
 use sinew_host::training::backend::Backend;
 
 /// `sinew data performance`.
@@ -56,6 +57,40 @@ pub(crate) fn performance(args: PerformanceArgs) -> Result<()> {
         m.expressions.len(),
         m.camera.width,
         m.camera.height
+    );
+    Ok(())
+}
+
+/// `sinew data neutral`.
+#[derive(Debug, Args)]
+pub(crate) struct NeutralArgs {
+    /// ICT-FaceKit folder.
+    #[arg(long)]
+    data: PathBuf,
+    #[command(flatten)]
+    identity: super::bones::IdentityArg,
+    /// A baked AIM actor made on the kit's generic neutral (e.g. tests/data/aim-ict.sinew): the
+    /// face takes its vertices and triangles. Without it: the whole face region.
+    #[arg(long)]
+    like: Option<PathBuf>,
+    /// Output OBJ.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// `sinew data neutral`.
+pub(crate) fn neutral(args: NeutralArgs) -> Result<()> {
+    let mesh = sinew_host::fit::performance::write_neutral(
+        &args.data,
+        &args.identity.weights,
+        args.like.as_deref(),
+        &args.out,
+    )?;
+    println!(
+        "{}: {} vertices, {} polygons",
+        args.out.display(),
+        mesh.positions.len(),
+        mesh.polygons.len()
     );
     Ok(())
 }
@@ -130,6 +165,81 @@ pub(crate) struct FitArgs {
     resume: Option<PathBuf>,
     #[command(flatten)]
     options: FitOptions,
+}
+
+/// `sinew retarget`.
+#[derive(Debug, Args)]
+pub(crate) struct RetargetArgs {
+    /// The baked AIM actor whose performance is retargeted.
+    #[arg(long)]
+    source: PathBuf,
+    /// The baked AIM actor that plays it, in vertex correspondence with the source (same
+    /// vertices and triangles, same shapes).
+    #[arg(long)]
+    target: PathBuf,
+    /// A performance folder of the source (`sinew data performance`) to fit the source to
+    /// first (into OUT/source.sinew).
+    #[arg(long, conflicts_with = "fit", required_unless_present = "fit")]
+    performance: Option<PathBuf>,
+    /// A fit of the source baked before (`sinew fit --out`), instead of --performance.
+    #[arg(long)]
+    fit: Option<PathBuf>,
+    /// Output folder: target.sinew, jaw.sinew, soft.sinew, one OBJ per frame of each in
+    /// target/, jaw/, soft/, strip.png and report.json.
+    #[arg(long)]
+    out: PathBuf,
+    /// Frames in strip.png, 0-based and comma separated (default: four spread over the
+    /// performance).
+    #[arg(long, value_delimiter = ',')]
+    frames: Option<Vec<usize>>,
+    /// Fit one coefficient vector per frame (the paper's "(G)") instead of per template point.
+    #[arg(long)]
+    global: bool,
+    #[command(flatten)]
+    options: FitOptions,
+}
+
+/// `sinew retarget`.
+pub(crate) fn retarget(args: RetargetArgs) -> Result<()> {
+    let input = match (args.performance, args.fit) {
+        (_, Some(fit)) => SourceFit::Baked(fit),
+        (Some(performance), None) => {
+            let c = if args.global {
+                Coefficients::Global
+            } else {
+                Coefficients::Local
+            };
+            let config = args.options.config(c);
+            eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
+            sinew_host::training::interrupt::watch_ctrl_c();
+            SourceFit::Fit {
+                performance,
+                config,
+                backend: args.options.backend,
+            }
+        }
+        (None, None) => anyhow::bail!("give --performance PERF_DIR or --fit FIT.sinew"),
+    };
+    let r = retarget_command(
+        &args.source,
+        &args.target,
+        &input,
+        &args.out,
+        args.frames.as_deref(),
+    )?;
+    println!(
+        "{}: {} frames of {} played on {}, {:.3} s per frame{}",
+        args.out.display(),
+        r.frames,
+        args.source.display(),
+        args.target.display(),
+        r.seconds_per_frame,
+        match (r.fit_seconds_per_frame, r.fit_mean_error_mm) {
+            (Some(s), Some(e)) => format!(" (fit: {e:.3} mm, {s:.2} s per frame)"),
+            _ => String::new(),
+        }
+    );
+    Ok(())
 }
 
 /// `sinew eval fit`.

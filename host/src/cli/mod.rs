@@ -67,6 +67,10 @@ enum Command {
     /// Fit a baked AIM actor to a performance's meshes (AIM eqs. 17–24): per-frame head, jaw
     /// and corrective coefficients, and the fitted meshes.
     Fit(fit::FitArgs),
+    /// Retarget a performance from one AIM actor to another in vertex correspondence (AIM Fig.
+    /// 8): the source fitted (or a fit of it), its head, jaw and coefficients played on the
+    /// target, and the jaw-only and soft-tissue-only parts, through sinew-core.
+    Retarget(fit::RetargetArgs),
     /// Generate data sets.
     #[command(subcommand)]
     Data(s2d::Data),
@@ -119,6 +123,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Eval(Eval::Aim(args)) => aim::eval(args),
         Command::Eval(Eval::Fit(args)) => fit::eval(args),
         Command::Fit(args) => fit::fit(args),
+        Command::Retarget(args) => fit::retarget(args),
         Command::Bake(args) => aim::bake(args),
         Command::Play(args) => aim::play(args),
         Command::Export(cmd) => export::run(cmd),

@@ -51,6 +51,10 @@ pub(crate) enum Data {
     /// trajectories of all 53 expression weights, the jaw and the head; one OBJ per frame,
     /// performance.json with the ground truth, the camera and 68 projected landmarks.
     Performance(super::fit::PerformanceArgs),
+    /// The ICT-FaceKit face region of an identity as OBJ, optionally on a baked actor's vertices
+    /// and triangles: the template to bake another identity's actor on in correspondence with it
+    /// (for `sinew retarget`).
+    Neutral(super::fit::NeutralArgs),
     /// The face `sinew demo` trains on: the ICT-FaceKit face region decimated to about 1,500
     /// vertices with its 20 default shapes and the bone constraints AIM trains on, as compact
     /// gzipped JSON (the repository's copy is host/data/demo-face.json.gz).
@@ -297,6 +301,7 @@ pub(crate) fn data(cmd: Data) -> Result<()> {
             );
         }
         Data::Performance(args) => super::fit::performance(args)?,
+        Data::Neutral(args) => super::fit::neutral(args)?,
         Data::DemoFace {
             data,
             templates,

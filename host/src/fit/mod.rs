@@ -2,7 +2,8 @@
 //! (`performance`), the blendshape baselines of Table 1 (`baseline`), the AIM fit on burn
 //! (`aim`; its settings and variables in `setup`, its checkpoints in `checkpoint`), a fit baked
 //! into a `.sinew` performance and played through the core (`bake`), per-frame error heatmaps
-//! of several fits side by side (`heatmaps`) and the commands' work (`commands`).
+//! of several fits side by side (`heatmaps`), the commands' work (`commands`) and a fit played
+//! on another actor (`retarget`, AIM Sec. 5.4).
 
 pub mod aim;
 pub mod bake;
@@ -11,4 +12,5 @@ pub mod checkpoint;
 pub mod commands;
 pub mod heatmaps;
 pub mod performance;
+pub mod retarget;
 pub mod setup;

@@ -486,6 +486,36 @@ pub fn generate(
     Ok(manifest)
 }
 
+/// `sinew data neutral`: the kit's face region on an identity (`identity`: weights of the kit's
+/// identity modes; empty: the generic neutral), on the vertices and triangles of `like` when
+/// given (a baked actor made on the generic neutral, such as the decimated golden), written to
+/// `out` as OBJ. It is the template on which an actor of that identity is baked in vertex
+/// correspondence with `like` (`sinew bake --template`), as retargeting needs.
+pub fn write_neutral(
+    data: &Path,
+    identity: &[f32],
+    like: Option<&Path>,
+    out: &Path,
+) -> Result<Mesh> {
+    let kit = IctFaceKit::open(data)?;
+    let face = kit.actor(identity, &[], FACE_REGION)?;
+    let mesh = match like {
+        Some(path) => {
+            let generic = kit.actor(&[], &[], FACE_REGION)?;
+            let t = actor_topology(path, &generic.template)?;
+            let positions = t
+                .kit_vertices
+                .iter()
+                .map(|&v| face.template.positions[v as usize])
+                .collect();
+            Mesh::new(positions, t.polygons)
+        }
+        None => face.template,
+    };
+    mesh.write(out)?;
+    Ok(mesh)
+}
+
 /// A frame's mesh: `T_g(LBS(n, T_b, k) + Σ_i w_i d_i)` (AIM eq. 17's form over the kit's
 /// deltas).
 fn pose(

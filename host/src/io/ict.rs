@@ -252,6 +252,16 @@ impl IctFaceKit {
             .collect()
     }
 
+    /// The whole neutral head of an identity (`identity_weights` as for [`Self::actor`]; empty:
+    /// the generic neutral).
+    pub fn neutral_of(&self, identity_weights: &[f32]) -> Result<Mesh> {
+        if identity_weights.iter().all(|&w| w == 0.0) {
+            return Ok(self.neutral.clone());
+        }
+        let all = 0..self.neutral.positions.len() as u32;
+        Ok(self.actor(identity_weights, &[], all)?.template)
+    }
+
     /// Builds an actor: identity `identity_weights[i]` (in standard deviations) for the first
     /// modes, the given expressions, restricted to the vertex range `region` (e.g.
     /// [`FACE_REGION`]). Only modes with a non-zero weight are read. Files are read on several

@@ -1,0 +1,345 @@
+//! Performance retargeting (AIM Sec. 5.4, Fig. 8): a performance fitted on a source actor, played
+//! on a target actor in vertex correspondence.
+//!
+//! The fit's per-frame head and jaw transforms `T_g`, `T_b` and coefficients `w` are the
+//! target's inputs as they are; only the actor changes, so the target moves as the source did
+//! with its own rest shape, jaw pivot, skinning weights and correctives. Local coefficients
+//! `w_j(c) = F_W(z_j, ĉ)` are evaluated at the source's template points, where the fit learned
+//! them (the performance carries them as `perf.points`), and applied at the target's vertex of
+//! the same index.
+//!
+//! The same frames split into Fig. 8's two parts: the rigid jaw alone (`T_b` with no
+//! correctives) and the soft tissue alone (the correctives with the jaw at rest); the head
+//! transform stays in all three, so the parts overlay the full result. Each is a `.sinew`
+//! performance of the target that plays through `sinew-core` like any fit.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, anyhow, bail, ensure};
+use serde::{Deserialize, Serialize};
+use sinew_core::SinewFile;
+use sinew_core::aim::AimActor;
+use sinew_core::performance::{self as perf, Coefficients, Performance};
+use sinew_core::replay::{hash_words, model_hash};
+
+use crate::figures::render::{Image, View, render, text_scale, text_width};
+use crate::fit::bake::play;
+use crate::fit::commands::fit_command;
+use crate::fit::setup::FitConfig;
+use crate::io::container::SinewWriter;
+use crate::io::mesh::{Mesh, points};
+use crate::training::backend::Backend;
+
+/// The jaw transform of the jaw at rest: the identity's 6D rotation, no translation.
+const JAW_AT_REST: [f32; 9] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0];
+
+/// Which part of a retargeted performance to keep (AIM Fig. 8's columns).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Part {
+    /// Everything: head, jaw and correctives.
+    Full,
+    /// The rigid jaw motion alone: head and jaw, no correctives.
+    Jaw,
+    /// The soft tissue alone: head and correctives, the jaw at rest.
+    Soft,
+}
+
+impl Part {
+    /// All three, in the order of the outputs.
+    pub const ALL: [Part; 3] = [Part::Full, Part::Jaw, Part::Soft];
+
+    /// The output name of this part (`target`, `jaw`, `soft`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Part::Full => "target",
+            Part::Jaw => "jaw",
+            Part::Soft => "soft",
+        }
+    }
+}
+
+/// Checks that `source` and `target` are AIM actors in correspondence: the same vertices (count
+/// and triangles) and the same number of correctives.
+fn check_correspondence(source: &AimActor<'_>, target: &AimActor<'_>) -> Result<()> {
+    ensure!(
+        source.vertex_count() == target.vertex_count(),
+        "the source has {} vertices and the target {}: retargeting needs two actors in vertex \
+         correspondence (bake the target on `sinew data neutral --like SOURCE` for that)",
+        source.vertex_count(),
+        target.vertex_count()
+    );
+    ensure!(
+        source
+            .triangles()
+            .indices()
+            .iter()
+            .eq(target.triangles().indices().iter()),
+        "the source's and the target's triangles differ: the actors are not in vertex \
+         correspondence"
+    );
+    ensure!(
+        source.shape_count() == target.shape_count(),
+        "the source has {} correctives and the target {}: both must be trained on the same shapes",
+        source.shape_count(),
+        target.shape_count()
+    );
+    Ok(())
+}
+
+/// The `.sinew` performance of `part` of `fit` (a performance of the actor `source`) retargeted
+/// onto the actor `target`, with each frame's f32 hash as the core plays it on `target`.
+///
+/// # Errors
+/// If an input is not what it should be (an actor, a performance), the fit is not of `source`,
+/// or the actors are not in correspondence ([`check_correspondence`]).
+pub fn retarget(source: &[u8], target: &[u8], fit: &[u8], part: Part) -> Result<Vec<u8>> {
+    let src = AimActor::from_bytes(source).map_err(|e| anyhow!("the source actor: {e}"))?;
+    let dst = AimActor::from_bytes(target).map_err(|e| anyhow!("the target actor: {e}"))?;
+    let p = Performance::from_bytes(fit).map_err(|e| anyhow!("the performance: {e}"))?;
+    p.check_actor(source, &src)
+        .map_err(|e| anyhow!("the performance is not a fit of the source actor: {e}"))?;
+    check_correspondence(&src, &dst)?;
+    let file = SinewFile::from_bytes(fit).map_err(|e| anyhow!("the performance: {e}"))?;
+    let mut w = SinewWriter::from_file(&file)?;
+    for name in [perf::MODEL_HASH, perf::POSES, perf::HASHES, perf::POINTS] {
+        w.remove_prefixed(name);
+    }
+    w.meta("retargeted_from", format!("{:016x}", model_hash(source)))
+        .meta("retargeted_part", part.name());
+    w.u32s(perf::MODEL_HASH, &[2], &hash_words(model_hash(target)))?;
+    let frames = p.frames();
+    let mut poses = Vec::with_capacity(frames * 18);
+    for f in 0..frames {
+        let (head, jaw) = p
+            .head_jaw(f)
+            .ok_or_else(|| anyhow!("frame {f} unreadable"))?;
+        poses.extend(head);
+        poses.extend(if part == Part::Soft { JAW_AT_REST } else { jaw });
+    }
+    w.f32s(perf::POSES, &[frames, 18], &poses)?;
+    let m = p.shape_count();
+    match (part, p.coefficients()) {
+        (Part::Jaw, _) => {
+            for name in [perf::WEIGHTS, perf::CODES, perf::BOX, perf::F_W] {
+                w.remove_prefixed(name);
+            }
+            w.f32s(perf::WEIGHTS, &[frames, m], &vec![0.0; frames * m])?;
+        }
+        (_, Coefficients::Local { points, .. }) => {
+            // F_W sees the points it was fitted at: the source's own, or those a retargeted
+            // source performance already carries.
+            let at = points.unwrap_or_else(|| src.template());
+            let values: Vec<f32> = at.iter().collect();
+            w.f32s(perf::POINTS, &[values.len() / 3, 3], &values)?;
+        }
+        (_, Coefficients::Global(_)) => {}
+    }
+    let unhashed = w.to_bytes()?;
+    let (_, hashes) = play(target, &unhashed)?;
+    let words: Vec<u32> = hashes.iter().flat_map(|&h| hash_words(h)).collect();
+    w.u32s(perf::HASHES, &[frames, 2], &words)?;
+    Ok(w.to_bytes()?)
+}
+
+/// Where the source's performance comes from.
+#[derive(Debug, Clone)]
+pub enum SourceFit {
+    /// A performance folder (`sinew data performance`) to fit the source actor to first.
+    Fit {
+        /// The folder.
+        performance: PathBuf,
+        /// The fit's settings.
+        config: FitConfig,
+        /// Its burn backend.
+        backend: Backend,
+    },
+    /// A fit of the source actor baked before (`sinew fit --out`).
+    Baked(PathBuf),
+}
+
+/// The `sinew retarget` report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RetargetReport {
+    /// Frames retargeted.
+    pub frames: usize,
+    /// The source actor's file.
+    pub source: PathBuf,
+    /// The target actor's file.
+    pub target: PathBuf,
+    /// The fit of the source played on the target (a `.sinew` performance).
+    pub performance: PathBuf,
+    /// Seconds per frame of fitting the source, when this command fitted it.
+    pub fit_seconds_per_frame: Option<f64>,
+    /// The fit's mean per-vertex error on the source's performance, mm, when fitted here.
+    pub fit_mean_error_mm: Option<f64>,
+    /// Seconds per frame to retarget (all three parts baked and played through the core).
+    pub seconds_per_frame: f64,
+    /// Frames drawn in strip.png (0-based).
+    pub strip_frames: Vec<usize>,
+}
+
+/// `sinew retarget`: the source's performance (fitted now or baked before) played on the target,
+/// written to `out`: `target.sinew`, `jaw.sinew`, `soft.sinew` (performances of the target),
+/// one OBJ per frame of each in `target/`, `jaw/`, `soft/`, `strip.png` (rows: `strip` frames;
+/// columns: the source as fitted, the target, jaw only, soft tissue only) and `report.json`.
+/// With a performance folder the source's fit goes to `source.sinew` (and its report and
+/// meshes beside it).
+pub fn retarget_command(
+    source: &Path,
+    target: &Path,
+    input: &SourceFit,
+    out: &Path,
+    strip: Option<&[usize]>,
+) -> Result<RetargetReport> {
+    let source_bytes = read_actor(source)?;
+    let target_bytes = read_actor(target)?;
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("{}: cannot create the output folder", out.display()))?;
+    let (fit_path, fit_seconds, fit_error) = match input {
+        SourceFit::Baked(path) => (path.clone(), None, None),
+        SourceFit::Fit {
+            performance,
+            config,
+            backend,
+        } => {
+            let path = out.join("source.sinew");
+            let start = Instant::now();
+            let r = fit_command(
+                source,
+                performance,
+                &path,
+                &out.join("source.json"),
+                config,
+                None,
+                *backend,
+            )?;
+            let seconds = start.elapsed().as_secs_f64() / r.frames.max(1) as f64;
+            (path, Some(seconds), Some(r.fit.mean_error_mm))
+        }
+    };
+    let fit = crate::io::container::read(&fit_path)?;
+    let start = Instant::now();
+    let mut parts = Vec::with_capacity(Part::ALL.len());
+    for part in Part::ALL {
+        let baked = retarget(&source_bytes, &target_bytes, &fit, part).with_context(|| {
+            format!(
+                "retargeting {} from {} to {}",
+                fit_path.display(),
+                source.display(),
+                target.display()
+            )
+        })?;
+        let (frames, _) = play(&target_bytes, &baked)?;
+        parts.push((part, baked, frames));
+    }
+    let frames = parts[0].2.len();
+    let seconds_per_frame = start.elapsed().as_secs_f64() / frames as f64;
+    let strip_frames = match strip {
+        Some(s) => {
+            if let Some(&f) = s.iter().find(|&&f| f >= frames) {
+                bail!("strip frame {f} is past the performance's {frames} frames");
+            }
+            s.to_vec()
+        }
+        None => spread(frames, 4),
+    };
+    let dst = AimActor::from_bytes(&target_bytes).map_err(|e| anyhow!("{e}"))?;
+    let mesh = Mesh::of_actor(&dst);
+    for (part, baked, played) in &parts {
+        crate::io::atomic::write(&out.join(format!("{}.sinew", part.name())), baked)?;
+        let dir = out.join(part.name());
+        for (f, positions) in played.iter().enumerate() {
+            mesh.with_positions(points(positions.iter().copied()))
+                .write(&dir.join(format!("frame_{f:05}.obj")))?;
+        }
+    }
+    let (source_frames, _) = play(&source_bytes, &fit)?;
+    let mut columns = vec![("source", &source_frames)];
+    columns.extend(
+        parts
+            .iter()
+            .map(|(part, _, played)| (column_title(*part), played)),
+    );
+    strip_picture(&mesh, &columns, &strip_frames).write_png(&out.join("strip.png"))?;
+    let report = RetargetReport {
+        frames,
+        source: source.to_owned(),
+        target: target.to_owned(),
+        performance: out.join("target.sinew"),
+        fit_seconds_per_frame: fit_seconds,
+        fit_mean_error_mm: fit_error,
+        seconds_per_frame,
+        strip_frames,
+    };
+    crate::io::atomic::write(
+        &out.join("report.json"),
+        &serde_json::to_vec_pretty(&report)?,
+    )?;
+    Ok(report)
+}
+
+fn read_actor(path: &Path) -> Result<Vec<u8>> {
+    let bytes = crate::io::container::read(path)?;
+    AimActor::from_bytes(&bytes)
+        .map_err(|e| anyhow!("{}: not an AIM actor: {e}", path.display()))?;
+    Ok(bytes)
+}
+
+fn column_title(part: Part) -> &'static str {
+    match part {
+        Part::Full => "target",
+        Part::Jaw => "jaw only",
+        Part::Soft => "soft tissue only",
+    }
+}
+
+/// `n` frames spread evenly over `frames` (all of them when there are fewer).
+fn spread(frames: usize, n: usize) -> Vec<usize> {
+    if frames <= n {
+        return (0..frames).collect();
+    }
+    (0..n).map(|i| i * (frames - 1) / (n - 1)).collect()
+}
+
+/// A grid: one row per frame of `rows`, one column per entry of `columns` (title, per-frame
+/// positions), each panel the frame's mesh from the front with the title above the first row.
+fn strip_picture(mesh: &Mesh, columns: &[(&str, &Vec<Vec<f32>>)], rows: &[usize]) -> Image {
+    let (width, height) = (220, 260);
+    let view = View::front(width, height);
+    let triangles = mesh.triangles();
+    let scale = text_scale(width, height);
+    let title_height = 12 * scale;
+    let mut grid = Vec::with_capacity(rows.len() + 1);
+    let titles: Vec<Image> = columns
+        .iter()
+        .map(|(title, _)| {
+            let mut header = Image::new(width, title_height, crate::figures::render::BACKGROUND);
+            let x = (i64::from(width) - i64::from(text_width(title, scale))) / 2;
+            header.text(x, i64::from(2 * scale), title, [40, 40, 40], scale);
+            header
+        })
+        .collect();
+    grid.push(Image::hstack(&titles));
+    for &f in rows {
+        let panels: Vec<Image> = columns
+            .iter()
+            .map(|(_, frames)| render(&points(frames[f].iter().copied()), &triangles, &[], &view))
+            .collect();
+        grid.push(Image::hstack(&panels));
+    }
+    Image::vstack(&grid)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::spread;
+
+    #[test]
+    fn strip_frames_spread_over_the_performance() {
+        assert_eq!(spread(3, 4), vec![0, 1, 2]);
+        assert_eq!(spread(10, 4), vec![0, 3, 6, 9]);
+        assert_eq!(spread(4, 4), vec![0, 1, 2, 3]);
+    }
+}

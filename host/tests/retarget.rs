@@ -1,0 +1,310 @@
+//! Retargeting (AIM Sec. 5.4, Fig. 8) on the golden actors: the golden fit of
+//! `tests/data/aim-ict.sinew` played on itself and on `tests/data/aim-ict-b.sinew`, an actor of
+//! another ICT-FaceKit identity baked on the same vertices (NOTICE, docs/FIT.md); its jaw-only and
+//! soft-tissue-only parts; the `.sinew` points section in the core; `sinew retarget` and
+//! `sinew data neutral` as a user runs them.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use sinew_core::aim::AimActor;
+use sinew_core::error::{BufferError, FormatError};
+use sinew_core::performance::{self as perf, Performance};
+use sinew_core::replay::ReplayError;
+use sinew_host::fit::bake::play;
+use sinew_host::fit::retarget::{Part, retarget};
+use sinew_host::io::container::SinewWriter;
+
+fn golden(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/data")
+        .join(name)
+}
+
+fn read(name: &str) -> Vec<u8> {
+    let path = golden(name);
+    std::fs::read(&path).unwrap_or_else(|e| panic!("{}: golden file missing ({e})", path.display()))
+}
+
+fn sinew(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sinew"))
+        .args(args)
+        .output()
+        .expect("run sinew")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Per-vertex displacement of each frame from the rest shape, `[V, 3]` per frame.
+fn displacements(frames: &[Vec<f32>], rest: &[f32]) -> Vec<Vec<f32>> {
+    frames
+        .iter()
+        .map(|f| f.iter().zip(rest).map(|(a, b)| a - b).collect())
+        .collect()
+}
+
+fn mean_norm(v: &[f32]) -> f64 {
+    let n = v.len() / 3;
+    v.chunks_exact(3)
+        .map(|p| f64::from((p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()))
+        .sum::<f64>()
+        / n as f64
+}
+
+#[test]
+fn a_fit_retargeted_onto_its_own_actor_plays_its_own_bits() {
+    let actor = read("aim-ict.sinew");
+    let fit = read("fit-ict.sinew");
+    let original = Performance::from_bytes(&fit).unwrap();
+    let full = retarget(&actor, &actor, &fit, Part::Full).unwrap();
+    let p = Performance::from_bytes(&full).unwrap();
+    assert_eq!(
+        p.point_count(),
+        Some(4705),
+        "a local fit carries its points"
+    );
+    let (_, hashes) = play(&actor, &full).unwrap();
+    for (f, h) in hashes.iter().enumerate() {
+        assert_eq!(Some(*h), original.expected(f), "frame {f}");
+        assert_eq!(Some(*h), p.expected(f), "frame {f}: baked hash");
+    }
+}
+
+#[test]
+fn the_parts_are_the_jaw_alone_and_the_soft_tissue_alone() {
+    let bytes = read("aim-ict.sinew");
+    let fit = read("fit-ict.sinew");
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let original = Performance::from_bytes(&fit).unwrap();
+    let (full, _) = play(&bytes, &retarget(&bytes, &bytes, &fit, Part::Full).unwrap()).unwrap();
+    let jaw_bytes = retarget(&bytes, &bytes, &fit, Part::Jaw).unwrap();
+    let soft_bytes = retarget(&bytes, &bytes, &fit, Part::Soft).unwrap();
+    let (jaw, _) = play(&bytes, &jaw_bytes).unwrap();
+    let (soft, _) = play(&bytes, &soft_bytes).unwrap();
+    let soft_perf = Performance::from_bytes(&soft_bytes).unwrap();
+    let zeros = vec![0.0; actor.shape_count()];
+    for f in 0..original.frames() {
+        // Jaw only: the fit's head and jaw with no correctives, exactly.
+        let (head, j) = original.head_jaw(f).unwrap();
+        let mut expected = vec![0.0; jaw[f].len()];
+        actor
+            .pose(&actor.pose_from_9d(&j, &head), &zeros, &mut expected)
+            .unwrap();
+        assert_eq!(jaw[f], expected, "frame {f}: jaw only");
+        // Soft tissue only: the same head, the jaw at rest, the fit's coefficients.
+        let (soft_head, soft_jaw) = soft_perf.head_jaw(f).unwrap();
+        assert_eq!(soft_head, head);
+        assert_eq!(soft_jaw, [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0]);
+        assert_ne!(soft[f], full[f], "frame {f}: the jaw moves in the fit");
+        assert_ne!(jaw[f], full[f], "frame {f}: the correctives act in the fit");
+    }
+}
+
+#[test]
+fn a_fit_retargeted_to_another_identity_moves_as_the_source_did() {
+    let source = read("aim-ict.sinew");
+    let target = read("aim-ict-b.sinew");
+    let fit = read("fit-ict.sinew");
+    let src = AimActor::from_bytes(&source).unwrap();
+    let dst = AimActor::from_bytes(&target).unwrap();
+    let src_rest: Vec<f32> = src.rest().iter().collect();
+    let dst_rest: Vec<f32> = dst.rest().iter().collect();
+    // Another face: the rest shapes differ by millimetres, not by rounding.
+    let identity = src_rest.iter().zip(&dst_rest).map(|(a, b)| a - b);
+    assert!(mean_norm(&identity.collect::<Vec<_>>()) > 0.1, "cm");
+
+    let baked = retarget(&source, &target, &fit, Part::Full).unwrap();
+    let (frames, hashes) = play(&target, &baked).unwrap();
+    let p = Performance::from_bytes(&baked).unwrap();
+    for (f, h) in hashes.iter().enumerate() {
+        assert_eq!(Some(*h), p.expected(f));
+    }
+    let (source_frames, _) = play(&source, &fit).unwrap();
+    let moved = displacements(&source_frames, &src_rest);
+    let retargeted = displacements(&frames, &dst_rest);
+    for (f, (a, b)) in moved.iter().zip(&retargeted).enumerate() {
+        let gap: Vec<f32> = a.iter().zip(b).map(|(a, b)| a - b).collect();
+        let (motion, gap) = (mean_norm(a), mean_norm(&gap));
+        println!("frame {f}: source motion {motion:.4} cm, target differs by {gap:.4} cm");
+        // The target performs the source's motion in its own anatomy: far closer to the
+        // source's displacement than the displacement itself, yet not a copy of it.
+        assert!(gap < 0.35 * motion, "frame {f}: {gap} vs {motion}");
+        assert!(gap > 0.0);
+    }
+}
+
+#[test]
+fn retargeting_refuses_actors_out_of_correspondence_and_fits_of_another_actor() {
+    let ict = read("aim-ict.sinew");
+    let procedural = read("aim-procedural.sinew");
+    let fit = read("fit-ict.sinew");
+    let e = retarget(&ict, &procedural, &fit, Part::Full).unwrap_err();
+    assert!(format!("{e:#}").contains("correspondence"), "{e:#}");
+    let e = retarget(&procedural, &ict, &fit, Part::Full).unwrap_err();
+    assert!(
+        format!("{e:#}").contains("not a fit of the source"),
+        "{e:#}"
+    );
+}
+
+#[test]
+fn the_points_section_is_checked_against_the_actor_and_the_coefficients() {
+    let bytes = read("aim-ict.sinew");
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let full = retarget(&bytes, &bytes, &read("fit-ict.sinew"), Part::Full).unwrap();
+    // Too few points for the actor.
+    let file = sinew_core::SinewFile::from_bytes(&full).unwrap();
+    let mut w = SinewWriter::from_file(&file).unwrap();
+    w.remove_prefixed(perf::POINTS);
+    w.f32s(perf::POINTS, &[2, 3], &[0.0; 6]).unwrap();
+    let short = w.to_bytes().unwrap();
+    let p = Performance::from_bytes(&short).unwrap();
+    assert!(matches!(
+        p.check_actor(&bytes, &actor),
+        Err(ReplayError::PointCount {
+            performance: 2,
+            actor: 4705
+        })
+    ));
+    let mut scratch = vec![0.0; p.scratch_len()];
+    let mut out = vec![0.0; 3 * actor.vertex_count()];
+    assert_eq!(
+        p.pose(&actor, 0, &mut scratch, &mut out),
+        Err(BufferError::Input)
+    );
+    // Points beside global coefficients mean nothing and are refused.
+    let jaw = retarget(&bytes, &bytes, &read("fit-ict.sinew"), Part::Jaw).unwrap();
+    let mut w = SinewWriter::from_file(&sinew_core::SinewFile::from_bytes(&jaw).unwrap()).unwrap();
+    w.f32s(perf::POINTS, &[4705, 3], &vec![0.0; 3 * 4705])
+        .unwrap();
+    assert_eq!(
+        Performance::from_bytes(&w.to_bytes().unwrap()),
+        Err(FormatError::IncompatibleShapes)
+    );
+}
+
+#[test]
+fn sinew_retarget_writes_the_three_parts_that_play_reproduces() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("retarget");
+    let target = golden("aim-ict-b.sinew");
+    let run = sinew(&[
+        "retarget",
+        "--source",
+        s(&golden("aim-ict.sinew")),
+        "--target",
+        s(&target),
+        "--fit",
+        s(&golden("fit-ict.sinew")),
+        "--out",
+        s(&out),
+        "--frames",
+        "0,3",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["frames"], 4);
+    assert_eq!(report["strip_frames"], serde_json::json!([0, 3]));
+    assert!(report["seconds_per_frame"].as_f64().unwrap() > 0.0);
+    let strip = std::fs::read(out.join("strip.png")).unwrap();
+    assert_eq!(&strip[1..4], b"PNG");
+    for part in ["target", "jaw", "soft"] {
+        let played = dir.path().join(format!("played-{part}"));
+        let p = sinew(&[
+            "play",
+            "--model",
+            s(&target),
+            "--performance",
+            s(&out.join(format!("{part}.sinew"))),
+            "--out",
+            s(&played),
+        ]);
+        assert!(p.status.success(), "{}", String::from_utf8_lossy(&p.stderr));
+        for f in 0..4 {
+            let name = format!("frame_{f:05}.obj");
+            assert_eq!(
+                std::fs::read(played.join(&name)).unwrap(),
+                std::fs::read(out.join(part).join(&name)).unwrap(),
+                "{part}/{name}"
+            );
+        }
+    }
+    // Out of correspondence: refused, naming both files.
+    let run = sinew(&[
+        "retarget",
+        "--source",
+        s(&golden("aim-ict.sinew")),
+        "--target",
+        s(&golden("aim-procedural.sinew")),
+        "--fit",
+        s(&golden("fit-ict.sinew")),
+        "--out",
+        s(&dir.path().join("bad")),
+    ]);
+    let e = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(
+        e.contains("aim-procedural.sinew") && e.contains("correspondence"),
+        "{e}"
+    );
+    // A strip frame past the end.
+    let run = sinew(&[
+        "retarget",
+        "--source",
+        s(&golden("aim-ict.sinew")),
+        "--target",
+        s(&target),
+        "--fit",
+        s(&golden("fit-ict.sinew")),
+        "--out",
+        s(&dir.path().join("late")),
+        "--frames",
+        "9",
+    ]);
+    assert!(!run.status.success());
+    assert!(String::from_utf8_lossy(&run.stderr).contains("strip frame 9"));
+}
+
+#[test]
+fn data_neutral_gives_the_golden_template_and_another_identity_on_its_vertices() {
+    let Some(root) = sinew_host::io::data::data_dir() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let kit = root.join("ict-facekit");
+    let like = golden("aim-ict.sinew");
+    let generic = dir.path().join("generic.obj");
+    let other = dir.path().join("other.obj");
+    for (out, identity) in [(&generic, None), (&other, Some("1.5,-1.2,1,0.8"))] {
+        let mut args = vec!["data", "neutral", "--data", s(&kit), "--like", s(&like)];
+        if let Some(w) = identity {
+            args.extend(["--identity", w]);
+        }
+        args.extend(["--out", s(out)]);
+        let run = sinew(&args);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    }
+    let bytes = read("aim-ict.sinew");
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let template: Vec<f32> = actor.template().iter().collect();
+    let generic = sinew_host::io::mesh::Mesh::read(&generic).unwrap();
+    let flat: Vec<f32> = generic.positions.iter().flatten().copied().collect();
+    assert_eq!(
+        flat, template,
+        "the golden actor's own template, bit for bit"
+    );
+    let other = sinew_host::io::mesh::Mesh::read(&other).unwrap();
+    assert_eq!(other.polygons, generic.polygons);
+    assert_ne!(other.positions, generic.positions);
+}
