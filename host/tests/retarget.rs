@@ -308,3 +308,71 @@ fn data_neutral_gives_the_golden_template_and_another_identity_on_its_vertices()
     assert_eq!(other.polygons, generic.polygons);
     assert_ne!(other.positions, generic.positions);
 }
+
+#[test]
+fn sinew_retarget_fits_the_source_to_a_performance_first() {
+    let Some(root) = sinew_host::io::data::data_dir() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let perf = dir.path().join("perf");
+    let source = golden("aim-ict.sinew");
+    let run = sinew(&[
+        "data",
+        "performance",
+        "--data",
+        s(&root.join("ict-facekit")),
+        "--actor",
+        s(&source),
+        "--frames",
+        "2",
+        "--out",
+        s(&perf),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let out = dir.path().join("retarget");
+    let run = sinew(&[
+        "retarget",
+        "--source",
+        s(&source),
+        "--target",
+        s(&golden("aim-ict-b.sinew")),
+        "--performance",
+        s(&perf),
+        "--out",
+        s(&out),
+        "--global",
+        "--iterations",
+        "20",
+        "--hidden",
+        "16",
+        "--code",
+        "4",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["frames"], 2);
+    assert!(report["fit_seconds_per_frame"].as_f64().unwrap() > 0.0);
+    assert!(report["fit_mean_error_mm"].as_f64().unwrap() > 0.0);
+    // The source's fit is kept, and what the target plays is that fit.
+    let fit = std::fs::read(out.join("source.sinew")).unwrap();
+    let played = std::fs::read(out.join("target.sinew")).unwrap();
+    let (f, p) = (
+        Performance::from_bytes(&fit).unwrap(),
+        Performance::from_bytes(&played).unwrap(),
+    );
+    assert!(!p.is_local());
+    for i in 0..2 {
+        assert_eq!(f.head_jaw(i), p.head_jaw(i));
+    }
+    assert!(out.join("target/frame_00001.obj").exists());
+}
