@@ -8,7 +8,6 @@ use std::path::Path;
 use anyhow::{Context, Result, anyhow, bail};
 use serde::Serialize;
 use sinew_core::aim::AimActor;
-use sinew_core::format::{ArtifactKind, SinewFile};
 use sinew_core::performance::Performance;
 use sinew_core::replay::{AimReplay, check_model};
 
@@ -106,18 +105,11 @@ pub(super) fn file_name(path: &Path) -> String {
 }
 
 impl Site {
-    /// Reads and validates the data files and builds the table. Errors name the file and what
-    /// is wrong with it: not a `.sinew` artefact, neither an AIM actor nor an S2D decoder, a
-    /// replay of another model, a pose file of the wrong shape, a performance fitted to another
-    /// actor, a file given for the other kind of model, a neutral of another topology.
-    pub fn load(inputs: Inputs<'_>) -> Result<Self> {
-        let model = crate::io::container::read(inputs.model)?;
-        let kind = SinewFile::from_bytes(&model)
-            .map_err(|e| anyhow!("{}: {e}", inputs.model.display()))?
-            .kind;
-        if kind == ArtifactKind::S2dDecoder {
-            return super::s2d::load(inputs, model);
-        }
+    /// Reads and validates the data files of an AIM actor (`model` holds its bytes, a valid
+    /// container; [`Site::load`] chooses by the model's kind) and builds the table. Errors name
+    /// the file and what is wrong with it: not an AIM actor, a replay of another model, a pose
+    /// file of the wrong shape, a performance fitted to another actor, a file for an S2D decoder.
+    pub(super) fn load_aim(inputs: Inputs<'_>, model: Vec<u8>) -> Result<Self> {
         let actor = AimActor::from_bytes(&model).map_err(|e| {
             anyhow!(
                 "{}: neither an AIM actor nor an S2D decoder that the viewer can show: {e}",

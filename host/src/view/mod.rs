@@ -11,10 +11,31 @@ pub mod server;
 
 use std::time::{Duration, Instant};
 
-use anyhow::Result;
+use anyhow::{Result, anyhow};
+use sinew_core::format::{ArtifactKind, SinewFile};
 
 pub use files::{Inputs, Site};
 pub use server::Viewer;
+
+impl Site {
+    /// Reads and validates the data files and builds the table, for an AIM actor
+    /// ([`files`]) or an S2D decoder ([`s2d`]) as the model's header says. Errors name the file
+    /// and what is wrong with it: not a `.sinew` artefact, neither an AIM actor nor an S2D
+    /// decoder, a replay of another model, a pose file of the wrong shape, a performance fitted
+    /// to another actor, a file given for the other kind of model, a neutral of another
+    /// topology.
+    pub fn load(inputs: Inputs<'_>) -> Result<Self> {
+        let model = crate::io::container::read(inputs.model)?;
+        let kind = SinewFile::from_bytes(&model)
+            .map_err(|e| anyhow!("{}: {e}", inputs.model.display()))?
+            .kind;
+        if kind == ArtifactKind::S2dDecoder {
+            s2d::load(inputs, model)
+        } else {
+            Site::load_aim(inputs, model)
+        }
+    }
+}
 
 /// `sinew view`: loads and checks the files, listens on 127.0.0.1:`port` (0: any free port),
 /// hands the page's address to `ready` (the command prints it as its first line), and serves
