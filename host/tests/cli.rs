@@ -827,10 +827,21 @@ fn view_names_a_bad_model_and_fails() {
     std::fs::write(&bad, b"not a model").unwrap();
     let e = err(&["view", s(&bad), "--port", "0"]);
     assert!(e.contains("bad.sinew"), "{e}");
-    let s2d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/s2d-ict.sinew");
-    let e = err(&["view", s(&s2d), "--port", "0"]);
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data");
+    // An S2D decoder plays a landmark track, not an AIM replay.
+    let s2d = data.join("s2d-ict.sinew");
+    let replay = data.join("aim-ict.f32.replay.sinew");
+    let e = err(&["view", s(&s2d), "--replay", s(&replay), "--port", "0"]);
     assert!(
-        e.contains("s2d-ict.sinew") && e.contains("not an AIM actor"),
+        e.contains("aim-ict.f32.replay.sinew") && e.contains("is for an AIM actor"),
+        "{e}"
+    );
+    // A performance fitted to the ICT actor, given with the procedural one.
+    let model = data.join("aim-procedural.sinew");
+    let fit = data.join("fit-ict.sinew");
+    let e = err(&["view", s(&model), "--performance", s(&fit), "--port", "0"]);
+    assert!(
+        e.contains("fit-ict.sinew") && e.contains("was fitted to another actor"),
         "{e}"
     );
 }

@@ -95,6 +95,41 @@ export class Replay {
   free(): void;
 }
 
+/** One frame of a fitted performance. */
+export interface PerformanceFrame {
+  head: Float32Array;
+  jaw: Float32Array;
+  /** `[shapeCount]` for a global fit; null for a local fit (its coefficients vary per vertex). */
+  coefficients: Float32Array | null;
+}
+
+/** A validated fitted performance (`sinew fit --out FIT.sinew`), played on its AIM actor. */
+export class Performance {
+  private constructor();
+  /** Validates a `.sinew` fitted performance. */
+  static load(bytes: Bytes): Performance;
+  /** "global": one coefficient vector per frame; "local": coefficients per vertex (AIM eq. 19). */
+  readonly form: "global" | "local";
+  readonly frameCount: number;
+  /** Coefficients per frame (per vertex for a local fit): the actor's corrective count. */
+  readonly shapeCount: number;
+  /** Content hash of the actor it was fitted to, 16 hex digits. */
+  readonly modelHash: string;
+  /** Whether the file carries each frame's hash as baked. */
+  readonly hasHashes: boolean;
+  /** Throws unless this performance was fitted to `model` (content hash and coefficient count). */
+  check(model: Model): void;
+  /** Frame `f`'s head, jaw and (global fit) coefficients (`0 <= f < frameCount`). */
+  frame(f: number): PerformanceFrame;
+  /** `[vertexCount * 3]` `model` posed for frame `f`; throws unless fitted to `model`. */
+  pose(model: Model, f: number): Float32Array;
+  /** Frame `f` posed, normals and hash computed in the module: sinew-core's `performance::frame_hash`. */
+  frameHash(model: Model, f: number): string;
+  /** The hash baked for frame `f`, 16 hex digits, or null when the file carries none. */
+  expected(f: number): string | null;
+  free(): void;
+}
+
 /**
  * A frame's hash, 16 hex digits: the values of every array in order. `frameHash(positions,
  * normals)` equals sinew-core's `replay::frame_hash` in the f32 mode, `frameHash(vertices)` its

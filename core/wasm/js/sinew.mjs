@@ -108,7 +108,7 @@ class Handle {
   #handle;
 
   constructor(key, handle) {
-    if (key !== token) throw new TypeError("sinew: use Model.load or Replay.load");
+    if (key !== token) throw new TypeError("sinew: use Model.load, Replay.load or Performance.load");
     this.#handle = handle;
     finalizer.register(this, handle, this);
   }
@@ -118,7 +118,7 @@ class Handle {
     return this.#handle;
   }
 
-  /** Frees the model or replay now (its memory in the module). Further calls throw. */
+  /** Frees the model, replay or performance now (its memory in the module). Further calls throw. */
   free() {
     if (this.#handle !== 0) {
       finalizer.unregister(this);
@@ -130,7 +130,7 @@ class Handle {
 
 function load(bytes, loader) {
   const w = exports();
-  put(bytesOf(bytes, "the model or replay"));
+  put(bytesOf(bytes, "the file"));
   const handle = loader(w);
   if (handle < 0) throw new Error(text(w.sinew_error()));
   return handle;
@@ -297,6 +297,77 @@ export class Replay extends Handle {
     if (!(model instanceof Model)) throw new TypeError("sinew: check takes a Model");
     take(exports().sinew_replay_check(this._h, model._h));
   }
+}
+
+/**
+ * A validated fitted performance (`sinew fit --out FIT.sinew`): per frame the head, the jaw and
+ * the coefficients (one vector per frame for a global fit, a network of the vertex for a local
+ * one), played on the AIM actor it was fitted to.
+ */
+export class Performance extends Handle {
+  #info;
+
+  /** Validates a `.sinew` fitted performance; throws an Error saying what is wrong. */
+  static load(bytes) {
+    return new Performance(token, load(bytes, (w) => w.sinew_performance_load()));
+  }
+
+  constructor(key, handle) {
+    super(key, handle);
+    this.#info = keyValues(takeText(exports().sinew_info(handle)));
+  }
+
+  /** "global" (one coefficient vector per frame) or "local" (coefficients per vertex, AIM eq. 19). */
+  get form() {
+    return this.#info.form;
+  }
+  /** Number of frames. */
+  get frameCount() {
+    return Number(this.#info.frames);
+  }
+  /** Coefficients per frame (per vertex for a local fit): the actor's corrective count. */
+  get shapeCount() {
+    return Number(this.#info.shapes);
+  }
+  /** The content hash of the actor it was fitted to (16 hex digits). */
+  get modelHash() {
+    return this.#info.model;
+  }
+  /** Whether the file carries each frame's hash as baked. */
+  get hasHashes() {
+    return this.#info.hashes === "1";
+  }
+
+  /** Throws unless this performance was fitted to `model` (content hash and coefficient count). */
+  check(model) {
+    take(exports().sinew_performance_check(this._h, modelHandle(model)));
+  }
+
+  /** Frame `f`'s `{ head, jaw, coefficients }`; `coefficients` is null for a local fit. */
+  frame(f) {
+    const v = takeF32(exports().sinew_performance_frame(this._h, frameIndex(f)));
+    return { head: v.subarray(0, 9), jaw: v.subarray(9, 18), coefficients: this.form === "local" ? null : v.subarray(18) };
+  }
+
+  /** Poses `model` (the actor it was fitted to) for frame `f`: positions, x y z per vertex. */
+  pose(model, f) {
+    return takeF32(exports().sinew_performance_pose(this._h, modelHandle(model), frameIndex(f)));
+  }
+
+  /** Frame `f` posed, its normals and its hash computed in the module (16 hex digits). */
+  frameHash(model, f) {
+    return takeText(exports().sinew_performance_hash(this._h, modelHandle(model), frameIndex(f)));
+  }
+
+  /** The hash baked for frame `f` (16 hex digits), or null when the file carries none. */
+  expected(f) {
+    return takeText(exports().sinew_performance_expected(this._h, frameIndex(f))) || null;
+  }
+}
+
+function modelHandle(model) {
+  if (!(model instanceof Model)) throw new TypeError("sinew: a performance plays on a Model");
+  return model._h;
 }
 
 /**

@@ -11,8 +11,8 @@
 //! JavaScript's writes never alias a borrow; memory can grow during any call, so JavaScript
 //! takes a fresh view of it after each.
 //!
-//! Models and replays live in a table here; JavaScript holds their handles (positive `i32`) and
-//! hands them back with [`sinew_free`]. Pointers are 32-bit on `wasm32`, the only target these
+//! Models, replays and performances live in a table here; JavaScript holds their handles
+//! (positive `i32`) and hands them back with [`sinew_free`]. Pointers are 32-bit on `wasm32`, the only target these
 //! functions are meant for (on the host they are compiled and linted, not called).
 //!
 //! Every export carries `#[unsafe(no_mangle)]` (exported under its own name), the one kind of
@@ -20,12 +20,24 @@
 
 use std::cell::RefCell;
 
-use crate::{Error, FrameInputs, Model, Replay};
+use crate::{Error, FrameInputs, Model, Performance, Replay};
 
 #[derive(Debug)]
 enum Object {
     Model(Model),
     Replay(Replay),
+    Performance(Performance),
+}
+
+impl Object {
+    /// "a model", "a replay" or "a performance", for messages about a handle of the wrong kind.
+    const fn what(&self) -> &'static str {
+        match self {
+            Self::Model(_) => "a model",
+            Self::Replay(_) => "a replay",
+            Self::Performance(_) => "a performance",
+        }
+    }
 }
 
 thread_local! {
@@ -33,7 +45,7 @@ thread_local! {
     static IO: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
     /// The message of the last failed operation.
     static ERROR: RefCell<String> = const { RefCell::new(String::new()) };
-    /// Models and replays; handle `h` is slot `h − 1`.
+    /// Models, replays and performances; handle `h` is slot `h − 1`.
     static OBJECTS: RefCell<Vec<Option<Object>>> = const { RefCell::new(Vec::new()) };
 }
 
@@ -93,7 +105,16 @@ fn slot(handle: i32) -> Option<usize> {
 }
 
 fn stale(handle: i32) -> Error {
-    Error::new(format!("handle {handle} is not a live model or replay"))
+    Error::new(format!(
+        "handle {handle} is not a live model, replay or performance"
+    ))
+}
+
+fn not_a(handle: i32, object: &Object, wanted: &str) -> Error {
+    Error::new(format!(
+        "handle {handle} is {}, not {wanted}",
+        object.what()
+    ))
 }
 
 /// Runs `f` on the model behind `handle`.
@@ -104,9 +125,7 @@ fn with_model<T>(handle: i32, f: impl FnOnce(&mut Model) -> Result<T, Error>) ->
             .and_then(Option::as_mut)
         {
             Some(Object::Model(m)) => f(m),
-            Some(Object::Replay(_)) => Err(Error::new(format!(
-                "handle {handle} is a replay, not a model"
-            ))),
+            Some(other) => Err(not_a(handle, other, "a model")),
             None => Err(stale(handle)),
         }
     })
@@ -120,9 +139,7 @@ fn with_replay<T>(handle: i32, f: impl FnOnce(&Replay) -> Result<T, Error>) -> R
             .and_then(Option::as_ref)
         {
             Some(Object::Replay(r)) => f(r),
-            Some(Object::Model(_)) => Err(Error::new(format!(
-                "handle {handle} is a model, not a replay"
-            ))),
+            Some(other) => Err(not_a(handle, other, "a replay")),
             None => Err(stale(handle)),
         }
     })
@@ -203,7 +220,7 @@ pub extern "C" fn sinew_replay_load() -> i32 {
     handle_or_error(Replay::load(io_bytes()).and_then(|r| insert(Object::Replay(r))))
 }
 
-/// Frees the model or replay behind `handle` (nothing for a handle not in use).
+/// Frees the model, replay or performance behind `handle` (nothing for a handle not in use).
 // Safety: exported under its own name; no other symbol in the module is called so.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
@@ -217,7 +234,9 @@ pub extern "C" fn sinew_free(handle: i32) {
 
 /// Describes the object behind `handle` as `key=value` lines: for a model `kind`, `vertices`,
 /// `shapes`, `inputs`, `triangles` and `hash` (16 hex digits); for a replay `kind`, `mode`,
-/// `frames`, `model` (the model's hash) and `neutral` (1 if it carries one).
+/// `frames`, `model` (the model's hash) and `neutral` (1 if it carries one); for a performance
+/// `kind=performance`, `form` (`global` or `local`), `frames`, `shapes`, `model` and `hashes` (1
+/// if it carries its frames' hashes).
 // Safety: exported under its own name; no other symbol in the module is called so.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
@@ -243,6 +262,14 @@ pub extern "C" fn sinew_info(handle: i32) -> i32 {
                 r.frames(),
                 r.model_hash(),
                 u8::from(r.has_neutral())
+            )),
+            Some(Object::Performance(p)) => Ok(format!(
+                "kind=performance\nform={}\nframes={}\nshapes={}\nmodel={:016x}\nhashes={}\n",
+                if p.is_local() { "local" } else { "global" },
+                p.frames(),
+                p.shape_count(),
+                p.model_hash(),
+                u8::from(p.has_hashes())
             )),
             None => Err(stale(handle)),
         }
@@ -399,4 +426,107 @@ pub extern "C" fn sinew_replay_check(replay: i32, model: i32) -> i32 {
         }
     });
     finish(outcome)
+}
+
+/// Loads the fitted performance whose bytes are in the I/O area ([`Performance::load`]); returns
+/// its handle, or -1.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_performance_load() -> i32 {
+    handle_or_error(Performance::load(io_bytes()).and_then(|p| insert(Object::Performance(p))))
+}
+
+/// Runs `f` on the performance behind `perf` and, when `model` is given, the model behind it.
+fn with_performance<T>(
+    perf: i32,
+    model: Option<i32>,
+    f: impl FnOnce(&Performance, Option<&Model>) -> Result<T, Error>,
+) -> Result<T, Error> {
+    OBJECTS.with_borrow(|objects| {
+        let get = |h: i32| {
+            slot(h)
+                .and_then(|i| objects.get(i))
+                .and_then(Option::as_ref)
+        };
+        let p = match get(perf) {
+            Some(Object::Performance(p)) => p,
+            Some(other) => return Err(not_a(perf, other, "a performance")),
+            None => return Err(stale(perf)),
+        };
+        let m = match model.map(|h| (h, get(h))) {
+            None => None,
+            Some((_, Some(Object::Model(m)))) => Some(m),
+            Some((h, Some(other))) => return Err(not_a(h, other, "a model")),
+            Some((h, None)) => return Err(stale(h)),
+        };
+        f(p, m)
+    })
+}
+
+/// The model of an operation that named one (always there: [`with_performance`] was given its
+/// handle).
+fn needs_model(model: Option<&Model>) -> Result<&Model, Error> {
+    model.ok_or_else(|| Error::new("a performance plays on a model; none was given"))
+}
+
+/// Checks that a performance was fitted to a model ([`Performance::check`]). Result: empty.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_performance_check(perf: i32, model: i32) -> i32 {
+    finish(with_performance(perf, Some(model), |p, m| {
+        p.check(needs_model(m)?).map(|()| Vec::new())
+    }))
+}
+
+/// Frame `frame` of a performance ([`Performance::frame`]). Result (`f32`): head, jaw, then the
+/// coefficients of a global fit (nothing more for a local one).
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_performance_frame(perf: i32, frame: u32) -> i32 {
+    finish(with_performance(perf, None, |p, _| {
+        let f = p.frame(frame as usize)?;
+        let coefficients = f.coefficients.unwrap_or_default();
+        Ok(f32_bytes(
+            &[&f.head[..], &f.jaw[..], &coefficients].concat(),
+        ))
+    }))
+}
+
+/// Poses `model` for frame `frame` of a performance ([`Performance::pose`]). Result: the
+/// positions (`f32`).
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_performance_pose(perf: i32, model: i32, frame: u32) -> i32 {
+    finish(with_performance(perf, Some(model), |p, m| {
+        Ok(f32_bytes(&p.pose(needs_model(m)?, frame as usize)?))
+    }))
+}
+
+/// Frame `frame`'s hash computed in the module ([`Performance::frame_hash`]). Result: 16 hex
+/// digits.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_performance_hash(perf: i32, model: i32, frame: u32) -> i32 {
+    finish(with_performance(perf, Some(model), |p, m| {
+        let hash = p.frame_hash(needs_model(m)?, frame as usize)?;
+        Ok(format!("{hash:016x}").into_bytes())
+    }))
+}
+
+/// The hash baked for frame `frame` ([`Performance::expected`]). Result: 16 hex digits, or
+/// empty when the file carries no hashes.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_performance_expected(perf: i32, frame: u32) -> i32 {
+    finish(with_performance(perf, None, |p, _| {
+        Ok(p.expected(frame as usize)?
+            .map(|h| format!("{h:016x}").into_bytes())
+            .unwrap_or_default())
+    }))
 }

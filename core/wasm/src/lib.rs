@@ -1,10 +1,11 @@
 //! `sinew-wasm`: Sinew's face models in a browser.
 //!
-//! `sinew-core` compiled to `wasm32-unknown-unknown`, with owned models and replays (the core
-//! borrows a byte slice; here each value owns its bytes) and errors as the core's messages. Two
-//! layers:
+//! `sinew-core` compiled to `wasm32-unknown-unknown`, with owned models, replays and fitted
+//! performances (the core borrows a byte slice; here each value owns its bytes) and errors as
+//! the core's messages. Two layers:
 //!
-//! - this module, plain safe Rust ([`Model`], [`Replay`], [`frame_hash`]), tested on the host;
+//! - this module, plain safe Rust ([`Model`], [`Replay`], [`Performance`], [`frame_hash`]),
+//!   tested on the host;
 //! - [`exports`], the module's `extern "C"` functions, which a hand-written ES module
 //!   (`core/wasm/js/sinew.mjs`) wraps into the JavaScript API of `docs/WASM.md`.
 //!
@@ -21,6 +22,9 @@ use sinew_core::replay::{self, AimReplay, S2D_INPUTS, S2dReplay};
 use sinew_core::s2d::S2dDecoder;
 
 pub mod exports;
+mod performance;
+
+pub use performance::{Performance, PerformanceFrame};
 
 /// Values in a head or jaw pose: a 6D rotation, then a translation.
 pub const POSE_9D: usize = 9;
@@ -143,6 +147,9 @@ enum ModelInner {
 #[derive(Debug)]
 pub struct Model {
     inner: ModelInner,
+    /// The content hash of the bytes ([`replay::model_hash`]), computed once: a performance
+    /// compares it at every frame.
+    hash: u64,
 }
 
 /// `what` must hold `expected` values.
@@ -173,6 +180,7 @@ impl Model {
     /// `WrongKind` with the kind found.
     pub fn load(bytes: Vec<u8>) -> Result<Self, Error> {
         let kind = SinewFile::from_bytes(&bytes)?.kind;
+        let hash = replay::model_hash(&bytes);
         let bytes = bytes.into_boxed_slice();
         let inner = match kind {
             ArtifactKind::AimActor => ModelInner::Aim(AimCell::try_new(bytes, |b| {
@@ -192,7 +200,7 @@ impl Model {
                 )));
             }
         };
-        Ok(Self { inner })
+        Ok(Self { inner, hash })
     }
 
     /// AIM actor or S2D decoder.
@@ -200,13 +208,6 @@ impl Model {
         match self.inner {
             ModelInner::Aim(_) => Kind::Aim,
             ModelInner::S2d { .. } => Kind::S2d,
-        }
-    }
-
-    fn bytes(&self) -> &[u8] {
-        match &self.inner {
-            ModelInner::Aim(c) => c.borrow_owner(),
-            ModelInner::S2d { cell, .. } => cell.borrow_owner(),
         }
     }
 
@@ -219,8 +220,8 @@ impl Model {
 
     /// The content hash of the model's bytes ([`sinew_core::replay::model_hash`]), which a
     /// replay names.
-    pub fn content_hash(&self) -> u64 {
-        replay::model_hash(self.bytes())
+    pub const fn content_hash(&self) -> u64 {
+        self.hash
     }
 
     /// The metadata text: `key=value` lines (`units=cm`, provenance).

@@ -8,7 +8,7 @@ use clap::Args;
 
 #[derive(Debug, Args)]
 pub(crate) struct ViewArgs {
-    /// The baked AIM actor (.sinew).
+    /// The baked AIM actor or S2D decoder (.sinew).
     model: PathBuf,
     /// A replay recorded with this actor (`sinew replay record`): the page plays it at 30 frames
     /// per second and checks every frame's hash.
@@ -17,6 +17,19 @@ pub(crate) struct ViewArgs {
     /// A pose file for this actor (`sinew play`'s JSON) to play instead of, or beside, a replay.
     #[arg(long)]
     poses: Option<PathBuf>,
+    /// A performance fitted to this actor (`sinew fit --out FIT.sinew`): the page plays it at 30
+    /// frames per second and checks every frame's hash against those baked in the file.
+    #[arg(long)]
+    performance: Option<PathBuf>,
+    /// For an S2D decoder: a landmark track, an S2D replay recorded with it (`sinew replay
+    /// record --model S2D.sinew`); the page decodes it at 30 frames per second, draws the
+    /// landmarks and checks every frame's hash.
+    #[arg(long)]
+    track: Option<PathBuf>,
+    /// For an S2D decoder: a face in its topology (.obj or .ply) to decode onto and draw with its
+    /// polygons (without it, the track's neutral or the decoder's template, drawn as points).
+    #[arg(long)]
+    neutral: Option<PathBuf>,
     /// Port on 127.0.0.1; 0 takes any free port.
     #[arg(long, env = "SINEW_VIEW_PORT", default_value_t = 8123)]
     port: u16,
@@ -32,6 +45,9 @@ pub(crate) fn run(args: ViewArgs) -> Result<()> {
         model: &args.model,
         replay: args.replay.as_deref(),
         poses: args.poses.as_deref(),
+        performance: args.performance.as_deref(),
+        track: args.track.as_deref(),
+        neutral: args.neutral.as_deref(),
     };
     sinew_host::view::view(
         inputs,

@@ -8,6 +8,7 @@ use std::path::Path;
 use anyhow::{Context, Result, anyhow, bail};
 use serde::Serialize;
 use sinew_core::aim::AimActor;
+use sinew_core::performance::Performance;
 use sinew_core::replay::{AimReplay, check_model};
 
 use crate::aim::play::PoseFile;
@@ -15,6 +16,7 @@ use crate::aim::play::PoseFile;
 /// The page, its script and style, and the core's JavaScript binding (core/wasm/js).
 const INDEX_HTML: &str = include_str!("web/index.html");
 const VIEWER_JS: &str = include_str!("web/viewer.js");
+const FACE_JS: &str = include_str!("web/face.js");
 const STYLE_CSS: &str = include_str!("web/style.css");
 const SINEW_MJS: &str = include_str!("../../../core/wasm/js/sinew.mjs");
 /// The core compiled to WebAssembly from this checkout's sources by `host/build.rs`.
@@ -37,12 +39,16 @@ pub struct Site {
     entries: Vec<Entry>,
 }
 
-/// What the page learns from `/config.json`: which data files exist and their names.
+/// What the page learns from `/config.json` for an AIM actor: which data files exist and their
+/// names.
 #[derive(Debug, Serialize)]
 struct Config<'a> {
     model: &'a str,
+    /// `aim` (an S2D decoder's configuration is [`super::s2d`]'s).
+    kind: &'static str,
     replay: Option<Described<'a>>,
     poses: Option<Described<'a>>,
+    performance: Option<Described<'a>>,
 }
 
 #[derive(Debug, Serialize)]
@@ -52,34 +58,74 @@ struct Described<'a> {
     /// A replay's numeric mode (`f32`, `q16`, `fast`); the page computes `f32` only.
     #[serde(skip_serializing_if = "Option::is_none")]
     mode: Option<String>,
+    /// A performance's coefficients: `global` or `local`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    form: Option<&'static str>,
+    /// Whether a performance carries its frames' hashes as baked.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hashes: Option<bool>,
+}
+
+impl<'a> Described<'a> {
+    const fn new(name: &'a str, frames: usize) -> Self {
+        Self {
+            name,
+            frames,
+            mode: None,
+            form: None,
+            hashes: None,
+        }
+    }
 }
 
 /// The data files `sinew view` shows: a baked AIM actor, and optionally a replay recorded with
-/// it and a pose file for it.
+/// it, a pose file for it and a performance fitted to it; or an S2D decoder, and optionally a
+/// landmark track and a neutral face in its topology.
 #[derive(Clone, Copy, Debug)]
 pub struct Inputs<'a> {
-    /// The baked actor (.sinew).
+    /// The baked actor or S2D decoder (.sinew).
     pub model: &'a Path,
     /// A replay of the actor (.sinew, `sinew replay record`).
     pub replay: Option<&'a Path>,
     /// A pose file for the actor (JSON, `sinew play`'s format).
     pub poses: Option<&'a Path>,
+    /// A performance fitted to the actor (.sinew, `sinew fit --out`).
+    pub performance: Option<&'a Path>,
+    /// An S2D decoder's landmark track: an S2D replay (.sinew, `sinew replay record`).
+    pub track: Option<&'a Path>,
+    /// A face in an S2D decoder's topology (.obj or .ply) to decode onto and draw.
+    pub neutral: Option<&'a Path>,
+}
+
+/// The file name of `path`, for the page.
+pub(super) fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
 }
 
 impl Site {
-    /// Reads and validates the data files and builds the table. Errors name the file and what
-    /// is wrong with it: not a `.sinew` artefact, not an AIM actor, a replay of another model, a
-    /// pose file of the wrong shape.
-    pub fn load(inputs: Inputs<'_>) -> Result<Self> {
-        let model = crate::io::container::read(inputs.model)?;
+    /// Reads and validates the data files of an AIM actor (`model` holds its bytes, a valid
+    /// container; [`Site::load`] chooses by the model's kind) and builds the table. Errors name
+    /// the file and what is wrong with it: not an AIM actor, a replay of another model, a pose
+    /// file of the wrong shape, a performance fitted to another actor, a file for an S2D decoder.
+    pub(super) fn load_aim(inputs: Inputs<'_>, model: Vec<u8>) -> Result<Self> {
         let actor = AimActor::from_bytes(&model).map_err(|e| {
             anyhow!(
-                "{}: not an AIM actor that the viewer can show: {e}",
+                "{}: neither an AIM actor nor an S2D decoder that the viewer can show: {e}",
                 inputs.model.display()
             )
         })?;
-        let name = |p: &Path| p.file_name().map(|n| n.to_string_lossy().into_owned());
-        let model_name = name(inputs.model).unwrap_or_default();
+        for (flag, path) in [("--track", inputs.track), ("--neutral", inputs.neutral)] {
+            if let Some(path) = path {
+                bail!(
+                    "{}: {flag} is for an S2D decoder, and {} is an AIM actor",
+                    path.display(),
+                    inputs.model.display()
+                );
+            }
+        }
+        let model_name = file_name(inputs.model);
 
         let mut replay = None;
         if let Some(path) = inputs.replay {
@@ -94,51 +140,58 @@ impl Site {
                 )
             })?;
             let mode = parsed.mode().to_string();
-            replay = Some((name(path).unwrap_or_default(), parsed.frames(), mode, bytes));
+            replay = Some((file_name(path), parsed.frames(), mode, bytes));
         }
         let mut poses = None;
         if let Some(path) = inputs.poses {
             let file = PoseFile::read(path, actor.shape_count())?;
             let json = serde_json::to_vec(&file)
                 .with_context(|| format!("{}: cannot serialise", path.display()))?;
-            poses = Some((name(path).unwrap_or_default(), file.frames.len(), json));
+            poses = Some((file_name(path), file.frames.len(), json));
+        }
+
+        let mut performance = None;
+        if let Some(path) = inputs.performance {
+            let bytes = crate::io::container::read(path)?;
+            let parsed = Performance::from_bytes(&bytes)
+                .map_err(|e| anyhow!("{}: not a fitted performance: {e}", path.display()))?;
+            parsed.check_actor(&model, &actor).map_err(|e| {
+                anyhow!(
+                    "{}: was fitted to another actor than {} ({e})",
+                    path.display(),
+                    inputs.model.display()
+                )
+            })?;
+            let described = (
+                file_name(path),
+                parsed.frames(),
+                if parsed.is_local() { "local" } else { "global" },
+                parsed.expected(0).is_some(),
+            );
+            drop(parsed);
+            performance = Some((described, bytes));
         }
 
         let config = serde_json::to_vec(&Config {
             model: &model_name,
+            kind: "aim",
             replay: replay.as_ref().map(|(name, frames, mode, _)| Described {
-                name,
-                frames: *frames,
                 mode: Some(mode.clone()),
+                ..Described::new(name, *frames)
             }),
-            poses: poses.as_ref().map(|(name, frames, _)| Described {
-                name,
-                frames: *frames,
-                mode: None,
-            }),
+            poses: poses
+                .as_ref()
+                .map(|(name, frames, _)| Described::new(name, *frames)),
+            performance: performance
+                .as_ref()
+                .map(|((name, frames, form, hashes), _)| Described {
+                    form: Some(form),
+                    hashes: Some(*hashes),
+                    ..Described::new(name, *frames)
+                }),
         })?;
 
-        let mut entries = vec![
-            entry("/", "text/html; charset=utf-8", INDEX_HTML.as_bytes()),
-            entry(
-                "/viewer.js",
-                "text/javascript; charset=utf-8",
-                VIEWER_JS.as_bytes(),
-            ),
-            entry(
-                "/style.css",
-                "text/css; charset=utf-8",
-                STYLE_CSS.as_bytes(),
-            ),
-            entry(
-                "/sinew.mjs",
-                "text/javascript; charset=utf-8",
-                SINEW_MJS.as_bytes(),
-            ),
-            entry("/sinew_wasm.wasm", "application/wasm", SINEW_WASM),
-            entry("/config.json", "application/json", &config),
-            entry("/model.sinew", "application/octet-stream", &model),
-        ];
+        let mut entries = page(&config, &model);
         if let Some((_, _, _, bytes)) = replay {
             entries.push(Entry {
                 path: "/replay.sinew",
@@ -153,6 +206,18 @@ impl Site {
                 body: json,
             });
         }
+        if let Some((_, bytes)) = performance {
+            entries.push(Entry {
+                path: "/performance.sinew",
+                content_type: "application/octet-stream",
+                body: bytes,
+            });
+        }
+        Self::new(entries)
+    }
+
+    /// The table of `entries`, refused if one is empty (an embedded file missing from the build).
+    pub(super) fn new(entries: Vec<Entry>) -> Result<Self> {
         if entries.iter().any(|e| e.body.is_empty()) {
             bail!("an embedded file of the viewer is empty: the build is broken");
         }
@@ -168,6 +233,37 @@ impl Site {
     pub fn entries(&self) -> &[Entry] {
         &self.entries
     }
+}
+
+/// The page, its script, style and WebAssembly, `/config.json` and the model: what every
+/// table starts with.
+pub(super) fn page(config: &[u8], model: &[u8]) -> Vec<Entry> {
+    vec![
+        entry("/", "text/html; charset=utf-8", INDEX_HTML.as_bytes()),
+        entry(
+            "/viewer.js",
+            "text/javascript; charset=utf-8",
+            VIEWER_JS.as_bytes(),
+        ),
+        entry(
+            "/face.js",
+            "text/javascript; charset=utf-8",
+            FACE_JS.as_bytes(),
+        ),
+        entry(
+            "/style.css",
+            "text/css; charset=utf-8",
+            STYLE_CSS.as_bytes(),
+        ),
+        entry(
+            "/sinew.mjs",
+            "text/javascript; charset=utf-8",
+            SINEW_MJS.as_bytes(),
+        ),
+        entry("/sinew_wasm.wasm", "application/wasm", SINEW_WASM),
+        entry("/config.json", "application/json", config),
+        entry("/model.sinew", "application/octet-stream", model),
+    ]
 }
 
 fn entry(path: &'static str, content_type: &'static str, body: &[u8]) -> Entry {

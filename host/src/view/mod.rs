@@ -1,18 +1,41 @@
-//! `sinew view`: a baked AIM actor in a web browser. A small server on 127.0.0.1 serves a page
-//! (WebGL2, `web/`) that poses the actor through the core compiled to WebAssembly, with sliders,
-//! orbit controls and replay playback; docs/VIEW.md.
+//! `sinew view`: a baked AIM actor or S2D decoder in a web browser. A small server on 127.0.0.1
+//! serves a page (WebGL2, `web/`) that poses the actor, or decodes a landmark track, through the
+//! core compiled to WebAssembly, with sliders, orbit controls and playback; docs/VIEW.md.
 //!
-//! [`files`] is the fixed table of what is served, [`server`] the HTTP side and its safety rules.
+//! [`files`] is the fixed table of what is served (`s2d` its S2D decoder's part), [`server`]
+//! the HTTP side and its safety rules.
 
 pub mod files;
+mod s2d;
 pub mod server;
 
 use std::time::{Duration, Instant};
 
-use anyhow::Result;
+use anyhow::{Result, anyhow};
+use sinew_core::format::{ArtifactKind, SinewFile};
 
 pub use files::{Inputs, Site};
 pub use server::Viewer;
+
+impl Site {
+    /// Reads and validates the data files and builds the table, for an AIM actor
+    /// ([`files`]) or an S2D decoder ([`s2d`]) as the model's header says. Errors name the file
+    /// and what is wrong with it: not a `.sinew` artefact, neither an AIM actor nor an S2D
+    /// decoder, a replay of another model, a pose file of the wrong shape, a performance fitted
+    /// to another actor, a file given for the other kind of model, a neutral of another
+    /// topology.
+    pub fn load(inputs: Inputs<'_>) -> Result<Self> {
+        let model = crate::io::container::read(inputs.model)?;
+        let kind = SinewFile::from_bytes(&model)
+            .map_err(|e| anyhow!("{}: {e}", inputs.model.display()))?
+            .kind;
+        if kind == ArtifactKind::S2dDecoder {
+            s2d::load(inputs, model)
+        } else {
+            Site::load_aim(inputs, model)
+        }
+    }
+}
 
 /// `sinew view`: loads and checks the files, listens on 127.0.0.1:`port` (0: any free port),
 /// hands the page's address to `ready` (the command prints it as its first line), and serves
@@ -56,6 +79,9 @@ mod tests {
             model: &data("aim-procedural.sinew"),
             replay: Some(&data("aim-procedural.f32.replay.sinew")),
             poses: None,
+            performance: None,
+            track: None,
+            neutral: None,
         })
         .unwrap()
     }
@@ -174,6 +200,9 @@ mod tests {
             model: &data("aim-procedural.sinew"),
             replay: None,
             poses: Some(&poses),
+            performance: None,
+            track: None,
+            neutral: None,
         })
         .unwrap();
         let config: serde_json::Value =
@@ -193,22 +222,43 @@ mod tests {
     #[test]
     fn bad_files_are_named() {
         let err = |inputs: Inputs<'_>| format!("{:#}", Site::load(inputs).unwrap_err());
-        let s2d = data("s2d-ict.sinew");
+        // A replay is neither kind of model.
+        let other = data("aim-ict.f32.replay.sinew");
         let e = err(Inputs {
-            model: &s2d,
+            model: &other,
             replay: None,
             poses: None,
+            performance: None,
+            track: None,
+            neutral: None,
         });
         assert!(
-            e.contains("s2d-ict.sinew") && e.contains("not an AIM actor"),
+            e.contains("aim-ict.f32.replay.sinew")
+                && e.contains("neither an AIM actor nor an S2D decoder"),
             "{e}"
         );
         let model = data("aim-procedural.sinew");
-        let other = data("aim-ict.f32.replay.sinew");
+        // A landmark track is for an S2D decoder.
+        let track = data("s2d-ict.replay.sinew");
+        let e = err(Inputs {
+            model: &model,
+            replay: None,
+            poses: None,
+            performance: None,
+            track: Some(&track),
+            neutral: None,
+        });
+        assert!(
+            e.contains("s2d-ict.replay.sinew") && e.contains("--track is for an S2D decoder"),
+            "{e}"
+        );
         let e = err(Inputs {
             model: &model,
             replay: Some(&other),
             poses: None,
+            performance: None,
+            track: None,
+            neutral: None,
         });
         assert!(
             e.contains("aim-ict.f32.replay.sinew") && e.contains("does not play"),
@@ -218,6 +268,9 @@ mod tests {
             model: &model,
             replay: Some(&model),
             poses: None,
+            performance: None,
+            track: None,
+            neutral: None,
         });
         assert!(e.contains("not an AIM replay"), "{e}");
         let dir = tempfile::tempdir().unwrap();
@@ -227,6 +280,9 @@ mod tests {
             model: &model,
             replay: None,
             poses: Some(&poses),
+            performance: None,
+            track: None,
+            neutral: None,
         });
         assert!(e.contains("p.json") && e.contains("weights"), "{e}");
         let missing = dir.path().join("missing.sinew");
@@ -234,8 +290,66 @@ mod tests {
             model: &missing,
             replay: None,
             poses: None,
+            performance: None,
+            track: None,
+            neutral: None,
         });
         assert!(e.contains("missing.sinew"), "{e}");
+    }
+
+    #[test]
+    fn serves_a_performance_fitted_to_the_actor() {
+        let site = Site::load(Inputs {
+            model: &data("aim-ict.sinew"),
+            replay: None,
+            poses: None,
+            performance: Some(&data("fit-ict.sinew")),
+            track: None,
+            neutral: None,
+        })
+        .unwrap();
+        let config: serde_json::Value =
+            serde_json::from_slice(get(&site, "/config.json").body).unwrap();
+        assert_eq!(config["performance"]["name"], "fit-ict.sinew");
+        assert_eq!(config["performance"]["frames"], 4);
+        assert_eq!(config["performance"]["hashes"], true);
+        let form = config["performance"]["form"].as_str().unwrap();
+        assert!(form == "global" || form == "local", "{form}");
+        assert!(config["replay"].is_null() && config["poses"].is_null());
+        let fit = std::fs::read(data("fit-ict.sinew")).unwrap();
+        assert_eq!(get(&site, "/performance.sinew").body, &fit[..]);
+        assert_eq!(get(&site, "/replay.sinew").status, 404);
+        // Without one, nothing is served there.
+        assert_eq!(get(&self::site(), "/performance.sinew").status, 404);
+    }
+
+    #[test]
+    fn refuses_a_performance_of_another_actor_naming_it() {
+        let err = |model: &str, performance: &str| {
+            let e = Site::load(Inputs {
+                model: &data(model),
+                replay: None,
+                poses: None,
+                performance: Some(&data(performance)),
+                track: None,
+                neutral: None,
+            })
+            .unwrap_err();
+            format!("{e:#}")
+        };
+        // fit-ict.sinew was fitted to aim-ict.sinew, not to the procedural actor.
+        let e = err("aim-procedural.sinew", "fit-ict.sinew");
+        assert!(
+            e.contains("fit-ict.sinew")
+                && e.contains("was fitted to another actor than")
+                && e.contains("aim-procedural.sinew"),
+            "{e}"
+        );
+        let e = err("aim-ict.sinew", "aim-ict.f32.replay.sinew");
+        assert!(
+            e.contains("aim-ict.f32.replay.sinew") && e.contains("not a fitted performance"),
+            "{e}"
+        );
     }
 
     /// One raw HTTP/1.1 request (raw, so that the path reaches the server as written), and the

@@ -1,8 +1,10 @@
 // Browser end-to-end test of `sinew view` (docs/VIEW.md): starts the viewer on the ICT actor, its
-// golden f32 replay and a pose file made here, loads the page in Debian's headless chromium
-// (WebGL2 on SwiftShader, no GPU needed) through playwright-core, plays both and requires every
-// frame's hash computed in the page to equal tests/data/aim-ict.hashes (f32) and the host's hashes
-// of the pose file; moves the sliders and the camera, checks a screenshot is not blank, checks the
+// golden f32 replay, a pose file made here and the golden fitted performance, loads the page in
+// Debian's headless chromium (WebGL2 on SwiftShader, no GPU needed) through playwright-core, plays
+// all three and requires every frame's hash computed in the page to equal
+// tests/data/aim-ict.hashes (f32), the host's hashes of the pose file and
+// tests/data/fit-ict.hashes; then the golden S2D decoder with its replay as landmark track,
+// every decoded frame's hash equal to tests/data/s2d-ict.hashes and the landmarks drawn; moves the sliders and the camera, checks a screenshot is not blank, checks the
 // server's refusals, then stops the server with Ctrl-C (SIGINT).
 //
 // Usage: node host/tests/view/e2e.mjs [--screenshot PATH]
@@ -55,10 +57,12 @@ for (const [path, hint] of [
 const guard = setTimeout(() => {
   console.error("e2e: timed out after 120 s");
   server?.kill("SIGKILL");
+  s2dServer?.kill("SIGKILL");
   process.exit(1);
 }, 120_000);
 
 let server = null;
+let s2dServer = null;
 let browser = null;
 try {
   // A pose file of three frames (neutral, jaw open 10°, head turned 15° with correctives), and
@@ -97,6 +101,8 @@ try {
       join(data, "aim-ict.f32.replay.sinew"),
       "--poses",
       poses,
+      "--performance",
+      join(data, "fit-ict.sinew"),
       "--port",
       "0",
       // A safety net only: the test stops it with SIGINT below.
@@ -152,7 +158,7 @@ try {
   check(/16\/16 frames match the recording/.test(status), `the page reports the match (${status})`);
 
   // The pose file, chosen in the source menu and played: the host's hashes, frame for frame.
-  check(ready.sources.length === 2 && ready.sources[1].count === 3, "the pose file is the second source");
+  check(ready.sources.length === 3 && ready.sources[1].count === 3, "the pose file is the second source");
   await page.selectOption("#source", "1");
   await page.click("#play");
   await page.waitForFunction(() => window.sinewTest.playedHashes(1).every((h) => h !== null), null, {
@@ -161,6 +167,27 @@ try {
   await page.click("#play");
   const posesPlayed = await page.evaluate(() => window.sinewTest.playedHashes(1));
   check(JSON.stringify(posesPlayed) === JSON.stringify(hostHashes), "the pose file's frames hash as on the host");
+
+  // The fitted performance, the third source, played through the core's Performance::pose: the
+  // hashes of tests/data/fit-ict.hashes, and the page says they match the ones baked in the file.
+  const fitHashes = readFileSync(join(data, "fit-ict.hashes"), "utf8")
+    .split("\n")
+    .filter((l) => /^\d+ [0-9a-f]{16}$/.test(l))
+    .map((l) => l.split(" ")[1]);
+  check(ready.sources[2].count === fitHashes.length && fitHashes.length > 0, `the performance is the third source (${fitHashes.length} frames)`);
+  await page.selectOption("#source", "2");
+  await page.click("#play");
+  await page.waitForFunction(() => window.sinewTest.playedHashes(2).every((h) => h !== null), null, {
+    timeout: 30_000,
+  });
+  await page.click("#play");
+  const fitPlayed = await page.evaluate(() => window.sinewTest.playedHashes(2));
+  check(JSON.stringify(fitPlayed) === JSON.stringify(fitHashes), "every performance frame's hash equals fit-ict.hashes");
+  const fitStatus = await page.textContent("#check");
+  check(
+    new RegExp(`${fitHashes.length}/${fitHashes.length} frames match the recording`).test(fitStatus),
+    `the page reports the performance's match with its baked hashes (${fitStatus})`,
+  );
   await page.selectOption("#source", "0");
 
   // The sliders move the geometry, and moving back restores it bit for bit.
@@ -237,6 +264,67 @@ try {
   console.log(`e2e: screenshot ${screenshotPath}`);
   check(errors.length === 0, `no errors in the page${errors.length ? `: ${errors.join("; ")}` : ""}`);
 
+  // An S2D decoder and its landmark track (the golden S2D replay), on a second server: every
+  // decoded frame's hash equals tests/data/s2d-ict.hashes, and the landmarks drawn give the
+  // frame's decoder input back.
+  s2dServer = spawn(
+    bin,
+    ["view", join(data, "s2d-ict.sinew"), "--track", join(data, "s2d-ict.replay.sinew"), "--port", "0", "--exit-after-seconds", "150"],
+    { stdio: ["ignore", "pipe", "inherit"] },
+  );
+  const s2dUrl = await firstLine(s2dServer);
+  const s2dPage = await browser.newPage({ viewport: { width: 1200, height: 800 } });
+  s2dPage.on("pageerror", (e) => errors.push(e.message));
+  s2dPage.on("console", (m) => m.type() === "error" && errors.push(m.text()));
+  await s2dPage.goto(s2dUrl);
+  await s2dPage.waitForFunction(() => window.sinewTest !== undefined, null, { timeout: 30_000 });
+  const s2dReady = await s2dPage.evaluate(() => window.sinewTest);
+  check(
+    s2dReady.ready === true && s2dReady.kind === "s2d" && s2dReady.vertexCount === 1177 && s2dReady.landmarkCount === 68,
+    `the page loaded the S2D decoder (${s2dReady.error ?? `${s2dReady.vertexCount} vertices, ${s2dReady.landmarkCount} landmarks`})`,
+  );
+  const s2dExpected = readFileSync(join(data, "s2d-ict.hashes"), "utf8")
+    .split("\n")
+    .filter((l) => l.startsWith("s2d "))
+    .map((l) => l.split(" ")[2]);
+  check(s2dExpected.length === 16 && s2dReady.sources[0].count === 16, "16 frames in the track and in s2d-ict.hashes");
+  await s2dPage.click("#play");
+  await s2dPage.waitForFunction(() => window.sinewTest.playedHashes(0).every((h) => h !== null), null, {
+    timeout: 30_000,
+  });
+  await s2dPage.click("#play");
+  const s2dPlayed = await s2dPage.evaluate(() => window.sinewTest.playedHashes(0));
+  check(JSON.stringify(s2dPlayed) === JSON.stringify(s2dExpected), "every decoded frame's hash equals s2d-ict.hashes");
+  const s2dRecomputed = await s2dPage.evaluate(() => window.sinewTest.frameHashes(0));
+  check(JSON.stringify(s2dRecomputed) === JSON.stringify(s2dExpected), "frameHashes() equals s2d-ict.hashes");
+  const s2dStatus = await s2dPage.textContent("#check");
+  check(/16\/16 frames match the recording/.test(s2dStatus), `the page reports the track's match (${s2dStatus})`);
+  // The track was measured on one identity and decodes onto another's neutral (a transfer), and
+  // the decoder normalises each set to unit size: the points give its input back up to that
+  // renormalisation, 2.1 % of the frame's largest input value at worst on this track (docs/VIEW.md).
+  const trips = await s2dPage.evaluate(() => Array.from({ length: 16 }, (_, f) => window.sinewTest.landmarkRoundTrip(f)));
+  check(trips[0].largest === 0 && trips[0].difference === 0, "frame 0 (no motion): the landmarks drawn are the neutral's");
+  const worst = Math.max(...trips.map((t) => (t.largest > 0 ? t.difference / t.largest : 0)));
+  check(worst < 0.03, `the landmarks drawn give each frame's decoder input back within 3 % (worst ${(100 * worst).toFixed(2)} %)`);
+  check((await s2dPage.evaluate(() => window.sinewTest.landmarks().length)) === 3 * 68, "68 landmarks drawn");
+  // The last frame shown: the face as points with the landmarks (green) over it.
+  await s2dPage.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  const s2dPng = PNG.sync.read(await s2dPage.locator("#face").screenshot());
+  let [cloud, green] = [0, 0];
+  for (let i = 0; i < s2dPng.data.length; i += 4) {
+    const [r, g, b] = [s2dPng.data[i], s2dPng.data[i + 1], s2dPng.data[i + 2]];
+    if ([r, g, b].some((c, k) => Math.abs(c - BACKGROUND[k]) > 8)) cloud++;
+    if (g > 150 && g > r + 60 && g > b + 60) green++;
+  }
+  const pixels = s2dPng.width * s2dPng.height;
+  check(cloud / pixels > 0.01 && green > 68 * 10, `the decoded face and its landmarks are drawn (${cloud} and ${green} pixels)`);
+  check(errors.length === 0, `no errors in the S2D page${errors.length ? `: ${errors.join("; ")}` : ""}`);
+  await s2dPage.close();
+  const s2dExited = new Promise((r) => s2dServer.once("exit", (code) => r(code)));
+  s2dServer.kill("SIGINT");
+  check((await Promise.race([s2dExited, sleep(5000).then(() => "still running")])) === 0, "SIGINT stops the S2D server");
+  s2dServer = null;
+
   const times = (await page.evaluate(() => window.sinewTest.frameTimes())).slice(1); // skip the first, cold
   times.sort((a, b) => a - b);
   const median = times[Math.floor(times.length / 2)];
@@ -263,6 +351,7 @@ try {
 } finally {
   await browser?.close().catch(() => {});
   server?.kill("SIGKILL");
+  s2dServer?.kill("SIGKILL");
   clearTimeout(guard);
   for (const file of ["poses.json", "poses.replay.sinew"]) rmSync(join(work, file), { force: true });
 }

@@ -1,17 +1,18 @@
-// The page of `sinew view` (docs/VIEW.md): a baked AIM actor posed through sinew-core compiled
-// to WebAssembly (sinew.mjs, docs/WASM.md), drawn with plain WebGL2. Every vertex position and
-// normal on screen comes from the core, so a frame's hash here is the one the host, the C API
-// and the firmware compute.
+// The page of `sinew view` (docs/VIEW.md): a baked AIM actor posed, or an S2D decoder decoding
+// a landmark track, through sinew-core compiled to WebAssembly (sinew.mjs, docs/WASM.md), drawn
+// with plain WebGL2 (face.js). Every vertex position (and an actor's normals) on screen comes
+// from the core, so a frame's hash here is the one the host, the C API and the firmware compute.
 //
 // For tests, `window.sinewTest` exposes the hashes of the frames played, the hash of what is
 // shown and the per-frame times (host/tests/view/e2e.mjs).
 
-import { init, Model, Replay, frameHash } from "./sinew.mjs";
+import { init, Model, Performance, Replay, frameHash } from "./sinew.mjs";
+import { FaceView, vertexNormals } from "./face.js";
 
 const $ = (id) => document.getElementById(id);
 const status = $("status");
 
-/** Replay playback speed: a replay records no frame rate, so 30 frames per second. */
+/** Playback speed: a replay or a performance records no frame rate, so 30 frames per second. */
 const FPS = 30;
 /** The 9D identity: 6D rotation columns (1,0,0), (0,1,0), then a zero translation. */
 const IDENTITY_9D = [1, 0, 0, 0, 1, 0, 0, 0, 0];
@@ -64,12 +65,15 @@ async function main() {
   await init();
   const config = await (await fetch("config.json")).json();
   const model = Model.load(await bytes("model.sinew"));
-  if (model.kind !== "aim") throw new Error(`${config.model} is not an AIM actor`);
   $("title").textContent = config.model;
   document.title = `${config.model} · Sinew view`;
+  if (model.kind === "s2d") return mainS2d(model, config);
 
-  // Frame sources: the replay's frames and the pose file's, each as {head, jaw, coefficients}.
+  // Frame sources: the replay's frames, the pose file's and the performance's. Each gives a
+  // frame's {head, jaw, coefficients} (coefficients null where they vary per vertex), its
+  // positions posed by the core, and the hash recorded for it where there is one to compare.
   const sources = [];
+  const posed = (p) => model.pose(p.head, p.jaw, p.coefficients);
   let replay = null;
   if (config.replay) {
     replay = Replay.load(await bytes("replay.sinew"));
@@ -78,24 +82,39 @@ async function main() {
       name: `replay ${config.replay.name} (${replay.mode})`,
       count: replay.frameCount,
       frame: (f) => replay.frame(f),
+      positions: (f) => posed(replay.frame(f)),
       expected: replay.mode === "f32" ? (f) => replay.expected(f) : null,
     });
   }
   if (config.poses) {
     const file = await (await fetch("poses.json")).json();
+    const frame = (f) => ({
+      head: file.frames[f].head ?? IDENTITY_9D,
+      jaw: file.frames[f].jaw ?? IDENTITY_9D,
+      coefficients: file.frames[f].weights,
+    });
     sources.push({
       name: `poses ${config.poses.name}`,
       count: file.frames.length,
-      frame: (f) => ({
-        head: file.frames[f].head ?? IDENTITY_9D,
-        jaw: file.frames[f].jaw ?? IDENTITY_9D,
-        coefficients: file.frames[f].weights,
-      }),
+      frame,
+      positions: (f) => posed(frame(f)),
       expected: null,
     });
   }
+  if (config.performance) {
+    const perf = Performance.load(await bytes("performance.sinew"));
+    perf.check(model);
+    sources.push({
+      name: `performance ${config.performance.name} (${perf.form})`,
+      count: perf.frameCount,
+      frame: (f) => perf.frame(f),
+      // The core's Performance::pose: a global frame's coefficients, or F_W per vertex.
+      positions: (f) => perf.pose(model, f),
+      expected: perf.hasHashes ? (f) => perf.expected(f) : null,
+    });
+  }
 
-  const view = new FaceView($("face"), model);
+  const view = new FaceView($("face"), model.triangles(), model.neutral());
   const skin = new Float32Array(model.vertexCount * 3);
   for (let v = 0; v < model.vertexCount; v++) skin.set(SKIN, v * 3);
   const heat = thicknessColours(model);
@@ -107,22 +126,21 @@ async function main() {
   };
   toggle.addEventListener("change", showThickness);
   showThickness();
-  const rig = new Rig(model.shapeCount, () => show(rig.pose(), null));
+  const rig = new Rig(model.shapeCount, () => show(() => posed(rig.pose()), null));
   const times = [];
   /** Hashes of the frames played, by source and frame index. */
   const played = sources.map(() => new Map());
   let positions = null;
 
-  /** Poses, draws and hashes; `playedFrame` ([source, frame]) records the hash as played. */
-  function show(pose, playedFrame) {
+  /**
+   * Poses (`compute` returns the positions), draws and hashes; `playedFrame` ([source, frame])
+   * records the hash as played.
+   */
+  function show(compute, playedFrame) {
     const t0 = performance.now();
-    positions = model.pose(pose.head, pose.jaw, pose.coefficients);
+    positions = compute();
     const normals = model.normals(positions);
-    const ms = performance.now() - t0;
-    times.push(ms);
-    const recent = times.slice(-TIME_WINDOW);
-    const mean = recent.reduce((a, b) => a + b, 0) / recent.length;
-    $("time").textContent = `${ms.toFixed(2)} ms (mean of ${recent.length}: ${mean.toFixed(2)} ms)`;
+    recordTime(times, performance.now() - t0);
     view.draw(positions, normals);
     const hash = frameHash(positions, normals);
     if (playedFrame) played[playedFrame[0]].set(playedFrame[1], hash);
@@ -131,21 +149,13 @@ async function main() {
 
   const player = new Player(sources, (s, f) => {
     const source = sources[s];
-    const pose = source.frame(f);
-    rig.setCoefficients(pose.coefficients);
-    const hash = show(pose, [s, f]);
-    const expected = source.expected?.(f);
-    const shown = played[s];
-    let note = `frame ${f}: ${hash}`;
-    if (expected) {
-      const same = [...shown].filter(([g, h]) => h === source.expected(g)).length;
-      note += hash === expected ? " = recorded" : ` ≠ recorded ${expected}`;
-      note += ` · ${same}/${source.count} frames match the recording`;
-    }
-    $("check").textContent = note;
+    const { coefficients } = source.frame(f);
+    if (coefficients) rig.setCoefficients(coefficients);
+    const hash = show(() => source.positions(f), [s, f]);
+    $("check").textContent = checkNote(source, played[s], f, hash);
   });
 
-  show(rig.pose(), null);
+  show(() => posed(rig.pose()), null);
   const frames = sources.reduce((n, s) => n + s.count, 0);
   status.textContent =
     `${model.vertexCount} vertices, ${model.triangleCount} triangles, ${model.shapeCount} ` +
@@ -161,8 +171,7 @@ async function main() {
     /** Every frame of source `s` posed, its normals computed and hashed now, in order. */
     frameHashes: (s = 0) =>
       Array.from({ length: sources[s].count }, (_, f) => {
-        const p = sources[s].frame(f);
-        const x = model.pose(p.head, p.jaw, p.coefficients);
+        const x = sources[s].positions(f);
         return frameHash(x, model.normals(x));
       }),
     /** The hash of the positions on screen. */
@@ -172,6 +181,142 @@ async function main() {
     playing: () => player.playing,
     /** The thickness heatmap's range as shown, e.g. "0 – 28.6 mm". */
     thicknessRange: () => heat.label,
+  };
+}
+
+/** Shows a frame's time (`ms`) and the mean of the last TIME_WINDOW, and keeps it in `times`. */
+function recordTime(times, ms) {
+  times.push(ms);
+  const recent = times.slice(-TIME_WINDOW);
+  const mean = recent.reduce((a, b) => a + b, 0) / recent.length;
+  $("time").textContent = `${ms.toFixed(2)} ms (mean of ${recent.length}: ${mean.toFixed(2)} ms)`;
+}
+
+/**
+ * What the page says of frame `f` of `source` with hash `hash`: the hash, and where the source
+ * has recorded ones, whether it equals its own and how many of the frames shown (`shown`, frame
+ * to hash) match.
+ */
+function checkNote(source, shown, f, hash) {
+  const expected = source.expected?.(f);
+  let note = `frame ${f}: ${hash}`;
+  if (expected) {
+    const same = [...shown].filter(([g, h]) => h === source.expected(g)).length;
+    note += hash === expected ? " = recorded" : ` ≠ recorded ${expected}`;
+    note += ` · ${same}/${source.count} frames match the recording`;
+  }
+  return note;
+}
+
+/**
+ * The landmarks a frame's decoder input describes, placed at the neutral's landmarks:
+ * `neutral + ‖centred(neutral)‖ · input`, x y z per landmark. Under both of the decoder's input
+ * normalisations (docs/FORMAT.md, `s2d.input`) the input is the landmarks' motion, less its
+ * mean, in units of the neutral's centred size (Frobenius: the difference of the two unit-size
+ * sets, the expressive one taken at the neutral's size), so this inverts it: exactly (up to
+ * rounding) for an input measured against this neutral, and up to the renormalisation of the
+ * moved set for one measured against another face's (a transferred track, Frobenius).
+ */
+function trackLandmarks(neutral, input) {
+  const k = neutral.length / 3;
+  const mean = [0, 1, 2].map((c) => {
+    let sum = 0;
+    for (let i = 0; i < k; i++) sum += neutral[3 * i + c];
+    return sum / k;
+  });
+  let size = 0;
+  for (let i = 0; i < neutral.length; i++) size += (neutral[i] - mean[i % 3]) ** 2;
+  size = Math.sqrt(size) || 1;
+  return neutral.map((n, i) => n + size * input[i]);
+}
+
+/**
+ * The page for an S2D decoder: its landmark track (an S2D replay) decoded frame by frame onto
+ * the `--neutral` face, else the track's neutral, else the decoder's template; the face drawn
+ * with the neutral's polygons, or as points when there are none; the landmarks over it.
+ */
+async function mainS2d(model, config) {
+  for (const id of ["head-jaw", "correctives", "display"]) $(id).hidden = true;
+  $("time-what").textContent = "Decode";
+  const face = config.neutral ? await (await fetch("neutral.json")).json() : null;
+  const track = config.track ? Replay.load(await bytes("track.sinew")) : null;
+  if (track) {
+    if (track.kind !== "s2d") throw new Error(`${config.track.name} is not an S2D replay`);
+    track.check(model);
+  }
+  const neutral = face ? Float32Array.from(face.positions) : (track?.neutral ?? model.neutral());
+  const triangles = face ? Uint32Array.from(face.triangles) : new Uint32Array(0);
+  const landmarkVertices = model.landmarkVertices();
+  const neutralLandmarks = new Float32Array(3 * landmarkVertices.length);
+  landmarkVertices.forEach((v, i) => neutralLandmarks.set(neutral.subarray(3 * v, 3 * v + 3), 3 * i));
+
+  const view = new FaceView($("face"), triangles, neutral);
+  view.setColours(new Float32Array(neutral.length).map((_, i) => SKIN[i % 3]));
+  const sources = track
+    ? [
+        {
+          name: `track ${config.track.name}`,
+          count: track.frameCount,
+          input: (f) => track.frame(f).input,
+          expected: config.track.compare ? (f) => track.expected(f) : null,
+        },
+      ]
+    : [];
+  const times = [];
+  const played = sources.map(() => new Map());
+  let positions = neutral;
+  let landmarks = neutralLandmarks;
+  const draw = () => view.draw(positions, triangles.length ? vertexNormals(positions, triangles) : positions);
+
+  const player = new Player(sources, (s, f) => {
+    const input = sources[s].input(f);
+    const t0 = performance.now();
+    positions = model.decode(input, neutral);
+    recordTime(times, performance.now() - t0);
+    landmarks = trackLandmarks(neutralLandmarks, input);
+    view.setLandmarks(landmarks);
+    draw();
+    const hash = frameHash(positions);
+    played[s].set(f, hash);
+    $("check").textContent = checkNote(sources[s], played[s], f, hash);
+  });
+  if (!track) {
+    view.setLandmarks(landmarks);
+    draw();
+  }
+  status.textContent =
+    `S2D decoder: ${model.vertexCount} vertices, ${model.landmarkCount} landmarks` +
+    (face ? `, ${triangles.length / 3} triangles of ${config.neutral.name}` : ", drawn as points") +
+    (track ? `, ${track.frameCount} frames to play` : "");
+
+  window.sinewTest = {
+    ready: true,
+    kind: "s2d",
+    vertexCount: model.vertexCount,
+    landmarkCount: model.landmarkCount,
+    sources: sources.map((s) => ({ name: s.name, count: s.count })),
+    playedHashes: (s = 0) => Array.from({ length: sources[s].count }, (_, f) => played[s].get(f) ?? null),
+    /** Every frame of source `s` decoded and hashed now, in order. */
+    frameHashes: (s = 0) =>
+      Array.from({ length: sources[s].count }, (_, f) => frameHash(model.decode(sources[s].input(f), neutral))),
+    positionsChecksum: () => frameHash(positions),
+    /** The landmarks drawn, x y z each. */
+    landmarks: () => Array.from(landmarks),
+    /**
+     * How faithfully the points show frame `f`: the largest difference between its input and
+     * the decoder's input from the neutral's landmarks and the landmarks drawn for it, and the
+     * input's largest value.
+     */
+    landmarkRoundTrip: (f, s = 0) => {
+      const input = sources[s].input(f);
+      const again = model.landmarkInput(neutralLandmarks, trackLandmarks(neutralLandmarks, input));
+      return {
+        difference: again.reduce((m, x, i) => Math.max(m, Math.abs(x - input[i])), 0),
+        largest: input.reduce((m, x) => Math.max(m, Math.abs(x)), 0),
+      };
+    },
+    frameTimes: () => times.slice(),
+    playing: () => player.playing,
   };
 }
 
@@ -293,221 +438,6 @@ class Rig {
     const jaw = [1, 0, 0, 0, cj, sj, 0, 0, 0];
     return { head, jaw, coefficients: this.coefficients };
   }
-}
-
-const VERTEX_SHADER = `#version 300 es
-in vec3 position;
-in vec3 normal;
-in vec3 tint;
-uniform mat4 viewProjection;
-uniform mat4 view;
-out vec3 viewNormal;
-out vec3 viewPosition;
-out vec3 albedo;
-void main() {
-  albedo = tint;
-  vec4 p = view * vec4(position, 1.0);
-  viewPosition = p.xyz;
-  viewNormal = mat3(view) * normal;
-  gl_Position = viewProjection * vec4(position, 1.0);
-}`;
-
-const FRAGMENT_SHADER = `#version 300 es
-precision highp float;
-in vec3 viewNormal;
-in vec3 viewPosition;
-in vec3 albedo;
-out vec4 colour;
-void main() {
-  vec3 n = normalize(viewNormal);
-  vec3 v = normalize(-viewPosition);
-  if (dot(n, v) < 0.0) n = -n;
-  vec3 key = normalize(vec3(0.5, 0.6, 0.8));
-  vec3 fill = normalize(vec3(-0.7, 0.1, 0.5));
-  float diffuse = max(dot(n, key), 0.0) * 0.75 + max(dot(n, fill), 0.0) * 0.25;
-  float sky = 0.5 + 0.5 * n.y;
-  float specular = pow(max(dot(n, normalize(key + v)), 0.0), 40.0) * 0.25;
-  vec3 c = albedo * (0.06 + 0.08 * sky + 0.85 * diffuse) + vec3(specular);
-  colour = vec4(pow(c, vec3(1.0 / 2.2)), 1.0);
-}`;
-
-/** The face on a WebGL2 canvas, with orbit (drag) and zoom (wheel) about its centre. */
-class FaceView {
-  constructor(canvas, model) {
-    this.canvas = canvas;
-    const gl = canvas.getContext("webgl2", { antialias: true });
-    if (!gl) throw new Error("this browser has no WebGL2");
-    this.gl = gl;
-    this.program = program(gl, VERTEX_SHADER, FRAGMENT_SHADER);
-    const triangles = model.triangles();
-    this.indexCount = triangles.length;
-    this.vao = gl.createVertexArray();
-    gl.bindVertexArray(this.vao);
-    this.positionBuffer = attribute(gl, this.program, "position");
-    this.normalBuffer = attribute(gl, this.program, "normal");
-    this.colourBuffer = attribute(gl, this.program, "tint");
-    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, gl.createBuffer());
-    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, triangles, gl.STATIC_DRAW);
-
-    // Orbit about the neutral's bounding box centre, at a distance that frames it.
-    const neutral = model.neutral();
-    const lo = [Infinity, Infinity, Infinity];
-    const hi = [-Infinity, -Infinity, -Infinity];
-    for (let i = 0; i < neutral.length; i += 3) {
-      for (let k = 0; k < 3; k++) {
-        lo[k] = Math.min(lo[k], neutral[i + k]);
-        hi[k] = Math.max(hi[k], neutral[i + k]);
-      }
-    }
-    this.centre = lo.map((l, k) => (l + hi[k]) / 2);
-    this.radius = Math.hypot(...hi.map((h, k) => h - lo[k])) / 2 || 1;
-    this.distance = this.radius * 2.8;
-    this.yaw = 0;
-    this.pitch = 0;
-    this.listen();
-  }
-
-  listen() {
-    const c = this.canvas;
-    let last = null;
-    c.addEventListener("pointerdown", (e) => {
-      last = [e.clientX, e.clientY];
-      c.setPointerCapture(e.pointerId);
-    });
-    c.addEventListener("pointerup", () => (last = null));
-    c.addEventListener("pointermove", (e) => {
-      if (!last) return;
-      this.yaw -= (e.clientX - last[0]) * 0.01;
-      this.pitch = Math.max(-1.5, Math.min(1.5, this.pitch - (e.clientY - last[1]) * 0.01));
-      last = [e.clientX, e.clientY];
-      this.redraw();
-    });
-    c.addEventListener(
-      "wheel",
-      (e) => {
-        e.preventDefault();
-        const factor = Math.exp(Math.sign(e.deltaY) * 0.1);
-        this.distance = Math.max(this.radius * 0.5, Math.min(this.radius * 10, this.distance * factor));
-        this.redraw();
-      },
-      { passive: false },
-    );
-    new ResizeObserver(() => this.redraw()).observe(c);
-  }
-
-  /** Sets the per-vertex colours (linear RGB, 3 per vertex) and redraws. */
-  setColours(colours) {
-    const gl = this.gl;
-    gl.bindBuffer(gl.ARRAY_BUFFER, this.colourBuffer);
-    gl.bufferData(gl.ARRAY_BUFFER, colours, gl.STATIC_DRAW);
-    if (this.drawn) this.redraw();
-  }
-
-  draw(positions, normals) {
-    const gl = this.gl;
-    gl.bindBuffer(gl.ARRAY_BUFFER, this.positionBuffer);
-    gl.bufferData(gl.ARRAY_BUFFER, positions, gl.DYNAMIC_DRAW);
-    gl.bindBuffer(gl.ARRAY_BUFFER, this.normalBuffer);
-    gl.bufferData(gl.ARRAY_BUFFER, normals, gl.DYNAMIC_DRAW);
-    this.drawn = true;
-    this.redraw();
-  }
-
-  redraw() {
-    const gl = this.gl;
-    const c = this.canvas;
-    const scale = window.devicePixelRatio || 1;
-    const [w, h] = [Math.round(c.clientWidth * scale), Math.round(c.clientHeight * scale)];
-    if (w > 0 && h > 0 && (c.width !== w || c.height !== h)) [c.width, c.height] = [w, h];
-    gl.viewport(0, 0, c.width, c.height);
-    gl.clearColor(0x1d / 255, 0x20 / 255, 0x26 / 255, 1);
-    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
-    gl.enable(gl.DEPTH_TEST);
-    gl.useProgram(this.program);
-    const eye = [
-      this.centre[0] + this.distance * Math.cos(this.pitch) * Math.sin(this.yaw),
-      this.centre[1] + this.distance * Math.sin(this.pitch),
-      this.centre[2] + this.distance * Math.cos(this.pitch) * Math.cos(this.yaw),
-    ];
-    const view = lookAt(eye, this.centre, [0, 1, 0]);
-    const near = Math.max(this.distance - this.radius * 2, this.radius * 0.01);
-    const projection = perspective(Math.PI / 5, c.width / Math.max(c.height, 1), near, this.distance + this.radius * 2);
-    gl.uniformMatrix4fv(gl.getUniformLocation(this.program, "view"), false, view);
-    gl.uniformMatrix4fv(gl.getUniformLocation(this.program, "viewProjection"), false, multiply(projection, view));
-    gl.bindVertexArray(this.vao);
-    gl.drawElements(gl.TRIANGLES, this.indexCount, gl.UNSIGNED_INT, 0);
-  }
-}
-
-function program(gl, vertexSource, fragmentSource) {
-  const p = gl.createProgram();
-  for (const [type, source] of [
-    [gl.VERTEX_SHADER, vertexSource],
-    [gl.FRAGMENT_SHADER, fragmentSource],
-  ]) {
-    const s = gl.createShader(type);
-    gl.shaderSource(s, source);
-    gl.compileShader(s);
-    if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw new Error(`shader: ${gl.getShaderInfoLog(s)}`);
-    gl.attachShader(p, s);
-  }
-  gl.linkProgram(p);
-  if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(`shader link: ${gl.getProgramInfoLog(p)}`);
-  return p;
-}
-
-function attribute(gl, p, name) {
-  const buffer = gl.createBuffer();
-  const location = gl.getAttribLocation(p, name);
-  gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
-  gl.enableVertexAttribArray(location);
-  gl.vertexAttribPointer(location, 3, gl.FLOAT, false, 0, 0);
-  return buffer;
-}
-
-// Column-major 4×4 matrices, as WebGL takes them.
-function lookAt(eye, target, up) {
-  const z = normalise(eye.map((e, k) => e - target[k]));
-  const x = normalise(cross(up, z));
-  const y = cross(z, x);
-  const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-  return new Float32Array([
-    x[0], y[0], z[0], 0,
-    x[1], y[1], z[1], 0,
-    x[2], y[2], z[2], 0,
-    -dot(x, eye), -dot(y, eye), -dot(z, eye), 1,
-  ]);
-}
-
-function perspective(fovY, aspect, near, far) {
-  const f = 1 / Math.tan(fovY / 2);
-  return new Float32Array([
-    f / aspect, 0, 0, 0,
-    0, f, 0, 0,
-    0, 0, (far + near) / (near - far), -1,
-    0, 0, (2 * far * near) / (near - far), 0,
-  ]);
-}
-
-function multiply(a, b) {
-  const out = new Float32Array(16);
-  for (let col = 0; col < 4; col++) {
-    for (let row = 0; row < 4; row++) {
-      let s = 0;
-      for (let k = 0; k < 4; k++) s += a[k * 4 + row] * b[col * 4 + k];
-      out[col * 4 + row] = s;
-    }
-  }
-  return out;
-}
-
-function cross(a, b) {
-  return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-}
-
-function normalise(v) {
-  const n = Math.hypot(...v) || 1;
-  return v.map((x) => x / n);
 }
 
 // Last, once every class above is defined.
