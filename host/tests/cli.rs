@@ -4,32 +4,8 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-fn sinew(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sinew"))
-        .args(args)
-        .output()
-        .expect("run sinew")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = sinew(args);
-    assert!(
-        out.status.success(),
-        "sinew {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn err(args: &[&str]) -> String {
-    let out = sinew(args);
-    assert!(!out.status.success(), "sinew {args:?} should have failed");
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+mod common;
+use common::{err, ok, repo, s, sinew};
 
 #[test]
 fn demo_then_every_command_on_its_outputs() {
@@ -844,15 +820,6 @@ fn view_names_a_bad_model_and_fails() {
         e.contains("fit-ict.sinew") && e.contains("was fitted to another actor"),
         "{e}"
     );
-}
-
-fn repo(path: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join(path)
-        .to_str()
-        .unwrap()
-        .to_string()
 }
 
 #[test]

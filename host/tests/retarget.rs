@@ -4,8 +4,10 @@
 //! soft-tissue-only parts; the `.sinew` points section in the core; `sinew retarget` and
 //! `sinew data neutral` as a user runs them.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::PathBuf;
+
+mod common;
+use common::{repo, s, sinew};
 
 use sinew_core::aim::AimActor;
 use sinew_core::error::{BufferError, FormatError};
@@ -16,25 +18,12 @@ use sinew_host::fit::retarget::{Part, retarget};
 use sinew_host::io::container::SinewWriter;
 
 fn golden(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data")
-        .join(name)
+    PathBuf::from(repo(&format!("tests/data/{name}")))
 }
 
 fn read(name: &str) -> Vec<u8> {
     let path = golden(name);
     std::fs::read(&path).unwrap_or_else(|e| panic!("{}: golden file missing ({e})", path.display()))
-}
-
-fn sinew(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sinew"))
-        .args(args)
-        .output()
-        .expect("run sinew")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// Per-vertex displacement of each frame from the rest shape, `[V, 3]` per frame.
