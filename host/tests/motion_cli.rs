@@ -185,9 +185,13 @@ fn eval_motion(dir: &std::path::Path, motions: &std::path::Path, model: &std::pa
             let f = r[key].as_f64().unwrap();
             assert!(f.is_finite() && f >= 0.0, "{row}.{key} = {f}");
         }
-        // Seeds make Motion3DGAN's motions differ; the LSTM's repeat (computed, not assumed).
-        assert!(r["diversity"].as_f64().unwrap() > 0.0, "{row}");
-        assert_eq!(r["diversity_lstm"].as_f64().unwrap(), 0.0, "{row}");
+        // Seeds make Motion3DGAN's motions differ; the LSTM's repeat (computed, not assumed: the
+        // distance of a motion from itself is 0 up to the rounding of its inner product).
+        let (gan, lstm) = (
+            r["diversity"].as_f64().unwrap(),
+            r["diversity_lstm"].as_f64().unwrap(),
+        );
+        assert!(gan > 1e-3 && (0.0..1e-5).contains(&lstm), "{row}: {gan} {lstm}");
         // One identity: no ground-truth pairs of a label.
         assert!(r["diversity_gt"].is_null(), "{row}");
     }
