@@ -191,7 +191,10 @@ fn eval_motion(dir: &std::path::Path, motions: &std::path::Path, model: &std::pa
             r["diversity"].as_f64().unwrap(),
             r["diversity_lstm"].as_f64().unwrap(),
         );
-        assert!(gan > 1e-3 && (0.0..1e-5).contains(&lstm), "{row}: {gan} {lstm}");
+        assert!(
+            gan > 1e-3 && (0.0..1e-5).contains(&lstm),
+            "{row}: {gan} {lstm}"
+        );
         // One identity: no ground-truth pairs of a label.
         assert!(r["diversity_gt"].is_null(), "{row}");
     }

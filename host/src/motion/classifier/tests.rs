@@ -100,5 +100,5 @@ fn the_classifier_learns_two_toy_classes() {
     assert!(features.iter().all(|f| f.len() == 8));
     // Bad input is refused.
     assert!(train(&seqs, &labels[..3], 2, &config, &device, &mut |_, _| {}).is_err());
-    assert!(train(&seqs, &vec![2; 24], 2, &config, &device, &mut |_, _| {}).is_err());
+    assert!(train(&seqs, &[2; 24], 2, &config, &device, &mut |_, _| {}).is_err());
 }
