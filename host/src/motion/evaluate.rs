@@ -117,8 +117,9 @@ pub struct Row {
     /// Fréchet distance of the LSTM's features from the ground truth's.
     pub frechet_lstm: f64,
     /// Fréchet distance of the training sequences' features from the test ground truth's (a
-    /// floor: two samples of the same distribution).
-    pub frechet_train: f64,
+    /// floor: two samples of the same distribution); Gen-LM only (Det-LM would decode every
+    /// training sequence).
+    pub frechet_train: Option<f64>,
     /// Motion3DGAN's diversity (rad).
     pub diversity: f32,
     /// The LSTM's diversity (rad; 0 by construction, computed).
@@ -297,7 +298,9 @@ struct Judge<'a> {
 }
 
 impl Judge<'_> {
-    fn row(&self, reading: &Reading, name: &str) -> Result<Row> {
+    /// The row of `reading`; `with_train`: also the training sequences' Fréchet distance (for
+    /// the reading whose landmarks are the training sequences' own).
+    fn row(&self, reading: &Reading, name: &str, with_train: bool) -> Result<Row> {
         let mut accuracy = Vec::new();
         let mut per_label: [Vec<f32>; 3] = Default::default();
         let mut feats = Vec::new();
@@ -342,7 +345,11 @@ impl Judge<'_> {
             per_label_accuracy: per_label,
             frechet_motion3dgan: frechet::between(&feats[1], &feats[0])?,
             frechet_lstm: frechet::between(&feats[2], &feats[0])?,
-            frechet_train: frechet::between(self.train_features, &feats[0])?,
+            frechet_train: if with_train {
+                Some(frechet::between(self.train_features, &feats[0])?)
+            } else {
+                None
+            },
             diversity: div[0],
             diversity_lstm: div[1],
             diversity_gt,
@@ -495,8 +502,8 @@ pub fn eval_motion(opts: &EvalMotion) -> Result<EvalReport> {
         classifier_train_accuracy: classifier::accuracy(&train_predicted, &train_labels),
         classifier_losses,
         lstm_losses,
-        gen_lm: judge.row(&gen_lm, "Gen-LM")?,
-        det_lm: judge.row(&det_lm, "Det-LM")?,
+        gen_lm: judge.row(&gen_lm, "Gen-LM", true)?,
+        det_lm: judge.row(&det_lm, "Det-LM", false)?,
         generated: generated_info,
         diversity_seeds,
         seconds: started.elapsed().as_secs_f64(),
