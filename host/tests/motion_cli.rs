@@ -1,7 +1,8 @@
-//! `sinew data motions`, `train motion`, `generate` and `interpolate` as a user runs them: a small
-//! motion set from the real ICT-FaceKit, read back by the library with its seeded split, a few
-//! training steps with a checkpoint resumed, meshes generated through the golden S2D decoder,
-//! and clear errors on bad input.
+//! `sinew data motions`, `train motion`, `generate`, `interpolate` and `eval motion` as a user
+//! runs them: a small motion set from the real ICT-FaceKit, read back by the library with its
+//! seeded split, a few training steps with a checkpoint resumed, meshes generated through the
+//! golden S2D decoder, Table 3's evaluation of the briefly trained generator, and clear errors on
+//! bad input.
 
 use std::process::{Command, Output};
 
@@ -129,6 +130,109 @@ fn data_motions_writes_a_seeded_split_set() {
     );
 
     generate_and_interpolate(dir.path(), &model);
+    eval_motion(dir.path(), &out, &model);
+}
+
+/// `sinew eval motion` on the small set with the just-trained generator and the golden decoder:
+/// a few epochs, two diversity seeds; then bad input.
+fn eval_motion(dir: &std::path::Path, motions: &std::path::Path, model: &std::path::Path) {
+    let decoder = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/s2d-ict.sinew");
+    let report = dir.join("eval.json");
+    let (m, s) = (model.to_str().unwrap(), motions.to_str().unwrap());
+    let eval = |model: &str, decoder: &str, motions: &str| {
+        sinew(&[
+            "eval",
+            "motion",
+            "--model",
+            model,
+            "--decoder",
+            decoder,
+            "--motions",
+            motions,
+            "--report",
+            report.to_str().unwrap(),
+            "--epochs",
+            "3",
+            "--diversity-seeds",
+            "2",
+            "--seed",
+            "4",
+            "--quiet",
+        ])
+    };
+    let run = eval(m, decoder, s);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("seed 4"), "{stderr}");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        stdout.contains("Gen-LM") && stdout.contains("Det-LM"),
+        "{stdout}"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(json["test_sequences"], 12);
+    assert_eq!(json["train_sequences"], 12);
+    assert_eq!(json["settings"]["classifier"]["epochs"], 3);
+    assert_eq!(json["classifier_losses"].as_array().unwrap().len(), 3);
+    assert!(json["seconds"].as_f64().unwrap() > 0.0);
+    for row in ["gen_lm", "det_lm"] {
+        let r = &json[row];
+        for key in ["accuracy_gt", "accuracy_motion3dgan", "accuracy_lstm"] {
+            let a = r[key].as_f64().unwrap();
+            assert!((0.0..=1.0).contains(&a), "{row}.{key} = {a}");
+        }
+        assert_eq!(r["frechet_train"].is_null(), row == "det_lm", "{row}");
+        for key in ["frechet_motion3dgan", "frechet_lstm"] {
+            let f = r[key].as_f64().unwrap();
+            assert!(f.is_finite() && f >= 0.0, "{row}.{key} = {f}");
+        }
+        // Seeds make Motion3DGAN's motions differ; the LSTM's repeat (computed, not assumed: the
+        // distance of a motion from itself is 0 up to the rounding of its inner product).
+        let (gan, lstm) = (
+            r["diversity"].as_f64().unwrap(),
+            r["diversity_lstm"].as_f64().unwrap(),
+        );
+        assert!(
+            gan > 1e-3 && (0.0..1e-5).contains(&lstm),
+            "{row}: {gan} {lstm}"
+        );
+        // One identity: no ground-truth pairs of a label.
+        assert!(r["diversity_gt"].is_null(), "{row}");
+    }
+    let generated = json["generated"].as_array().unwrap();
+    assert_eq!(generated.len(), 12);
+    assert_eq!(generated[0]["label"], "bareteeth");
+    assert_eq!(generated[0]["seed"], 4_000_000);
+    assert_eq!(generated[11]["seed"], 4_000_011);
+
+    // Bad input, each named: a decoder of another landmark count, a file of another kind as the
+    // generator, a folder without a motion set.
+    let tiny = dir.join("tiny-decoder.sinew");
+    std::fs::write(&tiny, sinew_host::s2d::synthetic::tiny_baked_decoder().1).unwrap();
+    let run = eval(m, tiny.to_str().unwrap(), s);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("tiny-decoder.sinew") && stderr.contains("reads 2 landmarks"),
+        "{stderr}"
+    );
+    let run = eval(decoder, decoder, s);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success()
+            && stderr.contains("s2d-ict.sinew")
+            && stderr.contains("not a Motion3DGAN generator"),
+        "{stderr}"
+    );
+    let missing = dir.join("no-motions-here");
+    let run = eval(m, decoder, missing.to_str().unwrap());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success()
+            && stderr.contains("no-motions-here")
+            && stderr.contains("manifest.json"),
+        "{stderr}"
+    );
 }
 
 /// `sinew generate` and `sinew interpolate` with the just-trained generator and the golden S2D

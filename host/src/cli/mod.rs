@@ -110,6 +110,11 @@ enum Eval {
     Aim(aim::EvalAim),
     /// AIM's Table 1 on a performance: GBS, PBS, and the global and local AIM fits.
     Fit(fit::EvalFitArgs),
+    /// Table 3 of S2D: a sequence classifier and the LSTM baseline trained on the training
+    /// motions; accuracy, Fréchet distance and diversity of the ground truth, a baked Motion3DGAN
+    /// generator (through sinew-core) and the LSTM, on generated landmarks and on landmarks
+    /// re-extracted from S2D-Dec meshes (report JSON).
+    Motion(motion::EvalMotionArgs),
 }
 
 /// Runs the parsed command.
@@ -122,6 +127,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Eval(Eval::S2d(args)) => s2d::eval(args),
         Command::Eval(Eval::Aim(args)) => aim::eval(args),
         Command::Eval(Eval::Fit(args)) => fit::eval(args),
+        Command::Eval(Eval::Motion(args)) => motion::eval(args),
         Command::Fit(args) => fit::fit(args),
         Command::Retarget(args) => fit::retarget(args),
         Command::Bake(args) => aim::bake(args),

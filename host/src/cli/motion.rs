@@ -1,5 +1,5 @@
-//! `sinew data motions`, `sinew train motion`, `sinew generate` and `sinew interpolate`:
-//! Motion3DGAN's data, training and generation (docs/MOTION.md).
+//! `sinew data motions`, `sinew train motion`, `sinew generate`, `sinew interpolate` and
+//! `sinew eval motion`: Motion3DGAN's data, training, generation and evaluation (docs/MOTION.md).
 
 use std::path::PathBuf;
 
@@ -7,6 +7,7 @@ use anyhow::Result;
 use clap::Args;
 use sinew_host::motion::commands::{TrainMotion, train_motion};
 use sinew_host::motion::data::{MotionsConfig, Split, generate_to};
+use sinew_host::motion::evaluate::{EvalMotion, EvalSettings, eval_motion};
 use sinew_host::motion::gan::GanConfig;
 use sinew_host::motion::generate::Generate;
 use sinew_host::training::backend::Backend;
@@ -233,5 +234,77 @@ pub(crate) fn interpolate(args: InterpolateArgs) -> Result<()> {
         args.to,
         args.steps
     );
+    Ok(())
+}
+
+/// `sinew eval motion`'s options.
+#[derive(Debug, Args)]
+pub(crate) struct EvalMotionArgs {
+    /// The baked generator (from `sinew train motion`).
+    #[arg(long)]
+    model: PathBuf,
+    /// The baked S2D decoder whose 68 landmarks the generator moves (Det-LM decodes through it).
+    #[arg(long)]
+    decoder: PathBuf,
+    /// Motion set folder (from `sinew data motions`): its training sequences train the
+    /// classifier and the LSTM baseline, its test sequences are the ground truth.
+    #[arg(long)]
+    motions: PathBuf,
+    /// JSON report to write.
+    #[arg(long)]
+    report: PathBuf,
+    /// Seed of the classifier, the LSTM baseline and the generated motions' seeds.
+    #[arg(long, env = "SINEW_SEED", default_value_t = 1)]
+    seed: u64,
+    /// Training epochs of the classifier and of the LSTM baseline.
+    #[arg(long, default_value_t = 40)]
+    epochs: usize,
+    /// Motions per label (from different seeds) for the diversity.
+    #[arg(long, default_value_t = 10)]
+    diversity_seeds: usize,
+    /// burn backend.
+    #[arg(long, value_enum, default_value_t = Backend::Flex)]
+    backend: Backend,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// `sinew eval motion`.
+pub(crate) fn eval(args: EvalMotionArgs) -> Result<()> {
+    eprintln!("seed {} (override with --seed or SINEW_SEED)", args.seed);
+    let settings = EvalSettings {
+        diversity_seeds: args.diversity_seeds,
+        ..EvalSettings::new(args.seed, args.epochs)
+    };
+    let r = eval_motion(&EvalMotion {
+        model: args.model,
+        decoder: args.decoder,
+        motions: args.motions,
+        report: args.report.clone(),
+        settings,
+        backend: args.backend,
+        quiet: args.quiet,
+    })?;
+    println!(
+        "{} test sequences, {} training; classifier {:.1} % on its training set",
+        r.test_sequences,
+        r.train_sequences,
+        100.0 * r.classifier_train_accuracy
+    );
+    println!("row     accuracy GT / Motion3DGAN / LSTM   Fréchet Motion3DGAN / LSTM   diversity");
+    for (name, row) in [("Gen-LM", &r.gen_lm), ("Det-LM", &r.det_lm)] {
+        println!(
+            "{name}  {:5.1} % / {:5.1} % / {:5.1} %        {:8.3} / {:8.3}          {:.3} (LSTM {:.3})",
+            100.0 * row.accuracy_gt,
+            100.0 * row.accuracy_motion3dgan,
+            100.0 * row.accuracy_lstm,
+            row.frechet_motion3dgan,
+            row.frechet_lstm,
+            row.diversity,
+            row.diversity_lstm
+        );
+    }
+    println!("{}: report ({:.1} s)", args.report.display(), r.seconds);
     Ok(())
 }

@@ -26,6 +26,25 @@ pub fn diversity(generator: &MotionGenerator<'_>, seeds: u64) -> Result<(Vec<f32
                     .map_err(|e| anyhow!("generating label {label}, seed {seed}: {e}"))
             })
             .collect::<Result<Vec<_>>>()?;
+        per_label.push(motions);
+    }
+    mean_pairwise(&per_label)
+}
+
+/// Per group, the mean geodesic distance over every pair of its motions (unit SRVFs of one
+/// shape); then the mean over the groups, last. Table 3's diversity with one group per label.
+///
+/// # Errors
+/// No groups, a group of fewer than 2 motions, or motions of different shapes.
+pub fn mean_pairwise(groups: &[Vec<Vec<f32>>]) -> Result<(Vec<f32>, f32)> {
+    ensure!(!groups.is_empty(), "diversity needs at least one group");
+    let mut per_group = Vec::with_capacity(groups.len());
+    for (g, motions) in groups.iter().enumerate() {
+        ensure!(
+            motions.len() >= 2,
+            "diversity needs at least 2 motions per group; group {g} has {}",
+            motions.len()
+        );
         let (mut sum, mut pairs) = (0.0f64, 0usize);
         for a in 0..motions.len() {
             for b in a + 1..motions.len() {
@@ -33,8 +52,8 @@ pub fn diversity(generator: &MotionGenerator<'_>, seeds: u64) -> Result<(Vec<f32
                 pairs += 1;
             }
         }
-        per_label.push((sum / pairs as f64) as f32);
+        per_group.push((sum / pairs as f64) as f32);
     }
-    let mean = per_label.iter().map(|&d| f64::from(d)).sum::<f64>() / LABELS as f64;
-    Ok((per_label, mean as f32))
+    let mean = per_group.iter().map(|&d| f64::from(d)).sum::<f64>() / groups.len() as f64;
+    Ok((per_group, mean as f32))
 }

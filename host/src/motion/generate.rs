@@ -47,6 +47,55 @@ struct Loaded<'a> {
     neutral_lmk: Vec<f32>,
 }
 
+/// A baked generator (from `sinew train motion`) and its labels; errors name `path`.
+pub(crate) fn open_generator<'a>(
+    path: &Path,
+    bytes: &'a [u8],
+) -> Result<(MotionGenerator<'a>, Vec<String>)> {
+    let generator = MotionGenerator::from_bytes(bytes).map_err(|e| {
+        anyhow!(
+            "{}: not a Motion3DGAN generator (from `sinew train motion`): {e}",
+            path.display()
+        )
+    })?;
+    let labels: Vec<String> = sinew_core::SinewFile::from_bytes(bytes)
+        .ok()
+        .and_then(|f| f.metadata().get("labels").map(str::to_owned))
+        .map(|l| l.split(',').map(str::to_owned).collect())
+        .unwrap_or_default();
+    if labels.len() != sinew_core::motion::LABELS {
+        bail!(
+            "{}: the generator lists {} labels, {} expected",
+            path.display(),
+            labels.len(),
+            sinew_core::motion::LABELS
+        );
+    }
+    Ok((generator, labels))
+}
+
+/// A baked S2D decoder whose landmarks `generator` (read from `model`) moves; errors name the
+/// files.
+pub(crate) fn open_decoder<'a>(
+    path: &Path,
+    bytes: &'a [u8],
+    generator: &MotionGenerator<'_>,
+    model: &Path,
+) -> Result<S2dDecoder<'a>> {
+    let decoder = S2dDecoder::from_bytes(bytes)
+        .map_err(|e| anyhow!("{}: not an S2D decoder: {e}", path.display()))?;
+    let k = decoder.landmarks().iter().count();
+    if 3 * k != generator.dims() {
+        bail!(
+            "{}: the decoder reads {k} landmarks, but the generator {} moves {}",
+            path.display(),
+            model.display(),
+            generator.dims() / 3
+        );
+    }
+    Ok(decoder)
+}
+
 fn load<'a>(opts: &Generate, gen_bytes: &'a [u8], dec_bytes: &'a [u8]) -> Result<Loaded<'a>> {
     if !(opts.intensity.is_finite() && opts.intensity >= 0.0) {
         bail!(
@@ -55,36 +104,8 @@ fn load<'a>(opts: &Generate, gen_bytes: &'a [u8], dec_bytes: &'a [u8]) -> Result
             opts.intensity
         );
     }
-    let generator = MotionGenerator::from_bytes(gen_bytes).map_err(|e| {
-        anyhow!(
-            "{}: not a Motion3DGAN generator (from `sinew train motion`): {e}",
-            opts.model.display()
-        )
-    })?;
-    let labels: Vec<String> = sinew_core::SinewFile::from_bytes(gen_bytes)
-        .ok()
-        .and_then(|f| f.metadata().get("labels").map(str::to_owned))
-        .map(|l| l.split(',').map(str::to_owned).collect())
-        .unwrap_or_default();
-    if labels.len() != sinew_core::motion::LABELS {
-        bail!(
-            "{}: the generator lists {} labels, {} expected",
-            opts.model.display(),
-            labels.len(),
-            sinew_core::motion::LABELS
-        );
-    }
-    let decoder = S2dDecoder::from_bytes(dec_bytes)
-        .map_err(|e| anyhow!("{}: not an S2D decoder: {e}", opts.decoder.display()))?;
-    let k = decoder.landmarks().iter().count();
-    if 3 * k != generator.dims() {
-        bail!(
-            "{}: the decoder reads {k} landmarks, but the generator {} moves {}",
-            opts.decoder.display(),
-            opts.model.display(),
-            generator.dims() / 3
-        );
-    }
+    let (generator, labels) = open_generator(&opts.model, gen_bytes)?;
+    let decoder = open_decoder(&opts.decoder, dec_bytes, &generator, &opts.model)?;
     let neutral = Mesh::read(&opts.neutral)?;
     let n = decoder.vertex_count();
     if neutral.positions.len() != n {

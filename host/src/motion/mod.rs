@@ -3,11 +3,15 @@
 //! the unit hypersphere, and what is built on them. See docs/MOTION.md.
 
 pub mod classes;
+pub mod classifier;
 pub mod commands;
 pub mod data;
 pub mod diversity;
+pub mod evaluate;
+pub mod frechet;
 pub mod gan;
 pub mod generate;
+pub mod lstm_baseline;
 pub mod motions_file;
 pub mod srvf;
 pub mod train;
