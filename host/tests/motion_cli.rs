@@ -4,17 +4,10 @@
 //! golden S2D decoder, Table 3's evaluation of the briefly trained generator, and clear errors on
 //! bad input.
 
-use std::process::{Command, Output};
+mod common;
+use common::sinew;
 
 use sinew_host::motion::data::{MotionSet, Split};
-
-fn sinew(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sinew"))
-        .args(args)
-        .env_remove("SINEW_SEED")
-        .output()
-        .expect("run sinew")
-}
 
 #[test]
 fn data_motions_writes_a_seeded_split_set() {
