@@ -93,7 +93,7 @@ fn check_correspondence(source: &AimActor<'_>, target: &AimActor<'_>) -> Result<
 ///
 /// # Errors
 /// If an input is not what it should be (an actor, a performance), the fit is not of `source`,
-/// or the actors are not in correspondence ([`check_correspondence`]).
+/// or the actors are not in correspondence (the same vertices, triangles and shape count).
 pub fn retarget(source: &[u8], target: &[u8], fit: &[u8], part: Part) -> Result<Vec<u8>> {
     let src = AimActor::from_bytes(source).map_err(|e| anyhow!("the source actor: {e}"))?;
     let dst = AimActor::from_bytes(target).map_err(|e| anyhow!("the target actor: {e}"))?;

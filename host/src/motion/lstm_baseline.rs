@@ -1,4 +1,4 @@
-//! Table 3's LSTM baseline (S2D section 4.3, the paper's reference [39]): a deterministic
+//! Table 3's LSTM baseline (S2D section 4.3, the paper's reference \[39\]): a deterministic
 //! generator that maps a label and a time code to the landmarks of each frame. Input at step t
 //! (1 to `FRAMES`): the one-hot label and `t / FRAMES`; one LSTM layer (burn's `nn::Lstm`) and a
 //! linear layer give the frame's displacement in the classifier's form

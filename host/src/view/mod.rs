@@ -19,7 +19,7 @@ pub use server::Viewer;
 
 impl Site {
     /// Reads and validates the data files and builds the table, for an AIM actor
-    /// ([`files`]) or an S2D decoder ([`s2d`]) as the model's header says. Errors name the file
+    /// (`files`) or an S2D decoder (`s2d`) as the model's header says. Errors name the file
     /// and what is wrong with it: not a `.sinew` artefact, neither an AIM actor nor an S2D
     /// decoder, a replay of another model, a pose file of the wrong shape, a performance fitted
     /// to another actor, a file given for the other kind of model, a neutral of another
