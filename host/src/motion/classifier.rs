@@ -148,21 +148,18 @@ impl Classifier {
     }
 }
 
-/// Trains a classifier on `seqs` (each `[FRAMES × inputs]`, from [`sequence_features`]) with
-/// their `labels` below `classes` by cross-entropy and Adam; `on_epoch(epoch, mean loss)` after
-/// each pass. Returns the classifier and each epoch's mean loss. `device` must have autodiff.
+/// Checks what both sequence models train on: sequences, one label each below `classes`, all of
+/// one length (a multiple of the frame count), and positive epochs, batch and width. Returns the
+/// sequences' length.
 ///
 /// # Errors
-/// No sequences, labels not one per sequence or out of range, sequences of different lengths,
-/// or a zero epoch count, batch or width.
-pub fn train(
+/// As the check says, naming what is wrong.
+pub fn check_training_set(
     seqs: &[Vec<f32>],
     labels: &[usize],
     classes: usize,
     config: &SequenceTraining,
-    device: &Device,
-    on_epoch: &mut dyn FnMut(usize, f32),
-) -> Result<(Classifier, Vec<f32>)> {
+) -> Result<usize> {
     ensure!(
         !seqs.is_empty() && seqs.len() == labels.len(),
         "no training sequences, or labels not one per sequence"
@@ -180,6 +177,25 @@ pub fn train(
         config.epochs > 0 && config.batch > 0 && config.hidden > 0,
         "epochs, batch and hidden width must be positive"
     );
+    Ok(len)
+}
+
+/// Trains a classifier on `seqs` (each `[FRAMES × inputs]`, from [`sequence_features`]) with
+/// their `labels` below `classes` by cross-entropy and Adam; `on_epoch(epoch, mean loss)` after
+/// each pass. Returns the classifier and each epoch's mean loss. `device` must have autodiff.
+///
+/// # Errors
+/// No sequences, labels not one per sequence or out of range, sequences of different lengths,
+/// or a zero epoch count, batch or width.
+pub fn train(
+    seqs: &[Vec<f32>],
+    labels: &[usize],
+    classes: usize,
+    config: &SequenceTraining,
+    device: &Device,
+    on_epoch: &mut dyn FnMut(usize, f32),
+) -> Result<(Classifier, Vec<f32>)> {
+    let len = check_training_set(seqs, labels, classes, config)?;
     device.seed(config.seed);
     let mut model = Classifier::new(
         len / FRAMES,

@@ -13,7 +13,7 @@ use burn::optim::{AdamConfig, GradientsParams};
 use burn::tensor::{Device, Tensor};
 use sinew_core::srvf::FRAMES;
 
-use super::classifier::{SequenceTraining, batches, stack, unit_scale};
+use super::classifier::{SequenceTraining, batches, check_training_set, stack, unit_scale};
 use super::srvf::{SrvfError, normalise_frame};
 use crate::training::nn::{pytorch_linear, tensor, to_vec};
 
@@ -103,23 +103,7 @@ pub fn train(
     device: &Device,
     on_epoch: &mut dyn FnMut(usize, f32),
 ) -> Result<(LstmGenerator, Vec<f32>)> {
-    ensure!(
-        !seqs.is_empty() && seqs.len() == labels.len(),
-        "no training sequences, or labels not one per sequence"
-    );
-    ensure!(
-        labels.iter().all(|&l| l < classes),
-        "a label is out of range"
-    );
-    let len = seqs[0].len();
-    ensure!(
-        len > 0 && len.is_multiple_of(FRAMES) && seqs.iter().all(|s| s.len() == len),
-        "training sequences of different lengths"
-    );
-    ensure!(
-        config.epochs > 0 && config.batch > 0 && config.hidden > 0,
-        "epochs, batch and hidden width must be positive"
-    );
+    let len = check_training_set(seqs, labels, classes, config)?;
     device.seed(config.seed);
     let scale = unit_scale(seqs);
     let mut model = LstmGenerator::new(classes, len / FRAMES, config.hidden, scale, device);
@@ -202,13 +186,22 @@ mod tests {
             hidden: 8,
         };
         let device = Backend::Flex.autodiff_device(config.seed).unwrap();
-        let (model, losses) = train(&seqs, &labels, 2, &config, &device, &mut |_, _| {}).unwrap();
+        // burn's CPU kernels split reductions by the work in flight on the shared thread pool,
+        // so trainings run beside other tests round differently; one thread of its own makes
+        // this test's two trainings comparable bit for bit.
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let run = || pool.install(|| train(&seqs, &labels, 2, &config, &device, &mut |_, _| {}));
+        let (model, losses) = run().unwrap();
         assert_eq!(losses.len(), 30);
         assert!(losses[29] < 0.5 * losses[0], "{losses:?}");
-        let a = model.generate(0, &device).unwrap();
+        let generate = |m: &LstmGenerator, label| pool.install(|| m.generate(label, &device));
+        let a = generate(&model, 0).unwrap();
         assert_eq!(a.len(), FRAMES * 9);
         // No noise: the same label gives the same bits, every call.
-        let again = model.generate(0, &device).unwrap();
+        let again = generate(&model, 0).unwrap();
         assert_eq!(
             a.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
             again.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
@@ -216,8 +209,8 @@ mod tests {
         assert_ne!(a, model.generate(1, &device).unwrap());
         assert!(model.generate(2, &device).is_err());
         // The same seed trains the same weights.
-        let (other, _) = train(&seqs, &labels, 2, &config, &device, &mut |_, _| {}).unwrap();
-        assert_eq!(a, other.generate(0, &device).unwrap());
+        let (other, _) = run().unwrap();
+        assert_eq!(a, generate(&other, 0).unwrap());
         // Class 0 moves landmark 0 up: its last frame's mean displacement in y is positive.
         let mean_dy: f32 = (0..12)
             .filter(|k| k % 2 == 0)
