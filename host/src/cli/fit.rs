@@ -29,6 +29,10 @@ pub(crate) struct PerformanceArgs {
     /// Gaussian noise on every coordinate, standard deviation in mm.
     #[arg(long, default_value_t = 0.0)]
     noise_mm: f32,
+    /// Gaussian noise on every landmark pixel coordinate of the 2D tracks (a landmark
+    /// detector's error), standard deviation in pixels.
+    #[arg(long, default_value_t = 0.0)]
+    landmark_noise_px: f32,
     /// A baked AIM actor made on the kit: the meshes take its topology (every template vertex
     /// must be a vertex of the kit's face region), and the jaw moves rigidly about its pivot with
     /// its skinning weights. Without it: the full face region, the jaw through the kit's jaw
@@ -43,6 +47,7 @@ pub(crate) fn performance(args: PerformanceArgs) -> Result<()> {
         seed: args.seed,
         frames: args.frames,
         noise_mm: args.noise_mm,
+        landmark_noise_px: args.landmark_noise_px,
         ..PerformanceConfig::default()
     };
     config.validate()?;

@@ -114,6 +114,11 @@ pub struct Manifest {
     pub fps: f32,
     /// Standard deviation of the Gaussian noise on every coordinate, in mm.
     pub noise_mm: f32,
+    /// Standard deviation of the Gaussian noise on every landmark pixel coordinate (a 2D
+    /// detector's error), on top of what the meshes' noise moves them; 0 in performances made
+    /// before the option existed.
+    #[serde(default)]
+    pub landmark_noise_px: f32,
     /// Length unit of the meshes and the camera.
     pub units: String,
     /// Vertices per mesh.
@@ -148,6 +153,8 @@ pub struct PerformanceConfig {
     pub frames: usize,
     /// Gaussian noise on every coordinate, in mm (0: none).
     pub noise_mm: f32,
+    /// Gaussian noise on every landmark pixel coordinate, in pixels (0: none).
+    pub landmark_noise_px: f32,
     /// Frames per second.
     pub fps: f32,
     /// Image size in pixels (the camera is placed in front of the face, looking at it).
@@ -164,6 +171,7 @@ impl Default for PerformanceConfig {
             seed: 1,
             frames: 60,
             noise_mm: 0.0,
+            landmark_noise_px: 0.0,
             fps: 30.0,
             image: [640, 480],
             focal: 1200.0,
@@ -180,6 +188,11 @@ impl PerformanceConfig {
             self.noise_mm.is_finite() && self.noise_mm >= 0.0,
             "--noise-mm must be finite and not negative, not {}",
             self.noise_mm
+        );
+        ensure!(
+            self.landmark_noise_px.is_finite() && self.landmark_noise_px >= 0.0,
+            "--landmark-noise-px must be finite and not negative, not {}",
+            self.landmark_noise_px
         );
         ensure!(self.fps > 0.0, "fps must be positive");
         ensure!(
@@ -198,6 +211,15 @@ impl Rng {
         Self(rand_pcg::Pcg64::new(
             u128::from(seed) << 64 | 0xfa_ce_5e_90,
             0x00a0_2bdb_0000_0000_0000_0000_0000_0001,
+        ))
+    }
+
+    /// The landmark pixels' noise: a stream of its own, so that adding it leaves the meshes of
+    /// a seed as they were.
+    fn landmarks(seed: u64) -> Self {
+        Self(rand_pcg::Pcg64::new(
+            u128::from(seed) << 64 | 0x1a_4d_a2_c5,
+            0x00a0_2bdb_0000_0000_0000_0000_0000_0003,
         ))
     }
 
@@ -418,6 +440,7 @@ pub fn generate(
     let mut rng = Rng::new(config.seed);
     let trajectories = Trajectories::new(&mut rng, names.len());
     let noise_cm = f64::from(config.noise_mm) / face.units.mm();
+    let mut pixel_rng = Rng::landmarks(config.seed);
     let mut manifest = Manifest {
         format: FORMAT.into(),
         version: VERSION,
@@ -431,6 +454,7 @@ pub fn generate(
         frames: config.frames,
         fps: config.fps,
         noise_mm: config.noise_mm,
+        landmark_noise_px: config.landmark_noise_px,
         units: face.units.name().into(),
         vertices: neutral.len(),
         data: data.to_owned(),
@@ -463,7 +487,17 @@ pub fn generate(
             .enumerate()
             .map(|(l, &v)| {
                 let p = positions[v as usize];
-                camera.project(p).filter(|uv| camera.inside(*uv)).ok_or_else(|| {
+                let detected = |[u, w]: [f32; 2]| {
+                    let sd = f64::from(config.landmark_noise_px);
+                    if sd > 0.0 {
+                        let du = sd * pixel_rng.normal();
+                        let dw = sd * pixel_rng.normal();
+                        [u + du as f32, w + dw as f32]
+                    } else {
+                        [u, w]
+                    }
+                };
+                camera.project(p).map(detected).filter(|uv| camera.inside(*uv)).ok_or_else(|| {
                     anyhow!(
                         "{}: frame {f}: landmark {l} (vertex {v} at {p:?}) projects outside the \
                          {}×{} image of the camera at {:?}",

@@ -92,6 +92,51 @@ fn generation_is_seeded_and_matches_the_actor() {
 }
 
 #[test]
+fn landmark_noise_moves_the_tracks_and_not_the_meshes() {
+    let Some(kit) = kit_dir() else { return };
+    let dirs = [(); 2].map(|()| tempfile::tempdir().unwrap());
+    let actor = golden_actor();
+    let clean = generate(&kit, Some(&actor), &small(7), dirs[0].path()).unwrap();
+    let noisy_config = PerformanceConfig {
+        landmark_noise_px: 2.0,
+        ..small(7)
+    };
+    let noisy = generate(&kit, Some(&actor), &noisy_config, dirs[1].path()).unwrap();
+    assert_eq!(noisy.landmark_noise_px, 2.0);
+    assert_eq!(clean.parameters, noisy.parameters);
+    for file in &clean.files {
+        assert_eq!(
+            std::fs::read(dirs[0].path().join(file)).unwrap(),
+            std::fs::read(dirs[1].path().join(file)).unwrap(),
+            "{file}"
+        );
+    }
+    // 3 frames × 68 landmarks × 2 coordinates of N(0, 2²) pixels.
+    let d: Vec<f32> = clean
+        .landmarks
+        .pixels
+        .iter()
+        .flatten()
+        .zip(noisy.landmarks.pixels.iter().flatten())
+        .flat_map(|(a, b)| [b[0] - a[0], b[1] - a[1]])
+        .collect();
+    let n = d.len() as f32;
+    let mean = d.iter().sum::<f32>() / n;
+    let sd = (d.iter().map(|x| (x - mean).powi(2)).sum::<f32>() / (n - 1.0)).sqrt();
+    assert!(mean.abs() < 0.3 && (sd - 2.0).abs() < 0.3, "{mean} {sd}");
+    // The manifest reads back with it; a negative value is refused.
+    assert_eq!(
+        Performance::read(dirs[1].path()).unwrap().manifest.landmark_noise_px,
+        2.0
+    );
+    let bad = PerformanceConfig {
+        landmark_noise_px: -1.0,
+        ..small(7)
+    };
+    assert!(bad.validate().is_err());
+}
+
+#[test]
 fn bad_performances_are_refused_naming_the_file() {
     let Some(kit) = kit_dir() else { return };
     let dir = tempfile::tempdir().unwrap();
