@@ -71,7 +71,6 @@ const PROCEDURAL: &[u8] = include_bytes!("../../../tests/data/aim-procedural.sin
 /// The decimated ICT-FaceKit actor.
 const ICT: &[u8] = include_bytes!("../../../tests/data/aim-ict.sinew");
 
-
 /// Every golden replay, in the order the targets play them.
 pub const GOLDENS: [Golden; 6] = [
     Golden {
