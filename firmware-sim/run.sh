@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Proves on emulated targets that sinew-core plays the golden AIM actors and the golden S2D decoder
-# back bit-identically to the x86_64 host: installs what is missing, then for each crate checks
-# formatting, runs clippy with warnings as errors, builds in release and runs the replays. Exits
-# non-zero if any target fails.
+# Proves on emulated targets that sinew-core plays the golden AIM actors, the golden S2D decoder, the
+# golden fitted performance and the golden generated sequence back bit-identically to the x86_64
+# host: installs what is missing, then for each crate checks formatting, runs clippy with warnings
+# as errors, builds in release and runs the replays. Exits non-zero if any target fails.
 #
 # Usage: bash firmware-sim/run.sh   (from anywhere)
 # Environment: CARGO_TARGET_DIR (default firmware-sim/target, shared by the four crates so that

@@ -3,9 +3,9 @@
 docs/BENCHMARKS.md (between the `firmware-costs` markers).
 
 Runs the Cortex-M4F and RISC-V firmware under QEMU with `-icount shift=0` (instruction counts
-repeat exactly), reads the per-phase costs they print for one frame of each golden actor, the
-per-frame totals of every golden replay, the Cortex-M stack high-water mark, and the flash and
-RAM footprint of the Cortex-M image from its ELF section headers (readelf).
+repeat exactly), reads the per-phase costs they print for one frame of each golden actor, of
+the S2D decoder and of the generated sequence (its curve, one frame), the per-frame totals of
+every golden replay, the Cortex-M stack high-water mark, and the flash and RAM footprint of the Cortex-M image from its ELF section headers (readelf).
 
 Usage: python3 scripts/firmware_costs.py [--check]
   --check  fail instead of rewriting when docs/BENCHMARKS.md differs from the measurement.
@@ -31,6 +31,12 @@ S2D_HEADER = re.compile(
     r"^sinew-firmware-sim(?:-riscv)?: [^,]+, (\S+): (\d+) vertices, (\d+) inputs, \d+ frames, (\d+) buffer values"
 )
 FRAME = re.compile(r"^frame +\d+ [0-9a-f]{16} ok +~?(\d+) instructions")
+MOTION_COST = re.compile(r"^motion cost (\S+) frame (\d+) \(instructions\): (.*)$")
+MOTION_HEADER = re.compile(
+    r"^sinew-firmware-sim(?:-riscv)?: [^,]+, (\S+): (\d+) vertices, (\d+) landmarks, \d+ frames, (\d+) buffer values"
+)
+# The firmware's shared frame arena (firmware-sim/common/src/lib.rs, `ARENA`), in f32 values.
+ARENA = 6 * 5120 + 2560
 STACK = re.compile(r"^stack high-water (\d+) bytes")
 
 
@@ -56,6 +62,14 @@ def parse(text: str):
             current = m.group(1)
             sizes[current] = (int(m.group(2)), int(m.group(3)), int(m.group(4)))
             frames[current] = []
+        elif m := MOTION_HEADER.match(line):
+            current = m.group(1)
+            sizes[current] = ("motion", int(m.group(2)), int(m.group(3)), int(m.group(4)))
+            frames[current] = []
+        elif m := MOTION_COST.match(line):
+            costs["motion:" + m.group(1).rsplit(".", 1)[0]] = dict(
+                kv.split("=") for kv in m.group(3).split()
+            )
         elif m := S2D_COST.match(line):
             costs["s2d:" + m.group(1).rsplit(".", 1)[0]] = dict(
                 kv.split("=") for kv in m.group(3).split()
@@ -102,6 +116,7 @@ def main() -> None:
     arm_costs, arm_frames, sizes, stack = parse(arm)
     rv_costs, rv_frames, _, _ = parse(rv)
     s2d_values = max((s[2] for s in sizes.values() if len(s) == 3), default=0)
+    motion_values = max((s[3] for s in sizes.values() if len(s) == 4), default=0)
     sec, flash, ram = footprint(TARGET / "thumbv7em-none-eabihf/release/sinew-firmware-sim")
     lines = [START, ""]
     lines += [
@@ -118,7 +133,7 @@ def main() -> None:
         "normals_fast": "vertex normals, fast (micromath)",
         "hash": "frame hash (replay check only)",
     }
-    for actor in (a for a in arm_costs if not a.startswith("s2d:")):
+    for actor in (a for a in arm_costs if ":" not in a):
         v, m = sizes[f"{actor}.f32"]
         for key, label in names.items():
             lines.append(
@@ -137,11 +152,26 @@ def main() -> None:
                 f"| {decoder} (S2D decoder, {v:,} vertices, {i} inputs) | {label} | "
                 f"{mil(int(arm_costs[key][phase]))} | {mil(int(rv_costs[key][phase]))} |"
             )
+    motion_names = {
+        "curve": "landmark curve, once per sequence (noise, generator MLP, exp map, eq. 5 decoding)",
+        "decode": "decode one frame (decoder input from the curve, S2D-Dec, + template neutral)",
+        "hash": "frame hash (replay check only)",
+    }
+    for key in (a for a in arm_costs if a.startswith("motion:")):
+        name = key.removeprefix("motion:")
+        _, v, k, _ = sizes[f"{name}.f32"]
+        for phase, label in motion_names.items():
+            lines.append(
+                f"| {name} (generated sequence, {k} landmarks → {v:,} vertices) | {label} | "
+                f"{mil(int(arm_costs[key][phase]))} | {mil(int(rv_costs[key][phase]))} |"
+            )
     lines += [
         "",
         "Whole frames as the replays run them (f32 and fast: pose + normals + hash; q16: pose +",
         "hash; S2D: decode + hash; fit-ict, the golden fitted performance: F_W at every vertex +",
-        "pose + normals + hash), mean over each replay's frames (16; fit-ict 4):",
+        "pose + normals + hash; motion-ict, the golden generated sequence: decoder input + decode +",
+        "hash, its curve generated before the first frame), mean over each replay's frames (16;",
+        "fit-ict 4; motion-ict 30):",
         "",
         "| replay | Cortex-M4F | RISC-V |",
         "|---|---|---|",
@@ -152,14 +182,15 @@ def main() -> None:
     lines += [
         "",
         "Cortex-M4F image (`firmware-sim/cortex-m`, release; both golden actors in flash, the ICT one",
-        "with its Q16.16 cache, and the golden S2D decoder; the S2D replay decodes in the AIM frame",
-        f"buffers, {s2d_values:,} of their {6 * 5120:,} values):",
+        "with its Q16.16 cache, the golden S2D decoder and the golden motion generator; the S2D replay",
+        f"decodes in the shared frame arena, {s2d_values:,} of its {ARENA:,} values, the generated",
+        f"sequence uses {motion_values:,} of them):",
         "",
         "| | bytes |",
         "|---|---|",
         f"| flash: .vector_table + .text + .rodata + .data | {flash:,} ({kib(flash)}) |",
         f"| of which code (.text) | {sec.get('.text', 0):,} ({kib(sec.get('.text', 0))}) |",
-        f"| RAM: .data + .bss (frame buffers for 5,120 vertices, kernel-suite buffers) | {ram:,} ({kib(ram)}) |",
+        f"| RAM: .data + .bss (frame arena, Q16.16 buffers for 5,120 vertices, kernel-suite buffers) | {ram:,} ({kib(ram)}) |",
         f"| stack high-water mark | {stack:,} ({kib(stack)}) |",
         f"| RAM in all | {ram + stack:,} ({kib(ram + stack)}) |",
         "",

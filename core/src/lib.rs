@@ -106,6 +106,7 @@ pub mod q16;
 pub mod replay;
 pub mod rotation;
 pub mod s2d;
+pub mod sequence;
 pub mod skinning;
 pub mod sparse;
 pub mod spiral;

@@ -1,4 +1,5 @@
-// Runs the golden AIM and S2D replays and the golden fitted performance compiled to wasm32-unknown-unknown under node.
+// Runs the golden AIM and S2D replays, the golden fitted performance and the golden generated
+// sequence compiled to wasm32-unknown-unknown under node.
 //
 // Usage: node run.mjs [path/to/sinew_firmware_wasm.wasm]
 // Without a path it looks in ../target (run.sh's shared target directory), then ./target.
@@ -81,5 +82,20 @@ console.log(
   `sinew-firmware-wasm: ${fittedFrames.length - fittedBad}/${fittedFrames.length} fitted-performance frames bit-identical to the host`,
 );
 if (fitted !== 0 || fittedBad !== 0 || fittedFrames.length === 0) {
+  process.exit(1);
+}
+// The generated sequence (reported as frames 6:1…).
+const motionStart = frames.length;
+const motion = instance.exports.sinew_replay_motion() >>> 0;
+if (motion === LOAD_ERROR) {
+  console.error("sinew-firmware-wasm: the generated sequence could not load the generator, the decoder or the hash list");
+  process.exit(1);
+}
+const motionFrames = frames.slice(motionStart);
+const motionBad = motionFrames.filter((f) => !f.ok).length;
+console.log(
+  `sinew-firmware-wasm: ${motionFrames.length - motionBad}/${motionFrames.length} generated-sequence frames bit-identical to the host`,
+);
+if (motion !== 0 || motionBad !== 0 || motionFrames.length === 0) {
   process.exit(1);
 }

@@ -12,8 +12,11 @@
 //!
 //! Nothing here allocates: the frame buffers live in a caller-owned [`Scratch`] (a `static` on
 //! the microcontrollers), sized for up to [`MAX_VERTICES`] vertices. An S2D replay reuses the
-//! same `f32` buffers (the AIM positions and normals, [`S2D_ARENA`] values) for its input,
-//! neutral, decoded vertices and the decoder's activations, so it adds no RAM.
+//! same `f32` buffers (the AIM positions and normals, [`ARENA`] values) for its input,
+//! neutral, decoded vertices and the decoder's activations. The generated sequence
+//! ([`motion::MOTION_GOLDENS`], [`motion::MotionRun`]) uses the same arena for its landmark
+//! curve, the decoder's input, the decoded vertices and a scratch the generator and the decoder
+//! share.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -37,6 +40,7 @@
 extern crate std;
 
 pub mod kernels;
+pub mod motion;
 pub mod performance;
 mod s2d;
 pub mod suite;
@@ -104,7 +108,11 @@ pub const GOLDENS: [Golden; 6] = [
 /// The S2D golden: a decoder trained briefly on real ICT-FaceKit pairs (the face region
 /// decimated to 1,177 vertices) and 16 frames of real ICT expressions decoded onto another
 /// identity's neutral.
-pub const S2D_GOLDENS: [Golden; 1] = [Golden {
+///
+/// A `static`, not a `const`: the generated sequence decodes with the same decoder
+/// ([`motion::MOTION_GOLDENS`]), and a `const` used there as well was placed in the image twice
+/// (448 KB more flash).
+pub static S2D_GOLDENS: [Golden; 1] = [Golden {
     name: "s2d-ict.f32",
     model: include_bytes!("../../../tests/data/s2d-ict.sinew"),
     replay: include_bytes!("../../../tests/data/s2d-ict.replay.sinew"),
@@ -114,15 +122,18 @@ pub const S2D_GOLDENS: [Golden; 1] = [Golden {
 /// buffers at 60 KiB each.
 pub const MAX_VERTICES: usize = 5120;
 
-/// `f32` values an S2D replay may use (the AIM positions and normals buffers): input, neutral,
-/// decoded vertices and [`sinew_core::s2d::S2dDecoder::scratch_len`] together.
-pub const S2D_ARENA: usize = 6 * MAX_VERTICES;
+/// `f32` values of the shared frame arena: the AIM positions and normals (`6 × MAX_VERTICES`),
+/// and 2,560 values more so that the generated sequence fits
+/// ([`sinew_core::sequence::Sequence::buffer_len`]: its landmark curve, 6,324 values, beside the
+/// S2D decoder's input, vertices and scratch). An S2D replay uses it for its input, neutral,
+/// decoded vertices and [`sinew_core::s2d::S2dDecoder::scratch_len`].
+pub const ARENA: usize = 6 * MAX_VERTICES + 2560;
 
 /// Caller-owned buffers for one frame.
 #[derive(Clone, Debug)]
 pub struct Scratch {
-    /// AIM: positions (first half) and normals (second half); S2D: the arena of [`S2D_ARENA`].
-    frame: [f32; S2D_ARENA],
+    /// AIM: positions (first half) and normals (second half); S2D: the arena of [`ARENA`].
+    frame: [f32; ARENA],
     positions_q16: [Q16; 3 * MAX_VERTICES],
     weights: [f32; MAX_SHAPES],
     weights_q16: [Q16; MAX_SHAPES],
@@ -134,7 +145,7 @@ impl Scratch {
     /// Zeroed buffers (a `const fn`, so a `static` can hold them).
     pub const fn new() -> Self {
         Self {
-            frame: [0.0; S2D_ARENA],
+            frame: [0.0; ARENA],
             positions_q16: [Q16::ZERO; 3 * MAX_VERTICES],
             weights: [0.0; MAX_SHAPES],
             weights_q16: [Q16::ZERO; MAX_SHAPES],
@@ -184,11 +195,19 @@ pub enum Error {
         /// Values needed.
         values: usize,
     },
-    /// An S2D decoder needs more buffer values than [`S2D_ARENA`].
+    /// An S2D decoder needs more buffer values than [`ARENA`].
     S2dTooLarge {
         /// Values needed: input, neutral, decoded vertices and the decoder's scratch.
         values: usize,
     },
+    /// A generated sequence needs more buffer values than [`ARENA`].
+    MotionTooLarge {
+        /// Values needed: curve, decoder input, decoded vertices and the shared scratch.
+        values: usize,
+    },
+    /// The pinned hash list of a generated sequence is not UTF-8 or lacks its `sequence` line
+    /// (label, seed, intensity).
+    HashList,
 }
 
 impl fmt::Display for Error {
@@ -208,7 +227,15 @@ impl fmt::Display for Error {
             ),
             Self::S2dTooLarge { values } => write!(
                 f,
-                "golden S2D decoder needs {values} buffer values, more than the {S2D_ARENA} the firmware holds"
+                "golden S2D decoder needs {values} buffer values, more than the {ARENA} the firmware holds"
+            ),
+            Self::MotionTooLarge { values } => write!(
+                f,
+                "golden generated sequence needs {values} buffer values, more than the {ARENA} the firmware holds"
+            ),
+            Self::HashList => write!(
+                f,
+                "golden hash list: not UTF-8, or no `sequence LABEL-NAME LABEL SEED INTENSITY` line"
             ),
         }
     }
@@ -452,7 +479,7 @@ mod tests {
             assert_ne!(seen[1].hash, seen[15].hash, "{}", g.name);
             let mut sc = scratch();
             let run = S2dRun::new(g, &mut sc).unwrap();
-            assert!(run.needed() <= S2D_ARENA);
+            assert!(run.needed() <= ARENA);
             assert_eq!(run.decoder().vertex_count(), 1177);
         }
     }

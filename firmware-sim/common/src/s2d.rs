@@ -10,7 +10,7 @@ use sinew_core::replay::{
 };
 use sinew_core::s2d::S2dDecoder;
 
-use crate::{Error, Golden, S2D_ARENA, Scratch, Summary, summarise};
+use crate::{ARENA, Error, Golden, Scratch, Summary, summarise};
 
 /// An S2D replay in progress: an iterator over its frames, so that a firmware can time each
 /// frame on its own.
@@ -19,7 +19,7 @@ pub struct S2dRun<'s> {
     decoder: S2dDecoder<'static>,
     replay: S2dReplay<'static>,
     next: usize,
-    arena: &'s mut [f32; S2D_ARENA],
+    arena: &'s mut [f32; ARENA],
 }
 
 impl<'s> S2dRun<'s> {

@@ -1,10 +1,12 @@
 //! Every golden a target plays, as suites a firmware loops over in one way: the AIM replays
-//! ([`Replay`]), the S2D replay ([`S2dRun`]) and the fitted performance ([`PerformanceRun`]),
+//! ([`Replay`]), the S2D replay ([`S2dRun`]), the fitted performance ([`PerformanceRun`]) and
+//! the generated sequence ([`MotionRun`]),
 //! each started with [`Run::new`], described for the log by its `Display` and played frame by
 //! frame as an iterator.
 
 use core::fmt;
 
+use crate::motion::{MOTION_GOLDENS, MotionRun};
 use crate::performance::{PERFORMANCE_GOLDENS, PerformanceRun};
 use crate::{Error, FrameCheck, GOLDENS, Golden, Replay, S2D_GOLDENS, S2dRun, Scratch};
 
@@ -17,11 +19,13 @@ pub enum Suite {
     S2d,
     /// The fitted performance ([`PERFORMANCE_GOLDENS`]).
     Performance,
+    /// The generated sequence ([`MOTION_GOLDENS`]).
+    Motion,
 }
 
 impl Suite {
     /// Every suite, in the order the targets play them.
-    pub const ALL: [Self; 3] = [Self::Aim, Self::S2d, Self::Performance];
+    pub const ALL: [Self; 4] = [Self::Aim, Self::S2d, Self::Performance, Self::Motion];
 
     /// The suite's goldens.
     pub const fn goldens(self) -> &'static [Golden] {
@@ -29,6 +33,7 @@ impl Suite {
             Self::Aim => &GOLDENS,
             Self::S2d => &S2D_GOLDENS,
             Self::Performance => &PERFORMANCE_GOLDENS,
+            Self::Motion => &MOTION_GOLDENS,
         }
     }
 
@@ -38,6 +43,7 @@ impl Suite {
             Self::Aim => "AIM replay frames",
             Self::S2d => "S2D frames",
             Self::Performance => "fitted-performance frames",
+            Self::Motion => "generated-sequence frames",
         }
     }
 }
@@ -53,6 +59,8 @@ pub enum Run<'s> {
     S2d(S2dRun<'s>),
     /// A fitted performance.
     Performance(PerformanceRun<'s>),
+    /// A generated sequence.
+    Motion(MotionRun<'s>),
 }
 
 impl<'s> Run<'s> {
@@ -62,6 +70,7 @@ impl<'s> Run<'s> {
             Suite::Aim => Self::Aim(Replay::new(golden, scratch)?),
             Suite::S2d => Self::S2d(S2dRun::new(golden, scratch)?),
             Suite::Performance => Self::Performance(PerformanceRun::new(golden, scratch)?),
+            Suite::Motion => Self::Motion(MotionRun::new(golden, scratch)?),
         })
     }
 }
@@ -92,6 +101,16 @@ impl fmt::Display for Run<'_> {
                 r.actor().shape_count(),
                 r.performance().frames()
             ),
+            Self::Motion(r) => write!(
+                f,
+                "{} vertices, {} landmarks, {} frames, {} buffer values, label {} seed {}",
+                r.sequence().decoder().vertex_count(),
+                r.sequence().input_len() / 3,
+                sinew_core::srvf::FRAMES,
+                r.sequence().buffer_len(),
+                r.hashes().label,
+                r.hashes().seed
+            ),
         }
     }
 }
@@ -104,6 +123,7 @@ impl Iterator for Run<'_> {
             Self::Aim(r) => r.next(),
             Self::S2d(r) => r.next(),
             Self::Performance(r) => r.next(),
+            Self::Motion(r) => r.next(),
         }
     }
 }

@@ -1,5 +1,6 @@
-//! Golden AIM and S2D replays on a Cortex-M4F (thumbv7em-none-eabihf, hardware single-precision FPU),
-//! run under `qemu-system-arm -machine mps2-an386` with semihosting.
+//! Golden AIM, S2D, fitted-performance and generated-sequence replays on a Cortex-M4F
+//! (thumbv7em-none-eabihf, hardware single-precision FPU), run under
+//! `qemu-system-arm -machine mps2-an386` with semihosting.
 //!
 //! Plays the 16-frame golden sequence with `sinew-core`, prints each frame's hash and its cost,
 //! and exits 0 only when every hash equals the one pinned on the x86_64 host. A panic or a
@@ -13,6 +14,7 @@ use cortex_m_rt::{ExceptionFrame, entry, exception};
 use cortex_m_semihosting::{debug, heprintln, hprintln};
 use panic_semihosting as _;
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
+use sinew_firmware_common::motion::{MOTION_GOLDENS, motion_costs};
 use sinew_firmware_common::suite::{Run, Suite};
 use sinew_firmware_common::{
     Error, FrameCheck, GOLDENS, S2D_GOLDENS, Scratch, Summary, phase_costs, s2d_costs,
@@ -181,7 +183,8 @@ fn run() -> bool {
             return false;
         }
     }
-    // The AIM replays, the S2D replay and the fitted performance, in the same frame buffers.
+    // The AIM replays, the S2D replay, the fitted performance and the generated sequence, in the
+    // same frame buffers.
     let mut passed = true;
     for suite in Suite::ALL {
         let mut summary = Summary::default();
@@ -227,6 +230,19 @@ fn run() -> bool {
         };
         match s2d_costs(golden, 8, scratch, || clock.now()) {
             Ok(c) => hprintln!("s2d cost {} frame 8 (instructions): {}", golden.name, c),
+            Err(e) => {
+                heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
+                return false;
+            }
+        }
+    }
+    for golden in &MOTION_GOLDENS {
+        let mut clock = Clock {
+            last: SYST::get_current(),
+            total: 0,
+        };
+        match motion_costs(golden, 8, scratch, || clock.now()) {
+            Ok(c) => hprintln!("motion cost {} frame 8 (instructions): {}", golden.name, c),
             Err(e) => {
                 heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
                 return false;

@@ -1,5 +1,6 @@
-//! Golden AIM and S2D replays on a 32-bit RISC-V core without FPU (riscv32imac-unknown-none-elf: every
-//! `f32` operation in software), run under `qemu-system-riscv32 -machine virt` with semihosting.
+//! Golden AIM, S2D, fitted-performance and generated-sequence replays on a 32-bit RISC-V core
+//! without FPU (riscv32imac-unknown-none-elf: every `f32` operation in software), run
+//! under `qemu-system-riscv32 -machine virt` with semihosting.
 //!
 //! Plays the 16-frame golden sequence with `sinew-core`, prints each frame's hash and the
 //! instructions it retired, and exits 0 only when every hash equals the one pinned on the x86_64
@@ -10,6 +11,7 @@
 use riscv::register::{mcause, mepc, minstret, mtval};
 use semihosting::{eprintln, println, process};
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
+use sinew_firmware_common::motion::{MOTION_GOLDENS, motion_costs};
 use sinew_firmware_common::suite::{Run, Suite};
 use sinew_firmware_common::{
     Error, FrameCheck, GOLDENS, S2D_GOLDENS, Scratch, Summary, phase_costs, s2d_costs,
@@ -83,7 +85,8 @@ fn run() -> bool {
             return false;
         }
     }
-    // The AIM replays, the S2D replay and the fitted performance, in the same frame buffers.
+    // The AIM replays, the S2D replay, the fitted performance and the generated sequence, in the
+    // same frame buffers.
     let mut passed = true;
     for suite in Suite::ALL {
         let mut summary = Summary::default();
@@ -124,6 +127,15 @@ fn run() -> bool {
     for golden in &S2D_GOLDENS {
         match s2d_costs(golden, 8, scratch, minstret::read64) {
             Ok(c) => println!("s2d cost {} frame 8 (instructions): {c}", golden.name),
+            Err(e) => {
+                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
+                return false;
+            }
+        }
+    }
+    for golden in &MOTION_GOLDENS {
+        match motion_costs(golden, 8, scratch, minstret::read64) {
+            Ok(c) => println!("motion cost {} frame 8 (instructions): {c}", golden.name),
             Err(e) => {
                 eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
                 return false;

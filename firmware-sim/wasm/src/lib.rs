@@ -1,7 +1,8 @@
 //! Golden AIM and S2D replays in WebAssembly (wasm32-unknown-unknown, no_std): the module
 //! exports [`sinew_replay`], which plays every golden AIM replay, and [`sinew_replay_s2d`], the
 //! golden S2D replay (`tests/data/*.replay.sinew`), and [`sinew_replay_performance`], the golden
-//! fitted performance (`tests/data/fit-ict.sinew`), with
+//! fitted performance (`tests/data/fit-ict.sinew`), and [`sinew_replay_motion`], the golden
+//! generated sequence (`tests/data/motion-ict.sinew` through the S2D decoder), with
 //! `sinew-core` and returns how many frames' hashes differ from those recorded on the x86_64
 //! host. Each frame is also handed to the host through the import `sinew.report`, so `run.mjs`
 //! can print it.
@@ -91,6 +92,16 @@ pub extern "C" fn sinew_replay_s2d() -> u32 {
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_replay_performance() -> u32 {
     play(Suite::Performance, |_| 7000)
+}
+
+/// Plays the golden generated sequence; returns the number of mismatching frames, or
+/// [`LOAD_ERROR`]. Frames are reported with 6000 added to the frame number.
+// Safety: `no_mangle` exports the function under its own name; no other symbol in the module
+// is called `sinew_replay_motion`.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_replay_motion() -> u32 {
+    play(Suite::Motion, |_| 6000)
 }
 
 /// Runs the core kernel suite on seeded weights; returns the number of cases whose hash differs

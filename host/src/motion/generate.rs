@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail};
 use sinew_core::motion::MotionGenerator;
 use sinew_core::s2d::S2dDecoder;
+use sinew_core::sequence::{Sequence, SequenceBuffers};
 use sinew_core::srvf::{FRAMES, decode};
 
 use super::srvf;
@@ -40,9 +41,8 @@ pub const STRIP: [usize; 5] = [1, 8, 15, 22, 30];
 
 /// The generator, the decoder and the neutral, checked against each other.
 struct Loaded<'a> {
-    generator: MotionGenerator<'a>,
+    sequence: Sequence<'a>,
     labels: Vec<String>,
-    decoder: S2dDecoder<'a>,
     neutral: Mesh,
     neutral_lmk: Vec<f32>,
 }
@@ -121,10 +121,16 @@ fn load<'a>(opts: &Generate, gen_bytes: &'a [u8], dec_bytes: &'a [u8]) -> Result
         .iter()
         .flat_map(|v| neutral.positions[v as usize])
         .collect();
+    let sequence = Sequence::new(generator, decoder).map_err(|e| {
+        anyhow!(
+            "{}: does not fit the generator {}: {e}",
+            opts.decoder.display(),
+            opts.model.display()
+        )
+    })?;
     Ok(Loaded {
-        generator,
+        sequence,
         labels,
-        decoder,
         neutral,
         neutral_lmk,
     })
@@ -141,27 +147,25 @@ impl Loaded<'_> {
         })
     }
 
-    /// The dense face of each landmark frame of `curve` (`[(FRAMES + 1) × dims]`), frames
-    /// `frames`.
-    fn meshes(&self, curve: &[f32], frames: &[usize]) -> Result<Vec<Vec<f32>>> {
-        let d = self.generator.dims();
-        let base: Vec<f32> = self.neutral.positions.iter().flatten().copied().collect();
-        let mut scratch = vec![0.0f32; self.decoder.scratch_len()];
-        let mut input = vec![0.0f32; d];
-        frames
-            .iter()
-            .map(|&t| {
-                let to = &curve[t * d..(t + 1) * d];
-                self.decoder
-                    .input(&self.neutral_lmk, to, &mut input)
-                    .map_err(|e| anyhow!("landmarks: {e}"))?;
-                let mut out = vec![0.0f32; base.len()];
-                self.decoder
-                    .decode_onto(&base, &input, &mut scratch, &mut out)
-                    .map_err(|e| anyhow!("decoding: {e}"))?;
-                Ok(out)
-            })
-            .collect()
+    /// Buffers for [`Sequence::curve`] and [`Sequence::frame`] on this neutral.
+    fn buffers(&self) -> Buffers {
+        let s = &self.sequence;
+        Buffers {
+            curve: vec![0.0; s.curve_len()],
+            input: vec![0.0; s.input_len()],
+            neutral: self.neutral.positions.iter().flatten().copied().collect(),
+            scratch: vec![0.0; s.scratch_len()],
+            vertices: vec![0.0; s.vertex_len()],
+        }
+    }
+
+    /// The dense face of frame `t` of the curve in `b` ([`Sequence::frame`]).
+    fn mesh(&self, b: &mut Buffers, t: usize) -> Result<Vec<f32>> {
+        let mut buf = b.view();
+        self.sequence
+            .frame(t, &mut buf)
+            .map_err(|e| anyhow!("decoding frame {t}: {e}"))?;
+        Ok(buf.vertices.to_vec())
     }
 
     /// Writes `frame_NN.obj` for each mesh (numbered from `first`) and the strip of `strip`
@@ -192,23 +196,16 @@ pub fn generate(opts: &Generate, label: &str) -> Result<Vec<f32>> {
     let dec_bytes = crate::io::container::read(&opts.decoder)?;
     let l = load(opts, &gen_bytes, &dec_bytes)?;
     let label = l.label(label, &opts.model)?;
-    let mut scratch = vec![0.0f32; l.generator.scratch_len()];
-    let mut curve = vec![0.0f32; l.generator.curve_len()];
-    l.generator
-        .landmarks(
-            label,
-            opts.seed,
-            opts.intensity,
-            &l.neutral_lmk,
-            &mut scratch,
-            &mut curve,
-        )
+    let mut b = l.buffers();
+    l.sequence
+        .curve(label, opts.seed, opts.intensity, &mut b.view())
         .map_err(|e| anyhow!("generating: {e}"))?;
-    let frames: Vec<usize> = (1..=FRAMES).collect();
-    let meshes = l.meshes(&curve, &frames)?;
+    let meshes = (1..=FRAMES)
+        .map(|t| l.mesh(&mut b, t))
+        .collect::<Result<Vec<_>>>()?;
     let strip: Vec<usize> = STRIP.iter().map(|&f| f - 1).collect();
     l.write(&opts.out, &meshes, 1, &strip)?;
-    Ok(curve)
+    Ok(b.curve)
 }
 
 /// `sinew interpolate`: the motions of `from` and `to` (same seed) joined by the geodesic
@@ -223,31 +220,53 @@ pub fn interpolate(opts: &Generate, from: &str, to: &str, steps: usize) -> Resul
     let dec_bytes = crate::io::container::read(&opts.decoder)?;
     let l = load(opts, &gen_bytes, &dec_bytes)?;
     let (a, b) = (l.label(from, &opts.model)?, l.label(to, &opts.model)?);
-    let mut scratch = vec![0.0f32; l.generator.scratch_len()];
-    let mut q1 = vec![0.0f32; l.generator.motion_len()];
+    let generator = l.sequence.generator();
+    let mut scratch = vec![0.0f32; generator.scratch_len()];
+    let mut q1 = vec![0.0f32; generator.motion_len()];
     let mut q2 = q1.clone();
-    l.generator
+    generator
         .motion(a, opts.seed, &mut scratch, &mut q1)
-        .and_then(|()| l.generator.motion(b, opts.seed, &mut scratch, &mut q2))
+        .and_then(|()| generator.motion(b, opts.seed, &mut scratch, &mut q2))
         .map_err(|e| anyhow!("generating: {e}"))?;
-    let d = l.generator.dims();
+    let d = generator.dims();
+    let mut buffers = l.buffers();
     let mut apexes = Vec::with_capacity(steps);
     let mut meshes = Vec::with_capacity(steps);
     for k in 0..steps {
         let tau = k as f32 / (steps - 1) as f32;
         let q = srvf::interpolate(&q1, &q2, tau)?;
-        let mut curve = vec![0.0f32; l.generator.curve_len()];
         decode(
             &q,
             &l.neutral_lmk,
-            opts.intensity * l.generator.length(),
-            &mut curve,
+            opts.intensity * generator.length(),
+            &mut buffers.curve,
         )
         .map_err(|e| anyhow!("decoding the motion: {e}"))?;
-        meshes.extend(l.meshes(&curve, &[FRAMES])?);
-        apexes.push(curve[FRAMES * d..].to_vec());
+        meshes.push(l.mesh(&mut buffers, FRAMES)?);
+        apexes.push(buffers.curve[FRAMES * d..].to_vec());
     }
     let strip: Vec<usize> = (0..steps).collect();
     l.write(&opts.out, &meshes, 1, &strip)?;
     Ok(apexes)
+}
+
+/// Owned buffers of a [`Sequence`] on one neutral.
+struct Buffers {
+    curve: Vec<f32>,
+    input: Vec<f32>,
+    neutral: Vec<f32>,
+    scratch: Vec<f32>,
+    vertices: Vec<f32>,
+}
+
+impl Buffers {
+    fn view(&mut self) -> SequenceBuffers<'_> {
+        SequenceBuffers {
+            curve: &mut self.curve,
+            input: &mut self.input,
+            neutral: &self.neutral,
+            scratch: &mut self.scratch,
+            vertices: &mut self.vertices,
+        }
+    }
 }
