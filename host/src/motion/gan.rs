@@ -148,6 +148,9 @@ impl Critic {
     }
 }
 
+/// The scale of the generator's output layer at initialisation, against PyTorch's.
+pub const OUTPUT_INIT: f64 = 0.1;
+
 /// The generator: an MLP from `[z ‖ one-hot label]` to a tangent vector at p.
 #[derive(Module, Debug)]
 pub struct Generator {
@@ -171,9 +174,31 @@ impl Generator {
             .collect();
         let mut activations = vec![Activation::LeakyRelu { slope }; hidden.len()];
         activations.push(Activation::Identity);
-        Self {
-            mlp: Mlp::new(&widths, &activations, device),
+        let mut mlp = Mlp::new(&widths, &activations, device);
+        // The label's rows of the first layer start √noise times larger: PyTorch's
+        // initialisation gives every input the same scale, so one hot input among `noise`
+        // standard normals would start √noise times weaker than the noise together, and the
+        // label would hardly shape the motion (the reference concatenates it after every layer
+        // instead, which the core's MLP cannot).
+        let rows: Vec<f32> = (0..noise + labels)
+            .map(|i| if i < noise { 1.0 } else { (noise as f32).sqrt() })
+            .collect();
+        let first = &mut mlp.layers[0];
+        let w = first.weight.val() * tensor(rows, [noise + labels, 1], device);
+        first.weight = burn::module::Param::from_tensor(w.detach());
+        // The output layer starts at a tenth of its scale, so the first motions lie near p (the
+        // training motions' mean) rather than a random tangent vector several times longer than
+        // theirs.
+        let last = mlp.layers.len() - 1;
+        let out = &mut mlp.layers[last];
+        let scaled = |t: Tensor<2>| t.mul_scalar(OUTPUT_INIT).detach();
+        out.weight = burn::module::Param::from_tensor(scaled(out.weight.val()));
+        if let Some(b) = out.bias.take() {
+            out.bias = Some(burn::module::Param::from_tensor(
+                b.val().mul_scalar(OUTPUT_INIT).detach(),
+            ));
         }
+        Self { mlp }
     }
 
     /// The tangent vectors: the MLP's output less its component along `p`.
@@ -192,6 +217,55 @@ impl Generator {
 pub fn project(s: Tensor<2>, p: Tensor<2>) -> Tensor<2> {
     let a = (s.clone() * p.clone()).sum_dim(1).div_scalar(FRAMES as f64);
     s - a * p
+}
+
+/// `exp_p(s)` row by row (S2D eq. 8): `cos(‖s‖) p + sin(‖s‖) s / ‖s‖`, the norm the
+/// hypersphere's (`‖s‖² = Σ s² / FRAMES`); `‖s‖` is floored at 1e-12 so that a zero row maps
+/// to p with a finite gradient.
+///
+/// # Shapes
+/// - s: `[n, d]`, p: `[1, d]` → `[n, d]`
+pub fn exp_rows(s: Tensor<2>, p: Tensor<2>) -> Tensor<2> {
+    let norm = s
+        .clone()
+        .powi_scalar(2)
+        .sum_dim(1)
+        .div_scalar(FRAMES as f64)
+        .add_scalar(1e-24)
+        .sqrt();
+    let k = norm.clone().sin() / norm.clone();
+    norm.cos() * p + s * k
+}
+
+/// The geodesic distance between unit rows a and b of the hypersphere, `2 asin(‖a − b‖ / 2)`
+/// (the arc of the chord: exact, and smooth where the two meet, unlike `acos ⟨a, b⟩`).
+///
+/// # Shapes
+/// - a, b: `[n, d]` → `[n, 1]`
+pub fn geodesic_rows(a: Tensor<2>, b: Tensor<2>) -> Tensor<2> {
+    let chord = (a - b)
+        .powi_scalar(2)
+        .sum_dim(1)
+        .div_scalar(FRAMES as f64)
+        .add_scalar(1e-24)
+        .sqrt();
+    chord.div_scalar(2.0).clamp_max(1.0).asin().mul_scalar(2.0)
+}
+
+/// L_r, the generator's reconstruction loss against the real motions of the same labels, as the
+/// reference computes it: the mean absolute difference of the tangent vectors (eq. 4's L1) plus
+/// the mean geodesic distance between the two motions on the sphere. The L1 term alone, a mean
+/// over 30 × 204 values of about 0.05 each, is too weak beside the critic's unit-norm gradient
+/// for the label to shape the motion; the geodesic term pulls each generated motion towards its
+/// label's motions with a gradient of unit norm.
+///
+/// # Shapes
+/// - fake, real: `[n, d]` tangent vectors at p: `[1, d]` → `[1]`
+pub fn reconstruction(fake: Tensor<2>, real: Tensor<2>, p: &Tensor<2>) -> Tensor<1> {
+    let l1 = (fake.clone() - real.clone()).abs().mean();
+    let on_sphere = |s: Tensor<2>| exp_rows(s, p.clone());
+    let geodesic = geodesic_rows(on_sphere(fake), on_sphere(real).detach()).mean();
+    l1 + geodesic
 }
 
 /// Adam with the reference's β = (0.5, 0.9).
@@ -233,7 +307,8 @@ pub struct StepLosses {
     pub penalty: f32,
     /// The generator's loss, `α1 L_adv + α2 L_r`.
     pub generator: f32,
-    /// L_r, the mean absolute difference from the real tangent vectors.
+    /// L_r: the mean absolute difference from the real tangent vectors plus the mean geodesic
+    /// distance from the real motions ([`reconstruction`]).
     pub reconstruction: f32,
 }
 
@@ -297,7 +372,7 @@ pub fn generator_step(
         .forward(Tensor::cat(vec![fake.clone(), batch.labels.clone()], 1))
         .mean()
         .neg();
-    let rec = (fake - batch.real.clone()).abs().mean();
+    let rec = reconstruction(fake, batch.real.clone(), p);
     let loss =
         adv.mul_scalar(config.alpha_adv as f64) + rec.clone().mul_scalar(config.alpha_rec as f64);
     let losses = StepLosses {

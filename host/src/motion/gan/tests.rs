@@ -82,3 +82,86 @@ fn generated_vectors_are_tangent_at_p() {
         assert!(a.abs() < 1e-5, "{a}");
     }
 }
+
+#[test]
+fn the_reconstruction_loss_measures_the_geodesic_on_the_sphere() {
+    let dev = device(6);
+    let d = FRAMES * 3;
+    let unit = |v: Vec<f32>| {
+        let n = (v.iter().map(|x| x * x).sum::<f32>() / FRAMES as f32).sqrt();
+        v.into_iter().map(|x| x / n).collect::<Vec<_>>()
+    };
+    let p = unit((0..d).map(|i| ((i as f32) * 0.37).sin() + 0.2).collect());
+    let pt = tensor(p.clone(), [1, d], &dev);
+    // Two tangent vectors at p of different lengths and directions.
+    let mut a: Vec<f32> = (0..d).map(|i| ((i as f32) * 0.11).cos() * 0.09).collect();
+    let mut b: Vec<f32> = (0..d).map(|i| ((i as f32) * 0.23).sin() * 0.05).collect();
+    sinew_core::srvf::project_tangent(&p, &mut a).unwrap();
+    sinew_core::srvf::project_tangent(&p, &mut b).unwrap();
+    let on = |s: &[f32]| crate::motion::srvf::exp(&p, s).unwrap();
+    let (qa, qb) = (on(&a), on(&b));
+    // exp_rows is the core's exponential map.
+    let ea = to_vec(exp_rows(tensor(a.clone(), [1, d], &dev), pt.clone()));
+    for (x, y) in ea.iter().zip(&qa) {
+        assert!((x - y).abs() < 1e-5, "{x} {y}");
+    }
+    // geodesic_rows is the host's geodesic distance, and L_r adds the mean |a − b|.
+    let want = crate::motion::srvf::distance(&qa, &qb).unwrap();
+    let got = to_vec(geodesic_rows(
+        tensor(qa.clone(), [1, d], &dev),
+        tensor(qb.clone(), [1, d], &dev),
+    ))[0];
+    assert!(want > 0.1 && (got - want).abs() < 1e-4, "{got} {want}");
+    let l1 = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).sum::<f32>() / d as f32;
+    let rec = to_vec(reconstruction(
+        tensor(a.clone(), [1, d], &dev),
+        tensor(b.clone(), [1, d], &dev),
+        &pt,
+    ))[0];
+    assert!((rec - (l1 + want)).abs() < 1e-4, "{rec} {}", l1 + want);
+    // It vanishes where the two motions meet.
+    let same = to_vec(reconstruction(
+        tensor(a.clone(), [1, d], &dev),
+        tensor(a, [1, d], &dev),
+        &pt,
+    ))[0];
+    assert!(same.abs() < 1e-5, "{same}");
+}
+
+#[test]
+fn a_fresh_generator_follows_its_label_and_starts_near_p() {
+    let dev = device(8);
+    let config = GanConfig::default();
+    let d = FRAMES * 204;
+    let mut p = vec![0.0f32; d];
+    p[0] = (FRAMES as f32).sqrt();
+    let p = tensor(p, [1, d], &dev);
+    let generator = Generator::new(config.noise, 12, d, &config.hidden, config.slope, &dev);
+    let n = 16;
+    let z = Tensor::<2>::random([n, config.noise], Distribution::Normal(0.0, 1.0), &dev);
+    let of = |label: usize, z: Tensor<2>| {
+        to_vec(generator.forward(
+            Tensor::cat(vec![z, one_hot(&vec![label; n], 12, &dev)], 1),
+            p.clone(),
+        ))
+    };
+    let (a, b) = (of(0, z.clone()), of(1, z));
+    // ‖·‖ of the hypersphere's inner product.
+    let norm = |v: &[f32]| (v.iter().map(|x| x * x).sum::<f32>() / FRAMES as f32).sqrt();
+    let rows = |v: &[f32]| -> Vec<Vec<f32>> { v.chunks_exact(d).map(<[f32]>::to_vec).collect() };
+    let (a, b) = (rows(&a), rows(&b));
+    let diff = |x: &[f32], y: &[f32]| {
+        norm(&x.iter().zip(y).map(|(u, v)| u - v).collect::<Vec<_>>())
+    };
+    // Another label moves the motion about as far as other noise does (PyTorch's initialisation
+    // alone would leave the label's effect √128 ≈ 11 times smaller).
+    let by_label = (0..n).map(|i| diff(&a[i], &b[i])).sum::<f32>() / n as f32;
+    let by_noise = (1..n).map(|i| diff(&a[i], &a[i - 1])).sum::<f32>() / (n - 1) as f32;
+    eprintln!("label {by_label}, noise {by_noise}");
+    assert!(by_label > 0.4 * by_noise, "{by_label} {by_noise}");
+    // The first motions lie near p: a tenth of PyTorch's scale, which would put them about 1.5
+    // rad away, beyond most training motions.
+    let mean_norm = a.iter().map(|r| norm(r)).sum::<f32>() / n as f32;
+    eprintln!("distance from p {mean_norm}");
+    assert!(mean_norm < 0.5, "{mean_norm}");
+}
