@@ -285,31 +285,6 @@ fn draw(
     (identities, groups, pairs)
 }
 
-/// Reads `read(i)` for every `i < n` on up to `threads` threads; results in index order.
-fn read_all(
-    n: usize,
-    threads: usize,
-    read: impl Fn(usize) -> Result<Vec<[f32; 3]>> + Sync,
-) -> Result<Vec<Vec<[f32; 3]>>> {
-    let mut slots: Vec<Option<Result<Vec<[f32; 3]>>>> = Vec::new();
-    slots.resize_with(n, || None);
-    let per = n.div_ceil(threads.max(1)).max(1);
-    std::thread::scope(|s| {
-        for (c, chunk) in slots.chunks_mut(per).enumerate() {
-            let read = &read;
-            s.spawn(move || {
-                for (k, slot) in chunk.iter_mut().enumerate() {
-                    *slot = Some(read(c * per + k));
-                }
-            });
-        }
-    });
-    slots
-        .into_iter()
-        .map(|s| s.unwrap_or_else(|| Err(anyhow::anyhow!("a reader thread did not finish"))))
-        .collect()
-}
-
 /// Generates a data set from the ICT-FaceKit in `kit`.
 pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet> {
     config.validate()?;
@@ -344,12 +319,17 @@ pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet> {
             kit.dir().display()
         );
     }
-    let threads = std::thread::available_parallelism().map_or(1, usize::from);
     let crop = |d: Vec<[f32; 3]>| d[region.clone()].to_vec();
-    let deltas = read_all(expressions.len(), threads, |e| {
-        kit.expression_delta(&expressions[e]).map(crop)
-    })?;
-    let id_deltas = read_all(modes, threads, |m| kit.identity_delta(m).map(crop))?;
+    let deltas: Vec<_> = kit
+        .expression_deltas(&expressions)?
+        .into_iter()
+        .map(crop)
+        .collect();
+    let id_deltas: Vec<_> = kit
+        .identity_deltas(modes)?
+        .into_iter()
+        .map(crop)
+        .collect();
     let base = &template.positions;
     let neutrals: Vec<Vec<[f32; 3]>> = identities
         .iter()
