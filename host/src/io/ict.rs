@@ -637,7 +637,10 @@ mod tests {
             "{err:?}"
         );
         let msg = err.to_string();
-        assert!(msg.contains("expressions") && msg.contains("\"smile\""), "{msg}");
+        assert!(
+            msg.contains("expressions") && msg.contains("\"smile\""),
+            "{msg}"
+        );
         assert!(matches!(
             kit.actor(&[], &["jawOpen", "jawOpen"], FACE_REGION),
             Err(IctError::RepeatedExpression { name, .. }) if name == "jawOpen"
@@ -704,11 +707,14 @@ mod tests {
         std::fs::write(dir.path().join("identities/identity001.obj"), tri).unwrap();
         let err = IctFaceKit::open(dir.path()).unwrap_err();
         assert!(
-            matches!(err, IctError::IdentityGap {
-                missing: 0,
-                next: 1,
-                ..
-            }),
+            matches!(
+                err,
+                IctError::IdentityGap {
+                    missing: 0,
+                    next: 1,
+                    ..
+                }
+            ),
             "{err:?}"
         );
         assert!(err.to_string().contains("identities"), "{err}");
@@ -718,7 +724,10 @@ mod tests {
         )
         .unwrap();
         let kit = IctFaceKit::open(dir.path()).unwrap();
-        assert!(matches!(kit.landmarks68(), Err(IctError::NoLandmarks { .. })));
+        assert!(matches!(
+            kit.landmarks68(),
+            Err(IctError::NoLandmarks { .. })
+        ));
         std::fs::write(dir.path().join("expressions/jawOpen.obj"), "v 0 0 0\n").unwrap();
         let err = kit.expression_delta("jawOpen").unwrap_err();
         assert!(

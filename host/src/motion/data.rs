@@ -449,11 +449,7 @@ pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet> {
         .into_iter()
         .map(crop)
         .collect();
-    let id_deltas: Vec<Vec<[f32; 3]>> = kit
-        .identity_deltas(modes)?
-        .into_iter()
-        .map(crop)
-        .collect();
+    let id_deltas: Vec<Vec<[f32; 3]>> = kit.identity_deltas(modes)?.into_iter().map(crop).collect();
     let base = &template.positions;
     let neutrals: Vec<Vec<[f32; 3]>> = identities
         .iter()
