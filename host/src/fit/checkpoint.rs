@@ -75,17 +75,14 @@ pub fn save(
         path: dir.to_owned(),
         source,
     })?;
-    let serialise = |what, e: &dyn std::fmt::Debug| CheckpointError::Serialise {
-        path: dir.to_owned(),
-        what,
-        detail: format!("{e:?}"),
-    };
     let model = net
         .clone()
         .into_record()
         .into_bytes()
-        .map_err(|e| serialise("fit", &e))?;
-    let opt = optim.into_bytes().map_err(|e| serialise("optimiser", &e))?;
+        .map_err(|e| checkpoint::serialise_error(dir, "fit", e))?;
+    let opt = optim
+        .into_bytes()
+        .map_err(|e| checkpoint::serialise_error(dir, "optimiser", e))?;
     let steps = state.steps_done;
     checkpoint::save(dir, steps, &model, &opt, &mut state, |s, f| s.files = f)
 }

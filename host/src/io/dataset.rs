@@ -348,6 +348,58 @@ pub fn check_version(
     })
 }
 
+/// The names of a kind of data set: its two files, the manifest's format and version, and what
+/// errors call its manifest.
+#[derive(Clone, Copy, Debug)]
+pub struct Layout {
+    /// The manifest's file name.
+    pub manifest: &'static str,
+    /// The data file's name.
+    pub data: &'static str,
+    /// What the manifest is, for errors (e.g. "a motion-set manifest").
+    pub what: &'static str,
+    /// The manifest's `format`.
+    pub format: &'static str,
+    /// The manifest's `version`.
+    pub version: u32,
+}
+
+/// A manifest's own format name and version.
+pub trait Versioned {
+    /// `format` and `version` as the file has them.
+    fn format_version(&self) -> (&str, u32);
+}
+
+/// Reads the set in `dir`: the manifest, checked for format and version and by `check` (which
+/// returns what `parts` needs of it), then the data file's bytes, which `parts` reads against
+/// the manifest. Every error names the file it is about.
+pub fn read<M, C, T>(
+    dir: &Path,
+    layout: &Layout,
+    check: impl FnOnce(&M) -> Result<C, ManifestProblem>,
+    parts: impl FnOnce(M, C, &[u8]) -> Result<T, ContentError>,
+) -> Result<T, DataSetError>
+where
+    M: DeserializeOwned + Versioned,
+{
+    let (manifest, mpath): (M, _) = read_manifest(dir, layout.manifest, layout.what)?;
+    check_version(
+        &mpath,
+        manifest.format_version(),
+        (layout.format, layout.version),
+    )?;
+    let checked = check(&manifest).map_err(|source| DataSetError::Manifest {
+        path: mpath,
+        source,
+    })?;
+    let dpath = dir.join(layout.data);
+    let bytes = crate::io::container::read(&dpath)?;
+    parts(manifest, checked, &bytes).map_err(|source| DataSetError::Contents {
+        path: dpath,
+        source,
+    })
+}
+
 /// Writes the data file `dir/data_file` (the bytes of `bytes`, laid out first) and the manifest
 /// `dir/manifest_file`, each atomically; `dir` is created if missing.
 pub fn write(

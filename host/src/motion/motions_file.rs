@@ -16,11 +16,26 @@ use super::data::{
 };
 use crate::io::container::{SinewWriter, WriterError};
 use crate::io::dataset::{
-    self, ContentError, DataSetError, Entry, ManifestProblem, Sections, count, flat, points,
+    self, ContentError, DataSetError, Entry, Layout, ManifestProblem, Sections, Versioned, count,
+    flat, points,
 };
 
 /// `content` metadata of a motion set's `.sinew` file.
 pub const CONTENT: &str = "motions";
+
+const LAYOUT: Layout = Layout {
+    manifest: MANIFEST_FILE,
+    data: DATA_FILE,
+    what: "a motion-set manifest",
+    format: MANIFEST_FORMAT,
+    version: MANIFEST_VERSION,
+};
+
+impl Versioned for Manifest {
+    fn format_version(&self) -> (&str, u32) {
+        (&self.format, self.version)
+    }
+}
 
 impl MotionSet {
     /// The `motions.` sections and metadata, as a `.sinew` file (kind `Performance`: recorded
@@ -64,22 +79,8 @@ impl MotionSet {
     /// Reads a motion set written by [`MotionSet::write`], checking that the manifest and the
     /// numbers agree; errors name the offending file.
     pub fn read(dir: &Path) -> Result<Self, DataSetError> {
-        let (manifest, mpath): (Manifest, _) =
-            dataset::read_manifest(dir, MANIFEST_FILE, "a motion-set manifest")?;
-        dataset::check_version(
-            &mpath,
-            (&manifest.format, manifest.version),
-            (MANIFEST_FORMAT, MANIFEST_VERSION),
-        )?;
-        check_manifest(&manifest).map_err(|source| DataSetError::Manifest {
-            path: mpath,
-            source,
-        })?;
-        let dpath = dir.join(DATA_FILE);
-        let bytes = crate::io::container::read(&dpath)?;
-        Self::from_parts(manifest, &bytes).map_err(|source| DataSetError::Contents {
-            path: dpath,
-            source,
+        dataset::read(dir, &LAYOUT, check_manifest, |m, (), bytes| {
+            Self::from_parts(m, bytes)
         })
     }
 

@@ -182,17 +182,14 @@ pub fn save_checkpoint(
     optim: &ModuleOptimizer,
     state: &mut CheckpointState,
 ) -> Result<(), CheckpointError> {
-    let serialise = |what, e: &dyn std::fmt::Debug| CheckpointError::Serialise {
-        path: dir.to_owned(),
-        what,
-        detail: format!("{e:?}"),
-    };
     let model = decoder
         .clone()
         .into_record()
         .into_bytes()
-        .map_err(|e| serialise("decoder", &e))?;
-    let opt = optim.into_bytes().map_err(|e| serialise("optimiser", &e))?;
+        .map_err(|e| checkpoint::serialise_error(dir, "decoder", e))?;
+    let opt = optim
+        .into_bytes()
+        .map_err(|e| checkpoint::serialise_error(dir, "optimiser", e))?;
     checkpoint::save(dir, state.steps_done, &model, &opt, state, |s, f| {
         s.files = f
     })

@@ -10,10 +10,26 @@ use super::data::{
     combinations_of,
 };
 use crate::io::container::{SinewWriter, WriterError};
-use crate::io::dataset::{self, ContentError, DataSetError, Entry, Sections, count, flat, points};
+use crate::io::dataset::{
+    self, ContentError, DataSetError, Entry, Layout, Sections, Versioned, count, flat, points,
+};
 
 /// `content` metadata of a pair set's `.sinew` file.
 pub const CONTENT: &str = "s2d-pairs";
+
+const LAYOUT: Layout = Layout {
+    manifest: MANIFEST_FILE,
+    data: DATA_FILE,
+    what: "an S2D pairs manifest",
+    format: MANIFEST_FORMAT,
+    version: MANIFEST_VERSION,
+};
+
+impl Versioned for Manifest {
+    fn format_version(&self) -> (&str, u32) {
+        (&self.format, self.version)
+    }
+}
 
 impl PairSet {
     /// The `pairs.` sections and metadata, as a `.sinew` file.
@@ -70,23 +86,7 @@ impl PairSet {
     /// Reads a data set written by [`PairSet::write`], checking that the manifest and the
     /// numbers agree; errors name the offending file.
     pub fn read(dir: &Path) -> Result<Self, DataSetError> {
-        let (manifest, mpath): (Manifest, _) =
-            dataset::read_manifest(dir, MANIFEST_FILE, "an S2D pairs manifest")?;
-        dataset::check_version(
-            &mpath,
-            (&manifest.format, manifest.version),
-            (MANIFEST_FORMAT, MANIFEST_VERSION),
-        )?;
-        let combinations = combinations_of(&manifest).map_err(|source| DataSetError::Manifest {
-            path: mpath,
-            source,
-        })?;
-        let dpath = dir.join(DATA_FILE);
-        let bytes = crate::io::container::read(&dpath)?;
-        Self::from_parts(manifest, combinations, &bytes).map_err(|source| DataSetError::Contents {
-            path: dpath,
-            source,
-        })
+        dataset::read(dir, &LAYOUT, combinations_of, Self::from_parts)
     }
 
     fn from_parts(

@@ -354,6 +354,16 @@ fn read_checked(dir: &Path, name: &str, crc: &str) -> Result<Vec<u8>, Checkpoint
     Ok(bytes)
 }
 
+/// The error of a `what` (e.g. "decoder") that burn could not serialise for the checkpoint in
+/// `dir`.
+pub fn serialise_error(dir: &Path, what: &'static str, e: impl std::fmt::Debug) -> CheckpointError {
+    CheckpointError::Serialise {
+        path: dir.to_owned(),
+        what,
+        detail: format!("{e:?}"),
+    }
+}
+
 /// Reads the burn record in the weight file `path` from its `bytes` (checked against their CRC).
 pub fn record_from_bytes(
     path: &Path,
