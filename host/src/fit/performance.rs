@@ -25,8 +25,8 @@ use sinew_core::linalg::{Mat3, Vec3};
 use sinew_core::rotation::to_6d;
 use sinew_core::skinning::{BoneTransform, lbs};
 
-use crate::io::ict::{FACE_REGION, IctFaceKit};
 use crate::io::dataset::{self, DataSetError};
+use crate::io::ict::{FACE_REGION, IctFaceKit};
 use crate::io::mesh::{Mesh, MeshError};
 
 /// The manifest's file name.

@@ -1,7 +1,7 @@
 use super::*;
+use crate::io::data::data_dir;
 use crate::io::dataset::DataSetError;
 use crate::io::mesh::MeshError;
-use crate::io::data::data_dir;
 
 pub(crate) fn golden_actor() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/aim-ict.sinew")
@@ -142,7 +142,10 @@ fn bad_performances_are_refused_naming_the_file() {
             if path.ends_with("frame_00001.obj")),
         "{e:?}"
     );
-    assert!(e.to_string().contains("frame_00001.obj: 4704 vertices"), "{e}");
+    assert!(
+        e.to_string().contains("frame_00001.obj: 4704 vertices"),
+        "{e}"
+    );
 
     // A missing frame.
     std::fs::remove_file(&frame1).unwrap();
