@@ -400,21 +400,20 @@ where
     })
 }
 
-/// Writes the data file `dir/data_file` (the bytes of `bytes`, laid out first) and the manifest
-/// `dir/manifest_file`, each atomically; `dir` is created if missing.
+/// Writes the set into `dir` (created if missing): the data file (`bytes`, laid out by the
+/// caller) and the manifest, each atomically, the manifest last.
 pub fn write(
     dir: &Path,
-    data_file: &str,
+    layout: &Layout,
     bytes: Result<Vec<u8>, WriterError>,
-    manifest_file: &str,
     manifest: &impl Serialize,
 ) -> Result<(), DataSetError> {
-    let dpath = dir.join(data_file);
+    let dpath = dir.join(layout.data);
     let bytes = bytes.map_err(|source| DataSetError::Encode {
         path: dpath.clone(),
         source,
     })?;
-    let mpath = dir.join(manifest_file);
+    let mpath = dir.join(layout.manifest);
     let json =
         serde_json::to_string_pretty(manifest).map_err(|source| DataSetError::EncodeManifest {
             path: mpath.clone(),
@@ -508,3 +507,6 @@ pub fn points(s: &[f32]) -> Vec<[f32; 3]> {
 pub fn flat(v: &[Vec<[f32; 3]>]) -> Vec<f32> {
     v.iter().flatten().flatten().copied().collect()
 }
+
+#[cfg(test)]
+mod tests;

@@ -67,13 +67,7 @@ impl MotionSet {
     /// Writes `motions.sinew` and `manifest.json` into `dir` (created if missing), each
     /// atomically.
     pub fn write(&self, dir: &Path) -> Result<(), DataSetError> {
-        dataset::write(
-            dir,
-            DATA_FILE,
-            self.to_bytes(),
-            MANIFEST_FILE,
-            &self.manifest,
-        )
+        dataset::write(dir, &LAYOUT, self.to_bytes(), &self.manifest)
     }
 
     /// Reads a motion set written by [`MotionSet::write`], checking that the manifest and the
