@@ -650,12 +650,14 @@ fn s2d_pairs_train_and_eval_end_to_end() {
     assert!(e.contains("nowhere") && e.contains("manifest.json"), "{e}");
 }
 
-/// `sinew` with `env` set (and `SINEW_SEED`, `SINEW_DATA` removed unless `env` sets them).
+/// `sinew` with `env` set (and `SINEW_SEED`, `SINEW_DATA`, `SINEW_CACHE` removed unless `env`
+/// sets them).
 fn sinew_env(args: &[&str], env: &[(&str, &str)]) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_sinew"));
     cmd.args(args)
         .env_remove("SINEW_SEED")
-        .env_remove("SINEW_DATA");
+        .env_remove("SINEW_DATA")
+        .env_remove("SINEW_CACHE");
     for (k, v) in env {
         cmd.env(k, v);
     }
@@ -670,6 +672,63 @@ fn said_seed(out: &Output) -> u64 {
         .find(|l| l.starts_with("seed "))
         .unwrap_or_else(|| panic!("no seed line in:\n{stderr}"));
     line.split_whitespace().nth(1).unwrap().parse().unwrap()
+}
+
+/// The hierarchy cache of `train s2d` follows the same rule: `--cache` beats `SINEW_CACHE`,
+/// which beats the temporary folder. The command says its cache before reading the pairs, so a
+/// missing pairs folder is enough.
+#[test]
+fn the_cache_flag_beats_sinew_cache_which_beats_the_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let (missing, out) = (dir.path().join("missing"), dir.path().join("m.sinew"));
+    let report = dir.path().join("r.json");
+    let args = [
+        "train",
+        "s2d",
+        "--pairs",
+        s(&missing),
+        "--protocol",
+        "expression",
+        "--out",
+        s(&out),
+        "--report",
+        s(&report),
+    ];
+    let said_cache = |out: &Output| -> String {
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let line = stderr
+            .lines()
+            .find_map(|l| l.strip_prefix("hierarchy cache "))
+            .unwrap_or_else(|| panic!("no cache line in:\n{stderr}"))
+            .to_owned();
+        line.strip_suffix(" (override with --cache or SINEW_CACHE)")
+            .unwrap_or_else(|| panic!("{line}"))
+            .to_owned()
+    };
+    let plain = sinew_env(&args, &[]);
+    assert!(!plain.status.success(), "a missing pairs folder must fail");
+    assert_eq!(
+        said_cache(&plain),
+        std::env::temp_dir()
+            .join("sinew-cache")
+            .display()
+            .to_string()
+    );
+    let (env_dir, flag_dir) = (dir.path().join("from-env"), dir.path().join("from-flag"));
+    let env = sinew_env(&args, &[("SINEW_CACHE", s(&env_dir))]);
+    assert_eq!(
+        said_cache(&env),
+        s(&env_dir),
+        "SINEW_CACHE beats the default"
+    );
+    let flag = [args.as_slice(), &["--cache", s(&flag_dir)]].concat();
+    let both = sinew_env(&flag, &[("SINEW_CACHE", s(&env_dir))]);
+    assert_eq!(said_cache(&both), s(&flag_dir), "--cache beats SINEW_CACHE");
+    let help = ok(&["train", "s2d", "--help"]);
+    assert!(
+        help.contains("SINEW_CACHE"),
+        "--help names SINEW_CACHE:\n{help}"
+    );
 }
 
 /// One rule for every command family: a flag beats its environment variable, which beats the

@@ -10,6 +10,7 @@ use sinew_host::s2d::decoder::S2dDecoder;
 use sinew_host::s2d::synthetic;
 use sinew_host::s2d::train::{Sample, TrainConfig, TrainOptions, Trained, request_stop, train};
 use sinew_host::training::backend::Backend;
+use sinew_host::training::checkpoint::{CheckpointError, InvalidState};
 use sinew_host::training::nn::to_vec;
 
 /// Training runs one at a time in this process: burn's CPU kernels split reductions across the
@@ -212,9 +213,17 @@ fn resuming_another_run_is_refused_with_the_folder_and_the_difference() {
     let dir = tempfile::tempdir().unwrap();
     run(&set, &w, &config, &options(dir.path(), false, Some(3))).unwrap();
     let folder = dir.path().display().to_string();
+    let state = dir.path().join(STATE_FILE);
     let refused = |set: &[Sample], config: &TrainConfig, options: &TrainOptions| {
-        let e = run(set, &w, config, options).expect_err("resumed another run");
-        format!("{e:#}")
+        run(set, &w, config, options).expect_err("resumed another run")
+    };
+    // The differences named by a refusal as another run's checkpoint, in `state`.
+    let differences = |e: &anyhow::Error| match e.downcast_ref::<CheckpointError>() {
+        Some(CheckpointError::Invalid {
+            path,
+            source: InvalidState::OtherRun { differences },
+        }) if *path == state => differences.clone(),
+        _ => panic!("not refused as another run: {e:#}"),
     };
 
     let longer = TrainConfig {
@@ -222,31 +231,39 @@ fn resuming_another_run_is_refused_with_the_folder_and_the_difference() {
         ..config.clone()
     };
     let e = refused(&set, &longer, &options(dir.path(), true, None));
-    assert!(
-        e.contains(&folder) && e.contains("config.epochs: 4 in the checkpoint, 5 now"),
-        "{e}"
+    assert_eq!(
+        differences(&e),
+        ["config.epochs: 4 in the checkpoint, 5 now"]
     );
+    assert!(format!("{e:#}").contains(&folder), "{e:#}");
 
     let mut other = set.clone();
     other[7].displacement[5] += 1e-3;
     let e = refused(&other, &config, &options(dir.path(), true, None));
-    assert!(e.contains(&folder) && e.contains("data.crc"), "{e}");
+    let d = differences(&e);
+    assert!(d.len() == 1 && d[0].starts_with("data.crc: "), "{d:?}");
 
     let e = refused(&set[..19], &config, &options(dir.path(), true, None));
     assert!(
-        e.contains("data.samples: 20 in the checkpoint, 19 now"),
-        "{e}"
+        differences(&e).contains(&"data.samples: 20 in the checkpoint, 19 now".to_owned()),
+        "{e:#}"
     );
 
     let mut fold1 = options(dir.path(), true, None);
     fold1.context.insert("fold".to_owned(), "1".to_owned());
     let e = refused(&set, &config, &fold1);
-    assert!(e.contains(&folder) && e.contains("context.fold"), "{e}");
+    assert_eq!(
+        differences(&e),
+        ["context.fold: \"0\" in the checkpoint, \"1\" now"]
+    );
 
     // Nothing to resume.
     let empty = tempfile::tempdir().unwrap();
     let e = refused(&set, &config, &options(empty.path(), true, None));
-    assert!(e.contains(STATE_FILE), "{e}");
+    assert!(
+        matches!(e.downcast_ref::<CheckpointError>(), Some(CheckpointError::StateRead { path, .. }) if *path == empty.path().join(STATE_FILE)),
+        "{e:#}"
+    );
 
     // The checkpoint is untouched: the same run still resumes.
     let resumed = run(&set, &w, &config, &options(dir.path(), true, None)).unwrap();

@@ -529,7 +529,8 @@ pub fn save_checkpoint(
         .map_err(|e| anyhow::anyhow!("{}: cannot serialise the optimiser: {e:?}", dir.display()))?;
     crate::training::checkpoint::save(dir, state.steps_done, &model, &opt, state, |s, f| {
         s.files = f;
-    })
+    })?;
+    Ok(())
 }
 
 /// Reads a checkpoint folder's `state.json`; the error names the file.

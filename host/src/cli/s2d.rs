@@ -194,6 +194,10 @@ pub(crate) struct TrainS2dArgs {
     /// from the same pairs.
     #[arg(long)]
     mirror: bool,
+    /// Folder of cached mesh hierarchies, reused across runs [default: sinew-cache in the
+    /// system's temporary folder].
+    #[arg(long, env = "SINEW_CACHE", value_name = "DIR")]
+    cache: Option<PathBuf>,
 }
 
 /// `sinew eval s2d`.
@@ -233,6 +237,11 @@ pub(crate) fn train(args: TrainS2dArgs) -> Result<()> {
         .folds
         .unwrap_or(if args.paper_protocol { FOLDS } else { 1 });
     eprintln!("seed {} (override with --seed or SINEW_SEED)", train.seed);
+    let cache = args.cache.unwrap_or_else(experiment::default_cache_dir);
+    eprintln!(
+        "hierarchy cache {} (override with --cache or SINEW_CACHE)",
+        cache.display()
+    );
     let job = TrainS2d {
         pairs: args.pairs,
         protocol: args.protocol,
@@ -252,6 +261,7 @@ pub(crate) fn train(args: TrainS2dArgs) -> Result<()> {
         factors: args.factors,
         resume: args.resume,
         mirror: args.mirror,
+        cache,
     };
     let r = experiment::train_s2d(&job, args.quiet)?;
     print_s2d(&r, &args.report);

@@ -2,26 +2,67 @@
 //! through `sinew_core::performance`: the fitted meshes `sinew fit` writes are the core's, so
 //! they are the bits every target plays.
 
-use anyhow::{Context, Result, anyhow, ensure};
 use sinew_core::aim::AimActor;
+use sinew_core::error::{BufferError, FormatError};
 use sinew_core::format::ArtifactKind;
 use sinew_core::performance::{self as perf, Performance};
 use sinew_core::replay::{hash_words, model_hash};
 
 use crate::fit::aim::{Coefficients, FitResult};
-use crate::io::container::SinewWriter;
+use crate::io::container::{SinewWriter, WriterError};
 use crate::training::nn::write_mlp;
+
+/// Why a fit could not be baked or a baked performance played. The bytes come from the caller,
+/// which names their files.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum BakeError {
+    /// The actor's bytes are not a valid AIM actor.
+    #[error("the actor")]
+    Actor(#[source] FormatError),
+    /// The performance's bytes are not a valid performance.
+    #[error("the performance")]
+    Performance(#[source] FormatError),
+    /// The performance was baked for another actor or does not fit it.
+    #[error("the performance does not play on this actor")]
+    OtherActor(#[source] sinew_core::replay::ReplayError),
+    /// A fit with no frames, or with fewer jaw poses than head poses.
+    #[error("a fit without frames cannot be baked")]
+    NoFrames,
+    /// A fit whose per-frame arrays do not have the shape its settings imply.
+    #[error("the fit's {what} are not [frames, {per_frame}]")]
+    Shape {
+        /// `codes` or `coefficients`.
+        what: &'static str,
+        /// The expected width.
+        per_frame: usize,
+    },
+    /// A global fit that carries no coefficients.
+    #[error("a global fit without coefficients")]
+    NoCoefficients,
+    /// The performance cannot be laid out as a `.sinew` file.
+    #[error(transparent)]
+    Encode(#[from] WriterError),
+    /// A frame the core could not play.
+    #[error("frame {frame}")]
+    Frame {
+        /// The frame.
+        frame: usize,
+        /// What the core said.
+        #[source]
+        source: BufferError,
+    },
+}
 
 /// The `.sinew` bytes of `result`, a fit of the actor whose bytes are `actor_bytes`, with each
 /// frame's f32 hash as the core computes it.
-pub fn bake(actor_bytes: &[u8], result: &FitResult) -> Result<Vec<u8>> {
-    let actor = AimActor::from_bytes(actor_bytes).map_err(|e| anyhow!("the actor: {e}"))?;
+pub fn bake(actor_bytes: &[u8], result: &FitResult) -> Result<Vec<u8>, BakeError> {
+    let actor = AimActor::from_bytes(actor_bytes).map_err(BakeError::Actor)?;
     let frames = result.head.len();
     let m = actor.shape_count();
-    ensure!(
-        frames > 0 && result.jaw.len() == frames,
-        "a fit without frames cannot be baked"
-    );
+    if frames == 0 || result.jaw.len() != frames {
+        return Err(BakeError::NoFrames);
+    }
     let mut w = SinewWriter::new(ArtifactKind::Performance);
     w.meta("source", "sinew fit")
         .meta(
@@ -42,24 +83,25 @@ pub fn bake(actor_bytes: &[u8], result: &FitResult) -> Result<Vec<u8>> {
     match result.config.coefficients {
         Coefficients::Local => {
             let f = result.config.code;
-            ensure!(
-                result.codes.len() == frames * f,
-                "the fit's codes are not [frames, f]"
-            );
+            if result.codes.len() != frames * f {
+                return Err(BakeError::Shape {
+                    what: "codes",
+                    per_frame: f,
+                });
+            }
             w.f32s(perf::CODES, &[frames, f], &result.codes)?;
             w.f32s(perf::BOX, &[4], &result.normalisation)?;
             write_mlp(&mut w, perf::F_W, &result.fw)?;
         }
         Coefficients::Global => {
-            let weights = result
-                .weights
-                .as_ref()
-                .ok_or_else(|| anyhow!("a global fit without coefficients"))?;
+            let weights = result.weights.as_ref().ok_or(BakeError::NoCoefficients)?;
             let flat: Vec<f32> = weights.iter().flatten().copied().collect();
-            ensure!(
-                flat.len() == frames * m,
-                "the fit's coefficients are not [frames, {m}]"
-            );
+            if flat.len() != frames * m {
+                return Err(BakeError::Shape {
+                    what: "coefficients",
+                    per_frame: m,
+                });
+            }
             w.f32s(perf::WEIGHTS, &[frames, m], &flat)?;
         }
         Coefficients::Zero => {
@@ -75,11 +117,11 @@ pub fn bake(actor_bytes: &[u8], result: &FitResult) -> Result<Vec<u8>> {
 
 /// Every frame of a baked performance played on its actor through the core: the positions
 /// (`[V, 3]` per frame) and each frame's f32 hash.
-pub fn play(actor_bytes: &[u8], perf_bytes: &[u8]) -> Result<(Vec<Vec<f32>>, Vec<u64>)> {
-    let actor = AimActor::from_bytes(actor_bytes).map_err(|e| anyhow!("the actor: {e}"))?;
-    let p = Performance::from_bytes(perf_bytes).map_err(|e| anyhow!("{e}"))?;
+pub fn play(actor_bytes: &[u8], perf_bytes: &[u8]) -> Result<(Vec<Vec<f32>>, Vec<u64>), BakeError> {
+    let actor = AimActor::from_bytes(actor_bytes).map_err(BakeError::Actor)?;
+    let p = Performance::from_bytes(perf_bytes).map_err(BakeError::Performance)?;
     p.check_actor(actor_bytes, &actor)
-        .map_err(|e| anyhow!("{e}"))?;
+        .map_err(BakeError::OtherActor)?;
     let v = actor.vertex_count();
     let mut scratch = vec![0.0; p.scratch_len()];
     let mut normals = vec![0.0; 3 * v];
@@ -88,13 +130,35 @@ pub fn play(actor_bytes: &[u8], perf_bytes: &[u8]) -> Result<(Vec<Vec<f32>>, Vec
     for f in 0..p.frames() {
         let mut positions = vec![0.0; 3 * v];
         let h = perf::frame_hash(&p, &actor, f, &mut scratch, &mut positions, &mut normals)
-            .with_context(|| format!("frame {f}"))?;
+            .map_err(|source| BakeError::Frame { frame: f, source })?;
         frames.push(positions);
         hashes.push(h);
     }
     Ok((frames, hashes))
 }
 
-fn frame_hashes(actor_bytes: &[u8], perf_bytes: &[u8]) -> Result<Vec<u64>> {
+fn frame_hashes(actor_bytes: &[u8], perf_bytes: &[u8]) -> Result<Vec<u64>, BakeError> {
     play(actor_bytes, perf_bytes).map(|(_, h)| h)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_bytes_are_refused_by_variant() {
+        assert!(matches!(play(b"junk", b"junk"), Err(BakeError::Actor(_))));
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../tests/data/aim-procedural.sinew");
+        let actor = std::fs::read(path).unwrap();
+        assert!(matches!(
+            play(&actor, b"junk"),
+            Err(BakeError::Performance(_))
+        ));
+        // An actor is not a performance.
+        assert!(matches!(
+            play(&actor, &actor),
+            Err(BakeError::Performance(_))
+        ));
+    }
 }

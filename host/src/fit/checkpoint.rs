@@ -5,14 +5,13 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow, ensure};
 use burn::module::Module;
 use burn::optim::ModuleOptimizer;
 use serde::{Deserialize, Serialize};
 
 use crate::fit::performance::Performance;
 use crate::fit::setup::{FitConfig, FitNet};
-use crate::training::checkpoint::{self, STATE_FILE, WeightFiles};
+use crate::training::checkpoint::{self, CheckpointError, InvalidState, WeightFiles};
 
 /// `format` of a fit checkpoint's `state.json`.
 pub const CHECKPOINT_FORMAT: &str = "sinew-fit-checkpoint";
@@ -66,16 +65,24 @@ pub fn target_crc(perf: &Performance) -> String {
 }
 
 /// Writes `net`, `optim` and `state` into `dir` (created if missing).
-pub fn save(dir: &Path, net: &FitNet, optim: &ModuleOptimizer, mut state: FitState) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+pub fn save(
+    dir: &Path,
+    net: &FitNet,
+    optim: &ModuleOptimizer,
+    mut state: FitState,
+) -> Result<(), CheckpointError> {
+    std::fs::create_dir_all(dir).map_err(|source| CheckpointError::CreateDir {
+        path: dir.to_owned(),
+        source,
+    })?;
     let model = net
         .clone()
         .into_record()
         .into_bytes()
-        .map_err(|e| anyhow!("{}: cannot serialise the fit: {e:?}", dir.display()))?;
+        .map_err(|e| checkpoint::serialise_error(dir, "fit", e))?;
     let opt = optim
         .into_bytes()
-        .map_err(|e| anyhow!("{}: cannot serialise the optimiser: {e:?}", dir.display()))?;
+        .map_err(|e| checkpoint::serialise_error(dir, "optimiser", e))?;
     let steps = state.steps_done;
     checkpoint::save(dir, steps, &model, &opt, &mut state, |s, f| s.files = f)
 }
@@ -87,65 +94,71 @@ pub fn load(
     net: FitNet,
     optim: ModuleOptimizer,
     expected: &FitState,
-) -> Result<(FitNet, ModuleOptimizer, FitState)> {
-    let path = dir.join(STATE_FILE);
-    let state: FitState = serde_json::from_value(checkpoint::read_state_value(dir)?)
-        .with_context(|| format!("{}: not a fit checkpoint state", path.display()))?;
-    ensure!(
-        state.format == CHECKPOINT_FORMAT,
-        "{}: format {:?}, expected {CHECKPOINT_FORMAT:?}",
-        path.display(),
-        state.format
-    );
-    state
-        .files
-        .validate()
-        .with_context(|| format!("{}", path.display()))?;
-    let same = FitConfig {
-        iterations: expected.config.iterations,
-        ..state.config.clone()
-    };
-    ensure!(
-        same == expected.config,
-        "{}: the checkpoint was fitted with other settings ({:?}) than this fit's ({:?})",
-        path.display(),
-        state.config,
-        expected.config
-    );
-    ensure!(
-        state.actor == expected.actor,
-        "{}: the checkpoint fits actor {}, this fit actor {}",
-        path.display(),
-        state.actor,
-        expected.actor
-    );
-    ensure!(
-        state.target_crc == expected.target_crc,
-        "{}: the checkpoint fits another performance (CRC {} here {})",
-        path.display(),
-        state.target_crc,
-        expected.target_crc
-    );
-    ensure!(
-        state.steps_done <= expected.config.iterations,
-        "{}: {} steps done, more than the {} asked for",
-        path.display(),
-        state.steps_done,
-        expected.config.iterations
-    );
+) -> Result<(FitNet, ModuleOptimizer, FitState), CheckpointError> {
+    let (state, _): (FitState, _) = checkpoint::read_state(dir, "a fit checkpoint state")?;
+    check(&state, expected).map_err(|reason| checkpoint::invalid(dir, reason))?;
     let model_path = dir.join(&state.files.model_file);
-    let record = burn::store::ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(
-        state.files.read_model(dir)?,
-    ))
-    .map_err(|e| anyhow!("{}: invalid: {e:?}", model_path.display()))?;
+    let record = checkpoint::record_from_bytes(&model_path, state.files.read_model(dir)?)?;
     let net = net
         .try_load_record(record)
-        .map_err(|e| anyhow!("{}: does not fit this fit: {e:?}", model_path.display()))?;
+        .map_err(|e| CheckpointError::Mismatch {
+            path: model_path,
+            what: "this fit",
+            detail: format!("{e:?}"),
+        })?;
     let optim_path = dir.join(&state.files.optim_file);
     let optim = optim
         .from_bytes(burn::tensor::Bytes::from_bytes_vec(
             state.files.read_optim(dir)?,
         ))
-        .map_err(|e| anyhow!("{}: invalid: {e:?}", optim_path.display()))?;
+        .map_err(|e| CheckpointError::Record {
+            path: optim_path,
+            detail: format!("{e:?}"),
+        })?;
     Ok((net, optim, state))
+}
+
+/// Checks a read state: its format and file names, and that it belongs to `expected`'s
+/// settings (iterations aside), actor and performance.
+fn check(state: &FitState, expected: &FitState) -> Result<(), InvalidState> {
+    if state.format != CHECKPOINT_FORMAT {
+        return Err(InvalidState::Format {
+            found: state.format.clone(),
+            expected: CHECKPOINT_FORMAT,
+        });
+    }
+    state.files.validate()?;
+    let same = FitConfig {
+        iterations: expected.config.iterations,
+        ..state.config.clone()
+    };
+    let mut differences = Vec::new();
+    if same != expected.config {
+        differences.push(format!(
+            "settings: {:?} in the checkpoint, {:?} now",
+            state.config, expected.config
+        ));
+    }
+    if state.actor != expected.actor {
+        differences.push(format!(
+            "actor: {} in the checkpoint, {} now",
+            state.actor, expected.actor
+        ));
+    }
+    if state.target_crc != expected.target_crc {
+        differences.push(format!(
+            "performance CRC: {} in the checkpoint, {} now",
+            state.target_crc, expected.target_crc
+        ));
+    }
+    if !differences.is_empty() {
+        return Err(InvalidState::OtherRun { differences });
+    }
+    if state.steps_done > expected.config.iterations {
+        return Err(InvalidState::StepsDone {
+            done: state.steps_done,
+            asked: expected.config.iterations,
+        });
+    }
+    Ok(())
 }

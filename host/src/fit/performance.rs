@@ -17,7 +17,7 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, bail, ensure};
+use anyhow::{Context, Result, anyhow, ensure};
 use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
@@ -25,8 +25,9 @@ use sinew_core::linalg::{Mat3, Vec3};
 use sinew_core::rotation::to_6d;
 use sinew_core::skinning::{BoneTransform, lbs};
 
+use crate::io::dataset::{self, DataSetError};
 use crate::io::ict::{FACE_REGION, IctFaceKit};
-use crate::io::mesh::Mesh;
+use crate::io::mesh::{Mesh, MeshError};
 
 /// The manifest's file name.
 pub const MANIFEST: &str = "performance.json";
@@ -635,6 +636,60 @@ fn camera_for(neutral: &[[f32; 3]], landmarks: &[u32], config: &PerformanceConfi
     }
 }
 
+/// A performance folder that could not be read, always naming the file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PerformanceError {
+    /// `performance.json` cannot be read, is not a performance manifest, or of another version.
+    #[error(transparent)]
+    Manifest(#[from] DataSetError),
+    /// A per-frame list of the manifest with another length than its frame count.
+    #[error("{}: {list} has {len} entries for {frames} frames", path.display())]
+    ListLength {
+        /// The manifest.
+        path: PathBuf,
+        /// The list: `files`, `parameters` or `landmarks.pixels`.
+        list: &'static str,
+        /// Its length.
+        len: usize,
+        /// The manifest's frame count.
+        frames: usize,
+    },
+    /// `kit_vertices` with another length than the vertex count.
+    #[error("{}: kit_vertices has {len} entries for {vertices} vertices", path.display())]
+    KitVertices {
+        /// The manifest.
+        path: PathBuf,
+        /// Its length.
+        len: usize,
+        /// The manifest's vertex count.
+        vertices: usize,
+    },
+    /// A frame the manifest lists that is not there.
+    #[error("{}: frame {frame} is missing (listed in {})", path.display(), manifest.display())]
+    MissingFrame {
+        /// The frame's mesh file.
+        path: PathBuf,
+        /// The frame.
+        frame: usize,
+        /// The manifest listing it.
+        manifest: PathBuf,
+    },
+    /// A frame's mesh that cannot be read (the mesh error names the file).
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// A frame's mesh with another vertex count than the performance.
+    #[error("{}: {found} vertices, the performance has {expected}", path.display())]
+    VertexCount {
+        /// The frame's mesh file.
+        path: PathBuf,
+        /// Its vertex count.
+        found: usize,
+        /// The manifest's.
+        expected: usize,
+    },
+}
+
 /// A performance read back: the manifest and every frame's positions.
 #[derive(Clone, Debug)]
 pub struct Performance {
@@ -651,60 +706,55 @@ pub struct Performance {
 impl Performance {
     /// Reads a performance folder, checking the manifest against itself and every frame's mesh
     /// (present, finite, with the manifest's vertex count); every error names the file.
-    pub fn read(dir: &Path) -> Result<Self> {
-        let path = dir.join(MANIFEST);
-        let text = std::fs::read_to_string(&path)
-            .with_context(|| format!("{}: cannot read the performance manifest", path.display()))?;
-        let manifest: Manifest = serde_json::from_str(&text)
-            .with_context(|| format!("{}: not a performance manifest", path.display()))?;
-        if manifest.format != FORMAT || manifest.version != VERSION {
-            bail!(
-                "{}: format {:?} version {}, expected {FORMAT:?} version {VERSION}",
-                path.display(),
-                manifest.format,
-                manifest.version
-            );
-        }
+    pub fn read(dir: &Path) -> Result<Self, PerformanceError> {
+        let (manifest, path): (Manifest, _) =
+            dataset::read_manifest(dir, MANIFEST, "a performance manifest")?;
+        dataset::check_version(
+            &path,
+            (&manifest.format, manifest.version),
+            (FORMAT, VERSION),
+        )?;
         let m = &manifest;
         let lists = [
             ("files", m.files.len()),
             ("parameters", m.parameters.len()),
             ("landmarks.pixels", m.landmarks.pixels.len()),
         ];
-        for (name, len) in lists {
-            ensure!(
-                len == m.frames,
-                "{}: {name} has {len} entries for {} frames",
-                path.display(),
-                m.frames
-            );
+        for (list, len) in lists {
+            if len != m.frames {
+                return Err(PerformanceError::ListLength {
+                    path,
+                    list,
+                    len,
+                    frames: m.frames,
+                });
+            }
         }
-        ensure!(
-            m.kit_vertices.len() == m.vertices,
-            "{}: kit_vertices has {} entries for {} vertices",
-            path.display(),
-            m.kit_vertices.len(),
-            m.vertices
-        );
+        if m.kit_vertices.len() != m.vertices {
+            return Err(PerformanceError::KitVertices {
+                path,
+                len: m.kit_vertices.len(),
+                vertices: m.vertices,
+            });
+        }
         let mut frames = Vec::with_capacity(m.frames);
         let mut polygons = Vec::new();
         for (f, file) in m.files.iter().enumerate() {
             let mesh_path = dir.join(file);
             if !mesh_path.is_file() {
-                bail!(
-                    "{}: frame {f} is missing (listed in {})",
-                    mesh_path.display(),
-                    path.display()
-                );
+                return Err(PerformanceError::MissingFrame {
+                    path: mesh_path,
+                    frame: f,
+                    manifest: path,
+                });
             }
             let mesh = Mesh::read(&mesh_path)?;
             if mesh.positions.len() != m.vertices {
-                bail!(
-                    "{}: {} vertices, the performance has {}",
-                    mesh_path.display(),
-                    mesh.positions.len(),
-                    m.vertices
-                );
+                return Err(PerformanceError::VertexCount {
+                    path: mesh_path,
+                    found: mesh.positions.len(),
+                    expected: m.vertices,
+                });
             }
             if f == 0 {
                 polygons = mesh.polygons;

@@ -11,9 +11,174 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, bail};
+use crate::io::mesh::{Mesh, MeshError};
 
-use crate::io::mesh::Mesh;
+/// Why a kit could not be opened or an actor built, always naming the file or folder.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum IctError {
+    /// A mesh of the kit could not be read, or has another topology than the neutral (the
+    /// mesh error names the file).
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// A folder of the kit could not be listed.
+    #[error("{}: cannot list folder", path.display())]
+    List {
+        /// The folder.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// `vertex_indices.json` could not be read.
+    #[error("{}: cannot read", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// `vertex_indices.json` is not JSON.
+    #[error("{}: not valid JSON", path.display())]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// What the parser said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The `expressions` folder holds no mesh.
+    #[error("{}: no expression meshes (NAME.obj or NAME.obj.gz)", path.display())]
+    NoExpressions {
+        /// The folder.
+        path: PathBuf,
+    },
+    /// An `identityNNN` file whose `NNN` is not a number.
+    #[error("{}: identity file name without a number", path.display())]
+    IdentityName {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The identity files skip a number.
+    #[error(
+        "{}: identity modes must be numbered from 000 without gaps; mode {missing} is missing \
+         (next found: {next})",
+        path.display()
+    )]
+    IdentityGap {
+        /// The `identities` folder.
+        path: PathBuf,
+        /// The first missing mode.
+        missing: usize,
+        /// The mode found in its place.
+        next: usize,
+    },
+    /// An expression name the kit does not have.
+    #[error("{}: no expression {name:?}; valid names: {}", path.display(), valid.join(", "))]
+    UnknownExpression {
+        /// The `expressions` folder.
+        path: PathBuf,
+        /// The name asked for.
+        name: String,
+        /// The kit's names.
+        valid: Vec<String>,
+    },
+    /// An expression asked for twice.
+    #[error("{}: expression {name:?} is listed twice", path.display())]
+    RepeatedExpression {
+        /// The `expressions` folder.
+        path: PathBuf,
+        /// The name.
+        name: String,
+    },
+    /// An identity mode beyond the kit's.
+    #[error(
+        "{}: no identity mode {mode}; the kit has {count} (0 to {})",
+        path.display(),
+        count.saturating_sub(1)
+    )]
+    UnknownIdentity {
+        /// The `identities` folder.
+        path: PathBuf,
+        /// The mode asked for.
+        mode: usize,
+        /// How many the kit has.
+        count: usize,
+    },
+    /// More identity weights than the kit has modes.
+    #[error(
+        "{given} identity weights given but the kit in {} has {count} identity modes",
+        path.display()
+    )]
+    TooManyWeights {
+        /// The kit's folder.
+        path: PathBuf,
+        /// How many weights were given.
+        given: usize,
+        /// How many modes the kit has.
+        count: usize,
+    },
+    /// An identity weight that is NaN or infinite.
+    #[error("{}: identity weight {weight} is not finite", path.display())]
+    WeightNotFinite {
+        /// The kit's folder.
+        path: PathBuf,
+        /// The weight.
+        weight: f32,
+    },
+    /// A vertex region that is empty or reaches past the neutral's vertices.
+    #[error(
+        "vertex region {region:?} is empty or beyond the kit's {vertices} vertices ({})",
+        path.display()
+    )]
+    Region {
+        /// The kit's folder.
+        path: PathBuf,
+        /// The region asked for.
+        region: Range<u32>,
+        /// The neutral's vertex count.
+        vertices: usize,
+    },
+    /// `vertex_indices.json` has no `idx_to_landmark_verts` list.
+    #[error("{}: no idx_to_landmark_verts list", path.display())]
+    NoLandmarks {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The landmark list is not 68 long.
+    #[error("{}: idx_to_landmark_verts has {count} entries, 68 expected", path.display())]
+    LandmarkCount {
+        /// The file.
+        path: PathBuf,
+        /// Its length.
+        count: usize,
+    },
+    /// A landmark entry that is not a vertex index of the neutral.
+    #[error(
+        "{}: landmark {landmark} is {value}, not a vertex index below {vertices}",
+        path.display()
+    )]
+    LandmarkIndex {
+        /// The file.
+        path: PathBuf,
+        /// The landmark's position in the list.
+        landmark: usize,
+        /// The entry, as JSON text.
+        value: String,
+        /// The neutral's vertex count.
+        vertices: usize,
+    },
+    /// A thread reading meshes stopped without an answer.
+    #[error("{}: a reader thread did not finish", path.display())]
+    ReaderThread {
+        /// The kit's folder.
+        path: PathBuf,
+    },
+}
+
+/// What the kit's functions return.
+pub type Result<T, E = IctError> = std::result::Result<T, E>;
 
 /// The full face area: vertices 0–9408 and polygons 0–9229 of the ICT topology (the upstream
 /// README's "Face" geometry; eyes, mouth socket, teeth and back of the head are excluded).
@@ -92,10 +257,12 @@ pub struct IctFaceKit {
 /// The mesh files in `dir` as (name without `.obj`/`.obj.gz`, path), sorted by name.
 fn list_obj(dir: &Path) -> Result<BTreeMap<String, PathBuf>> {
     let mut out = BTreeMap::new();
-    let entries =
-        std::fs::read_dir(dir).with_context(|| format!("{}: cannot list folder", dir.display()))?;
-    for entry in entries {
-        let entry = entry.with_context(|| format!("{}: cannot list folder", dir.display()))?;
+    let list = |source| IctError::List {
+        path: dir.to_owned(),
+        source,
+    };
+    for entry in std::fs::read_dir(dir).map_err(list)? {
+        let entry = entry.map_err(list)?;
         let file_name = entry.file_name();
         let name = file_name.to_string_lossy();
         let stem = name
@@ -116,16 +283,20 @@ impl IctFaceKit {
     pub fn open(dir: &Path) -> Result<Self> {
         let neutral = Mesh::read(&dir.join("generic_neutral_mesh.obj"))?;
         let json_path = dir.join("vertex_indices.json");
-        let text = std::fs::read_to_string(&json_path)
-            .with_context(|| format!("{}: cannot read", json_path.display()))?;
-        let vertex_indices: serde_json::Value = serde_json::from_str(&text)
-            .with_context(|| format!("{}: not valid JSON", json_path.display()))?;
+        let text = std::fs::read_to_string(&json_path).map_err(|source| IctError::Read {
+            path: json_path.clone(),
+            source,
+        })?;
+        let vertex_indices: serde_json::Value =
+            serde_json::from_str(&text).map_err(|source| IctError::Json {
+                path: json_path.clone(),
+                source,
+            })?;
         let expressions = list_obj(&dir.join("expressions"))?;
         if expressions.is_empty() {
-            bail!(
-                "{}: no expression meshes (NAME.obj or NAME.obj.gz)",
-                dir.join("expressions").display()
-            );
+            return Err(IctError::NoExpressions {
+                path: dir.join("expressions"),
+            });
         }
         let id_dir = dir.join("identities");
         let mut numbered = BTreeMap::new();
@@ -135,16 +306,16 @@ impl IctFaceKit {
             };
             let i: usize = num
                 .parse()
-                .map_err(|_| anyhow!("{}: identity file name without a number", path.display()))?;
+                .map_err(|_| IctError::IdentityName { path: path.clone() })?;
             numbered.insert(i, path);
         }
         let identities: Vec<PathBuf> = numbered.values().cloned().collect();
         if let Some((pos, (&i, _))) = numbered.iter().enumerate().find(|(k, (i, _))| k != *i) {
-            bail!(
-                "{}: identity modes must be numbered from 000 without gaps; mode {pos} is missing \
-                 (next found: {i})",
-                id_dir.display()
-            );
+            return Err(IctError::IdentityGap {
+                path: id_dir,
+                missing: pos,
+                next: i,
+            });
         }
         Ok(Self {
             dir: dir.to_owned(),
@@ -192,12 +363,10 @@ impl IctFaceKit {
         self.expressions
             .get(name)
             .map(PathBuf::as_path)
-            .ok_or_else(|| {
-                anyhow!(
-                    "{}: no expression {name:?}; valid names: {}",
-                    self.dir.join("expressions").display(),
-                    self.expression_names().join(", ")
-                )
+            .ok_or_else(|| IctError::UnknownExpression {
+                path: self.dir.join("expressions"),
+                name: name.to_owned(),
+                valid: self.expression_names(),
             })
     }
 
@@ -208,15 +377,38 @@ impl IctFaceKit {
 
     /// The offsets of identity mode `i` at one standard deviation (identity file − neutral).
     pub fn identity_delta(&self, i: usize) -> Result<Vec<[f32; 3]>> {
-        let path = self.identities.get(i).ok_or_else(|| {
-            anyhow!(
-                "{}: no identity mode {i}; the kit has {} (0 to {})",
-                self.dir.join("identities").display(),
-                self.identities.len(),
-                self.identities.len().saturating_sub(1)
-            )
-        })?;
+        let path = self
+            .identities
+            .get(i)
+            .ok_or_else(|| IctError::UnknownIdentity {
+                path: self.dir.join("identities"),
+                mode: i,
+                count: self.identities.len(),
+            })?;
         self.delta_of(path)
+    }
+
+    /// The offsets of the expressions `names`, in that order, read on several threads (as
+    /// [`Self::expression_delta`] for each).
+    pub fn expression_deltas(&self, names: &[impl AsRef<str>]) -> Result<Vec<Vec<[f32; 3]>>> {
+        let paths = names
+            .iter()
+            .map(|name| self.expression_path(name.as_ref()).map(Path::to_owned))
+            .collect::<Result<Vec<_>>>()?;
+        self.read_deltas(&paths)
+    }
+
+    /// The offsets of identity modes `0..count`, in mode order, read on several threads (as
+    /// [`Self::identity_delta`] for each).
+    pub fn identity_deltas(&self, count: usize) -> Result<Vec<Vec<[f32; 3]>>> {
+        if count > self.identities.len() {
+            return Err(IctError::UnknownIdentity {
+                path: self.dir.join("identities"),
+                mode: count - 1,
+                count: self.identities.len(),
+            });
+        }
+        self.read_deltas(&self.identities[..count])
     }
 
     /// The 68 iBUG landmark vertices (`idx_to_landmark_verts` of `vertex_indices.json`), in iBUG
@@ -227,13 +419,12 @@ impl IctFaceKit {
             .vertex_indices
             .get("idx_to_landmark_verts")
             .and_then(serde_json::Value::as_array)
-            .ok_or_else(|| anyhow!("{}: no idx_to_landmark_verts list", path.display()))?;
+            .ok_or_else(|| IctError::NoLandmarks { path: path.clone() })?;
         if list.len() != 68 {
-            bail!(
-                "{}: idx_to_landmark_verts has {} entries, 68 expected",
-                path.display(),
-                list.len()
-            );
+            return Err(IctError::LandmarkCount {
+                path,
+                count: list.len(),
+            });
         }
         let nv = self.neutral.positions.len();
         list.iter()
@@ -242,11 +433,11 @@ impl IctFaceKit {
                 v.as_u64()
                     .filter(|&i| (i as usize) < nv)
                     .map(|i| i as u32)
-                    .ok_or_else(|| {
-                        anyhow!(
-                            "{}: landmark {k} is {v}, not a vertex index below {nv}",
-                            path.display()
-                        )
+                    .ok_or_else(|| IctError::LandmarkIndex {
+                        path: path.clone(),
+                        landmark: k,
+                        value: v.to_string(),
+                        vertices: nv,
                     })
             })
             .collect()
@@ -274,26 +465,32 @@ impl IctFaceKit {
     ) -> Result<Actor> {
         let nv = self.neutral.positions.len();
         if identity_weights.len() > self.identities.len() {
-            bail!(
-                "{} identity weights given but the kit in {} has {} identity modes",
-                identity_weights.len(),
-                self.dir.display(),
-                self.identities.len()
-            );
+            return Err(IctError::TooManyWeights {
+                path: self.dir.clone(),
+                given: identity_weights.len(),
+                count: self.identities.len(),
+            });
         }
-        if let Some(w) = identity_weights.iter().find(|w| !w.is_finite()) {
-            bail!("identity weight {w} is not finite");
+        if let Some(&weight) = identity_weights.iter().find(|w| !w.is_finite()) {
+            return Err(IctError::WeightNotFinite {
+                path: self.dir.clone(),
+                weight,
+            });
         }
         if region.is_empty() || region.end as usize > nv {
-            bail!(
-                "vertex region {region:?} is empty or beyond the kit's {nv} vertices ({})",
-                self.dir.display()
-            );
+            return Err(IctError::Region {
+                path: self.dir.clone(),
+                region,
+                vertices: nv,
+            });
         }
         let mut paths = Vec::new();
         for (k, name) in expressions.iter().enumerate() {
             if expressions[..k].contains(name) {
-                bail!("expression {name:?} is listed twice");
+                return Err(IctError::RepeatedExpression {
+                    path: self.dir.join("expressions"),
+                    name: (*name).to_owned(),
+                });
             }
             paths.push(self.expression_path(name)?.to_owned());
         }
@@ -382,135 +579,16 @@ impl IctFaceKit {
         });
         slots
             .into_iter()
-            .map(|s| s.unwrap_or_else(|| Err(anyhow!("a reader thread did not finish"))))
+            .map(|s| {
+                s.unwrap_or_else(|| {
+                    Err(IctError::ReaderThread {
+                        path: self.dir.clone(),
+                    })
+                })
+            })
             .collect()
     }
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::io::data::data_dir;
-
-    fn kit() -> Option<IctFaceKit> {
-        let dir = data_dir()?.join("ict-facekit");
-        Some(IctFaceKit::open(&dir).unwrap())
-    }
-
-    fn norm(v: [f32; 3]) -> f32 {
-        (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-    }
-
-    #[test]
-    fn kit_listing_and_landmarks() {
-        let Some(kit) = kit() else { return };
-        let names = kit.expression_names();
-        assert_eq!(names.len(), 53);
-        assert!(names.windows(2).all(|w| w[0] < w[1]));
-        // The kit's own list of expressions agrees with the folder.
-        let listed: Vec<String> =
-            serde_json::from_value(kit.vertex_indices["expressions"].clone()).unwrap();
-        assert_eq!(listed, names);
-        assert_eq!(kit.identity_count(), 100);
-        for name in DEFAULT_SHAPES {
-            assert!(names.iter().any(|n| n == name), "{name}");
-        }
-        let lm = kit.landmarks68().unwrap();
-        // First, chin and last landmarks as the upstream README lists them.
-        assert_eq!((lm[0], lm[8], lm[67]), (1225, 966, 5966));
-        // iBUG 8 (chin) lies on the mid-plane; 36 and 45 (outer eye corners) mirror each other,
-        // and the subject's right (iBUG 36) is at negative x.
-        let p = &kit.neutral().positions;
-        assert_eq!(p[lm[8] as usize][0], 0.0);
-        assert!(p[lm[36] as usize][0] < -4.0);
-        assert_eq!(p[lm[36] as usize][0], -p[lm[45] as usize][0]);
-
-        let err = kit
-            .actor(&[], &["jawOpen", "smile"], FACE_REGION)
-            .unwrap_err();
-        let msg = err.to_string();
-        assert!(
-            msg.contains("\"smile\"") && msg.contains("mouthSmile_L"),
-            "{msg}"
-        );
-        assert!(
-            kit.actor(&[], &["jawOpen", "jawOpen"], FACE_REGION)
-                .is_err()
-        );
-        assert!(kit.actor(&[0.0; 101], &[], FACE_REGION).is_err());
-        assert!(kit.actor(&[], &[], 0..30_000).is_err());
-        let msg = kit.identity_delta(100).unwrap_err().to_string();
-        assert!(msg.contains("100"), "{msg}");
-    }
-
-    #[test]
-    fn default_actor() {
-        let Some(kit) = kit() else { return };
-        let t = std::time::Instant::now();
-        let actor = kit.actor(&[], &DEFAULT_SHAPES, FACE_REGION).unwrap();
-        eprintln!("default ICT actor built in {:?}", t.elapsed());
-        assert_eq!(actor.shapes.len(), 20);
-        assert_eq!(actor.names.len(), 20);
-        assert_eq!(actor.names[0], "neutral");
-        assert_eq!(actor.names[1], "jawOpen");
-        assert!(actor.shapes.iter().all(|s| s.len() == 9_409));
-        assert_eq!(actor.template.positions.len(), 9_409);
-        assert_eq!(actor.template.polygons.len(), 9_230);
-        assert_eq!(actor.template.polygon_uvs.len(), 9_230);
-        actor.template.validate().unwrap();
-        // With no identity weights the template is the generic neutral's face.
-        assert_eq!(
-            actor.template.positions[..],
-            kit.neutral().positions[..9_409]
-        );
-        assert_eq!(actor.shapes[0], actor.template.positions);
-        assert_eq!(actor.units, crate::io::units::Unit::Centimetre);
-        assert!(actor.source.contains("MIT") && actor.source.contains("USC"));
-
-        // The data README: jawOpen moves some vertex by 4.2 cm, mouthSmile_L by 1.6 cm.
-        let max_disp = |s: usize| {
-            actor.shapes[s]
-                .iter()
-                .zip(&actor.shapes[0])
-                .map(|(a, b)| norm([a[0] - b[0], a[1] - b[1], a[2] - b[2]]))
-                .fold(0.0f32, f32::max)
-        };
-        let jaw = max_disp(1);
-        let smile = max_disp(5);
-        eprintln!("max displacement: jawOpen {jaw} cm, mouthSmile_L {smile} cm");
-        assert!((jaw - 4.2).abs() < 0.1, "{jaw}");
-        assert!((smile - 1.6).abs() < 0.1, "{smile}");
-
-        // All 68 landmarks lie in the face region, which keeps the first 9,409 vertices in
-        // order, so their indices are unchanged.
-        let lm = kit.landmarks68().unwrap();
-        assert_eq!(actor.landmarks.iter().flatten().count(), 68);
-        for (a, &b) in actor.landmarks.iter().zip(&lm) {
-            assert_eq!(*a, Some(b));
-        }
-    }
-
-    #[test]
-    fn identity_weights_change_the_neutral_not_the_deltas() {
-        let Some(kit) = kit() else { return };
-        let actor = kit.actor(&[0.0, 1.5], &["jawOpen"], 0..6706).unwrap();
-        let d1 = kit.identity_delta(1).unwrap();
-        let jaw = kit.expression_delta("jawOpen").unwrap();
-        assert_eq!(actor.template.positions.len(), 6_706);
-        assert!(actor.source.contains("1:1.5"), "{}", actor.source);
-        let mut moved = 0.0f32;
-        for v in 0..6706 {
-            let n = kit.neutral().positions[v];
-            let a = actor.shapes[0][v];
-            let off = [a[0] - n[0], a[1] - n[1], a[2] - n[2]];
-            for c in 0..3 {
-                assert!((off[c] - 1.5 * d1[v][c]).abs() < 1e-4);
-                let e = actor.shapes[1][v][c] - a[c];
-                assert!((e - jaw[v][c]).abs() < 1e-4);
-            }
-            moved = moved.max(norm(off));
-        }
-        eprintln!("identity mode 1 at 1.5 sigma moves the face by up to {moved} cm");
-        assert!(moved > 0.1, "{moved}");
-    }
-}
+mod tests;

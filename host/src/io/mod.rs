@@ -1,11 +1,12 @@
 //! Files in and out: meshes (OBJ, PLY), the ICT-FaceKit reader, ARKit captures (Live Link Face CSV), the `.sinew` writer and
-//! inspector, the real-data folder, and atomic outputs. The lowest layer of the host: it imports
+//! inspector, the data-set folders (manifest and numbers), the real-data folder, and atomic outputs. The lowest layer of the host: it imports
 //! nothing else of the crate.
 
 pub mod arkit;
 pub mod atomic;
 pub mod container;
 pub mod data;
+pub mod dataset;
 pub mod ict;
 pub mod inspect;
 pub mod mesh;

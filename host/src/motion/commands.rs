@@ -99,7 +99,8 @@ pub fn save_checkpoint(
         history: run.history.clone(),
         files: WeightFiles::default(),
     };
-    checkpoint::save(dir, run.step, &model, &opt, &mut state, |s, f| s.files = f)
+    checkpoint::save(dir, run.step, &model, &opt, &mut state, |s, f| s.files = f)?;
+    Ok(())
 }
 
 /// Loads the checkpoint in `dir` into `run` (built as for a fresh run), after checking that it

@@ -444,14 +444,12 @@ pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet> {
         );
     }
     let crop = |d: Vec<[f32; 3]>| d[region.clone()].to_vec();
-    let kit_deltas: Vec<Vec<[f32; 3]>> = expressions
-        .par_iter()
-        .map(|n| kit.expression_delta(n).map(crop))
-        .collect::<Result<_>>()?;
-    let id_deltas: Vec<Vec<[f32; 3]>> = (0..modes)
-        .into_par_iter()
-        .map(|m| kit.identity_delta(m).map(crop))
-        .collect::<Result<_>>()?;
+    let kit_deltas: Vec<Vec<[f32; 3]>> = kit
+        .expression_deltas(&expressions)?
+        .into_iter()
+        .map(crop)
+        .collect();
+    let id_deltas: Vec<Vec<[f32; 3]>> = kit.identity_deltas(modes)?.into_iter().map(crop).collect();
     let base = &template.positions;
     let neutrals: Vec<Vec<[f32; 3]>> = identities
         .iter()

@@ -8,27 +8,39 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow, ensure};
-use sinew_core::{ArtifactKind, SinewFile};
+use sinew_core::ArtifactKind;
 
 use super::data::{
     DATA_FILE, MANIFEST_FILE, MANIFEST_FORMAT, MANIFEST_VERSION, Manifest, MotionSet, Split,
     frame_of,
 };
-use crate::io::container::SinewWriter;
-use crate::io::mesh::Mesh;
+use crate::io::container::{SinewWriter, WriterError};
+use crate::io::dataset::{
+    self, ContentError, DataSetError, Entry, Layout, ManifestProblem, Sections, Versioned, count,
+    flat, points,
+};
 
 /// `content` metadata of a motion set's `.sinew` file.
 pub const CONTENT: &str = "motions";
 
-fn flat(v: &[Vec<[f32; 3]>]) -> Vec<f32> {
-    v.iter().flatten().flatten().copied().collect()
+const LAYOUT: Layout = Layout {
+    manifest: MANIFEST_FILE,
+    data: DATA_FILE,
+    what: "a motion-set manifest",
+    format: MANIFEST_FORMAT,
+    version: MANIFEST_VERSION,
+};
+
+impl Versioned for Manifest {
+    fn format_version(&self) -> (&str, u32) {
+        (&self.format, self.version)
+    }
 }
 
 impl MotionSet {
     /// The `motions.` sections and metadata, as a `.sinew` file (kind `Performance`: recorded
     /// per-frame inputs).
-    pub fn to_bytes(&self) -> Result<Vec<u8>> {
+    pub fn to_bytes(&self) -> Result<Vec<u8>, WriterError> {
         let m = &self.manifest;
         let (v, i, e) = (self.vertices(), self.neutrals.len(), m.expressions.len());
         let frames: usize = m.sequences.iter().map(|s| s.frames).sum();
@@ -49,99 +61,52 @@ impl MotionSet {
         w.f32s("motions.weights", &[frames, e], &weights)?;
         let lmk: Vec<f32> = self.landmarks.iter().flatten().copied().collect();
         w.f32s("motions.landmarks", &[frames, m.landmarks.len(), 3], &lmk)?;
-        Ok(w.to_bytes()?)
+        w.to_bytes()
     }
 
     /// Writes `motions.sinew` and `manifest.json` into `dir` (created if missing), each
     /// atomically.
-    pub fn write(&self, dir: &Path) -> Result<()> {
-        crate::io::atomic::write(&dir.join(DATA_FILE), &self.to_bytes()?)?;
-        let json = serde_json::to_string_pretty(&self.manifest)?;
-        crate::io::atomic::write(&dir.join(MANIFEST_FILE), json.as_bytes())
+    pub fn write(&self, dir: &Path) -> Result<(), DataSetError> {
+        dataset::write(dir, &LAYOUT, self.to_bytes(), &self.manifest)
     }
 
     /// Reads a motion set written by [`MotionSet::write`], checking that the manifest and the
     /// numbers agree; errors name the offending file.
-    pub fn read(dir: &Path) -> Result<Self> {
-        let mpath = dir.join(MANIFEST_FILE);
-        let text = std::fs::read_to_string(&mpath)
-            .with_context(|| format!("{}: cannot read", mpath.display()))?;
-        let manifest: Manifest = serde_json::from_str(&text)
-            .with_context(|| format!("{}: not a motion-set manifest", mpath.display()))?;
-        ensure!(
-            manifest.format == MANIFEST_FORMAT && manifest.version == MANIFEST_VERSION,
-            "{}: format {:?} version {}, expected {MANIFEST_FORMAT:?} version {MANIFEST_VERSION}",
-            mpath.display(),
-            manifest.format,
-            manifest.version
-        );
-        check_manifest(&manifest).with_context(|| format!("{}", mpath.display()))?;
-        let dpath = dir.join(DATA_FILE);
-        let bytes = crate::io::container::read(&dpath)?;
-        Self::from_parts(manifest, &bytes).with_context(|| format!("{}", dpath.display()))
+    pub fn read(dir: &Path) -> Result<Self, DataSetError> {
+        dataset::read(dir, &LAYOUT, check_manifest, |m, (), bytes| {
+            Self::from_parts(m, bytes)
+        })
     }
 
-    fn from_parts(manifest: Manifest, bytes: &[u8]) -> Result<Self> {
-        let f = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::Performance)
-            .map_err(|e| anyhow!("{e}"))?;
-        ensure!(
-            f.metadata().get("content") == Some(CONTENT),
-            "not a motion set (metadata content={:?})",
-            f.metadata().get("content")
-        );
-        let u = |x: usize| u32::try_from(x).context("count too large");
+    fn from_parts(manifest: Manifest, bytes: &[u8]) -> Result<Self, ContentError> {
+        let f = Sections::open(bytes, ArtifactKind::Performance, CONTENT)?;
         let frames: usize = manifest.sequences.iter().map(|s| s.frames).sum();
         let (v, i, e, k, n) = (
-            u(manifest.vertices)?,
-            u(manifest.identities.len())?,
-            u(manifest.expressions.len())?,
-            u(manifest.landmarks.len())?,
-            u(frames)?,
+            count(manifest.vertices)?,
+            count(manifest.identities.len())?,
+            count(manifest.expressions.len())?,
+            count(manifest.landmarks.len())?,
+            count(frames)?,
         );
-        let f32s = |name: &str, dims: &[u32]| -> Result<Vec<f32>> {
-            Ok(f.f32_tensor(name, dims)
-                .map_err(|e| anyhow!("{name}: {e}"))?
-                .iter()
-                .collect())
-        };
-        let u32s = |name: &str, dims: &[u32]| -> Result<Vec<u32>> {
-            Ok(f.u32_tensor(name, dims)
-                .map_err(|e| anyhow!("{name}: {e}"))?
-                .iter()
-                .collect())
-        };
-        let points = |s: &[f32]| -> Vec<[f32; 3]> {
-            s.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
-        };
-        let positions = points(&f32s("motions.template", &[v, 3])?);
-        let (tdims, rank) = f
-            .dims_of("motions.tri")
-            .map_err(|e| anyhow!("motions.tri: {e}"))?;
-        ensure!(
-            rank == 2 && tdims[1] == 3,
-            "motions.tri: shape must be [T, 3]"
-        );
-        let tri = u32s("motions.tri", &tdims[..2])?;
-        ensure!(
-            tri.iter().all(|&x| x < v),
-            "motions.tri: vertex index out of range"
-        );
-        let lmk = u32s("motions.lmk", &[k])?;
-        ensure!(
-            lmk == manifest.landmarks,
-            "motions.lmk differs from the manifest's landmarks"
-        );
+        let template = f.template("motions", v)?;
+        let lmk = f.u32s("motions.lmk", &[k])?;
+        if lmk != manifest.landmarks {
+            return Err(ContentError::Landmarks {
+                name: "motions.lmk".into(),
+            });
+        }
         let split = |s: Vec<f32>| -> Vec<Vec<[f32; 3]>> {
             s.chunks_exact(3 * v as usize).map(points).collect()
         };
-        let neutrals = split(f32s("motions.ident", &[i, v, 3])?);
-        let deltas = split(f32s("motions.delta", &[i, e, v, 3])?);
-        let all_weights = f32s("motions.weights", &[n, e])?;
-        ensure!(
-            all_weights.iter().all(|w| (0.0..=1.0).contains(w)),
-            "motions.weights: a weight outside [0, 1]"
-        );
-        let all_landmarks = f32s("motions.landmarks", &[n, k, 3])?;
+        let neutrals = split(f.f32s("motions.ident", &[i, v, 3])?);
+        let deltas = split(f.f32s("motions.delta", &[i, e, v, 3])?);
+        let all_weights = f.f32s("motions.weights", &[n, e])?;
+        if !all_weights.iter().all(|w| (0.0..=1.0).contains(w)) {
+            return Err(ContentError::WeightRange {
+                name: "motions.weights".into(),
+            });
+        }
+        let all_landmarks = f.f32s("motions.landmarks", &[n, k, 3])?;
         let (mut weights, mut landmarks) = (Vec::new(), Vec::new());
         let (mut at_w, mut at_l) = (0, 0);
         let (e, d) = (e as usize, 3 * k as usize);
@@ -160,22 +125,22 @@ impl MotionSet {
                     Some(&lmk),
                 );
                 let stored = &l[fr * d..(fr + 1) * d];
-                ensure!(
-                    expected
-                        .iter()
-                        .flatten()
-                        .zip(stored)
-                        .all(|(a, b)| a.to_bits() == b.to_bits()),
-                    "motions.landmarks: sequence {s} frame {fr} differs from its weights' frame"
-                );
+                if !expected
+                    .iter()
+                    .flatten()
+                    .zip(stored)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+                {
+                    return Err(ContentError::Frame {
+                        name: "motions.landmarks".into(),
+                        entry: Entry::Sequence(s),
+                        frame: fr,
+                    });
+                }
             }
             weights.push(w);
             landmarks.push(l);
         }
-        let template = Mesh::new(
-            positions,
-            tri.chunks_exact(3).map(<[u32]>::to_vec).collect(),
-        );
         Ok(Self {
             manifest,
             template,
@@ -188,40 +153,47 @@ impl MotionSet {
 }
 
 /// The manifest's own rules: labels, landmarks, identities, the split and frame counts.
-fn check_manifest(m: &Manifest) -> Result<()> {
-    ensure!(
-        m.labels
-            .iter()
-            .map(String::as_str)
-            .eq(super::classes::LABELS),
-        "labels {:?} are not CoMA's twelve",
-        m.labels
-    );
-    ensure!(
-        m.landmarks.len() == 68 && m.landmarks.iter().all(|&l| (l as usize) < m.vertices),
-        "68 landmark vertices below {} expected",
-        m.vertices
-    );
+fn check_manifest(m: &Manifest) -> Result<(), ManifestProblem> {
+    if !m
+        .labels
+        .iter()
+        .map(String::as_str)
+        .eq(super::classes::LABELS)
+    {
+        return Err(ManifestProblem::Labels {
+            labels: m.labels.clone(),
+        });
+    }
+    if m.landmarks.len() != 68 || m.landmarks.iter().any(|&l| l as usize >= m.vertices) {
+        return Err(ManifestProblem::Landmarks {
+            vertices: m.vertices,
+        });
+    }
     for (s, spec) in m.sequences.iter().enumerate() {
-        ensure!(
-            spec.identity < m.identities.len(),
-            "sequence {s}: identity {} of {}",
-            spec.identity,
-            m.identities.len()
-        );
-        ensure!(
-            m.labels.contains(&spec.label),
-            "sequence {s}: unknown label {:?}",
-            spec.label
-        );
-        ensure!(spec.frames >= 2, "sequence {s}: fewer than 2 frames");
-        ensure!(
-            (spec.split == Split::Test) == (spec.repetition == 0),
-            "sequence {s}: repetition {} is on the {:?} side; repetition 0 and only it is a test \
-             sequence",
-            spec.repetition,
-            spec.split
-        );
+        let entry = Entry::Sequence(s);
+        if spec.identity >= m.identities.len() {
+            return Err(ManifestProblem::Identity {
+                entry,
+                identity: spec.identity,
+                count: m.identities.len(),
+            });
+        }
+        if !m.labels.contains(&spec.label) {
+            return Err(ManifestProblem::UnknownLabel {
+                entry,
+                label: spec.label.clone(),
+            });
+        }
+        if spec.frames < 2 {
+            return Err(ManifestProblem::TooFewFrames { entry });
+        }
+        if (spec.split == Split::Test) != (spec.repetition == 0) {
+            return Err(ManifestProblem::Split {
+                entry,
+                repetition: spec.repetition,
+                side: format!("{:?}", spec.split),
+            });
+        }
     }
     Ok(())
 }

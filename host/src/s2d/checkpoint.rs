@@ -10,7 +10,6 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-use anyhow::{Context, Result, bail, ensure};
 use burn::module::Module;
 use burn::optim::ModuleOptimizer;
 use serde::{Deserialize, Serialize};
@@ -19,7 +18,7 @@ use serde_json::Value;
 use super::decoder::{DecoderConfig, S2dDecoder};
 use super::objective::{Sample, TrainConfig};
 pub use crate::training::checkpoint::STATE_FILE;
-use crate::training::checkpoint::{self, WeightFiles};
+use crate::training::checkpoint::{self, CheckpointError, InvalidState, WeightFiles};
 
 /// [`CheckpointState::format`] of an S2D checkpoint.
 pub const CHECKPOINT_FORMAT: &str = "sinew-s2d-checkpoint";
@@ -137,38 +136,39 @@ impl CheckpointState {
     }
 
     /// Checks the fields against each other (not against a run: see [`check_same_run`]).
-    fn validate(&self) -> Result<()> {
-        ensure!(
-            self.format == CHECKPOINT_FORMAT,
-            "format {:?}, expected {CHECKPOINT_FORMAT:?} (not an S2D training checkpoint)",
-            self.format
-        );
-        ensure!(
-            self.version == CHECKPOINT_VERSION,
-            "version {}, this build reads {CHECKPOINT_VERSION}",
-            self.version
-        );
-        ensure!(
-            self.epochs_done <= self.config.epochs,
-            "{} epochs done of {}",
-            self.epochs_done,
-            self.config.epochs
-        );
-        ensure!(
-            self.losses.len() == self.epochs_done,
-            "{} epoch losses for {} epochs done",
-            self.losses.len(),
-            self.epochs_done
-        );
-        ensure!(
-            !self.complete() || self.steps_in_epoch == 0,
-            "every epoch is done but {} steps of another are recorded",
-            self.steps_in_epoch
-        );
-        ensure!(
-            self.epoch_loss_total.is_finite() && self.losses.iter().all(|l| l.is_finite()),
-            "a loss is not finite"
-        );
+    fn validate(&self) -> Result<(), InvalidState> {
+        if self.format != CHECKPOINT_FORMAT {
+            return Err(InvalidState::Format {
+                found: self.format.clone(),
+                expected: CHECKPOINT_FORMAT,
+            });
+        }
+        if self.version != CHECKPOINT_VERSION {
+            return Err(InvalidState::Version {
+                found: self.version,
+                expected: CHECKPOINT_VERSION,
+            });
+        }
+        if self.epochs_done > self.config.epochs {
+            return Err(InvalidState::EpochsDone {
+                done: self.epochs_done,
+                epochs: self.config.epochs,
+            });
+        }
+        if self.losses.len() != self.epochs_done {
+            return Err(InvalidState::Losses {
+                losses: self.losses.len(),
+                done: self.epochs_done,
+            });
+        }
+        if self.complete() && self.steps_in_epoch != 0 {
+            return Err(InvalidState::StepsAfterLast {
+                steps: self.steps_in_epoch,
+            });
+        }
+        if !(self.epoch_loss_total.is_finite() && self.losses.iter().all(|l| l.is_finite())) {
+            return Err(InvalidState::LossNotFinite);
+        }
         self.files.validate()
     }
 }
@@ -181,14 +181,15 @@ pub fn save_checkpoint(
     decoder: &S2dDecoder,
     optim: &ModuleOptimizer,
     state: &mut CheckpointState,
-) -> Result<()> {
-    let model =
-        decoder.clone().into_record().into_bytes().map_err(|e| {
-            anyhow::anyhow!("{}: cannot serialise the decoder: {e:?}", dir.display())
-        })?;
+) -> Result<(), CheckpointError> {
+    let model = decoder
+        .clone()
+        .into_record()
+        .into_bytes()
+        .map_err(|e| checkpoint::serialise_error(dir, "decoder", e))?;
     let opt = optim
         .into_bytes()
-        .map_err(|e| anyhow::anyhow!("{}: cannot serialise the optimiser: {e:?}", dir.display()))?;
+        .map_err(|e| checkpoint::serialise_error(dir, "optimiser", e))?;
     checkpoint::save(dir, state.steps_done, &model, &opt, state, |s, f| {
         s.files = f
     })
@@ -199,19 +200,17 @@ pub fn save_checkpoint(
 /// # Errors
 /// If the file cannot be read, is not JSON, not an S2D checkpoint state, or inconsistent; the
 /// message names the file.
-fn read_state_json(dir: &Path) -> Result<(CheckpointState, Value)> {
-    let path = dir.join(STATE_FILE);
-    let value = checkpoint::read_state_value(dir)?;
-    let state: CheckpointState = serde_json::from_value(value.clone())
-        .with_context(|| format!("{}: not an S2D checkpoint state", path.display()))?;
+fn read_state_json(dir: &Path) -> Result<(CheckpointState, Value), CheckpointError> {
+    let (state, value): (CheckpointState, _) =
+        checkpoint::read_state(dir, "an S2D checkpoint state")?;
     state
         .validate()
-        .with_context(|| format!("{}: invalid checkpoint state", path.display()))?;
+        .map_err(|reason| checkpoint::invalid(dir, reason))?;
     Ok((state, value))
 }
 
 /// Reads and checks a checkpoint folder's `state.json`.
-pub fn read_state(dir: &Path) -> Result<CheckpointState> {
+pub fn read_state(dir: &Path) -> Result<CheckpointState, CheckpointError> {
     Ok(read_state_json(dir)?.0)
 }
 
@@ -223,21 +222,26 @@ pub fn load_checkpoint(
     decoder: S2dDecoder,
     optim: ModuleOptimizer,
     current: &CheckpointState,
-) -> Result<(S2dDecoder, ModuleOptimizer, CheckpointState)> {
+) -> Result<(S2dDecoder, ModuleOptimizer, CheckpointState), CheckpointError> {
     let (state, stored) = read_state_json(dir)?;
     check_same_run(dir, &stored, current)?;
     let model_path = dir.join(&state.files.model_file);
-    let model = state.files.read_model(dir)?;
-    let record = burn::store::ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(model))
-        .map_err(|e| anyhow::anyhow!("{}: invalid: {e:?}", model_path.display()))?;
-    let decoder = decoder.try_load_record(record).map_err(|e| {
-        anyhow::anyhow!("{}: does not fit the decoder: {e:?}", model_path.display())
-    })?;
+    let record = checkpoint::record_from_bytes(&model_path, state.files.read_model(dir)?)?;
+    let decoder = decoder
+        .try_load_record(record)
+        .map_err(|e| CheckpointError::Mismatch {
+            path: model_path,
+            what: "the decoder",
+            detail: format!("{e:?}"),
+        })?;
     let optim_path = dir.join(&state.files.optim_file);
     let opt = state.files.read_optim(dir)?;
     let optim = optim
         .from_bytes(burn::tensor::Bytes::from_bytes_vec(opt))
-        .map_err(|e| anyhow::anyhow!("{}: invalid: {e:?}", optim_path.display()))?;
+        .map_err(|e| CheckpointError::Record {
+            path: optim_path,
+            detail: format!("{e:?}"),
+        })?;
     Ok((decoder, optim, state))
 }
 
@@ -247,19 +251,27 @@ pub fn load_checkpoint(
 ///
 /// Both sides are compared as serde_json writes and reads them back, so a value that went
 /// through the file compares equal to the value it was written from.
-fn check_same_run(dir: &Path, stored: &Value, current: &CheckpointState) -> Result<()> {
-    let current: Value = serde_json::from_str(&serde_json::to_string(current)?)?;
+fn check_same_run(
+    dir: &Path,
+    stored: &Value,
+    current: &CheckpointState,
+) -> Result<(), CheckpointError> {
+    let encode = |source| CheckpointError::EncodeState {
+        path: dir.join(STATE_FILE),
+        source,
+    };
+    let current: Value = serde_json::to_string(current)
+        .and_then(|text| serde_json::from_str(&text))
+        .map_err(encode)?;
     let mut diffs = Vec::new();
     for key in IDENTITY {
         differences(key, &stored[key], &current[key], &mut diffs);
     }
     if !diffs.is_empty() {
-        bail!(
-            "{}: the checkpoint belongs to another run ({}); resume with the same arguments and \
-             data, or train without --resume to start over",
-            dir.display(),
-            diffs.join("; ")
-        );
+        return Err(checkpoint::invalid(
+            dir,
+            InvalidState::OtherRun { differences: diffs },
+        ));
     }
     Ok(())
 }

@@ -33,6 +33,7 @@ use serde::{Deserialize, Serialize};
 use super::decoder::InputNormalisation;
 use super::symmetry::Mirror;
 use super::train::{Sample, landmark_input};
+use crate::io::dataset::{Entry, ManifestProblem};
 use crate::io::ict::{FACE_REGION, IctFaceKit};
 use crate::io::mesh::Mesh;
 
@@ -285,31 +286,6 @@ fn draw(
     (identities, groups, pairs)
 }
 
-/// Reads `read(i)` for every `i < n` on up to `threads` threads; results in index order.
-fn read_all(
-    n: usize,
-    threads: usize,
-    read: impl Fn(usize) -> Result<Vec<[f32; 3]>> + Sync,
-) -> Result<Vec<Vec<[f32; 3]>>> {
-    let mut slots: Vec<Option<Result<Vec<[f32; 3]>>>> = Vec::new();
-    slots.resize_with(n, || None);
-    let per = n.div_ceil(threads.max(1)).max(1);
-    std::thread::scope(|s| {
-        for (c, chunk) in slots.chunks_mut(per).enumerate() {
-            let read = &read;
-            s.spawn(move || {
-                for (k, slot) in chunk.iter_mut().enumerate() {
-                    *slot = Some(read(c * per + k));
-                }
-            });
-        }
-    });
-    slots
-        .into_iter()
-        .map(|s| s.unwrap_or_else(|| Err(anyhow::anyhow!("a reader thread did not finish"))))
-        .collect()
-}
-
 /// Generates a data set from the ICT-FaceKit in `kit`.
 pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet> {
     config.validate()?;
@@ -344,12 +320,13 @@ pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet> {
             kit.dir().display()
         );
     }
-    let threads = std::thread::available_parallelism().map_or(1, usize::from);
     let crop = |d: Vec<[f32; 3]>| d[region.clone()].to_vec();
-    let deltas = read_all(expressions.len(), threads, |e| {
-        kit.expression_delta(&expressions[e]).map(crop)
-    })?;
-    let id_deltas = read_all(modes, threads, |m| kit.identity_delta(m).map(crop))?;
+    let deltas: Vec<_> = kit
+        .expression_deltas(&expressions)?
+        .into_iter()
+        .map(crop)
+        .collect();
+    let id_deltas: Vec<_> = kit.identity_deltas(modes)?.into_iter().map(crop).collect();
     let base = &template.positions;
     let neutrals: Vec<Vec<[f32; 3]>> = identities
         .iter()
@@ -433,67 +410,73 @@ fn transferred(
 }
 
 /// Each pair's shapes as (expression index, weight), checking names, weights and groups.
-pub(crate) fn combinations_of(m: &Manifest) -> Result<Vec<Vec<(usize, f32)>>> {
-    let index = |name: &str| {
-        m.expressions
-            .iter()
-            .position(|e| e == name)
-            .with_context(|| format!("expression {name:?} is not in the expression list"))
+pub(crate) fn combinations_of(m: &Manifest) -> Result<Vec<Vec<(usize, f32)>>, ManifestProblem> {
+    let index = |name: &str, entry: Option<Entry>| {
+        m.expressions.iter().position(|e| e == name).ok_or_else(|| {
+            ManifestProblem::UnknownExpression {
+                entry,
+                name: name.to_owned(),
+            }
+        })
     };
     let mut group_of = vec![usize::MAX; m.expressions.len()];
     for (g, group) in m.shape_groups.iter().enumerate() {
         for name in group {
-            let e = index(name)?;
-            ensure!(
-                group_of[e] == usize::MAX,
-                "expression {name:?} is in two shape groups"
-            );
+            let e = index(name, None)?;
+            if group_of[e] != usize::MAX {
+                return Err(ManifestProblem::TwoGroups { name: name.clone() });
+            }
             group_of[e] = g;
         }
     }
     if let Some(e) = group_of.iter().position(|&g| g == usize::MAX) {
-        bail!("expression {:?} is in no shape group", m.expressions[e]);
+        return Err(ManifestProblem::NoGroup {
+            name: m.expressions[e].clone(),
+        });
     }
     m.pairs
         .iter()
         .enumerate()
         .map(|(p, spec)| {
-            ensure!(
-                spec.identity < m.identities.len(),
-                "pair {p}: identity {} of {}",
-                spec.identity,
-                m.identities.len()
-            );
-            ensure!(!spec.shapes.is_empty(), "pair {p}: no expression shapes");
+            let entry = Entry::Pair(p);
+            if spec.identity >= m.identities.len() {
+                return Err(ManifestProblem::Identity {
+                    entry,
+                    identity: spec.identity,
+                    count: m.identities.len(),
+                });
+            }
+            if spec.shapes.is_empty() {
+                return Err(ManifestProblem::NoShapes { entry });
+            }
             let mut out: Vec<(usize, f32)> = Vec::with_capacity(spec.shapes.len());
             for c in &spec.shapes {
-                let e = index(&c.shape).with_context(|| format!("pair {p}"))?;
-                ensure!(
-                    c.weight.is_finite() && c.weight > 0.0 && c.weight <= 1.0,
-                    "pair {p}: weight {} of {:?} is not in (0, 1]",
-                    c.weight,
-                    c.shape
-                );
-                ensure!(
-                    group_of[e] == spec.group,
-                    "pair {p}: {:?} is not in shape group {}",
-                    c.shape,
-                    spec.group
-                );
-                ensure!(
-                    out.iter().all(|&(o, _)| o != e),
-                    "pair {p}: {:?} is listed twice",
-                    c.shape
-                );
+                let e = index(&c.shape, Some(entry))?;
+                if !(c.weight.is_finite() && c.weight > 0.0 && c.weight <= 1.0) {
+                    return Err(ManifestProblem::Weight {
+                        entry,
+                        shape: c.shape.clone(),
+                        weight: c.weight,
+                    });
+                }
+                if group_of[e] != spec.group {
+                    return Err(ManifestProblem::Group {
+                        entry,
+                        shape: c.shape.clone(),
+                        group: spec.group,
+                    });
+                }
+                if out.iter().any(|&(o, _)| o == e) {
+                    return Err(ManifestProblem::Repeated {
+                        entry,
+                        shape: c.shape.clone(),
+                    });
+                }
                 out.push((e, c.weight));
             }
             Ok(out)
         })
         .collect()
-}
-
-pub(crate) fn flat(v: &[Vec<[f32; 3]>]) -> Vec<f32> {
-    v.iter().flatten().flatten().copied().collect()
 }
 
 impl PairSet {

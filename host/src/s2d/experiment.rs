@@ -118,14 +118,15 @@ pub struct TrainS2d {
     /// Add the mirror images of training pairs to the training set, of S2D-Dec and of the
     /// baselines (`Mirroring::mirrorable` says which).
     pub mirror: bool,
+    /// The folder of cached mesh hierarchies ([`hierarchy::cached`]; usually
+    /// [`default_cache_dir`]).
+    pub cache: PathBuf,
 }
 
-/// The hierarchy cache folder: `$SINEW_CACHE`, else `sinew-cache` in the system's temporary
-/// folder.
-pub fn cache_dir() -> PathBuf {
-    std::env::var_os("SINEW_CACHE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| std::env::temp_dir().join("sinew-cache"))
+/// The default hierarchy cache folder: `sinew-cache` in the system's temporary folder (`sinew
+/// train s2d --cache DIR` or `SINEW_CACHE` choose another).
+pub fn default_cache_dir() -> PathBuf {
+    std::env::temp_dir().join("sinew-cache")
 }
 
 /// The model path of `fold` for the `--out` path of fold 0.
@@ -323,7 +324,7 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
             args.pairs.display()
         );
     }
-    let h = hierarchy::cached(&set.template, &args.factors, &cache_dir())
+    let h = hierarchy::cached(&set.template, &args.factors, &args.cache)
         .context("building the face region's mesh hierarchy")?;
     let distances = landmark_distances(&set.template.positions, &set.manifest.landmarks)?;
     let (loss, weights) = args.objective.loss_and_weights(&distances);

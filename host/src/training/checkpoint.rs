@@ -6,11 +6,198 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, ensure};
 use serde::{Deserialize, Serialize};
 
 /// The name of the state file inside a checkpoint folder.
 pub const STATE_FILE: &str = "state.json";
+
+/// A checkpoint that could not be written, read or resumed, always with the file or folder.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum CheckpointError {
+    /// `state.json` could not be read.
+    #[error(
+        "{}: cannot read the checkpoint state (is {} a checkpoint folder?)",
+        path.display(),
+        path.parent().unwrap_or(Path::new("")).display()
+    )]
+    StateRead {
+        /// The state file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// `state.json` is not JSON.
+    #[error("{}: not valid JSON (truncated?)", path.display())]
+    StateJson {
+        /// The state file.
+        path: PathBuf,
+        /// What the parser said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// `state.json` is JSON of another shape than the trainer's state.
+    #[error("{}: not {what}", path.display())]
+    NotState {
+        /// The state file.
+        path: PathBuf,
+        /// What it should be, e.g. "an S2D checkpoint state".
+        what: &'static str,
+        /// What the parser said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// `state.json` reads, but breaks a rule or belongs to another run.
+    #[error("{}: invalid checkpoint state", path.display())]
+    Invalid {
+        /// The state file.
+        path: PathBuf,
+        /// What is wrong.
+        #[source]
+        source: InvalidState,
+    },
+    /// A weight file named by `state.json` could not be read.
+    #[error("{}: cannot read this file named by {STATE_FILE}", path.display())]
+    WeightRead {
+        /// The weight file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A weight file whose bytes do not match the CRC that `state.json` records.
+    #[error(
+        "{}: its CRC differs from the one {STATE_FILE} records (the file is damaged)",
+        path.display()
+    )]
+    Crc {
+        /// The weight file.
+        path: PathBuf,
+    },
+    /// A weight file that burn cannot read as a record.
+    #[error("{}: invalid: {detail}", path.display())]
+    Record {
+        /// The weight file.
+        path: PathBuf,
+        /// What burn said.
+        detail: String,
+    },
+    /// A record that does not fit the model or optimiser it is loaded into.
+    #[error("{}: does not fit {what}: {detail}", path.display())]
+    Mismatch {
+        /// The weight file.
+        path: PathBuf,
+        /// What it was loaded into, e.g. "the decoder".
+        what: &'static str,
+        /// What burn said.
+        detail: String,
+    },
+    /// The model or optimiser could not be serialised.
+    #[error("{}: cannot serialise the {what}: {detail}", path.display())]
+    Serialise {
+        /// The checkpoint folder.
+        path: PathBuf,
+        /// What, e.g. "decoder" or "optimiser".
+        what: &'static str,
+        /// What burn said.
+        detail: String,
+    },
+    /// The state could not be written as JSON.
+    #[error("{}: cannot encode the checkpoint state", path.display())]
+    EncodeState {
+        /// The state file.
+        path: PathBuf,
+        /// What the encoder said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The checkpoint folder could not be created.
+    #[error("{}: cannot create", path.display())]
+    CreateDir {
+        /// The folder.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file could not be written (the message names it).
+    #[error(transparent)]
+    Write(anyhow::Error),
+}
+
+/// A rule of a checkpoint state that it breaks, or the run it does not belong to.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum InvalidState {
+    /// Another trainer's checkpoint.
+    #[error("format {found:?}, expected {expected:?}")]
+    Format {
+        /// The state's format name.
+        found: String,
+        /// This trainer's.
+        expected: &'static str,
+    },
+    /// A state of another version.
+    #[error("version {found}, this build reads {expected}")]
+    Version {
+        /// The state's version.
+        found: u32,
+        /// This build's.
+        expected: u32,
+    },
+    /// A weight file name that is not `model-<n>.bpk` / `optim-<n>.bpk`.
+    #[error("{what} file {name:?} is not a checkpoint file name")]
+    FileName {
+        /// "model" or "optimiser".
+        what: &'static str,
+        /// The name.
+        name: String,
+    },
+    /// More epochs done than the run has.
+    #[error("{done} epochs done of {epochs}")]
+    EpochsDone {
+        /// Epochs done.
+        done: usize,
+        /// Epochs of the run.
+        epochs: usize,
+    },
+    /// A loss history of another length than the epochs done.
+    #[error("{losses} epoch losses for {done} epochs done")]
+    Losses {
+        /// Losses recorded.
+        losses: usize,
+        /// Epochs done.
+        done: usize,
+    },
+    /// Steps of an epoch beyond the last.
+    #[error("every epoch is done but {steps} steps of another are recorded")]
+    StepsAfterLast {
+        /// The steps.
+        steps: usize,
+    },
+    /// A recorded loss that is NaN or infinite.
+    #[error("a loss is not finite")]
+    LossNotFinite,
+    /// More steps done than the run asks for.
+    #[error("{done} steps done, more than the {asked} asked for")]
+    StepsDone {
+        /// Steps done.
+        done: usize,
+        /// Steps asked for.
+        asked: usize,
+    },
+    /// The checkpoint belongs to another run; each entry is `field: A in the checkpoint, B now`.
+    #[error(
+        "the checkpoint belongs to another run ({}); resume with the same arguments and data, or \
+         train without --resume to start over",
+        differences.join("; ")
+    )]
+    OtherRun {
+        /// The fields that differ.
+        differences: Vec<String>,
+    },
+}
 
 /// The weight files a `state.json` goes with. Missing fields read as empty (AIM checkpoints
 /// written before these fields existed: see [`WeightFiles::is_legacy`]).
@@ -36,23 +223,25 @@ impl WeightFiles {
 
     /// Checks that both names are checkpoint weight-file names (nothing else is ever read or
     /// deleted through them).
-    pub fn validate(&self) -> Result<()> {
+    pub fn validate(&self) -> Result<(), InvalidState> {
         for (what, name) in [("model", &self.model_file), ("optimiser", &self.optim_file)] {
-            ensure!(
-                is_weight_file_name(name),
-                "{what} file {name:?} is not a checkpoint file name"
-            );
+            if !is_weight_file_name(name) {
+                return Err(InvalidState::FileName {
+                    what,
+                    name: name.clone(),
+                });
+            }
         }
         Ok(())
     }
 
     /// Reads the model's bytes and checks them against their CRC.
-    pub fn read_model(&self, dir: &Path) -> Result<Vec<u8>> {
+    pub fn read_model(&self, dir: &Path) -> Result<Vec<u8>, CheckpointError> {
         read_checked(dir, &self.model_file, &self.model_crc)
     }
 
     /// Reads the optimiser's bytes and checks them against their CRC.
-    pub fn read_optim(&self, dir: &Path) -> Result<Vec<u8>> {
+    pub fn read_optim(&self, dir: &Path) -> Result<Vec<u8>, CheckpointError> {
         read_checked(dir, &self.optim_file, &self.optim_crc)
     }
 }
@@ -84,22 +273,27 @@ pub fn save<S: Serialize>(
     optim: &[u8],
     state: &mut S,
     set_files: impl FnOnce(&mut S, WeightFiles),
-) -> Result<()> {
+) -> Result<(), CheckpointError> {
     let files = WeightFiles {
         model_file: format!("model-{steps}.bpk"),
         model_crc: crc_hex(model),
         optim_file: format!("optim-{steps}.bpk"),
         optim_crc: crc_hex(optim),
     };
-    crate::io::atomic::write(&dir.join(&files.model_file), model)?;
-    crate::io::atomic::write(&dir.join(&files.optim_file), optim)?;
+    crate::io::atomic::write(&dir.join(&files.model_file), model)
+        .map_err(CheckpointError::Write)?;
+    crate::io::atomic::write(&dir.join(&files.optim_file), optim)
+        .map_err(CheckpointError::Write)?;
     let keep = files.clone();
     set_files(state, files);
     // state.json last: until it is in place, the previous one still names whole files.
-    crate::io::atomic::write(
-        &dir.join(STATE_FILE),
-        serde_json::to_string_pretty(state)?.as_bytes(),
-    )?;
+    let path = dir.join(STATE_FILE);
+    let json =
+        serde_json::to_string_pretty(state).map_err(|source| CheckpointError::EncodeState {
+            path: path.clone(),
+            source,
+        })?;
+    crate::io::atomic::write(&path, json.as_bytes()).map_err(CheckpointError::Write)?;
     // The earlier checkpoints' weights; a file that cannot be removed only costs disk space.
     if let Ok(entries) = std::fs::read_dir(dir) {
         for entry in entries.flatten() {
@@ -113,34 +307,74 @@ pub fn save<S: Serialize>(
 }
 
 /// Reads `dir/state.json` as JSON; the error names the file.
-pub fn read_state_value(dir: &Path) -> Result<serde_json::Value> {
+pub fn read_state_value(dir: &Path) -> Result<serde_json::Value, CheckpointError> {
     let path = dir.join(STATE_FILE);
-    let bytes = std::fs::read(&path).with_context(|| {
-        format!(
-            "{}: cannot read the checkpoint state (is {} a checkpoint folder?)",
-            path.display(),
-            dir.display()
-        )
-    })?;
-    serde_json::from_slice(&bytes)
-        .with_context(|| format!("{}: not valid JSON (truncated?)", path.display()))
+    let bytes = match std::fs::read(&path) {
+        Ok(bytes) => bytes,
+        Err(source) => return Err(CheckpointError::StateRead { path, source }),
+    };
+    serde_json::from_slice(&bytes).map_err(|source| CheckpointError::StateJson { path, source })
+}
+
+/// Reads `dir/state.json` as the trainer's state `S`; `what` names it in errors (e.g. "an S2D
+/// checkpoint state").
+pub fn read_state<S: serde::de::DeserializeOwned>(
+    dir: &Path,
+    what: &'static str,
+) -> Result<(S, serde_json::Value), CheckpointError> {
+    let value = read_state_value(dir)?;
+    match serde_json::from_value(value.clone()) {
+        Ok(state) => Ok((state, value)),
+        Err(source) => Err(CheckpointError::NotState {
+            path: dir.join(STATE_FILE),
+            what,
+            source,
+        }),
+    }
+}
+
+/// `reason` as the error of `dir/state.json`.
+pub fn invalid(dir: &Path, reason: InvalidState) -> CheckpointError {
+    CheckpointError::Invalid {
+        path: dir.join(STATE_FILE),
+        source: reason,
+    }
 }
 
 /// Reads a checkpoint file named by `state.json` and checks it against its CRC.
-fn read_checked(dir: &Path, name: &str, crc: &str) -> Result<Vec<u8>> {
+fn read_checked(dir: &Path, name: &str, crc: &str) -> Result<Vec<u8>, CheckpointError> {
     let path = dir.join(name);
-    let bytes = std::fs::read(&path).with_context(|| {
-        format!(
-            "{}: cannot read this file named by {STATE_FILE}",
-            path.display()
-        )
-    })?;
-    ensure!(
-        crc_hex(&bytes) == crc,
-        "{}: its CRC differs from the one {STATE_FILE} records (the file is damaged)",
-        path.display()
-    );
+    let bytes = match std::fs::read(&path) {
+        Ok(bytes) => bytes,
+        Err(source) => return Err(CheckpointError::WeightRead { path, source }),
+    };
+    if crc_hex(&bytes) != crc {
+        return Err(CheckpointError::Crc { path });
+    }
     Ok(bytes)
+}
+
+/// The error of a `what` (e.g. "decoder") that burn could not serialise for the checkpoint in
+/// `dir`.
+pub fn serialise_error(dir: &Path, what: &'static str, e: impl std::fmt::Debug) -> CheckpointError {
+    CheckpointError::Serialise {
+        path: dir.to_owned(),
+        what,
+        detail: format!("{e:?}"),
+    }
+}
+
+/// Reads the burn record in the weight file `path` from its `bytes` (checked against their CRC).
+pub fn record_from_bytes(
+    path: &Path,
+    bytes: Vec<u8>,
+) -> Result<burn::store::ModuleRecord, CheckpointError> {
+    burn::store::ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes)).map_err(|e| {
+        CheckpointError::Record {
+            path: path.to_owned(),
+            detail: format!("{e:?}"),
+        }
+    })
 }
 
 /// The checkpoint folder that belongs to a model path: `MODEL.ckpt/` beside it.
@@ -198,13 +432,34 @@ mod tests {
         assert_eq!(files.read_model(dir.path()).unwrap(), b"m2");
         assert_eq!(files.read_optim(dir.path()).unwrap(), b"o2");
         std::fs::write(dir.path().join("model-2.bpk"), b"m3").unwrap();
-        let e = files.read_model(dir.path()).unwrap_err().to_string();
-        assert!(e.contains("model-2.bpk") && e.contains("CRC"), "{e}");
-        std::fs::write(dir.path().join(STATE_FILE), b"{\"step\": 2, \"mo").unwrap();
-        let e = format!("{:#}", read_state_value(dir.path()).unwrap_err());
+        let e = files.read_model(dir.path()).unwrap_err();
         assert!(
-            e.contains("state.json") && e.contains("not valid JSON"),
-            "{e}"
+            matches!(&e, CheckpointError::Crc { path } if path.ends_with("model-2.bpk")),
+            "{e:?}"
         );
+        assert!(e.to_string().contains("model-2.bpk"), "{e}");
+        std::fs::remove_file(dir.path().join("optim-2.bpk")).unwrap();
+        let e = files.read_optim(dir.path()).unwrap_err();
+        assert!(
+            matches!(&e, CheckpointError::WeightRead { path, .. } if path.ends_with("optim-2.bpk")),
+            "{e:?}"
+        );
+        let bad = WeightFiles {
+            model_file: "../model-2.bpk".into(),
+            ..files
+        };
+        assert!(matches!(
+            bad.validate(),
+            Err(InvalidState::FileName { what: "model", .. })
+        ));
+        std::fs::write(dir.path().join(STATE_FILE), b"{\"step\": 2, \"mo").unwrap();
+        let e = read_state_value(dir.path()).unwrap_err();
+        assert!(
+            matches!(&e, CheckpointError::StateJson { path, .. } if path.ends_with(STATE_FILE)),
+            "{e:?}"
+        );
+        let e = read_state_value(&dir.path().join("nowhere")).unwrap_err();
+        assert!(matches!(e, CheckpointError::StateRead { .. }), "{e:?}");
+        assert!(e.to_string().contains("nowhere"), "{e}");
     }
 }

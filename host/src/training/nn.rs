@@ -3,14 +3,14 @@
 //! `sinew_core::network::load_mlp` and `sinew_core::spiral` read, so the host trains and the core
 //! plays back the same weights.
 
-use anyhow::{Result, ensure};
+use anyhow::Result;
 use burn::module::{Module, Param};
 use burn::nn::{Linear, LinearConfig};
 use burn::tensor::activation::{elu, gelu, leaky_relu, relu};
 use burn::tensor::{Device, Distribution, Int, Tensor, TensorData};
 use sinew_core::nn::Activation;
 
-use crate::io::container::SinewWriter;
+use crate::io::container::{SinewWriter, WriterError};
 
 pub use super::tensor::{tensor, to_vec};
 
@@ -120,7 +120,7 @@ impl Mlp {
     }
 
     /// Writes the weights as the core's MLP sections under `prefix`.
-    pub fn export(&self, w: &mut SinewWriter, prefix: &str) -> Result<()> {
+    pub fn export(&self, w: &mut SinewWriter, prefix: &str) -> Result<(), WriterError> {
         write_mlp(w, prefix, &self.weights())
     }
 }
@@ -141,16 +141,18 @@ pub struct LayerWeights {
 }
 
 /// Writes an MLP as the sections `sinew_core::network::load_mlp` reads (see docs/FORMAT.md).
-pub fn write_mlp(w: &mut SinewWriter, prefix: &str, layers: &[LayerWeights]) -> Result<()> {
+pub fn write_mlp(
+    w: &mut SinewWriter,
+    prefix: &str,
+    layers: &[LayerWeights],
+) -> Result<(), WriterError> {
     let codes: Vec<u32> = layers.iter().map(|l| l.activation.code()).collect();
     let params: Vec<f32> = layers.iter().map(|l| l.activation.param()).collect();
     w.u32s(&format!("{prefix}.act"), &[codes.len()], &codes)?;
     w.f32s(&format!("{prefix}.par"), &[params.len()], &params)?;
+    // A layer whose weights or bias do not have its shape is refused by the writer
+    // (`WriterError::ShapeMismatch`, naming the section).
     for (i, l) in layers.iter().enumerate() {
-        ensure!(
-            l.weight.len() == l.inputs * l.outputs && l.bias.len() == l.outputs,
-            "MLP {prefix}: layer {i} has inconsistent shapes"
-        );
         w.f32s(
             &format!("{prefix}.{i}.w"),
             &[l.outputs, l.inputs],

@@ -1,5 +1,7 @@
 use super::*;
 use crate::io::data::data_dir;
+use crate::io::dataset::DataSetError;
+use crate::io::mesh::MeshError;
 
 pub(crate) fn golden_actor() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/aim-ict.sinew")
@@ -147,7 +149,7 @@ fn bad_performances_are_refused_naming_the_file() {
     generate(&kit, Some(&golden_actor()), &config, dir.path()).unwrap();
     let frame1 = dir.path().join("frame_00001.obj");
     let text = std::fs::read_to_string(&frame1).unwrap();
-    let err = |dir: &Path| format!("{:#}", Performance::read(dir).unwrap_err());
+    let err = |dir: &Path| Performance::read(dir).unwrap_err();
 
     // A NaN coordinate.
     let nan = {
@@ -158,7 +160,11 @@ fn bad_performances_are_refused_naming_the_file() {
     };
     std::fs::write(&frame1, nan).unwrap();
     let e = err(dir.path());
-    assert!(e.contains("frame_00001.obj"), "{e}");
+    assert!(
+        matches!(&e, PerformanceError::Mesh(MeshError::Parse { path, .. } | MeshError::Inconsistent { path, .. })
+            if path.ends_with("frame_00001.obj")),
+        "{e:?}"
+    );
 
     // Too few vertices (the last vertex dropped, faces referring to it dropped too).
     let last = text.lines().filter(|l| l.starts_with("v ")).count();
@@ -177,7 +183,12 @@ fn bad_performances_are_refused_naming_the_file() {
     std::fs::write(&frame1, fewer.join("\n")).unwrap();
     let e = err(dir.path());
     assert!(
-        e.contains("frame_00001.obj") && e.contains("4704 vertices"),
+        matches!(&e, PerformanceError::VertexCount { path, found: 4704, expected: 4705 }
+            if path.ends_with("frame_00001.obj")),
+        "{e:?}"
+    );
+    assert!(
+        e.to_string().contains("frame_00001.obj: 4704 vertices"),
         "{e}"
     );
 
@@ -185,8 +196,9 @@ fn bad_performances_are_refused_naming_the_file() {
     std::fs::remove_file(&frame1).unwrap();
     let e = err(dir.path());
     assert!(
-        e.contains("frame_00001.obj") && e.contains("missing"),
-        "{e}"
+        matches!(&e, PerformanceError::MissingFrame { path, frame: 1, .. }
+            if path.ends_with("frame_00001.obj")),
+        "{e:?}"
     );
 
     // A manifest that disagrees with itself.
@@ -195,7 +207,19 @@ fn bad_performances_are_refused_naming_the_file() {
     m.frames = 5;
     std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
     let e = err(dir.path());
-    assert!(e.contains(MANIFEST) && e.contains("5 frames"), "{e}");
+    assert!(
+        matches!(&e, PerformanceError::ListLength { path, list: "files", len: 2, frames: 5 }
+            if path.ends_with(MANIFEST)),
+        "{e:?}"
+    );
+    // Not a manifest at all.
+    std::fs::write(&path, "[]").unwrap();
+    let e = err(dir.path());
+    assert!(
+        matches!(&e, PerformanceError::Manifest(DataSetError::ManifestJson { path, .. })
+            if path.ends_with(MANIFEST)),
+        "{e:?}"
+    );
 }
 
 #[test]

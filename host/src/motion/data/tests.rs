@@ -1,5 +1,6 @@
 use super::*;
 use crate::io::data::data_dir;
+use crate::io::dataset::{ContentError, DataSetError, Entry, ManifestProblem};
 use crate::motion::srvf;
 
 fn small() -> MotionsConfig {
@@ -164,19 +165,26 @@ fn real_motions_are_consistent_round_trip_and_separate_the_classes() {
     bad.sequences[1].split = Split::Test;
     let json = serde_json::to_string(&bad).unwrap();
     crate::io::atomic::write(&dir.path().join(MANIFEST_FILE), json.as_bytes()).unwrap();
-    let err = format!("{:#}", MotionSet::read(dir.path()).unwrap_err());
+    let err = MotionSet::read(dir.path()).unwrap_err();
     assert!(
-        err.contains(MANIFEST_FILE) && err.contains("repetition"),
-        "{err}"
+        matches!(&err, DataSetError::Manifest { path, source: ManifestProblem::Split { entry: Entry::Sequence(1), .. } }
+            if path.ends_with(MANIFEST_FILE)),
+        "{err:?}"
+    );
+    let msg = format!("{:#}", anyhow::Error::from(err));
+    assert!(
+        msg.contains(MANIFEST_FILE) && msg.contains("repetition"),
+        "{msg}"
     );
     // Weights that disagree with the stored landmarks are refused.
     let mut tampered = set.clone();
     tampered.weights[3][e * 5] = 0.5;
     tampered.write(dir.path()).unwrap();
-    let err = format!("{:#}", MotionSet::read(dir.path()).unwrap_err());
+    let err = MotionSet::read(dir.path()).unwrap_err();
     assert!(
-        err.contains(DATA_FILE) && err.contains("sequence 3"),
-        "{err}"
+        matches!(&err, DataSetError::Contents { path, source: ContentError::Frame { entry: Entry::Sequence(3), .. } }
+            if path.ends_with(DATA_FILE)),
+        "{err:?}"
     );
 
     // The SRVF separates the classes: sequences of one class lie nearer each other on the sphere

@@ -1,7 +1,9 @@
 //! Tests of [`super`] (data).
 
 use super::*;
+use crate::io::container::ContainerError;
 use crate::io::data::data_dir;
+use crate::io::dataset::{ContentError, DataSetError, Entry, ManifestProblem};
 
 fn small() -> PairsConfig {
     PairsConfig {
@@ -90,7 +92,13 @@ fn real_pairs_are_deterministic_and_round_trip() {
     let mut m = set.manifest.clone();
     m.pairs[3].shapes[0].weight *= 0.5;
     std::fs::write(&mpath, serde_json::to_string(&m).unwrap()).unwrap();
-    let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
+    let err = PairSet::read(dir.path()).unwrap_err();
+    assert!(
+        matches!(&err, DataSetError::Contents { path, source: ContentError::Entry { name, entry: Entry::Pair(3) } }
+            if path.ends_with(DATA_FILE) && name == "pairs.weights"),
+        "{err:?}"
+    );
+    let msg = format!("{:#}", anyhow::Error::from(err));
     assert!(
         msg.contains("pairs.sinew") && msg.contains("pair 3"),
         "{msg}"
@@ -98,20 +106,28 @@ fn real_pairs_are_deterministic_and_round_trip() {
     m = set.manifest.clone();
     m.pairs[2].shapes[0].shape = "smile".into();
     std::fs::write(&mpath, serde_json::to_string(&m).unwrap()).unwrap();
-    let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
+    let err = PairSet::read(dir.path()).unwrap_err();
     assert!(
-        msg.contains("manifest.json") && msg.contains("smile"),
-        "{msg}"
+        matches!(&err, DataSetError::Manifest { path, source: ManifestProblem::UnknownExpression { entry: Some(Entry::Pair(2)), name } }
+            if path.ends_with(MANIFEST_FILE) && name == "smile"),
+        "{err:?}"
     );
     std::fs::write(&mpath, "{").unwrap();
-    let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
-    assert!(msg.contains("manifest.json"), "{msg}");
+    let err = PairSet::read(dir.path()).unwrap_err();
+    assert!(
+        matches!(&err, DataSetError::ManifestJson { path, .. } if path.ends_with(MANIFEST_FILE)),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("manifest.json"), "{err}");
     // A truncated data file is refused, naming it.
     std::fs::write(&mpath, serde_json::to_string(&set.manifest).unwrap()).unwrap();
     let dpath = dir.path().join(DATA_FILE);
     std::fs::write(&dpath, &bytes[..bytes.len() / 2]).unwrap();
-    let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
-    assert!(msg.contains("pairs.sinew"), "{msg}");
+    let err = PairSet::read(dir.path()).unwrap_err();
+    assert!(
+        matches!(&err, DataSetError::Data(ContainerError::Invalid { path, .. }) if path.ends_with(DATA_FILE)),
+        "{err:?}"
+    );
 }
 
 /// Transferred expressions: one delta per identity and shape, close to the kit's shared
@@ -194,18 +210,23 @@ fn transferred_expressions_follow_each_identity() {
     m.config.expressions = Expressions::Shared;
     let mpath = dir.path().join(MANIFEST_FILE);
     std::fs::write(&mpath, serde_json::to_string(&m).unwrap()).unwrap();
-    let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
+    let err = PairSet::read(dir.path()).unwrap_err();
     assert!(
-        msg.contains("pairs.sinew") && msg.contains("pairs.delta"),
-        "{msg}"
+        matches!(&err, DataSetError::Contents { path, source: ContentError::Section { name, .. } }
+            if path.ends_with(DATA_FILE) && name == "pairs.delta"),
+        "{err:?}"
     );
     // A manifest from before the field (no `expressions`) means shared deltas, whatever the
     // default is now: it is refused the same way.
     let mut old = serde_json::to_value(&set.manifest).unwrap();
     old["config"].as_object_mut().unwrap().remove("expressions");
     std::fs::write(&mpath, old.to_string()).unwrap();
-    let msg = format!("{:#}", PairSet::read(dir.path()).unwrap_err());
-    assert!(msg.contains("pairs.delta"), "{msg}");
+    let err = PairSet::read(dir.path()).unwrap_err();
+    assert!(
+        matches!(&err, DataSetError::Contents { source: ContentError::Section { name, .. }, .. }
+            if name == "pairs.delta"),
+        "{err:?}"
+    );
 }
 
 #[test]
