@@ -181,7 +181,13 @@ impl Generator {
         // label would hardly shape the motion (the reference concatenates it after every layer
         // instead, which the core's MLP cannot).
         let rows: Vec<f32> = (0..noise + labels)
-            .map(|i| if i < noise { 1.0 } else { (noise as f32).sqrt() })
+            .map(|i| {
+                if i < noise {
+                    1.0
+                } else {
+                    (noise as f32).sqrt()
+                }
+            })
             .collect();
         let first = &mut mlp.layers[0];
         let w = first.weight.val() * tensor(rows, [noise + labels, 1], device);

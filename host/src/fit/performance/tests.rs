@@ -128,7 +128,10 @@ fn landmark_noise_moves_the_tracks_and_not_the_meshes() {
     assert!(mean.abs() < 0.3 && (sd - 2.0).abs() < 0.3, "{mean} {sd}");
     // The manifest reads back with it; a negative value is refused.
     assert_eq!(
-        Performance::read(dirs[1].path()).unwrap().manifest.landmark_noise_px,
+        Performance::read(dirs[1].path())
+            .unwrap()
+            .manifest
+            .landmark_noise_px,
         2.0
     );
     let bad = PerformanceConfig {

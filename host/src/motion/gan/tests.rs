@@ -150,9 +150,8 @@ fn a_fresh_generator_follows_its_label_and_starts_near_p() {
     let norm = |v: &[f32]| (v.iter().map(|x| x * x).sum::<f32>() / FRAMES as f32).sqrt();
     let rows = |v: &[f32]| -> Vec<Vec<f32>> { v.chunks_exact(d).map(<[f32]>::to_vec).collect() };
     let (a, b) = (rows(&a), rows(&b));
-    let diff = |x: &[f32], y: &[f32]| {
-        norm(&x.iter().zip(y).map(|(u, v)| u - v).collect::<Vec<_>>())
-    };
+    let diff =
+        |x: &[f32], y: &[f32]| norm(&x.iter().zip(y).map(|(u, v)| u - v).collect::<Vec<_>>());
     // Another label moves the motion about as far as other noise does (PyTorch's initialisation
     // alone would leave the label's effect √128 ≈ 11 times smaller).
     let by_label = (0..n).map(|i| diff(&a[i], &b[i])).sum::<f32>() / n as f32;
