@@ -1,5 +1,6 @@
 use super::*;
 use crate::motion::train::TangentData;
+use crate::training::checkpoint::{CheckpointError, InvalidState, STATE_FILE};
 
 /// Unit motions of two labels with 6 coordinates (2 landmarks) per frame.
 fn toy() -> TangentData {
@@ -72,18 +73,59 @@ fn a_resumed_run_continues_bit_for_bit() {
         bake(&straight.generator, &data, &config).unwrap()
     );
 
-    // Another run's settings are refused, naming the state file.
+    // Another run's settings are refused, naming the state file and the setting.
     let other = GanConfig {
         lr: 2e-3,
         ..config.clone()
     };
-    let err = format!(
-        "{:#}",
-        load_checkpoint(dir.path(), Run::new(&data, &other, &device), &other, &data).unwrap_err()
-    );
+    let e =
+        load_checkpoint(dir.path(), Run::new(&data, &other, &device), &other, &data).unwrap_err();
     assert!(
-        err.contains(STATE_FILE) && err.contains("other settings"),
-        "{err}"
+        matches!(&e, CheckpointError::Invalid { path, source: InvalidState::OtherRun { differences } }
+            if path.ends_with(STATE_FILE)
+                && differences == &["settings.lr: 0.001 in the checkpoint, 0.002 now"]),
+        "{e:?}"
+    );
+    assert!(format!("{e:#}").contains(STATE_FILE), "{e:#}");
+    // So are other training motions, and a state whose history does not fit its steps.
+    let mut moved = toy();
+    moved.p[0] += 1.0;
+    let e = load_checkpoint(
+        dir.path(),
+        Run::new(&moved, &config, &device),
+        &config,
+        &moved,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, CheckpointError::Invalid { source: InvalidState::OtherRun { differences }, .. }
+            if differences.len() == 1 && differences[0].starts_with("training motions")),
+        "{e:?}"
+    );
+    let path = dir.path().join(STATE_FILE);
+    let mut state: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    state["steps_done"] = serde_json::json!(2);
+    std::fs::write(&path, serde_json::to_vec(&state).unwrap()).unwrap();
+    let e = load_checkpoint(
+        dir.path(),
+        Run::new(&data, &config, &device),
+        &config,
+        &data,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            &e,
+            CheckpointError::Invalid {
+                source: InvalidState::History {
+                    recorded: 3,
+                    done: 2
+                },
+                ..
+            }
+        ),
+        "{e:?}"
     );
 }
 
