@@ -229,3 +229,47 @@ fn the_baked_generator_is_a_motion_generator_the_core_reads() {
     assert!((mean - per_label.iter().sum::<f32>() / 12.0).abs() < 1e-5);
     assert!(crate::motion::diversity::diversity(&core, 1).is_err());
 }
+
+#[test]
+fn a_damaged_optimiser_file_is_named() {
+    let (data, config) = (toy(), config());
+    let device = Backend::Flex.autodiff_device(config.seed).unwrap();
+    let run = run_to(&data, &config, Run::new(&data, &config, &device), 1);
+    let dir = tempfile::tempdir().unwrap();
+    save_checkpoint(dir.path(), &run, &config, &data).unwrap();
+    let state_path = dir.path().join(STATE_FILE);
+    let state: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&state_path).unwrap()).unwrap();
+    let name = state["files"]["optim_file"].as_str().unwrap().to_owned();
+    let whole = std::fs::read(dir.path().join(&name)).unwrap();
+    // Bytes whose CRC state.json records, so that only their layout is wrong.
+    let rewrite = |bytes: &[u8]| {
+        std::fs::write(dir.path().join(&name), bytes).unwrap();
+        let mut state = state.clone();
+        state["files"]["optim_crc"] =
+            serde_json::json!(crate::training::checkpoint::crc_hex(bytes));
+        std::fs::write(&state_path, serde_json::to_vec(&state).unwrap()).unwrap();
+        load_checkpoint(
+            dir.path(),
+            Run::new(&data, &config, &device),
+            &config,
+            &data,
+        )
+        .unwrap_err()
+    };
+    let mut longer = whole.clone();
+    longer.push(0);
+    let e = rewrite(&longer);
+    assert!(
+        matches!(&e, CheckpointError::TrailingBytes { path } if path.ends_with(&name)),
+        "{e:?}"
+    );
+    let e = rewrite(&whole[..whole.len() - 1]);
+    assert!(
+        matches!(&e, CheckpointError::Truncated { path } if path.ends_with(&name)),
+        "{e:?}"
+    );
+    let e = rewrite(&whole[..4]);
+    assert!(matches!(&e, CheckpointError::Truncated { .. }), "{e:?}");
+    assert!(e.to_string().contains(&name), "{e}");
+}
