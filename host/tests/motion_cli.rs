@@ -113,12 +113,15 @@ fn data_motions_writes_a_seeded_split_set() {
         String::from_utf8_lossy(&run.stderr)
     );
     assert_eq!(std::fs::read(&model).unwrap(), first);
-    // Resuming with other settings is refused, naming the checkpoint state.
+    // Resuming with other settings is refused, naming the checkpoint state and the setting.
     let run = train(&["--resume", ckpt.to_str().unwrap(), "--lr", "0.01"]);
     assert!(!run.status.success());
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(
-        stderr.contains("state.json") && stderr.contains("other settings"),
+        stderr.contains("state.json")
+            && stderr.contains("another run")
+            && stderr.contains("settings.lr:")
+            && stderr.contains("0.01 now"),
         "{stderr}"
     );
 

@@ -14,7 +14,7 @@ use sinew_core::error::{BufferError, FormatError};
 use sinew_core::performance::{self as perf, Performance};
 use sinew_core::replay::ReplayError;
 use sinew_host::fit::bake::play;
-use sinew_host::fit::retarget::{Part, retarget};
+use sinew_host::fit::retarget::{Input, Part, RetargetError, retarget};
 use sinew_host::io::container::SinewWriter;
 
 fn golden(name: &str) -> PathBuf {
@@ -24,6 +24,33 @@ fn golden(name: &str) -> PathBuf {
 fn read(name: &str) -> Vec<u8> {
     let path = golden(name);
     std::fs::read(&path).unwrap_or_else(|e| panic!("{}: golden file missing ({e})", path.display()))
+}
+
+/// [`retarget`] of golden files by name: the source actor, the target actor and the fit.
+fn retarget_files(
+    source: &str,
+    target: &str,
+    fit: &str,
+    part: Part,
+) -> Result<Vec<u8>, RetargetError> {
+    let (source, target, fit) = (golden(source), golden(target), golden(fit));
+    let bytes = |path: &PathBuf| std::fs::read(path).unwrap();
+    let (s, t, f) = (bytes(&source), bytes(&target), bytes(&fit));
+    retarget(
+        Input {
+            path: &source,
+            bytes: &s,
+        },
+        Input {
+            path: &target,
+            bytes: &t,
+        },
+        Input {
+            path: &fit,
+            bytes: &f,
+        },
+        part,
+    )
 }
 
 /// Per-vertex displacement of each frame from the rest shape, `[V, 3]` per frame.
@@ -47,7 +74,13 @@ fn a_fit_retargeted_onto_its_own_actor_plays_its_own_bits() {
     let actor = read("aim-ict.sinew");
     let fit = read("fit-ict.sinew");
     let original = Performance::from_bytes(&fit).unwrap();
-    let full = retarget(&actor, &actor, &fit, Part::Full).unwrap();
+    let full = retarget_files(
+        "aim-ict.sinew",
+        "aim-ict.sinew",
+        "fit-ict.sinew",
+        Part::Full,
+    )
+    .unwrap();
     let p = Performance::from_bytes(&full).unwrap();
     assert_eq!(
         p.point_count(),
@@ -67,9 +100,26 @@ fn the_parts_are_the_jaw_alone_and_the_soft_tissue_alone() {
     let fit = read("fit-ict.sinew");
     let actor = AimActor::from_bytes(&bytes).unwrap();
     let original = Performance::from_bytes(&fit).unwrap();
-    let (full, _) = play(&bytes, &retarget(&bytes, &bytes, &fit, Part::Full).unwrap()).unwrap();
-    let jaw_bytes = retarget(&bytes, &bytes, &fit, Part::Jaw).unwrap();
-    let soft_bytes = retarget(&bytes, &bytes, &fit, Part::Soft).unwrap();
+    let (full, _) = play(
+        &bytes,
+        &retarget_files(
+            "aim-ict.sinew",
+            "aim-ict.sinew",
+            "fit-ict.sinew",
+            Part::Full,
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let jaw_bytes =
+        retarget_files("aim-ict.sinew", "aim-ict.sinew", "fit-ict.sinew", Part::Jaw).unwrap();
+    let soft_bytes = retarget_files(
+        "aim-ict.sinew",
+        "aim-ict.sinew",
+        "fit-ict.sinew",
+        Part::Soft,
+    )
+    .unwrap();
     let (jaw, _) = play(&bytes, &jaw_bytes).unwrap();
     let (soft, _) = play(&bytes, &soft_bytes).unwrap();
     let soft_perf = Performance::from_bytes(&soft_bytes).unwrap();
@@ -104,7 +154,13 @@ fn a_fit_retargeted_to_another_identity_moves_as_the_source_did() {
     let identity = src_rest.iter().zip(&dst_rest).map(|(a, b)| a - b);
     assert!(mean_norm(&identity.collect::<Vec<_>>()) > 0.1, "cm");
 
-    let baked = retarget(&source, &target, &fit, Part::Full).unwrap();
+    let baked = retarget_files(
+        "aim-ict.sinew",
+        "aim-ict-b.sinew",
+        "fit-ict.sinew",
+        Part::Full,
+    )
+    .unwrap();
     let (frames, hashes) = play(&target, &baked).unwrap();
     let p = Performance::from_bytes(&baked).unwrap();
     for (f, h) in hashes.iter().enumerate() {
@@ -126,15 +182,61 @@ fn a_fit_retargeted_to_another_identity_moves_as_the_source_did() {
 
 #[test]
 fn retargeting_refuses_actors_out_of_correspondence_and_fits_of_another_actor() {
-    let ict = read("aim-ict.sinew");
-    let procedural = read("aim-procedural.sinew");
-    let fit = read("fit-ict.sinew");
-    let e = retarget(&ict, &procedural, &fit, Part::Full).unwrap_err();
-    assert!(format!("{e:#}").contains("correspondence"), "{e:#}");
-    let e = retarget(&procedural, &ict, &fit, Part::Full).unwrap_err();
+    let e = retarget_files(
+        "aim-ict.sinew",
+        "aim-procedural.sinew",
+        "fit-ict.sinew",
+        Part::Full,
+    )
+    .unwrap_err();
     assert!(
-        format!("{e:#}").contains("not a fit of the source"),
-        "{e:#}"
+        matches!(&e, RetargetError::VertexCount { source_actor, target_actor, target_vertices, .. }
+            if source_actor.ends_with("aim-ict.sinew")
+                && target_actor.ends_with("aim-procedural.sinew")
+                && *target_vertices != 4705),
+        "{e:?}"
+    );
+    let text = e.to_string();
+    assert!(
+        text.contains("aim-ict.sinew")
+            && text.contains("aim-procedural.sinew")
+            && text.contains("correspondence"),
+        "{text}"
+    );
+    let e = retarget_files(
+        "aim-procedural.sinew",
+        "aim-ict.sinew",
+        "fit-ict.sinew",
+        Part::Full,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, RetargetError::OtherActor { fit, actor, source: ReplayError::WrongModel { .. } }
+            if fit.ends_with("fit-ict.sinew") && actor.ends_with("aim-procedural.sinew")),
+        "{e:?}"
+    );
+    // Files that are not what they should be are named.
+    let e = retarget_files(
+        "fit-ict.sinew",
+        "aim-ict.sinew",
+        "fit-ict.sinew",
+        Part::Full,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, RetargetError::NotAnActor { path, .. } if path.ends_with("fit-ict.sinew")),
+        "{e:?}"
+    );
+    let e = retarget_files(
+        "aim-ict.sinew",
+        "aim-ict.sinew",
+        "aim-ict.sinew",
+        Part::Full,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, RetargetError::NotAPerformance { path, .. } if path.ends_with("aim-ict.sinew")),
+        "{e:?}"
     );
 }
 
@@ -142,7 +244,13 @@ fn retargeting_refuses_actors_out_of_correspondence_and_fits_of_another_actor() 
 fn the_points_section_is_checked_against_the_actor_and_the_coefficients() {
     let bytes = read("aim-ict.sinew");
     let actor = AimActor::from_bytes(&bytes).unwrap();
-    let full = retarget(&bytes, &bytes, &read("fit-ict.sinew"), Part::Full).unwrap();
+    let full = retarget_files(
+        "aim-ict.sinew",
+        "aim-ict.sinew",
+        "fit-ict.sinew",
+        Part::Full,
+    )
+    .unwrap();
     // Too few points for the actor.
     let file = sinew_core::SinewFile::from_bytes(&full).unwrap();
     let mut w = SinewWriter::from_file(&file).unwrap();
@@ -164,7 +272,7 @@ fn the_points_section_is_checked_against_the_actor_and_the_coefficients() {
         Err(BufferError::Input)
     );
     // Points beside global coefficients mean nothing and are refused.
-    let jaw = retarget(&bytes, &bytes, &read("fit-ict.sinew"), Part::Jaw).unwrap();
+    let jaw = retarget_files("aim-ict.sinew", "aim-ict.sinew", "fit-ict.sinew", Part::Jaw).unwrap();
     let mut w = SinewWriter::from_file(&sinew_core::SinewFile::from_bytes(&jaw).unwrap()).unwrap();
     w.f32s(perf::POINTS, &[4705, 3], &vec![0.0; 3 * 4705])
         .unwrap();

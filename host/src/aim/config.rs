@@ -294,24 +294,6 @@ impl AimConfig {
         serde_json::from_value(value)
     }
 
-    /// The fields in which `self` and `other` differ, as `name: self's value → other's`.
-    pub fn differences(&self, other: &Self) -> Vec<String> {
-        let (Ok(serde_json::Value::Object(a)), Ok(serde_json::Value::Object(b))) =
-            (serde_json::to_value(self), serde_json::to_value(other))
-        else {
-            return Vec::new();
-        };
-        a.iter()
-            .filter(|(k, v)| b.get(*k) != Some(*v))
-            .map(|(k, v)| {
-                let w = b
-                    .get(k)
-                    .map_or_else(|| "missing".to_owned(), ToString::to_string);
-                format!("{k}: {v} → {w}")
-            })
-            .collect()
-    }
-
     /// Steps of the final anneal (`anneal_fraction` of the run, rounded).
     pub fn anneal_steps(&self) -> usize {
         ((self.iterations as f64 * self.anneal_fraction).round() as usize).min(self.iterations)
@@ -496,13 +478,18 @@ mod tests {
             shapes_per_point: 1,
             ..AimConfig::demo()
         };
-        assert!(c.differences(&paper).is_empty());
+        let differences = |a: &AimConfig, b: &AimConfig| {
+            let mut out = Vec::new();
+            crate::training::checkpoint::serialised_differences("config", a, b, &mut out).unwrap();
+            out
+        };
+        assert!(differences(&c, &paper).is_empty());
         assert_eq!(
-            c.differences(&jaw),
+            differences(&c, &jaw),
             [
-                r#"jaw_init: "identity" → "bones""#,
-                "lambda_jaw: 0.0 → 1.0",
-                "shapes_per_point: 1 → 2"
+                r#"config.jaw_init: "identity" in the checkpoint, "bones" now"#,
+                "config.lambda_jaw: 0.0 in the checkpoint, 1.0 now",
+                "config.shapes_per_point: 1 in the checkpoint, 2 now"
             ]
         );
         assert!(AimConfig::from_recorded(serde_json::json!({"hiden": 3})).is_err());

@@ -16,7 +16,7 @@ use super::config::JawInit;
 use super::model::{AimNet, IDENTITY_9D, normalisation, normalise};
 use super::{AimConfig, TrainingSet};
 use crate::training::backend::Backend;
-use crate::training::checkpoint::{STATE_FILE, WeightFiles};
+use crate::training::checkpoint::{self, CheckpointError, InvalidState, STATE_FILE, WeightFiles};
 use crate::training::nn::to_vec;
 
 /// Names of the logged loss terms, in [`LossRecord::terms`] order. "skinning" is eq. 15 (k = 0
@@ -428,20 +428,7 @@ pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> R
     };
     if options.resume {
         let (n, o, s) = load_checkpoint(dir, net, optim, &device)?;
-        if s.config != *config {
-            bail!(
-                "{}: the checkpoint was trained with another configuration ({}); resume with the same config",
-                dir.display(),
-                s.config.differences(config).join(", ")
-            );
-        }
-        if s.names != set.names {
-            bail!(
-                "{}: the checkpoint was trained on other shapes ({:?})",
-                dir.display(),
-                s.names
-            );
-        }
+        check_same_run(dir, &s, config, &set.names)?;
         (net, optim, state) = (n, o, s);
     } else {
         // The template travels with the checkpoint so that `sinew bake` needs nothing else.
@@ -518,29 +505,23 @@ pub fn save_checkpoint(
     net: &AimNet,
     optim: &burn::optim::ModuleOptimizer,
     state: &mut CheckpointState,
-) -> Result<()> {
+) -> Result<(), CheckpointError> {
     let model = net
         .clone()
         .into_record()
         .into_bytes()
-        .map_err(|e| anyhow::anyhow!("{}: cannot serialise the model: {e:?}", dir.display()))?;
+        .map_err(|e| checkpoint::serialise_error(dir, "model", e))?;
     let opt = optim
         .into_bytes()
-        .map_err(|e| anyhow::anyhow!("{}: cannot serialise the optimiser: {e:?}", dir.display()))?;
-    crate::training::checkpoint::save(dir, state.steps_done, &model, &opt, state, |s, f| {
+        .map_err(|e| checkpoint::serialise_error(dir, "optimiser", e))?;
+    checkpoint::save(dir, state.steps_done, &model, &opt, state, |s, f| {
         s.files = f;
-    })?;
-    Ok(())
+    })
 }
 
 /// Reads a checkpoint folder's `state.json`; the error names the file.
-pub fn read_state(dir: &Path) -> Result<CheckpointState> {
-    serde_json::from_value(crate::training::checkpoint::read_state_value(dir)?).with_context(|| {
-        format!(
-            "{}: not an AIM checkpoint state",
-            dir.join(STATE_FILE).display()
-        )
-    })
+pub fn read_state(dir: &Path) -> Result<CheckpointState, CheckpointError> {
+    Ok(checkpoint::read_state(dir, "an AIM checkpoint state")?.0)
 }
 
 /// Loads a checkpoint folder into a model of the right shape.
@@ -549,29 +530,26 @@ pub fn load_checkpoint(
     net: AimNet,
     optim: burn::optim::ModuleOptimizer,
     device: &Device,
-) -> Result<(AimNet, burn::optim::ModuleOptimizer, CheckpointState)> {
+) -> Result<(AimNet, burn::optim::ModuleOptimizer, CheckpointState), CheckpointError> {
     let state = read_state(dir)?;
-    let (model_name, optim_name, model, opt) = if state.files.is_legacy() {
+    let (model_path, optim_path, model, opt) = if state.files.is_legacy() {
         let read = |name: &str| {
-            std::fs::read(dir.join(name))
-                .with_context(|| format!("{}: cannot read checkpoint file {name}", dir.display()))
+            let path = dir.join(name);
+            match std::fs::read(&path) {
+                Ok(bytes) => Ok((path, bytes)),
+                Err(source) => Err(CheckpointError::WeightRead { path, source }),
+            }
         };
-        (
-            "model.bpk",
-            "optim.bpk",
-            read("model.bpk")?,
-            read("optim.bpk")?,
-        )
+        let ((model_path, model), (optim_path, opt)) = (read("model.bpk")?, read("optim.bpk")?);
+        (model_path, optim_path, model, opt)
     } else {
-        state.files.validate().with_context(|| {
-            format!(
-                "{}: invalid checkpoint state",
-                dir.join(STATE_FILE).display()
-            )
-        })?;
+        state
+            .files
+            .validate()
+            .map_err(|reason| checkpoint::invalid(dir, reason))?;
         (
-            state.files.model_file.as_str(),
-            state.files.optim_file.as_str(),
+            dir.join(&state.files.model_file),
+            dir.join(&state.files.optim_file),
             state.files.read_model(dir)?,
             state.files.read_optim(dir)?,
         )
@@ -581,18 +559,59 @@ pub fn load_checkpoint(
     } else {
         AimNet::new(&state.config, state.names.len(), device)
     };
-    let record = burn::store::ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(model))
-        .map_err(|e| anyhow::anyhow!("{}/{model_name}: invalid: {e:?}", dir.display()))?;
-    let net = net.try_load_record(record).map_err(|e| {
-        anyhow::anyhow!(
-            "{}/{model_name}: does not fit the model: {e:?}",
-            dir.display()
-        )
-    })?;
+    let record = checkpoint::record_from_bytes(&model_path, model)?;
+    let net = net
+        .try_load_record(record)
+        .map_err(|e| CheckpointError::Mismatch {
+            path: model_path,
+            what: "the model",
+            detail: format!("{e:?}"),
+        })?;
     let optim = optim
         .from_bytes(burn::tensor::Bytes::from_bytes_vec(opt))
-        .map_err(|e| anyhow::anyhow!("{}/{optim_name}: invalid: {e:?}", dir.display()))?;
+        .map_err(|e| CheckpointError::Record {
+            path: optim_path,
+            detail: format!("{e:?}"),
+        })?;
     Ok((net, optim, state))
+}
+
+/// Checks that the checkpoint `state` read from `dir` belongs to a run of `config` on the
+/// shapes `names`; the error names `state.json` and every difference.
+pub fn check_same_run(
+    dir: &Path,
+    state: &CheckpointState,
+    config: &AimConfig,
+    names: &[String],
+) -> Result<(), CheckpointError> {
+    let mut differences = Vec::new();
+    checkpoint::serialised_differences("config", &state.config, config, &mut differences).map_err(
+        |source| CheckpointError::EncodeState {
+            path: dir.join(STATE_FILE),
+            source,
+        },
+    )?;
+    if differences.is_empty() && state.config != *config {
+        // Configurations that differ yet write the same JSON: named whole.
+        differences.push(format!(
+            "config: {:?} in the checkpoint, {config:?} now",
+            state.config
+        ));
+    }
+    if state.names != names {
+        differences.push(format!(
+            "shapes: {:?} in the checkpoint, {names:?} now",
+            state.names
+        ));
+    }
+    if differences.is_empty() {
+        Ok(())
+    } else {
+        Err(checkpoint::invalid(
+            dir,
+            InvalidState::OtherRun { differences },
+        ))
+    }
 }
 
 /// Loads only the model and state of a checkpoint (for baking), on an inference device.

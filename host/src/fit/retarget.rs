@@ -16,18 +16,19 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, anyhow, bail, ensure};
+use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 use sinew_core::SinewFile;
 use sinew_core::aim::AimActor;
+use sinew_core::error::FormatError;
 use sinew_core::performance::{self as perf, Coefficients, Performance};
-use sinew_core::replay::{hash_words, model_hash};
+use sinew_core::replay::{ReplayError, hash_words, model_hash};
 
 use crate::figures::render::{Image, View, render, text_scale, text_width};
-use crate::fit::bake::play;
+use crate::fit::bake::{BakeError, play};
 use crate::fit::commands::fit_command;
 use crate::fit::setup::FitConfig;
-use crate::io::container::SinewWriter;
+use crate::io::container::{SinewWriter, WriterError};
 use crate::io::mesh::{Mesh, points};
 use crate::training::backend::Backend;
 
@@ -60,31 +61,182 @@ impl Part {
     }
 }
 
+/// A file's bytes with its path, so that a refusal can name the file.
+#[derive(Clone, Copy, Debug)]
+pub struct Input<'a> {
+    /// Where the bytes were read from.
+    pub path: &'a Path,
+    /// The file's bytes.
+    pub bytes: &'a [u8],
+}
+
+/// A retargeting that was refused or failed; each names the files concerned.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RetargetError {
+    /// An actor file that is not an AIM actor.
+    #[error("{}: not an AIM actor", path.display())]
+    NotAnActor {
+        /// The actor file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// A fit file that is not a `.sinew` performance.
+    #[error("{}: not a performance", path.display())]
+    NotAPerformance {
+        /// The fit file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// A fit of another actor than the source.
+    #[error("{}: not a fit of the source actor {}", fit.display(), actor.display())]
+    OtherActor {
+        /// The fit file.
+        fit: PathBuf,
+        /// The source actor's file.
+        actor: PathBuf,
+        /// What the core said.
+        #[source]
+        source: ReplayError,
+    },
+    /// Actors with different vertex counts.
+    #[error(
+        "{} has {source_vertices} vertices and {} {target_vertices}: retargeting needs two \
+         actors in vertex correspondence (bake the target on `sinew data neutral --like SOURCE` \
+         for that)",
+        source_actor.display(),
+        target_actor.display()
+    )]
+    VertexCount {
+        /// The source actor's file.
+        source_actor: PathBuf,
+        /// The target actor's file.
+        target_actor: PathBuf,
+        /// The source's vertices.
+        source_vertices: usize,
+        /// The target's vertices.
+        target_vertices: usize,
+    },
+    /// Actors with the same vertex count but other triangles.
+    #[error(
+        "the triangles of {} and {} differ: the actors are not in vertex correspondence",
+        source_actor.display(),
+        target_actor.display()
+    )]
+    Triangles {
+        /// The source actor's file.
+        source_actor: PathBuf,
+        /// The target actor's file.
+        target_actor: PathBuf,
+    },
+    /// Actors trained on different numbers of shapes.
+    #[error(
+        "{} has {source_shapes} correctives and {} {target_shapes}: both must be trained on the \
+         same shapes",
+        source_actor.display(),
+        target_actor.display()
+    )]
+    ShapeCount {
+        /// The source actor's file.
+        source_actor: PathBuf,
+        /// The target actor's file.
+        target_actor: PathBuf,
+        /// The source's correctives.
+        source_shapes: usize,
+        /// The target's correctives.
+        target_shapes: usize,
+    },
+    /// A frame whose head and jaw transforms cannot be read.
+    #[error("{}: frame {frame} unreadable", path.display())]
+    Frame {
+        /// The fit file.
+        path: PathBuf,
+        /// The frame (0-based).
+        frame: usize,
+    },
+    /// The retargeted performance could not be laid out as a `.sinew` file.
+    #[error("{}: retargeted onto {}", fit.display(), target_actor.display())]
+    Layout {
+        /// The fit file.
+        fit: PathBuf,
+        /// The target actor's file.
+        target_actor: PathBuf,
+        /// What the writer said.
+        #[source]
+        source: Box<WriterError>,
+    },
+    /// The retargeted performance does not play on the target.
+    #[error("{}: retargeted onto {}", fit.display(), target_actor.display())]
+    Play {
+        /// The fit file.
+        fit: PathBuf,
+        /// The target actor's file.
+        target_actor: PathBuf,
+        /// Why it does not play.
+        #[source]
+        source: Box<BakeError>,
+    },
+    /// A strip frame past the performance's end.
+    #[error("{}: strip frame {frame} is past the performance's {frames} frames", fit.display())]
+    StripFrame {
+        /// The fit file.
+        fit: PathBuf,
+        /// The frame asked for (0-based).
+        frame: usize,
+        /// The performance's frames.
+        frames: usize,
+    },
+}
+
+/// Reads `input` as an AIM actor.
+fn actor<'a>(input: Input<'a>) -> Result<AimActor<'a>, RetargetError> {
+    AimActor::from_bytes(input.bytes).map_err(|source| RetargetError::NotAnActor {
+        path: input.path.to_owned(),
+        source,
+    })
+}
+
 /// Checks that `source` and `target` are AIM actors in correspondence: the same vertices (count
 /// and triangles) and the same number of correctives.
-fn check_correspondence(source: &AimActor<'_>, target: &AimActor<'_>) -> Result<()> {
-    ensure!(
-        source.vertex_count() == target.vertex_count(),
-        "the source has {} vertices and the target {}: retargeting needs two actors in vertex \
-         correspondence (bake the target on `sinew data neutral --like SOURCE` for that)",
-        source.vertex_count(),
-        target.vertex_count()
-    );
-    ensure!(
-        source
-            .triangles()
-            .indices()
-            .iter()
-            .eq(target.triangles().indices().iter()),
-        "the source's and the target's triangles differ: the actors are not in vertex \
-         correspondence"
-    );
-    ensure!(
-        source.shape_count() == target.shape_count(),
-        "the source has {} correctives and the target {}: both must be trained on the same shapes",
-        source.shape_count(),
-        target.shape_count()
-    );
+fn check_correspondence(
+    (source, src): (Input<'_>, &AimActor<'_>),
+    (target, dst): (Input<'_>, &AimActor<'_>),
+) -> Result<(), RetargetError> {
+    let paths = || (source.path.to_owned(), target.path.to_owned());
+    if src.vertex_count() != dst.vertex_count() {
+        let (source_actor, target_actor) = paths();
+        return Err(RetargetError::VertexCount {
+            source_actor,
+            target_actor,
+            source_vertices: src.vertex_count(),
+            target_vertices: dst.vertex_count(),
+        });
+    }
+    if !src
+        .triangles()
+        .indices()
+        .iter()
+        .eq(dst.triangles().indices().iter())
+    {
+        let (source_actor, target_actor) = paths();
+        return Err(RetargetError::Triangles {
+            source_actor,
+            target_actor,
+        });
+    }
+    if src.shape_count() != dst.shape_count() {
+        let (source_actor, target_actor) = paths();
+        return Err(RetargetError::ShapeCount {
+            source_actor,
+            target_actor,
+            source_shapes: src.shape_count(),
+            target_shapes: dst.shape_count(),
+        });
+    }
     Ok(())
 }
 
@@ -93,54 +245,88 @@ fn check_correspondence(source: &AimActor<'_>, target: &AimActor<'_>) -> Result<
 ///
 /// # Errors
 /// If an input is not what it should be (an actor, a performance), the fit is not of `source`,
-/// or the actors are not in correspondence (the same vertices, triangles and shape count).
-pub fn retarget(source: &[u8], target: &[u8], fit: &[u8], part: Part) -> Result<Vec<u8>> {
-    let src = AimActor::from_bytes(source).map_err(|e| anyhow!("the source actor: {e}"))?;
-    let dst = AimActor::from_bytes(target).map_err(|e| anyhow!("the target actor: {e}"))?;
-    let p = Performance::from_bytes(fit).map_err(|e| anyhow!("the performance: {e}"))?;
-    p.check_actor(source, &src)
-        .map_err(|e| anyhow!("the performance is not a fit of the source actor: {e}"))?;
-    check_correspondence(&src, &dst)?;
-    let file = SinewFile::from_bytes(fit).map_err(|e| anyhow!("the performance: {e}"))?;
-    let mut w = SinewWriter::from_file(&file)?;
+/// or the actors are not in correspondence (the same vertices, triangles and shape count); the
+/// error names the files.
+pub fn retarget(
+    source: Input<'_>,
+    target: Input<'_>,
+    fit: Input<'_>,
+    part: Part,
+) -> Result<Vec<u8>, RetargetError> {
+    let src = actor(source)?;
+    let dst = actor(target)?;
+    let not_a_performance = |source| RetargetError::NotAPerformance {
+        path: fit.path.to_owned(),
+        source,
+    };
+    let p = Performance::from_bytes(fit.bytes).map_err(not_a_performance)?;
+    p.check_actor(source.bytes, &src)
+        .map_err(|reason| RetargetError::OtherActor {
+            fit: fit.path.to_owned(),
+            actor: source.path.to_owned(),
+            source: reason,
+        })?;
+    check_correspondence((source, &src), (target, &dst))?;
+    let layout = |e| RetargetError::Layout {
+        fit: fit.path.to_owned(),
+        target_actor: target.path.to_owned(),
+        source: Box::new(e),
+    };
+    let file = SinewFile::from_bytes(fit.bytes).map_err(not_a_performance)?;
+    let mut w = SinewWriter::from_file(&file).map_err(layout)?;
     for name in [perf::MODEL_HASH, perf::POSES, perf::HASHES, perf::POINTS] {
         w.remove_prefixed(name);
     }
-    w.meta("retargeted_from", format!("{:016x}", model_hash(source)))
-        .meta("retargeted_part", part.name());
-    w.u32s(perf::MODEL_HASH, &[2], &hash_words(model_hash(target)))?;
+    w.meta(
+        "retargeted_from",
+        format!("{:016x}", model_hash(source.bytes)),
+    )
+    .meta("retargeted_part", part.name());
+    w.u32s(
+        perf::MODEL_HASH,
+        &[2],
+        &hash_words(model_hash(target.bytes)),
+    )
+    .map_err(layout)?;
     let frames = p.frames();
     let mut poses = Vec::with_capacity(frames * 18);
     for f in 0..frames {
-        let (head, jaw) = p
-            .head_jaw(f)
-            .ok_or_else(|| anyhow!("frame {f} unreadable"))?;
+        let (head, jaw) = p.head_jaw(f).ok_or_else(|| RetargetError::Frame {
+            path: fit.path.to_owned(),
+            frame: f,
+        })?;
         poses.extend(head);
         poses.extend(if part == Part::Soft { JAW_AT_REST } else { jaw });
     }
-    w.f32s(perf::POSES, &[frames, 18], &poses)?;
+    w.f32s(perf::POSES, &[frames, 18], &poses).map_err(layout)?;
     let m = p.shape_count();
     match (part, p.coefficients()) {
         (Part::Jaw, _) => {
             for name in [perf::WEIGHTS, perf::CODES, perf::BOX, perf::F_W] {
                 w.remove_prefixed(name);
             }
-            w.f32s(perf::WEIGHTS, &[frames, m], &vec![0.0; frames * m])?;
+            w.f32s(perf::WEIGHTS, &[frames, m], &vec![0.0; frames * m])
+                .map_err(layout)?;
         }
         (_, Coefficients::Local { points, .. }) => {
             // F_W sees the points it was fitted at: the source's own, or those a retargeted
             // source performance already carries.
             let at = points.unwrap_or_else(|| src.template());
             let values: Vec<f32> = at.iter().collect();
-            w.f32s(perf::POINTS, &[values.len() / 3, 3], &values)?;
+            w.f32s(perf::POINTS, &[values.len() / 3, 3], &values)
+                .map_err(layout)?;
         }
         (_, Coefficients::Global(_)) => {}
     }
-    let unhashed = w.to_bytes()?;
-    let (_, hashes) = play(target, &unhashed)?;
+    let unhashed = w.to_bytes().map_err(layout)?;
+    let (_, hashes) = play(target.bytes, &unhashed).map_err(|e| RetargetError::Play {
+        fit: fit.path.to_owned(),
+        target_actor: target.path.to_owned(),
+        source: Box::new(e),
+    })?;
     let words: Vec<u32> = hashes.iter().flat_map(|&h| hash_words(h)).collect();
-    w.u32s(perf::HASHES, &[frames, 2], &words)?;
-    Ok(w.to_bytes()?)
+    w.u32s(perf::HASHES, &[frames, 2], &words).map_err(layout)?;
+    w.to_bytes().map_err(layout)
 }
 
 /// Where the source's performance comes from.
@@ -223,14 +409,21 @@ pub fn retarget_command(
     let start = Instant::now();
     let mut parts = Vec::with_capacity(Part::ALL.len());
     for part in Part::ALL {
-        let baked = retarget(&source_bytes, &target_bytes, &fit, part).with_context(|| {
-            format!(
-                "retargeting {} from {} to {}",
-                fit_path.display(),
-                source.display(),
-                target.display()
-            )
-        })?;
+        let baked = retarget(
+            Input {
+                path: source,
+                bytes: &source_bytes,
+            },
+            Input {
+                path: target,
+                bytes: &target_bytes,
+            },
+            Input {
+                path: &fit_path,
+                bytes: &fit,
+            },
+            part,
+        )?;
         let (frames, _) = play(&target_bytes, &baked)?;
         parts.push((part, baked, frames));
     }
@@ -238,14 +431,22 @@ pub fn retarget_command(
     let seconds_per_frame = start.elapsed().as_secs_f64() / frames as f64;
     let strip_frames = match strip {
         Some(s) => {
-            if let Some(&f) = s.iter().find(|&&f| f >= frames) {
-                bail!("strip frame {f} is past the performance's {frames} frames");
+            if let Some(&frame) = s.iter().find(|&&f| f >= frames) {
+                return Err(RetargetError::StripFrame {
+                    fit: fit_path,
+                    frame,
+                    frames,
+                }
+                .into());
             }
             s.to_vec()
         }
         None => spread(frames, 4),
     };
-    let dst = AimActor::from_bytes(&target_bytes).map_err(|e| anyhow!("{e}"))?;
+    let dst = actor(Input {
+        path: target,
+        bytes: &target_bytes,
+    })?;
     let mesh = Mesh::of_actor(&dst);
     for (part, baked, played) in &parts {
         crate::io::atomic::write(&out.join(format!("{}.sinew", part.name())), baked)?;
@@ -282,8 +483,10 @@ pub fn retarget_command(
 
 fn read_actor(path: &Path) -> Result<Vec<u8>> {
     let bytes = crate::io::container::read(path)?;
-    AimActor::from_bytes(&bytes)
-        .map_err(|e| anyhow!("{}: not an AIM actor: {e}", path.display()))?;
+    actor(Input {
+        path,
+        bytes: &bytes,
+    })?;
     Ok(bytes)
 }
 

@@ -2,6 +2,7 @@
 //! sections 3.1, 4.3 and 4.4): labelled landmark motions, their square-root velocity functions on
 //! the unit hypersphere, and what is built on them. See docs/MOTION.md.
 
+pub mod checkpoint;
 pub mod classes;
 pub mod classifier;
 pub mod commands;

@@ -7,7 +7,7 @@
 //! the decoder's shape, a fingerprint of the training data and the caller's context (protocol,
 //! fold, …) and names every difference.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use burn::module::Module;
@@ -265,7 +265,7 @@ fn check_same_run(
         .map_err(encode)?;
     let mut diffs = Vec::new();
     for key in IDENTITY {
-        differences(key, &stored[key], &current[key], &mut diffs);
+        checkpoint::differences(key, &stored[key], &current[key], &mut diffs);
     }
     if !diffs.is_empty() {
         return Err(checkpoint::invalid(
@@ -274,43 +274,6 @@ fn check_same_run(
         ));
     }
     Ok(())
-}
-
-/// Appends `path: A in the checkpoint, B now` for every leaf where `a` and `b` differ.
-fn differences(path: &str, a: &Value, b: &Value, out: &mut Vec<String>) {
-    match (a, b) {
-        (Value::Object(x), Value::Object(y)) => {
-            let keys: BTreeSet<&String> = x.keys().chain(y.keys()).collect();
-            for k in keys {
-                differences(
-                    &format!("{path}.{k}"),
-                    x.get(k).unwrap_or(&Value::Null),
-                    y.get(k).unwrap_or(&Value::Null),
-                    out,
-                );
-            }
-        }
-        _ if a != b => out.push(format!(
-            "{path}: {} in the checkpoint, {} now",
-            shorten(a),
-            shorten(b)
-        )),
-        _ => {}
-    }
-}
-
-/// A value's JSON, cut to 60 characters.
-fn shorten(v: &Value) -> String {
-    let s = if v.is_null() {
-        "nothing".to_owned()
-    } else {
-        v.to_string()
-    };
-    if s.chars().count() > 60 {
-        format!("{}…", s.chars().take(59).collect::<String>())
-    } else {
-        s
-    }
 }
 
 /// Serde for numbers that must read back bit for bit: as decimal strings, through `Display` and
@@ -394,21 +357,5 @@ mod tests {
             );
         }
         assert!(serde_json::from_str::<T>(r#"{"a": "x", "b": []}"#).is_err());
-    }
-
-    #[test]
-    fn differences_name_each_field() {
-        let a: Value = serde_json::json!({"epochs": 3, "lr": 0.001, "filters": [4, 2]});
-        let b: Value = serde_json::json!({"epochs": 4, "lr": 0.001, "filters": [4, 3], "x": 1});
-        let mut out = Vec::new();
-        differences("config", &a, &b, &mut out);
-        assert_eq!(
-            out,
-            [
-                "config.epochs: 3 in the checkpoint, 4 now",
-                "config.filters: [4,2] in the checkpoint, [4,3] now",
-                "config.x: nothing in the checkpoint, 1 now",
-            ]
-        );
     }
 }

@@ -4,9 +4,11 @@
 //! `state.json` last, so an interruption at any moment leaves the previous checkpoint whole;
 //! earlier weight files are removed only once the new `state.json` is in place.
 
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
+use serde_json::Value;
 
 /// The name of the state file inside a checkpoint folder.
 pub const STATE_FILE: &str = "state.json";
@@ -121,6 +123,18 @@ pub enum CheckpointError {
         #[source]
         source: std::io::Error,
     },
+    /// A weight file that ends before what it holds does.
+    #[error("{}: truncated", path.display())]
+    Truncated {
+        /// The weight file.
+        path: PathBuf,
+    },
+    /// A weight file with bytes after what it holds.
+    #[error("{}: trailing bytes after the last record", path.display())]
+    TrailingBytes {
+        /// The weight file.
+        path: PathBuf,
+    },
     /// A file could not be written (the message names it).
     #[error(transparent)]
     Write(anyhow::Error),
@@ -186,6 +200,14 @@ pub enum InvalidState {
         done: usize,
         /// Steps asked for.
         asked: usize,
+    },
+    /// A step history of another length than the steps done.
+    #[error("{recorded} steps recorded for {done} steps done")]
+    History {
+        /// Steps recorded.
+        recorded: usize,
+        /// Steps done.
+        done: usize,
     },
     /// The checkpoint belongs to another run; each entry is `field: A in the checkpoint, B now`.
     #[error(
@@ -354,6 +376,61 @@ fn read_checked(dir: &Path, name: &str, crc: &str) -> Result<Vec<u8>, Checkpoint
     Ok(bytes)
 }
 
+/// Appends `path: A in the checkpoint, B now` for every leaf where `a` (the checkpoint's) and
+/// `b` (this run's) differ: the entries of [`InvalidState::OtherRun`].
+pub fn differences(path: &str, a: &Value, b: &Value, out: &mut Vec<String>) {
+    match (a, b) {
+        (Value::Object(x), Value::Object(y)) => {
+            let keys: BTreeSet<&String> = x.keys().chain(y.keys()).collect();
+            for k in keys {
+                differences(
+                    &format!("{path}.{k}"),
+                    x.get(k).unwrap_or(&Value::Null),
+                    y.get(k).unwrap_or(&Value::Null),
+                    out,
+                );
+            }
+        }
+        _ if a != b => out.push(format!(
+            "{path}: {} in the checkpoint, {} now",
+            shorten(a),
+            shorten(b)
+        )),
+        _ => {}
+    }
+}
+
+/// A value's JSON, cut to 60 characters.
+fn shorten(v: &Value) -> String {
+    let s = if v.is_null() {
+        "nothing".to_owned()
+    } else {
+        v.to_string()
+    };
+    if s.chars().count() > 60 {
+        format!("{}…", s.chars().take(59).collect::<String>())
+    } else {
+        s
+    }
+}
+
+/// [`differences`] of two values as serde_json writes them, under `path`. A value read back from
+/// `state.json` writes as the value it was written from, so only real differences are named.
+pub fn serialised_differences<T: Serialize>(
+    path: &str,
+    stored: &T,
+    current: &T,
+    out: &mut Vec<String>,
+) -> Result<(), serde_json::Error> {
+    differences(
+        path,
+        &serde_json::to_value(stored)?,
+        &serde_json::to_value(current)?,
+        out,
+    );
+    Ok(())
+}
+
 /// The error of a `what` (e.g. "decoder") that burn could not serialise for the checkpoint in
 /// `dir`.
 pub fn serialise_error(dir: &Path, what: &'static str, e: impl std::fmt::Debug) -> CheckpointError {
@@ -461,5 +538,21 @@ mod tests {
         let e = read_state_value(&dir.path().join("nowhere")).unwrap_err();
         assert!(matches!(e, CheckpointError::StateRead { .. }), "{e:?}");
         assert!(e.to_string().contains("nowhere"), "{e}");
+    }
+
+    #[test]
+    fn differences_name_each_field() {
+        let a: Value = serde_json::json!({"epochs": 3, "lr": 0.001, "filters": [4, 2]});
+        let b: Value = serde_json::json!({"epochs": 4, "lr": 0.001, "filters": [4, 3], "x": 1});
+        let mut out = Vec::new();
+        differences("config", &a, &b, &mut out);
+        assert_eq!(
+            out,
+            [
+                "config.epochs: 3 in the checkpoint, 4 now",
+                "config.filters: [4,2] in the checkpoint, [4,3] now",
+                "config.x: nothing in the checkpoint, 1 now",
+            ]
+        );
     }
 }

@@ -251,12 +251,32 @@ fn a_checkpoint_from_before_the_jaw_fields_resumes_with_the_paper_objective() {
         },
         &options(true, None),
     )
-    .unwrap_err()
-    .to_string();
+    .unwrap_err();
     assert!(
-        err.contains("jaw_init") && err.contains("lambda_jaw"),
-        "{err}"
+        matches!(
+            err.downcast_ref::<CheckpointError>(),
+            Some(CheckpointError::Invalid { path, source: InvalidState::OtherRun { differences } })
+                if path.ends_with(STATE_FILE)
+                    && differences == &[
+                        r#"config.jaw_init: "identity" in the checkpoint, "bones" now"#,
+                        "config.lambda_jaw: 0.0 in the checkpoint, 1.0 now",
+                    ]
+        ),
+        "{err:#}"
     );
+    // So is a training set of other shapes.
+    let mut fewer = set.clone();
+    fewer.names[1] = "renamed".into();
+    let err = train(&fewer, &paper, &options(true, None)).unwrap_err();
+    assert!(
+        matches!(
+            err.downcast_ref::<CheckpointError>(),
+            Some(CheckpointError::Invalid { source: InvalidState::OtherRun { differences }, .. })
+                if differences.len() == 1 && differences[0].starts_with("shapes: ")
+        ),
+        "{err:#}"
+    );
+    assert!(format!("{err:#}").contains("renamed"), "{err:#}");
     let done = train(&set, &paper, &options(true, None)).unwrap();
     assert!(done.complete);
     assert_eq!(done.state.config, paper);

@@ -1,5 +1,6 @@
 use super::*;
 use crate::motion::train::TangentData;
+use crate::training::checkpoint::{CheckpointError, InvalidState, STATE_FILE};
 
 /// Unit motions of two labels with 6 coordinates (2 landmarks) per frame.
 fn toy() -> TangentData {
@@ -72,18 +73,59 @@ fn a_resumed_run_continues_bit_for_bit() {
         bake(&straight.generator, &data, &config).unwrap()
     );
 
-    // Another run's settings are refused, naming the state file.
+    // Another run's settings are refused, naming the state file and the setting.
     let other = GanConfig {
         lr: 2e-3,
         ..config.clone()
     };
-    let err = format!(
-        "{:#}",
-        load_checkpoint(dir.path(), Run::new(&data, &other, &device), &other, &data).unwrap_err()
-    );
+    let e =
+        load_checkpoint(dir.path(), Run::new(&data, &other, &device), &other, &data).unwrap_err();
     assert!(
-        err.contains(STATE_FILE) && err.contains("other settings"),
-        "{err}"
+        matches!(&e, CheckpointError::Invalid { path, source: InvalidState::OtherRun { differences } }
+            if path.ends_with(STATE_FILE)
+                && differences == &["settings.lr: 0.001 in the checkpoint, 0.002 now"]),
+        "{e:?}"
+    );
+    assert!(format!("{e:#}").contains(STATE_FILE), "{e:#}");
+    // So are other training motions, and a state whose history does not fit its steps.
+    let mut moved = toy();
+    moved.p[0] += 1.0;
+    let e = load_checkpoint(
+        dir.path(),
+        Run::new(&moved, &config, &device),
+        &config,
+        &moved,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, CheckpointError::Invalid { source: InvalidState::OtherRun { differences }, .. }
+            if differences.len() == 1 && differences[0].starts_with("training motions")),
+        "{e:?}"
+    );
+    let path = dir.path().join(STATE_FILE);
+    let mut state: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    state["steps_done"] = serde_json::json!(2);
+    std::fs::write(&path, serde_json::to_vec(&state).unwrap()).unwrap();
+    let e = load_checkpoint(
+        dir.path(),
+        Run::new(&data, &config, &device),
+        &config,
+        &data,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            &e,
+            CheckpointError::Invalid {
+                source: InvalidState::History {
+                    recorded: 3,
+                    done: 2
+                },
+                ..
+            }
+        ),
+        "{e:?}"
     );
 }
 
@@ -186,4 +228,48 @@ fn the_baked_generator_is_a_motion_generator_the_core_reads() {
     assert!((per_label[5] - (sum / 6.0) as f32).abs() < 1e-6);
     assert!((mean - per_label.iter().sum::<f32>() / 12.0).abs() < 1e-5);
     assert!(crate::motion::diversity::diversity(&core, 1).is_err());
+}
+
+#[test]
+fn a_damaged_optimiser_file_is_named() {
+    let (data, config) = (toy(), config());
+    let device = Backend::Flex.autodiff_device(config.seed).unwrap();
+    let run = run_to(&data, &config, Run::new(&data, &config, &device), 1);
+    let dir = tempfile::tempdir().unwrap();
+    save_checkpoint(dir.path(), &run, &config, &data).unwrap();
+    let state_path = dir.path().join(STATE_FILE);
+    let state: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&state_path).unwrap()).unwrap();
+    let name = state["files"]["optim_file"].as_str().unwrap().to_owned();
+    let whole = std::fs::read(dir.path().join(&name)).unwrap();
+    // Bytes whose CRC state.json records, so that only their layout is wrong.
+    let rewrite = |bytes: &[u8]| {
+        std::fs::write(dir.path().join(&name), bytes).unwrap();
+        let mut state = state.clone();
+        state["files"]["optim_crc"] =
+            serde_json::json!(crate::training::checkpoint::crc_hex(bytes));
+        std::fs::write(&state_path, serde_json::to_vec(&state).unwrap()).unwrap();
+        load_checkpoint(
+            dir.path(),
+            Run::new(&data, &config, &device),
+            &config,
+            &data,
+        )
+        .unwrap_err()
+    };
+    let mut longer = whole.clone();
+    longer.push(0);
+    let e = rewrite(&longer);
+    assert!(
+        matches!(&e, CheckpointError::TrailingBytes { path } if path.ends_with(&name)),
+        "{e:?}"
+    );
+    let e = rewrite(&whole[..whole.len() - 1]);
+    assert!(
+        matches!(&e, CheckpointError::Truncated { path } if path.ends_with(&name)),
+        "{e:?}"
+    );
+    let e = rewrite(&whole[..4]);
+    assert!(matches!(&e, CheckpointError::Truncated { .. }), "{e:?}");
+    assert!(e.to_string().contains(&name), "{e}");
 }
