@@ -559,14 +559,7 @@ pub fn load_checkpoint(
     } else {
         AimNet::new(&state.config, state.names.len(), device)
     };
-    let record = checkpoint::record_from_bytes(&model_path, model)?;
-    let net = net
-        .try_load_record(record)
-        .map_err(|e| CheckpointError::Mismatch {
-            path: model_path,
-            what: "the model",
-            detail: format!("{e:?}"),
-        })?;
+    let net = checkpoint::load_module(net, model_path, model, "the model")?;
     let optim = optim
         .from_bytes(burn::tensor::Bytes::from_bytes_vec(opt))
         .map_err(|e| CheckpointError::Record {

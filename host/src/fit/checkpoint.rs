@@ -98,14 +98,7 @@ pub fn load(
     let (state, _): (FitState, _) = checkpoint::read_state(dir, "a fit checkpoint state")?;
     check(&state, expected).map_err(|reason| checkpoint::invalid(dir, reason))?;
     let model_path = dir.join(&state.files.model_file);
-    let record = checkpoint::record_from_bytes(&model_path, state.files.read_model(dir)?)?;
-    let net = net
-        .try_load_record(record)
-        .map_err(|e| CheckpointError::Mismatch {
-            path: model_path,
-            what: "this fit",
-            detail: format!("{e:?}"),
-        })?;
+    let net = checkpoint::load_module(net, model_path, state.files.read_model(dir)?, "this fit")?;
     let optim_path = dir.join(&state.files.optim_file);
     let optim = optim
         .from_bytes(burn::tensor::Bytes::from_bytes_vec(

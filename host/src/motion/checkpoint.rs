@@ -108,17 +108,16 @@ pub fn load_checkpoint(
         checkpoint::read_state(dir, "a Motion3DGAN checkpoint state")?;
     check(dir, &state, config, &data_crc(data))?;
     let model_path = dir.join(&state.files.model_file);
-    let record = checkpoint::record_from_bytes(&model_path, state.files.read_model(dir)?)?;
-    let nets = Networks {
+    let networks = Networks {
         generator: run.generator,
         critic: run.critic,
-    }
-    .try_load_record(record)
-    .map_err(|e| CheckpointError::Mismatch {
-        path: model_path,
-        what: "the networks",
-        detail: format!("{e:?}"),
-    })?;
+    };
+    let nets = checkpoint::load_module(
+        networks,
+        model_path,
+        state.files.read_model(dir)?,
+        "the networks",
+    )?;
     let optim_path = dir.join(&state.files.optim_file);
     let opt = state.files.read_optim(dir)?;
     let split = |at: usize| -> Result<(Vec<u8>, usize), CheckpointError> {

@@ -226,14 +226,12 @@ pub fn load_checkpoint(
     let (state, stored) = read_state_json(dir)?;
     check_same_run(dir, &stored, current)?;
     let model_path = dir.join(&state.files.model_file);
-    let record = checkpoint::record_from_bytes(&model_path, state.files.read_model(dir)?)?;
-    let decoder = decoder
-        .try_load_record(record)
-        .map_err(|e| CheckpointError::Mismatch {
-            path: model_path,
-            what: "the decoder",
-            detail: format!("{e:?}"),
-        })?;
+    let decoder = checkpoint::load_module(
+        decoder,
+        model_path,
+        state.files.read_model(dir)?,
+        "the decoder",
+    )?;
     let optim_path = dir.join(&state.files.optim_file);
     let opt = state.files.read_optim(dir)?;
     let optim = optim

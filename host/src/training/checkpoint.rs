@@ -454,6 +454,25 @@ pub fn record_from_bytes(
     })
 }
 
+/// Loads the burn record in the weight file `path` (its `bytes`, checked against their CRC)
+/// into `module`, whose shape must match it ([`CheckpointError::Mismatch`] names `what` it was
+/// loaded into otherwise).
+pub fn load_module<M: burn::module::Module>(
+    module: M,
+    path: PathBuf,
+    bytes: Vec<u8>,
+    what: &'static str,
+) -> Result<M, CheckpointError> {
+    let record = record_from_bytes(&path, bytes)?;
+    module
+        .try_load_record(record)
+        .map_err(|e| CheckpointError::Mismatch {
+            path,
+            what,
+            detail: format!("{e:?}"),
+        })
+}
+
 /// The checkpoint folder that belongs to a model path: `MODEL.ckpt/` beside it.
 pub fn checkpoint_dir_for(model: &Path) -> PathBuf {
     model.with_extension("ckpt")
