@@ -141,5 +141,5 @@ pub fn bake(
     if q16 {
         bytes = crate::aim::bake::with_q16_cache(&bytes)?;
     }
-    crate::io::atomic::write(out, &bytes)
+    Ok(crate::io::atomic::write(out, &bytes)?)
 }

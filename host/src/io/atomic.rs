@@ -2,12 +2,60 @@
 //! then rename it over the destination, so an interrupted run never leaves a half-written file.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+/// The step of an atomic write that failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WriteStep {
+    /// Creating the destination's folder.
+    CreateFolder,
+    /// Creating the temporary file beside the destination.
+    CreateTemporary,
+    /// Writing or flushing the bytes.
+    Write,
+    /// Syncing the temporary file to disk.
+    Sync,
+    /// Renaming the finished temporary file over the destination.
+    Rename,
+}
+
+impl std::fmt::Display for WriteStep {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            WriteStep::CreateFolder => "cannot create folder",
+            WriteStep::CreateTemporary => "cannot create a temporary file",
+            WriteStep::Write => "write failed",
+            WriteStep::Sync => "sync failed",
+            WriteStep::Rename => "cannot move the finished file into place",
+        })
+    }
+}
+
+/// An atomic write that failed; the destination keeps its previous content.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {step}", path.display())]
+pub struct AtomicWriteError {
+    /// The file (or, for [`WriteStep::CreateFolder`] and [`WriteStep::CreateTemporary`], the
+    /// folder) the step failed on.
+    pub path: PathBuf,
+    /// The step that failed.
+    pub step: WriteStep,
+    /// The operating system's error.
+    #[source]
+    pub source: std::io::Error,
+}
+
+/// Maps an I/O error of `step` on `at` to an [`AtomicWriteError`].
+fn fail(at: &Path, step: WriteStep) -> impl FnOnce(std::io::Error) -> AtomicWriteError + '_ {
+    move |source| AtomicWriteError {
+        path: at.to_path_buf(),
+        step,
+        source,
+    }
+}
 
 /// Writes `bytes` to `path` atomically.
-pub fn write(path: &Path, bytes: &[u8]) -> Result<()> {
+pub fn write(path: &Path, bytes: &[u8]) -> Result<(), AtomicWriteError> {
     write_with(path, |f| f.write_all(bytes))
 }
 
@@ -15,13 +63,12 @@ pub fn write(path: &Path, bytes: &[u8]) -> Result<()> {
 pub fn write_with(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> Result<()> {
+) -> Result<(), AtomicWriteError> {
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("{}: cannot create folder", dir.display()))?;
+    std::fs::create_dir_all(dir).map_err(fail(dir, WriteStep::CreateFolder))?;
     let mut builder = tempfile::Builder::new();
     builder.prefix(".sinew-tmp-");
     // A finished output is an ordinary file: readable by others as the umask allows, not the
@@ -30,22 +77,17 @@ pub fn write_with(
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
     let mut tmp = builder
         .tempfile_in(dir)
-        .with_context(|| format!("{}: cannot create a temporary file", dir.display()))?;
+        .map_err(fail(dir, WriteStep::CreateTemporary))?;
     {
         let mut w = std::io::BufWriter::new(tmp.as_file_mut());
-        fill(&mut w).with_context(|| format!("{}: write failed", path.display()))?;
-        w.flush()
-            .with_context(|| format!("{}: write failed", path.display()))?;
+        fill(&mut w).map_err(fail(path, WriteStep::Write))?;
+        w.flush().map_err(fail(path, WriteStep::Write))?;
     }
     tmp.as_file()
         .sync_all()
-        .with_context(|| format!("{}: sync failed", path.display()))?;
-    tmp.persist(path).with_context(|| {
-        format!(
-            "{}: cannot move the finished file into place",
-            path.display()
-        )
-    })?;
+        .map_err(fail(path, WriteStep::Sync))?;
+    tmp.persist(path)
+        .map_err(|e| fail(path, WriteStep::Rename)(e.error))?;
     Ok(())
 }
 
@@ -86,7 +128,10 @@ mod tests {
             w.write_all(b"partial")?;
             Err(std::io::Error::other("disk full"))
         });
-        assert!(format!("{:#}", err.unwrap_err()).contains("out.bin"));
+        let err = err.unwrap_err();
+        assert_eq!(err.step, WriteStep::Write);
+        assert_eq!(err.path, p);
+        assert!(err.to_string().contains("out.bin"));
         assert_eq!(std::fs::read(&p).unwrap(), b"old");
     }
 }

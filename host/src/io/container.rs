@@ -39,7 +39,7 @@ pub enum ContainerError {
     Build(#[from] WriterError),
     /// The bytes could not be written to disk (the message names the file).
     #[error(transparent)]
-    Write(anyhow::Error),
+    Write(crate::io::atomic::AtomicWriteError),
 }
 
 /// A section, metadata entry or size that the format cannot hold, found before anything is

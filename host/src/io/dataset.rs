@@ -97,7 +97,7 @@ pub enum DataSetError {
     },
     /// A file could not be written to disk (the message names the file).
     #[error(transparent)]
-    Write(anyhow::Error),
+    Write(crate::io::atomic::AtomicWriteError),
 }
 
 /// An entry of a manifest: a pair of a pair set or a sequence of a motion set.

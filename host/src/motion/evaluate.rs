@@ -517,5 +517,8 @@ fn lstm_on(motion: &[f32], neutral: &[f32]) -> Result<Vec<Vec<f32>>> {
 }
 
 fn write_report(path: &Path, report: &EvalReport) -> Result<()> {
-    crate::io::atomic::write(path, serde_json::to_string_pretty(report)?.as_bytes())
+    Ok(crate::io::atomic::write(
+        path,
+        serde_json::to_string_pretty(report)?.as_bytes(),
+    )?)
 }

@@ -137,7 +137,7 @@ pub enum CheckpointError {
     },
     /// A file could not be written (the message names it).
     #[error(transparent)]
-    Write(anyhow::Error),
+    Write(crate::io::atomic::AtomicWriteError),
 }
 
 /// A rule of a checkpoint state that it breaks, or the run it does not belong to.

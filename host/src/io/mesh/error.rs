@@ -83,7 +83,7 @@ pub enum MeshError {
     },
     /// The encoded mesh could not be written to disk (the message names the file).
     #[error(transparent)]
-    Write(anyhow::Error),
+    Write(crate::io::atomic::AtomicWriteError),
     /// A mesh that should correspond vertex by vertex to a reference has other counts.
     #[error(
         "{}: topology differs from the reference: expected {expected_vertices} vertices and \
