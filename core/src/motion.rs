@@ -6,7 +6,8 @@
 //! Gaussian noise by Box–Muller through `libm` ([`gaussian_noise`]) → the generator MLP on
 //! `[z ‖ one-hot label]` → its output projected onto the tangent space at the reference motion p
 //! → the exponential map ([`crate::srvf::exp_map`], a unit SRVF) → decoding onto a neutral's
-//! landmarks ([`crate::srvf::decode`]). No allocation: every buffer is the caller's, sized by
+//! landmarks ([`crate::srvf::decode`]) with an arc length drawn from the label's training
+//! lengths (the next value of the seed's Gaussian stream). No allocation: every buffer is the caller's, sized by
 //! [`MotionGenerator::scratch_len`].
 
 use rand_core::{RngCore, SeedableRng};
@@ -42,7 +43,9 @@ pub fn gaussian_noise(seed: u64, out: &mut [f32]) {
 pub struct MotionGenerator<'a> {
     mlp: Mlp<'a>,
     p: F32s<'a>,
-    length: f32,
+    /// `motion.length`: one length for every label (`[1]`), or per label its mean and spread
+    /// (`[LABELS, 2]`).
+    lengths: F32s<'a>,
     noise: usize,
     dims: usize,
 }
@@ -50,7 +53,9 @@ pub struct MotionGenerator<'a> {
 impl<'a> MotionGenerator<'a> {
     /// Validates `bytes` as a motion generator: kind, `content` metadata, the MLP `motion.g`
     /// (inputs = noise + [`LABELS`], outputs = `FRAMES × dims`), the reference motion `motion.p`
-    /// `[FRAMES, dims]` with `dims` whole 3D points, and a finite, positive `motion.length`.
+    /// `[FRAMES, dims]` with `dims` whole 3D points, and `motion.length`: `[1]`, one positive
+    /// length for every label, or `[LABELS, 2]`, per label a positive mean and a non-negative
+    /// spread, all finite.
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::MotionGenerator)?;
         if file.metadata().get("content") != Some(CONTENT) {
@@ -70,19 +75,28 @@ impl<'a> MotionGenerator<'a> {
         if !p.iter().all(f32::is_finite) {
             return Err(FormatError::NonFinite);
         }
-        let length = file
-            .f32_tensor("motion.length", &[1])?
-            .iter()
-            .next()
-            .ok_or(FormatError::IncompatibleShapes)?;
-        if !(length.is_finite() && length > 0.0) {
-            return Err(FormatError::NonFinite);
+        let (shape, rank) = file.dims_of("motion.length")?;
+        let lengths = match (rank, shape[0]) {
+            (1, 1) => file.f32_tensor("motion.length", &[1])?,
+            (2, n) if n as usize == LABELS => {
+                file.f32_tensor("motion.length", &[LABELS as u32, 2])?
+            }
+            _ => return Err(FormatError::IncompatibleShapes),
+        };
+        let mut values = lengths.iter();
+        while let Some(mean) = values.next() {
+            let spread = if rank == 2 { values.next() } else { Some(0.0) };
+            match spread {
+                Some(spread)
+                    if mean.is_finite() && mean > 0.0 && spread.is_finite() && spread >= 0.0 => {}
+                _ => return Err(FormatError::NonFinite),
+            }
         }
         Ok(Self {
             noise: mlp.inputs() - LABELS,
             mlp,
             p,
-            length,
+            lengths,
             dims,
         })
     }
@@ -107,9 +121,28 @@ impl<'a> MotionGenerator<'a> {
         (FRAMES + 1) * self.dims
     }
 
-    /// The default intensity (the training curves' mean arc length).
-    pub fn length(&self) -> f32 {
-        self.length
+    /// The mean arc length of `label`'s training curves (of all labels', for a file with one
+    /// length): the length a motion of intensity 1 has on average. 0 for a label not below
+    /// [`LABELS`].
+    pub fn length(&self, label: usize) -> f32 {
+        self.length_of(label).0
+    }
+
+    /// The standard deviation of `label`'s training curves' arc length (0 for a file with one
+    /// length, or a label not below [`LABELS`]).
+    pub fn length_spread(&self, label: usize) -> f32 {
+        self.length_of(label).1
+    }
+
+    /// (mean, spread) of `label`'s arc length.
+    fn length_of(&self, label: usize) -> (f32, f32) {
+        if label >= LABELS {
+            return (0.0, 0.0);
+        }
+        if self.lengths.iter().len() == 1 {
+            return (self.lengths.at(0), 0.0);
+        }
+        (self.lengths.at(2 * label), self.lengths.at(2 * label + 1))
     }
 
     /// Scratch length [`MotionGenerator::motion`] and [`MotionGenerator::landmarks`] need.
@@ -139,12 +172,15 @@ impl<'a> MotionGenerator<'a> {
         if scratch.len() < self.scratch_len() {
             return Err(BufferError::Scratch);
         }
-        self.motion_into(label, seed, scratch, out)
+        self.motion_into(label, seed, scratch, out).map(|_| ())
     }
 
     /// The landmark curve of `label` from `seed` on `neutral` (`[dims]`, the face's landmarks):
-    /// [`MotionGenerator::motion`] decoded with length `intensity × length()` into `out`
-    /// (`[(FRAMES + 1) × dims]`, frame 0 the neutral).
+    /// [`MotionGenerator::motion`] decoded with length `intensity × max(0, m + s · g)` into
+    /// `out` (`[(FRAMES + 1) × dims]`, frame 0 the neutral), where `m` and `s` are the label's
+    /// [`MotionGenerator::length`] and [`MotionGenerator::length_spread`] and `g` is the seed's
+    /// standard normal value drawn right after the noise: the SRVF is scale-free, so how far a
+    /// motion goes is drawn from its label's training lengths.
     ///
     /// # Errors
     /// [`BufferError::Input`] for a label not below [`LABELS`] or a neutral of another length;
@@ -166,18 +202,21 @@ impl<'a> MotionGenerator<'a> {
         }
         // The motion itself lives in the first motion-sized part of the scratch.
         let (q, rest) = scratch.split_at_mut(self.motion_len());
-        self.motion_into(label, seed, rest, q)?;
-        decode(q, neutral, intensity * self.length, out)
+        let g = self.motion_into(label, seed, rest, q)?;
+        let (mean, spread) = self.length_of(label);
+        let length = (mean + spread * g).max(0.0);
+        decode(q, neutral, intensity * length, out)
     }
 
-    /// [`MotionGenerator::motion`] with scratch of at least `scratch_len() − motion_len()`.
+    /// [`MotionGenerator::motion`] with scratch of at least `scratch_len() − motion_len()`;
+    /// returns the seed's Gaussian value after the noise (the one that draws the length).
     fn motion_into(
         &self,
         label: usize,
         seed: u64,
         scratch: &mut [f32],
         out: &mut [f32],
-    ) -> Result<(), BufferError> {
+    ) -> Result<f32, BufferError> {
         if label >= LABELS {
             return Err(BufferError::Input);
         }
@@ -186,8 +225,12 @@ impl<'a> MotionGenerator<'a> {
         let (input, rest) = scratch.split_at_mut(self.mlp.inputs());
         let (s, rest) = rest.split_at_mut(self.motion_len());
         let (p, rest) = rest.split_at_mut(self.motion_len());
-        let (noise, code) = input.split_at_mut(self.noise);
-        gaussian_noise(seed, noise);
+        // The seed's stream gives the noise and then one more value, the length's draw; the
+        // code's first slot holds it until the code is written.
+        let drawn = input.get_mut(..=self.noise).ok_or(BufferError::Scratch)?;
+        gaussian_noise(seed, drawn);
+        let g = drawn.last().copied().unwrap_or(0.0);
+        let (_, code) = input.split_at_mut(self.noise);
         for (k, c) in code.iter_mut().enumerate() {
             *c = if k == label { 1.0 } else { 0.0 };
         }
@@ -196,7 +239,8 @@ impl<'a> MotionGenerator<'a> {
         }
         self.mlp.eval(input, s, rest)?;
         project_tangent(p, s)?;
-        exp_map(p, s, out)
+        exp_map(p, s, out)?;
+        Ok(g)
     }
 }
 

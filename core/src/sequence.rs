@@ -92,8 +92,8 @@ impl<'a> Sequence<'a> {
         self.curve_len() + self.input_len() + self.vertex_len() + self.scratch_len()
     }
 
-    /// Generates the landmark curve of `label` from `seed` at `intensity` (1: the training
-    /// motions' mean length) on the neutral's landmarks (`buf.neutral`'s, or the template's
+    /// Generates the landmark curve of `label` from `seed` at `intensity` (1: a length drawn
+    /// from the label's training motions, [`MotionGenerator::landmarks`]) on the neutral's landmarks (`buf.neutral`'s, or the template's
     /// when it is empty) into `buf.curve`.
     ///
     /// # Errors

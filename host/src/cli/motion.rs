@@ -149,7 +149,8 @@ pub(crate) struct GenerateArgs {
     /// The neutral face (.obj or .ply) in the decoder's topology.
     #[arg(long)]
     neutral: PathBuf,
-    /// Scale of the motion (eq. 5; 1 is the training motions' mean length).
+    /// Scale of the motion (eq. 5; 1: a length drawn from the label's training motions, or for
+    /// interpolate the two labels' mean lengths blended).
     #[arg(long, default_value_t = 1.0)]
     intensity: f32,
     /// Output folder: frame_NN.obj and strip.png.

@@ -23,7 +23,8 @@ use crate::training::checkpoint;
 pub const CONTENT: &str = "motion-generator";
 
 /// The baked generator: kind `MotionGenerator`, the generator's MLP under `motion.g`, the
-/// reference motion `motion.p` and the default intensity `motion.length`.
+/// reference motion `motion.p` and per label the mean and spread of the arc length,
+/// `motion.length` `[LABELS, 2]`.
 pub fn bake(generator: &Generator, data: &TangentData, config: &GanConfig) -> Result<Vec<u8>> {
     let d = data.dims() / FRAMES;
     let mut w = SinewWriter::new(ArtifactKind::MotionGenerator);
@@ -40,7 +41,7 @@ pub fn bake(generator: &Generator, data: &TangentData, config: &GanConfig) -> Re
         );
     generator.mlp.export(&mut w, "motion.g")?;
     w.f32s("motion.p", &[FRAMES, d], &data.p)?;
-    w.f32s("motion.length", &[1], &[data.length])?;
+    w.f32s("motion.length", &[LABELS.len(), 2], &data.lengths_flat())?;
     Ok(w.to_bytes()?)
 }
 
@@ -72,8 +73,9 @@ pub struct TrainReport {
     pub config: GanConfig,
     /// Training sequences.
     pub sequences: usize,
-    /// The default intensity (mean arc length of the training curves).
-    pub length: f32,
+    /// Per label (in `LABELS` order), the mean and the standard deviation of the training
+    /// curves' arc length.
+    pub lengths: Vec<[f32; 2]>,
     /// Seconds this invocation trained.
     pub seconds: f64,
     /// Per generator step.
@@ -164,7 +166,7 @@ pub fn train_motion(opts: &TrainMotion) -> Result<TrainReport> {
     let report = TrainReport {
         config: config.clone(),
         sequences: data.tangents.len(),
-        length: data.length,
+        lengths: data.lengths.clone(),
         seconds: started.elapsed().as_secs_f64(),
         history: run.history,
     };

@@ -30,7 +30,8 @@ pub struct Generate {
     pub neutral: PathBuf,
     /// The seed of the noise.
     pub seed: u64,
-    /// Scale of the motion (1: the training curves' mean length).
+    /// Scale of the motion (1: a length drawn from the label's training curves; interpolation
+    /// blends the two labels' mean lengths).
     pub intensity: f32,
     /// The output folder.
     pub out: PathBuf,
@@ -235,10 +236,12 @@ pub fn interpolate(opts: &Generate, from: &str, to: &str, steps: usize) -> Resul
     for k in 0..steps {
         let tau = k as f32 / (steps - 1) as f32;
         let q = srvf::interpolate(&q1, &q2, tau)?;
+        // The length blends the two labels' mean lengths as the motion blends them.
+        let length = (1.0 - tau) * generator.length(a) + tau * generator.length(b);
         decode(
             &q,
             &l.neutral_lmk,
-            opts.intensity * generator.length(),
+            opts.intensity * length,
             &mut buffers.curve,
         )
         .map_err(|e| anyhow!("decoding the motion: {e}"))?;

@@ -27,8 +27,10 @@ pub struct TangentData {
     pub tangents: Vec<Vec<f32>>,
     /// Each one's label index.
     pub labels: Vec<usize>,
-    /// The mean arc length of the training curves: the decoding's default intensity.
-    pub length: f32,
+    /// Per label, the mean and the standard deviation of its training curves' arc length (the
+    /// length a decoded motion of intensity 1 draws from; SRVFs are scale-free). A label without
+    /// training curves takes every curve's.
+    pub lengths: Vec<[f32; 2]>,
 }
 
 impl TangentData {
@@ -43,21 +45,37 @@ impl TangentData {
             "the motion set has no training sequences"
         );
         let mut qs = Vec::with_capacity(train.len());
-        let mut length = 0.0f64;
+        let mut lengths = Vec::with_capacity(train.len());
         for &s in &train {
             let e = srvf::encode(&set.landmark_frames(s))
                 .with_context(|| format!("encoding sequence {s}"))?;
-            length += f64::from(e.length);
+            lengths.push(f64::from(e.length));
             qs.push(e.q);
         }
-        let labels = train.iter().map(|&s| set.label(s)).collect();
+        let labels: Vec<usize> = train.iter().map(|&s| set.label(s)).collect();
+        let all = mean_and_spread(&lengths);
+        let per_label = (0..LABELS.len())
+            .map(|l| {
+                let mine: Vec<f64> = lengths
+                    .iter()
+                    .zip(&labels)
+                    .filter(|&(_, &k)| k == l)
+                    .map(|(x, _)| *x)
+                    .collect();
+                if mine.is_empty() {
+                    all
+                } else {
+                    mean_and_spread(&mine)
+                }
+            })
+            .collect();
         let mut data = Self::from_motions(&qs, labels)?;
-        data.length = (length / train.len() as f64) as f32;
+        data.lengths = per_label;
         Ok(data)
     }
 
-    /// Motions `qs` (unit SRVFs of one shape) with their labels, log-mapped at their mean; the
-    /// length is 1.
+    /// Motions `qs` (unit SRVFs of one shape) with their labels, log-mapped at their mean; every
+    /// label's length is 1, without spread.
     ///
     /// # Errors
     /// If there are no motions, or they differ in shape, or their mean is zero.
@@ -88,8 +106,13 @@ impl TangentData {
             p,
             tangents,
             labels,
-            length: 1.0,
+            lengths: vec![[1.0, 0.0]; LABELS.len()],
         })
+    }
+
+    /// `lengths` flattened, `[LABELS × 2]`, as `motion.length` stores them.
+    pub fn lengths_flat(&self) -> Vec<f32> {
+        self.lengths.iter().flatten().copied().collect()
     }
 
     /// Coordinates of one tangent vector (`FRAMES × dims`).
@@ -266,6 +289,14 @@ pub struct TrainRecord {
     pub config: GanConfig,
     /// Per generator step.
     pub history: Vec<StepLosses>,
+}
+
+/// The mean and the population standard deviation of `xs` (not empty), in f32.
+fn mean_and_spread(xs: &[f64]) -> [f32; 2] {
+    let n = xs.len() as f64;
+    let mean = xs.iter().sum::<f64>() / n;
+    let var = xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n;
+    [mean as f32, var.sqrt() as f32]
 }
 
 #[cfg(test)]

@@ -273,3 +273,78 @@ fn a_damaged_optimiser_file_is_named() {
     assert!(matches!(&e, CheckpointError::Truncated { .. }), "{e:?}");
     assert!(e.to_string().contains(&name), "{e}");
 }
+
+#[test]
+fn the_length_is_drawn_from_the_labels_training_lengths() {
+    let (mut data, config) = (toy(), config());
+    data.lengths[0] = [0.2, 0.05];
+    data.lengths[1] = [0.5, 0.0];
+    let device = Backend::Flex.autodiff_device(config.seed).unwrap();
+    let run = run_to(&data, &config, Run::new(&data, &config, &device), 1);
+    let bytes = bake(&run.generator, &data, &config).unwrap();
+    let core = sinew_core::motion::MotionGenerator::from_bytes(&bytes).unwrap();
+    assert_eq!((core.length(0), core.length_spread(0)), (0.2, 0.05));
+    assert_eq!((core.length(1), core.length_spread(1)), (0.5, 0.0));
+    assert_eq!((core.length(2), core.length_spread(2)), (1.0, 0.0));
+
+    let neutral = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0];
+    let mut scratch = vec![0.0f32; core.scratch_len()];
+    let mut q = vec![0.0f32; core.motion_len()];
+    let mut curve = vec![0.0f32; core.curve_len()];
+    let mut expected = curve.clone();
+    let mut lengths = Vec::new();
+    for seed in [3u64, 4, 5] {
+        for (label, intensity) in [(0usize, 1.0f32), (0, 0.5), (1, 1.0)] {
+            core.landmarks(label, seed, intensity, &neutral, &mut scratch, &mut curve)
+                .unwrap();
+            // The draw is the seed's Gaussian value right after the noise.
+            let mut z = vec![0.0f32; config.noise + 1];
+            sinew_core::motion::gaussian_noise(seed, &mut z);
+            let [m, s] = data.lengths[label];
+            let length = intensity * (m + s * z[config.noise]).max(0.0);
+            core.motion(label, seed, &mut scratch, &mut q).unwrap();
+            sinew_core::srvf::decode(&q, &neutral, length, &mut expected).unwrap();
+            assert_eq!(curve, expected, "label {label}, seed {seed}");
+            if label == 0 && intensity == 1.0 {
+                lengths.push(length);
+            }
+        }
+    }
+    // Label 0's lengths differ by seed; label 1 has no spread.
+    assert!(lengths.windows(2).all(|w| w[0] != w[1]), "{lengths:?}");
+
+    // A file with one length for every label (as generators were first baked) decodes every
+    // label at that length, and broken lengths are refused.
+    let with_lengths = |shape: &[usize], values: &[f32]| {
+        let mut w = SinewWriter::new(ArtifactKind::MotionGenerator);
+        w.meta("content", CONTENT);
+        run.generator.mlp.export(&mut w, "motion.g").unwrap();
+        w.f32s("motion.p", &[FRAMES, 6], &data.p).unwrap();
+        w.f32s("motion.length", shape, values).unwrap();
+        w.to_bytes().unwrap()
+    };
+    let one = with_lengths(&[1], &[0.3]);
+    let core = sinew_core::motion::MotionGenerator::from_bytes(&one).unwrap();
+    for label in [0usize, 7] {
+        assert_eq!((core.length(label), core.length_spread(label)), (0.3, 0.0));
+        core.landmarks(label, 3, 1.0, &neutral, &mut scratch, &mut curve)
+            .unwrap();
+        core.motion(label, 3, &mut scratch, &mut q).unwrap();
+        sinew_core::srvf::decode(&q, &neutral, 0.3, &mut expected).unwrap();
+        assert_eq!(curve, expected);
+    }
+    let mut negative = data.lengths_flat();
+    negative[3] = -0.1;
+    for (shape, values) in [
+        (vec![LABELS.len(), 2], negative),
+        (vec![1], vec![0.0]),
+        (vec![2], vec![0.3, 0.3]),
+        (vec![LABELS.len(), 3], vec![0.3; 3 * LABELS.len()]),
+    ] {
+        assert!(
+            sinew_core::motion::MotionGenerator::from_bytes(&with_lengths(&shape, &values))
+                .is_err(),
+            "{shape:?}"
+        );
+    }
+}

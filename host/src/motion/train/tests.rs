@@ -118,3 +118,42 @@ fn a_short_run_generates_each_label_nearer_its_own_class() {
         }
     }
 }
+
+#[test]
+fn each_label_keeps_its_training_curves_length() {
+    let Some(root) = crate::io::data::data_dir() else {
+        return;
+    };
+    let kit = crate::io::ict::IctFaceKit::open(&root.join("ict-facekit")).unwrap();
+    let config = crate::motion::data::MotionsConfig {
+        seed: 5,
+        identities: 2,
+        per_class: 3,
+    };
+    let set = crate::motion::data::generate(&kit, &config).unwrap();
+    let data = TangentData::from_set(&set).unwrap();
+    assert_eq!(data.lengths.len(), LABELS.len());
+    let train = set.split(Split::Train);
+    for (label, &[mean, spread]) in data.lengths.iter().enumerate() {
+        let mine: Vec<f64> = train
+            .iter()
+            .filter(|&&s| set.label(s) == label)
+            .map(|&s| f64::from(srvf::encode(&set.landmark_frames(s)).unwrap().length))
+            .collect();
+        let n = mine.len() as f64;
+        let m = mine.iter().sum::<f64>() / n;
+        let sd = (mine.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n).sqrt();
+        assert!((f64::from(mean) - m).abs() < 1e-6 * m, "label {label}");
+        assert!((f64::from(spread) - sd).abs() < 1e-6 * m, "label {label}");
+        assert!(
+            spread > 0.0,
+            "label {label}: random apex intensities spread the lengths"
+        );
+    }
+    // The classes move by different amounts (eyebrow little, mouth_extreme much).
+    let means: Vec<f32> = data.lengths.iter().map(|l| l[0]).collect();
+    let (lo, hi) = means
+        .iter()
+        .fold((f32::MAX, 0.0f32), |(lo, hi), &m| (lo.min(m), hi.max(m)));
+    assert!(hi > 2.0 * lo, "{means:?}");
+}
