@@ -16,15 +16,54 @@
 //! transform learned for its shape (`train.jaw`) in from the identity by its weight, as
 //! `sinew demo` opens the jaw.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Result, bail};
 use serde::Serialize;
 use sinew_core::aim::AimActor;
 
 use crate::aim::model::IDENTITY_9D;
-use crate::aim::play::Frame;
-use crate::io::arkit::{Capture, CaptureFrame, LIVE_LINK_FACE_CHANNELS};
+use crate::aim::play::{Frame, PlayError};
+use crate::io::arkit::{Capture, CaptureError, CaptureFrame, LIVE_LINK_FACE_CHANNELS};
+use crate::io::atomic::AtomicWriteError;
+
+/// Why a Live Link Face capture could not be played on an actor.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ArkitError {
+    /// The capture could not be read.
+    #[error(transparent)]
+    Capture(#[from] CaptureError),
+    /// No capture channel drives any of the actor's shapes.
+    #[error(
+        "{}: no capture channel matches any of the actor's shapes (channels {}; shapes {})",
+        path.display(),
+        channels.join(","),
+        shapes.join(",")
+    )]
+    NoMatch {
+        /// The capture.
+        path: PathBuf,
+        /// Its channels.
+        channels: Vec<String>,
+        /// The actor's corrective shapes.
+        shapes: Vec<String>,
+    },
+    /// The actor could not be read or posed, or a frame not written.
+    #[error(transparent)]
+    Play(#[from] PlayError),
+    /// The mapping summary could not be laid out as JSON.
+    #[error("{}: cannot lay out the mapping", path.display())]
+    Summary {
+        /// The summary file.
+        path: PathBuf,
+        /// What the JSON writer said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The mapping summary could not be written.
+    #[error(transparent)]
+    Write(#[from] AtomicWriteError),
+}
 
 /// Which capture channel drives which corrective shape.
 #[derive(Clone, Debug, Serialize)]
@@ -45,7 +84,7 @@ pub struct Mapping {
 impl Mapping {
     /// Maps capture `channels` onto the actor's corrective `shapes` (neutral excluded); `path`
     /// names the capture in the error when no channel plays any shape.
-    pub fn new(path: &Path, channels: &[String], shapes: &[String]) -> Result<Self> {
+    pub fn new(path: &Path, channels: &[String], shapes: &[String]) -> Result<Self, ArkitError> {
         let find = |name: &str| shapes.iter().position(|s| s.eq_ignore_ascii_case(name));
         let sided = shapes
             .iter()
@@ -80,12 +119,11 @@ impl Mapping {
             }
         }
         if routes.is_empty() {
-            bail!(
-                "{}: no capture channel matches any of the actor's shapes (channels {}; shapes {})",
-                path.display(),
-                channels.join(","),
-                shapes.join(",")
-            );
+            return Err(ArkitError::NoMatch {
+                path: path.to_path_buf(),
+                channels: channels.to_vec(),
+                shapes: shapes.to_vec(),
+            });
         }
         let at_rest = (0..shapes.len())
             .filter(|s| !routes.iter().any(|r| r.1 == *s))
@@ -127,13 +165,17 @@ pub struct Playback {
 const JAW_SHAPES: [&str; 4] = ["jawOpen", "jawLeft", "jawRight", "jawForward"];
 
 /// Reads a Live Link Face capture and maps it onto `actor`.
-pub fn playback(actor: &AimActor<'_>, capture_path: &Path) -> Result<Playback> {
+pub fn playback(actor: &AimActor<'_>, capture_path: &Path) -> Result<Playback, ArkitError> {
     let capture = Capture::read(capture_path)?;
     playback_of(actor, capture_path, &capture)
 }
 
 /// Maps a parsed capture onto `actor`; `path` names the capture in errors.
-pub fn playback_of(actor: &AimActor<'_>, path: &Path, capture: &Capture) -> Result<Playback> {
+pub fn playback_of(
+    actor: &AimActor<'_>,
+    path: &Path,
+    capture: &Capture,
+) -> Result<Playback, ArkitError> {
     let shapes = crate::aim::play::corrective_names(actor);
     let mut mapping = Mapping::new(path, &capture.channels, &shapes)?;
     // The learned jaw transforms, when the artefact records them (every trained actor does).
@@ -171,10 +213,9 @@ pub fn playback_of(actor: &AimActor<'_>, path: &Path, capture: &Capture) -> Resu
 
 /// `sinew play --arkit`: poses the baked actor from a Live Link Face capture, one OBJ per frame,
 /// and writes the channel mapping to `arkit.json` beside them.
-pub fn play_arkit(model: &Path, capture: &Path, out: &Path) -> Result<Playback> {
-    let bytes = crate::io::container::read(model)?;
-    let actor =
-        AimActor::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
+pub fn play_arkit(model: &Path, capture: &Path, out: &Path) -> Result<Playback, ArkitError> {
+    let bytes = crate::io::container::read(model).map_err(PlayError::from)?;
+    let actor = crate::aim::play::actor(model, &bytes)?;
     let playback = playback(&actor, capture)?;
     crate::aim::play::play_frames(&actor, &playback.frames, out, None)?;
     let summary = serde_json::json!({
@@ -182,10 +223,12 @@ pub fn play_arkit(model: &Path, capture: &Path, out: &Path) -> Result<Playback> 
         "frames": playback.frames.len(),
         "mapping": playback.mapping,
     });
-    crate::io::atomic::write(
-        &out.join("arkit.json"),
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
-    )?;
+    let path = out.join("arkit.json");
+    let json = serde_json::to_string_pretty(&summary).map_err(|source| ArkitError::Summary {
+        path: path.clone(),
+        source,
+    })?;
+    crate::io::atomic::write(&path, json.as_bytes())?;
     Ok(playback)
 }
 
@@ -413,10 +456,34 @@ mod tests {
             "Timecode,BlendshapeCount,HeadYaw,TongueOut\na,2,0.1,0.2\n",
         )
         .unwrap();
-        let e = playback_of(&actor, Path::new("odd.csv"), &capture)
-            .unwrap_err()
-            .to_string();
-        assert!(e.starts_with("odd.csv: no capture channel matches"), "{e}");
+        let e = playback_of(&actor, Path::new("odd.csv"), &capture).unwrap_err();
+        assert!(
+            matches!(&e, ArkitError::NoMatch { path, channels, .. }
+                if path == Path::new("odd.csv") && channels.len() == 2),
+            "{e}"
+        );
+        assert!(
+            e.to_string()
+                .starts_with("odd.csv: no capture channel matches"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_missing_capture_or_model_is_refused_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let model = dir.path().join("actor.sinew");
+        std::fs::write(&model, golden()).unwrap();
+        let missing = dir.path().join("missing.csv");
+        let e = play_arkit(&model, &missing, &dir.path().join("out")).unwrap_err();
+        assert!(matches!(e, ArkitError::Capture(_)), "{e}");
+        let damaged = dir.path().join("damaged.sinew");
+        std::fs::write(&damaged, &golden()[..100]).unwrap();
+        let e = play_arkit(&damaged, &missing, &dir.path().join("out")).unwrap_err();
+        assert!(
+            matches!(e, ArkitError::Play(PlayError::Container(_))),
+            "{e}"
+        );
     }
 
     #[test]

@@ -1,15 +1,32 @@
 //! Baking a trained AIM into the core's format: the networks, and their outputs at the template
 //! vertices as a per-vertex cache for real-time playback (see `sinew_core::aim` for the sections).
 
-use anyhow::Result;
-
 use super::{AimConfig, TrainingSet};
 use burn::tensor::Device;
+use sinew_core::FormatError;
 use sinew_core::format::{ArtifactKind, FLAG_PLAYBACK_ONLY};
 
 use super::model::{AimNet, normalise};
-use crate::io::container::SinewWriter;
+use crate::io::container::{SinewWriter, WriterError};
 use crate::training::nn::{tensor, to_vec};
+
+/// Why the Q16.16 playback cache could not be added to an actor.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Q16CacheError {
+    /// The bytes are not an AIM actor.
+    #[error("not an AIM actor")]
+    NotAnActor(#[source] FormatError),
+    /// The actor lacks an `f32` cache section the Q16.16 cache is rounded from.
+    #[error("section {name} missing")]
+    MissingSection {
+        /// The section.
+        name: String,
+    },
+    /// The actor with its cache could not be laid out.
+    #[error(transparent)]
+    Writer(#[from] WriterError),
+}
 
 /// The networks' outputs at a set of points.
 #[derive(Clone, Debug, Default)]
@@ -70,7 +87,11 @@ pub struct BakeInput<'a> {
 }
 
 /// Builds the baked actor.
-pub fn bake(net: &AimNet, input: &BakeInput<'_>, device: &Device) -> Result<(Vec<u8>, Cache)> {
+pub fn bake(
+    net: &AimNet,
+    input: &BakeInput<'_>,
+    device: &Device,
+) -> Result<(Vec<u8>, Cache), WriterError> {
     let cache = evaluate(net, input.points, input.normalisation, device);
     let v = input.points.len();
     let m = net.corrective_shapes();
@@ -116,19 +137,20 @@ pub fn bake(net: &AimNet, input: &BakeInput<'_>, device: &Device) -> Result<(Vec
 /// Adds the Q16.16 playback cache (`q16.s0`, `q16.k`, `q16.e`: the `f32` cache rounded to
 /// nearest with `sinew_core::q16::q16`, exactly as the core would) to a baked actor, for the
 /// core's fixed-point mode (`sinew_core::q16`). An actor that has one already is returned as is.
-pub fn with_q16_cache(actor_bytes: &[u8]) -> Result<Vec<u8>> {
-    let actor = sinew_core::aim::AimActor::from_bytes(actor_bytes)
-        .map_err(|e| anyhow::anyhow!("not an AIM actor: {e}"))?;
+pub fn with_q16_cache(actor_bytes: &[u8]) -> Result<Vec<u8>, Q16CacheError> {
+    let actor =
+        sinew_core::aim::AimActor::from_bytes(actor_bytes).map_err(Q16CacheError::NotAnActor)?;
     if actor.q16().is_some() {
         return Ok(actor_bytes.to_vec());
     }
     let (v, m) = (actor.vertex_count(), actor.shape_count());
     let file = actor.file();
-    let q = |name: &str| -> Result<Vec<i32>> {
-        let s = file
-            .section(name)
-            .and_then(|s| s.f32s())
-            .ok_or_else(|| anyhow::anyhow!("section {name} missing"))?;
+    let q = |name: &str| -> Result<Vec<i32>, Q16CacheError> {
+        let s = file.section(name).and_then(|s| s.f32s()).ok_or_else(|| {
+            Q16CacheError::MissingSection {
+                name: name.to_string(),
+            }
+        })?;
         Ok(s.iter()
             .map(|x| sinew_core::q16::q16(x).to_bits())
             .collect())
@@ -141,7 +163,10 @@ pub fn with_q16_cache(actor_bytes: &[u8]) -> Result<Vec<u8>> {
 }
 
 /// Metadata recorded in every baked actor.
-pub fn metadata(set: &TrainingSet, config: &AimConfig) -> Result<Vec<(String, String)>> {
+pub fn metadata(
+    set: &TrainingSet,
+    config: &AimConfig,
+) -> Result<Vec<(String, String)>, serde_json::Error> {
     Ok(vec![
         ("units".into(), set.units.name().into()),
         ("axes".into(), "x-left-of-actor,y-up,z-forward".into()),
@@ -193,5 +218,16 @@ mod tests {
         }
         // Idempotent.
         assert_eq!(with_q16_cache(&out).unwrap(), out);
+    }
+
+    #[test]
+    fn a_damaged_actor_is_refused() {
+        let golden = std::fs::read(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../tests/data/aim-procedural.sinew"
+        ))
+        .unwrap();
+        let err = with_q16_cache(&golden[..golden.len() / 2]).unwrap_err();
+        assert!(matches!(err, Q16CacheError::NotAnActor(_)), "{err}");
     }
 }

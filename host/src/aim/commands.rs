@@ -71,7 +71,7 @@ pub fn train_aim(
         stop_after: None,
         quiet,
     };
-    run(set, config, &options, out)
+    Ok(run(set, config, &options, out)?)
 }
 
 /// `sinew eval aim`: the baked actor against its ICT-FaceKit training shapes (of `identity`, as
@@ -103,7 +103,7 @@ pub fn eval_aim(
             );
         }
     }
-    crate::aim::run::evaluate(
+    Ok(crate::aim::run::evaluate(
         &bytes,
         &set,
         &config,
@@ -111,7 +111,7 @@ pub fn eval_aim(
         0.0,
         config.iterations,
         model,
-    )
+    )?)
 }
 
 /// `sinew bake`: re-bakes a checkpoint, optionally at another template's vertices.

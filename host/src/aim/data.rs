@@ -2,8 +2,6 @@
 //! set: sparse bone constraints (Wu et al.), the forehead region of eq. 15, the symmetry plane of
 //! eq. 14 and the jaw pivot.
 
-use anyhow::{Result, ensure};
-
 use super::{Plane, TrainingSet};
 use crate::anatomy::constraints::anchors;
 use crate::geometry::align::RigidFit;
@@ -167,8 +165,10 @@ pub fn training_set(
     jaw: &Mesh,
     pivot: Option<[f32; 3]>,
     max_depth: f32,
-) -> Result<TrainingSet> {
-    ensure!(!actor.shapes.is_empty(), "the actor has no shapes");
+) -> Result<TrainingSet, super::InvalidTrainingSet> {
+    if actor.shapes.is_empty() {
+        return Err(super::InvalidTrainingSet::NoShapes);
+    }
     let neutral = &actor.template;
     let anchors = anchors(neutral, skull, jaw, max_depth);
     let mm_per_unit = actor.units.mm() as f32;
@@ -193,6 +193,28 @@ mod tests {
     use super::*;
     use crate::training::nn::{tensor, to_vec};
     use sinew_core::linalg::Vec3;
+
+    #[test]
+    fn broken_sets_are_refused_by_rule() {
+        let (actor, bones) = crate::aim::procedural::actor(8);
+        let mut empty = actor.clone();
+        empty.shapes.clear();
+        let e = training_set(&empty, &bones.skull, &bones.jaw, None, 10.0).unwrap_err();
+        assert_eq!(e, crate::aim::InvalidTrainingSet::NoShapes);
+        let set = training_set(&actor, &bones.skull, &bones.jaw, None, 10.0).unwrap();
+        let mut short = set.clone();
+        short.names.pop();
+        assert!(matches!(
+            short.validate(),
+            Err(crate::aim::InvalidTrainingSet::NameCount { .. })
+        ));
+        let mut far = set.clone();
+        far.forehead.push(set.vertices() as u32);
+        assert_eq!(
+            far.validate(),
+            Err(crate::aim::InvalidTrainingSet::ForeheadIndex)
+        );
+    }
 
     /// Rotation by `deg` degrees about the unit `axis` (Rodrigues), row-major.
     fn rotation(axis: [f64; 3], deg: f64) -> [[f64; 3]; 3] {

@@ -16,14 +16,162 @@
 use std::io::{Read, Write};
 use std::path::Path;
 
-use anyhow::{Context, Result, bail, ensure};
 use serde::{Deserialize, Serialize};
 
 use super::data::{forehead, jaw_pivot, symmetry_plane};
-use super::{Anchor, TrainingSet};
+use super::{Anchor, InvalidTrainingSet, TrainingSet};
+use crate::anatomy::bones::BonesError;
 use crate::anatomy::constraints::{Bone, anchors};
-use crate::io::ict::{DEFAULT_SHAPES, FACE_REGION, ICT_ATTRIBUTION, IctFaceKit};
-use crate::io::mesh::Mesh;
+use crate::anatomy::fit::BonesFitError;
+use crate::geometry::qem::DecimateError;
+use crate::io::atomic::AtomicWriteError;
+use crate::io::ict::{DEFAULT_SHAPES, FACE_REGION, ICT_ATTRIBUTION, IctError, IctFaceKit};
+use crate::io::mesh::{InvalidMesh, Mesh};
+
+/// Why the demo face could not be made or read. The reading variants carry the name the caller
+/// gave the file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum DemoFaceError {
+    /// The ICT-FaceKit folder could not be read.
+    #[error(transparent)]
+    Kit(#[from] IctError),
+    /// The template bones' folder holds no templates.
+    #[error(transparent)]
+    Templates(#[from] BonesFitError),
+    /// The template bones could not be loaded or fitted.
+    #[error(transparent)]
+    Bones(#[from] BonesError),
+    /// The face region could not be decimated.
+    #[error("decimating the ICT-FaceKit face region")]
+    Decimate(#[source] DecimateError),
+    /// The decimated face region is not a valid mesh.
+    #[error("the decimated ICT-FaceKit face region")]
+    DecimatedMesh(#[source] InvalidMesh),
+    /// The face could not be laid out as JSON.
+    #[error(transparent)]
+    Encode(serde_json::Error),
+    /// The JSON could not be compressed.
+    #[error(transparent)]
+    Compress(std::io::Error),
+    /// The file could not be written.
+    #[error(transparent)]
+    Write(#[from] AtomicWriteError),
+    /// The bytes are not gzip.
+    #[error("{name}: not a gzip file")]
+    NotGzip {
+        /// The file's name.
+        name: String,
+        /// What the decoder said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The JSON is not a demo face's.
+    #[error("{name}: not a demo face file")]
+    NotDemoFace {
+        /// The file's name.
+        name: String,
+        /// What the JSON reader said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A count or index of the file that does not add up.
+    #[error("{name}: invalid demo face")]
+    Invalid {
+        /// The file's name.
+        name: String,
+        /// The broken rule.
+        #[source]
+        source: DemoFaceProblem,
+    },
+    /// The face's mesh is not valid.
+    #[error("{name}: invalid face mesh")]
+    FaceMesh {
+        /// The file's name.
+        name: String,
+        /// The broken rule.
+        #[source]
+        source: InvalidMesh,
+    },
+    /// The training set built from the file is not valid.
+    #[error("{name}")]
+    Set {
+        /// The file's name.
+        name: String,
+        /// The broken rule.
+        #[source]
+        source: InvalidTrainingSet,
+    },
+}
+
+/// A rule of the demo face file that a file breaks.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DemoFaceProblem {
+    /// Another `format` than this version's.
+    #[error("format {found:?}, expected {:?}", FORMAT)]
+    Format {
+        /// The file's format.
+        found: String,
+    },
+    /// Another coordinate step than [`QUANTUM_CM`].
+    #[error("coordinate step {found} cm, expected {}", QUANTUM_CM)]
+    Quantum {
+        /// The file's step.
+        found: f64,
+    },
+    /// No vertices.
+    #[error("no vertices")]
+    NoVertices,
+    /// Names that do not match the expressions and the neutral.
+    #[error("{names} shape names for {expressions} expressions and the neutral")]
+    NameCount {
+        /// The names.
+        names: usize,
+        /// The expressions.
+        expressions: usize,
+    },
+    /// An expression with another offset count than the vertices.
+    #[error("expression {name} has {offsets} offsets for {vertices} vertices")]
+    Offsets {
+        /// The expression.
+        name: String,
+        /// Its offsets.
+        offsets: usize,
+        /// The vertices.
+        vertices: usize,
+    },
+    /// Bone entries of another count than the vertices.
+    #[error("{entries} bone entries for {vertices} vertices")]
+    BoneEntries {
+        /// The entries.
+        entries: usize,
+        /// The vertices.
+        vertices: usize,
+    },
+    /// A triangle that refers past the vertices.
+    #[error("triangle {triangle:?} refers to a vertex beyond the {vertices} there are")]
+    Triangle {
+        /// The triangle.
+        triangle: [u32; 3],
+        /// The vertices.
+        vertices: usize,
+    },
+    /// A landmark past the vertices.
+    #[error("landmark vertex {vertex} is beyond the {vertices} vertices")]
+    Landmark {
+        /// The landmark's vertex.
+        vertex: u32,
+        /// The vertices.
+        vertices: usize,
+    },
+    /// A stored coordinate so large that rebuilding the shapes could overflow.
+    #[error("a coordinate beyond {limit_cm} cm")]
+    Coordinate {
+        /// The largest coordinate allowed (cm).
+        limit_cm: f64,
+    },
+}
 
 /// Where the file lives in the repository, for messages and the regeneration command.
 pub const PATH: &str = "host/data/demo-face.json.gz";
@@ -70,7 +218,7 @@ fn position(q: [i32; 3]) -> [f32; 3] {
 
 /// Makes the demo face's file bytes from the ICT-FaceKit folder `data` and the template bones
 /// in `templates` (`artisynth-jaw/`, `skull-odedstein/`). The same inputs give the same bytes.
-pub fn make(data: &Path, templates: &Path) -> Result<Vec<u8>> {
+pub fn make(data: &Path, templates: &Path) -> Result<Vec<u8>, DemoFaceError> {
     let kit = IctFaceKit::open(data)?;
     let actor = kit.actor(&[], &DEFAULT_SHAPES, FACE_REGION)?;
     let templates = crate::anatomy::fit::bone_templates(templates)?;
@@ -79,7 +227,7 @@ pub fn make(data: &Path, templates: &Path) -> Result<Vec<u8>> {
     let tris = actor.template.triangles();
     let (kept, triangles) =
         crate::geometry::qem::decimate(&actor.template.positions, &tris, TARGET_VERTICES)
-            .context("decimating the ICT-FaceKit face region")?;
+            .map_err(DemoFaceError::Decimate)?;
     let pick =
         |shape: &[[f32; 3]]| -> Vec<[f32; 3]> { kept.iter().map(|&v| shape[v as usize]).collect() };
     let neutral = pick(&actor.template.positions);
@@ -87,9 +235,7 @@ pub fn make(data: &Path, templates: &Path) -> Result<Vec<u8>> {
         neutral.clone(),
         triangles.iter().map(|t| t.to_vec()).collect(),
     );
-    template
-        .validate()
-        .context("the decimated ICT-FaceKit face region")?;
+    template.validate().map_err(DemoFaceError::DecimatedMesh)?;
     let nearest = |p: [f32; 3]| -> u32 {
         let d = |q: &[f32; 3]| (0..3).map(|i| (p[i] - q[i]).powi(2)).sum::<f32>();
         (0..neutral.len())
@@ -139,17 +285,17 @@ pub fn make(data: &Path, templates: &Path) -> Result<Vec<u8>> {
         bones,
         jaw_pivot: quantise(jaw_pivot(&fitted.jaw)),
     };
-    let json = serde_json::to_vec(&stored)?;
+    let json = serde_json::to_vec(&stored).map_err(DemoFaceError::Encode)?;
     // No file name and no time in the header, so the bytes depend on the content alone.
     let mut gz = flate2::GzBuilder::new()
         .mtime(0)
         .write(Vec::new(), flate2::Compression::best());
-    gz.write_all(&json)?;
-    Ok(gz.finish()?)
+    gz.write_all(&json).map_err(DemoFaceError::Compress)?;
+    gz.finish().map_err(DemoFaceError::Compress)
 }
 
 /// `sinew data demo-face`: [`make`], written atomically to `out`.
-pub fn write(data: &Path, templates: &Path, out: &Path) -> Result<TrainingSet> {
+pub fn write(data: &Path, templates: &Path, out: &Path) -> Result<TrainingSet, DemoFaceError> {
     let bytes = make(data, templates)?;
     let set = load(&bytes, &out.display().to_string())?;
     crate::io::atomic::write(out, &bytes)?;
@@ -157,19 +303,27 @@ pub fn write(data: &Path, templates: &Path, out: &Path) -> Result<TrainingSet> {
 }
 
 /// The built-in demo face's training set.
-pub fn builtin() -> Result<TrainingSet> {
+pub fn builtin() -> Result<TrainingSet, DemoFaceError> {
     load(EMBEDDED, &format!("{PATH} (built in)"))
 }
 
 /// Reads a demo face file (gzipped JSON) into a training set; `name` names it in errors.
-pub fn load(bytes: &[u8], name: &str) -> Result<TrainingSet> {
+pub fn load(bytes: &[u8], name: &str) -> Result<TrainingSet, DemoFaceError> {
     let mut json = Vec::new();
     flate2::read::GzDecoder::new(bytes)
         .read_to_end(&mut json)
-        .with_context(|| format!("{name}: not a gzip file"))?;
-    let s: Stored =
-        serde_json::from_slice(&json).with_context(|| format!("{name}: not a demo face file"))?;
-    check(&s).with_context(|| format!("{name}: invalid demo face"))?;
+        .map_err(|source| DemoFaceError::NotGzip {
+            name: name.to_owned(),
+            source,
+        })?;
+    let s: Stored = serde_json::from_slice(&json).map_err(|source| DemoFaceError::NotDemoFace {
+        name: name.to_owned(),
+        source,
+    })?;
+    check(&s).map_err(|source| DemoFaceError::Invalid {
+        name: name.to_owned(),
+        source,
+    })?;
     let neutral: Vec<[f32; 3]> = s.neutral.iter().map(|&q| position(q)).collect();
     let template = Mesh::new(
         neutral.clone(),
@@ -177,7 +331,10 @@ pub fn load(bytes: &[u8], name: &str) -> Result<TrainingSet> {
     );
     template
         .validate()
-        .with_context(|| format!("{name}: invalid face mesh"))?;
+        .map_err(|source| DemoFaceError::FaceMesh {
+            name: name.to_owned(),
+            source,
+        })?;
     let mut shapes = vec![neutral.clone()];
     shapes.extend(s.deltas.iter().map(|d| {
         s.neutral
@@ -218,60 +375,74 @@ pub fn load(bytes: &[u8], name: &str) -> Result<TrainingSet> {
         mm_per_unit: 10.0,
         source: s.source,
     };
-    set.validate().with_context(|| name.to_owned())?;
+    set.validate().map_err(|source| DemoFaceError::Set {
+        name: name.to_owned(),
+        source,
+    })?;
     Ok(set)
 }
 
 /// Every count and index of a stored face, before anything is built from it.
-fn check(s: &Stored) -> Result<()> {
-    ensure!(
-        s.format == FORMAT,
-        "format {:?}, expected {FORMAT:?}",
-        s.format
-    );
-    ensure!(
-        s.quantum_cm == QUANTUM_CM,
-        "coordinate step {} cm, expected {QUANTUM_CM}",
-        s.quantum_cm
-    );
-    let v = s.neutral.len();
-    ensure!(v > 0, "no vertices");
-    ensure!(
-        s.names.len() == s.deltas.len() + 1,
-        "{} shape names for {} expressions and the neutral",
-        s.names.len(),
-        s.deltas.len()
-    );
-    for (d, name) in s.deltas.iter().zip(&s.names[1..]) {
-        ensure!(
-            d.len() == v,
-            "expression {name} has {} offsets for {v} vertices",
-            d.len()
-        );
+fn check(s: &Stored) -> Result<(), DemoFaceProblem> {
+    if s.format != FORMAT {
+        return Err(DemoFaceProblem::Format {
+            found: s.format.clone(),
+        });
     }
-    ensure!(
-        s.bones.len() == v,
-        "{} bone entries for {v} vertices",
-        s.bones.len()
-    );
+    if s.quantum_cm != QUANTUM_CM {
+        return Err(DemoFaceProblem::Quantum {
+            found: s.quantum_cm,
+        });
+    }
+    let v = s.neutral.len();
+    if v == 0 {
+        return Err(DemoFaceProblem::NoVertices);
+    }
+    if s.names.len() != s.deltas.len() + 1 {
+        return Err(DemoFaceProblem::NameCount {
+            names: s.names.len(),
+            expressions: s.deltas.len(),
+        });
+    }
+    for (d, name) in s.deltas.iter().zip(&s.names[1..]) {
+        if d.len() != v {
+            return Err(DemoFaceProblem::Offsets {
+                name: name.clone(),
+                offsets: d.len(),
+                vertices: v,
+            });
+        }
+    }
+    if s.bones.len() != v {
+        return Err(DemoFaceProblem::BoneEntries {
+            entries: s.bones.len(),
+            vertices: v,
+        });
+    }
     if let Some(t) = s
         .triangles
         .iter()
         .find(|t| t.iter().any(|&i| i as usize >= v))
     {
-        bail!("triangle {t:?} refers to a vertex beyond the {v} there are");
+        return Err(DemoFaceProblem::Triangle {
+            triangle: *t,
+            vertices: v,
+        });
     }
-    if let Some(l) = s.landmarks.iter().flatten().find(|&&l| l as usize >= v) {
-        bail!("landmark vertex {l} is beyond the {v} vertices");
+    if let Some(&l) = s.landmarks.iter().flatten().find(|&&l| l as usize >= v) {
+        return Err(DemoFaceProblem::Landmark {
+            vertex: l,
+            vertices: v,
+        });
     }
     // Sums of stored integers must not overflow when the shapes are rebuilt.
     let limit = 1 << 28;
     let big = |q: &[i32; 3]| q.iter().any(|c| c.abs() > limit);
-    ensure!(
-        !s.neutral.iter().chain(s.deltas.iter().flatten()).any(big),
-        "a coordinate beyond {} cm",
-        f64::from(limit) * QUANTUM_CM
-    );
+    if s.neutral.iter().chain(s.deltas.iter().flatten()).any(big) {
+        return Err(DemoFaceProblem::Coordinate {
+            limit_cm: f64::from(limit) * QUANTUM_CM,
+        });
+    }
     Ok(())
 }
 
@@ -320,8 +491,8 @@ mod tests {
     fn bad_files_are_refused_with_their_name() {
         let err = load(b"not gzip", "face.gz").unwrap_err();
         assert!(
-            format!("{err:#}").starts_with("face.gz: not a gzip file"),
-            "{err:#}"
+            matches!(&err, DemoFaceError::NotGzip { name, .. } if name == "face.gz"),
+            "{err}"
         );
 
         let mut json = Vec::new();
@@ -338,27 +509,36 @@ mod tests {
 
         let mut s: Stored = serde_json::from_slice(&json).unwrap();
         s.triangles[3][1] = 1_000_000;
-        let err = format!("{:#}", load(&gz(&s), "face.gz").unwrap_err());
+        let err = load(&gz(&s), "face.gz").unwrap_err();
         assert!(
-            err.contains("face.gz: invalid demo face") && err.contains("1000000"),
+            matches!(&err, DemoFaceError::Invalid { name, source: DemoFaceProblem::Triangle { triangle, .. } }
+                if name == "face.gz" && triangle[1] == 1_000_000),
             "{err}"
         );
 
         let mut s: Stored = serde_json::from_slice(&json).unwrap();
         s.deltas[4].pop();
-        let err = format!("{:#}", load(&gz(&s), "face.gz").unwrap_err());
+        let err = load(&gz(&s), "face.gz").unwrap_err();
         assert!(
-            err.contains(&format!("expression {}", DEFAULT_SHAPES[4])),
+            matches!(&err, DemoFaceError::Invalid { source: DemoFaceProblem::Offsets { name, .. }, .. }
+                if name == DEFAULT_SHAPES[4]),
             "{err}"
         );
 
         let mut s: Stored = serde_json::from_slice(&json).unwrap();
         s.format = "other/2".into();
-        let err = format!("{:#}", load(&gz(&s), "face.gz").unwrap_err());
-        assert!(err.contains("other/2"), "{err}");
+        let err = load(&gz(&s), "face.gz").unwrap_err();
+        assert!(
+            matches!(&err, DemoFaceError::Invalid { source: DemoFaceProblem::Format { found }, .. }
+                if found == "other/2"),
+            "{err}"
+        );
 
-        let err = format!("{:#}", load(&gz(&good)[..200], "cut.gz").unwrap_err());
-        assert!(err.starts_with("cut.gz:"), "{err}");
+        let err = load(&gz(&good)[..200], "cut.gz").unwrap_err();
+        assert!(
+            matches!(&err, DemoFaceError::NotGzip { name, .. } if name == "cut.gz"),
+            "{err}"
+        );
     }
 
     /// The committed file is what `sinew data demo-face` makes from the shared data today.

@@ -2,12 +2,42 @@
 //! posed with its learned jaw transform and a one-hot coefficient vector (AIM eq. 17) and
 //! compared with the ground-truth mesh, per vertex, in millimetres.
 
-use anyhow::{Context, Result, ensure};
 use serde::Serialize;
+use sinew_core::FormatError;
 use sinew_core::aim::AimActor;
 
 use super::ErrorStats;
 use super::model::IDENTITY_9D;
+
+/// Why a baked actor could not be measured.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum EvalError {
+    /// The artefact lacks a valid `train.jaw` section (the learned jaw transforms).
+    #[error("train.jaw")]
+    TrainJaw(#[source] FormatError),
+    /// Measuring needs the learned jaw transforms, which the artefact lacks.
+    #[error("the model carries no training poses: train.jaw")]
+    NoTrainingPoses(#[source] FormatError),
+    /// Ground truth with another shape count than the model.
+    #[error("the model has {model} shapes, the data {data}")]
+    ShapeCount {
+        /// The model's shapes (neutral included).
+        model: usize,
+        /// The data's shapes.
+        data: usize,
+    },
+    /// A ground-truth shape with another vertex count than the model.
+    #[error("shape {shape} has {vertices} vertices, the model {model}")]
+    VertexCount {
+        /// The shape's name.
+        shape: String,
+        /// Its vertices.
+        vertices: usize,
+        /// The model's vertices.
+        model: usize,
+    },
+}
 
 /// Per-shape and overall errors.
 #[derive(Clone, Debug, Serialize)]
@@ -23,12 +53,12 @@ pub struct ShapeErrors {
 }
 
 /// The learned jaw transform of every training shape, neutral (identity) first.
-pub fn training_poses(actor: &AimActor<'_>) -> Result<Vec<[f32; 9]>> {
+pub fn training_poses(actor: &AimActor<'_>) -> Result<Vec<[f32; 9]>, EvalError> {
     let m = actor.shape_count();
     let jaw = actor
         .file()
         .f32_tensor("train.jaw", &[m as u32, 9])
-        .map_err(|e| anyhow::anyhow!("train.jaw: {e}"))?;
+        .map_err(EvalError::TrainJaw)?;
     let mut poses = vec![IDENTITY_9D];
     for i in 0..m {
         poses.push(std::array::from_fn(|j| jaw.at(9 * i + j)));
@@ -55,25 +85,30 @@ pub fn shape_errors(
     names: &[String],
     shapes: &[Vec<[f32; 3]>],
     mm_per_unit: f32,
-) -> Result<ShapeErrors> {
-    ensure!(
-        shapes.len() == actor.shape_count() + 1,
-        "the model has {} shapes, the data {}",
-        actor.shape_count() + 1,
-        shapes.len()
-    );
-    let poses = training_poses(actor).context("the model carries no training poses")?;
+) -> Result<ShapeErrors, EvalError> {
+    if shapes.len() != actor.shape_count() + 1 {
+        return Err(EvalError::ShapeCount {
+            model: actor.shape_count() + 1,
+            data: shapes.len(),
+        });
+    }
+    let poses = training_poses(actor).map_err(|e| match e {
+        EvalError::TrainJaw(source) => EvalError::NoTrainingPoses(source),
+        other => other,
+    })?;
     let v = actor.vertex_count();
     let mut all = Vec::with_capacity(v * shapes.len());
     let mut per_shape = Vec::new();
     let mut per_vertex_sum = vec![0.0f32; v];
     let mut per_shape_vertex = Vec::new();
     for (i, (gt, name)) in shapes.iter().zip(names).enumerate() {
-        ensure!(
-            gt.len() == v,
-            "shape {name} has {} vertices, the model {v}",
-            gt.len()
-        );
+        if gt.len() != v {
+            return Err(EvalError::VertexCount {
+                shape: name.clone(),
+                vertices: gt.len(),
+                model: v,
+            });
+        }
         let posed = pose_training_shape(actor, &poses[i], i);
         let errs: Vec<f32> = gt
             .iter()

@@ -23,6 +23,50 @@ use serde::Serialize;
 pub use crate::anatomy::constraints::Anchor;
 pub use config::AimConfig;
 
+/// A training set that breaks a rule of [`TrainingSet::validate`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum InvalidTrainingSet {
+    /// An actor without shapes to build a set from.
+    #[error("the actor has no shapes")]
+    NoShapes,
+    /// Fewer than two shapes: AIM needs a neutral and an expression.
+    #[error("AIM needs a neutral and at least one expression, got {shapes} shapes")]
+    TooFewShapes {
+        /// The shapes given.
+        shapes: usize,
+    },
+    /// Shape and name counts differ.
+    #[error("{shapes} shapes but {names} names")]
+    NameCount {
+        /// The shapes.
+        shapes: usize,
+        /// The names.
+        names: usize,
+    },
+    /// A shape with another vertex count than the template.
+    #[error("shape {name} has {vertices} vertices, the template {template}")]
+    ShapeVertices {
+        /// The shape's name.
+        name: String,
+        /// Its vertices.
+        vertices: usize,
+        /// The template's vertices.
+        template: usize,
+    },
+    /// Constraints of another count than the template's vertices.
+    #[error("{constraints} constraints for {vertices} vertices")]
+    ConstraintCount {
+        /// The constraints.
+        constraints: usize,
+        /// The template's vertices.
+        vertices: usize,
+    },
+    /// A forehead vertex beyond the template.
+    #[error("forehead index out of range")]
+    ForeheadIndex,
+}
+
 /// A plane of symmetry: points x with (x − origin)·normal = 0.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct Plane {
@@ -99,35 +143,37 @@ impl TrainingSet {
     }
 
     /// Checks the set is consistent; the error says what is wrong.
-    pub fn validate(&self) -> anyhow::Result<()> {
+    pub fn validate(&self) -> Result<(), InvalidTrainingSet> {
         let v = self.vertices();
-        anyhow::ensure!(
-            self.shapes.len() >= 2,
-            "AIM needs a neutral and at least one expression, got {} shapes",
-            self.shapes.len()
-        );
-        anyhow::ensure!(
-            self.shapes.len() == self.names.len(),
-            "{} shapes but {} names",
-            self.shapes.len(),
-            self.names.len()
-        );
-        for (s, name) in self.shapes.iter().zip(&self.names) {
-            anyhow::ensure!(
-                s.len() == v,
-                "shape {name} has {} vertices, the template {v}",
-                s.len()
-            );
+        if self.shapes.len() < 2 {
+            return Err(InvalidTrainingSet::TooFewShapes {
+                shapes: self.shapes.len(),
+            });
         }
-        anyhow::ensure!(
-            self.anchors.len() == v,
-            "{} constraints for {v} vertices",
-            self.anchors.len()
-        );
-        anyhow::ensure!(
-            self.forehead.iter().all(|&i| (i as usize) < v),
-            "forehead index out of range"
-        );
+        if self.shapes.len() != self.names.len() {
+            return Err(InvalidTrainingSet::NameCount {
+                shapes: self.shapes.len(),
+                names: self.names.len(),
+            });
+        }
+        for (s, name) in self.shapes.iter().zip(&self.names) {
+            if s.len() != v {
+                return Err(InvalidTrainingSet::ShapeVertices {
+                    name: name.clone(),
+                    vertices: s.len(),
+                    template: v,
+                });
+            }
+        }
+        if self.anchors.len() != v {
+            return Err(InvalidTrainingSet::ConstraintCount {
+                constraints: self.anchors.len(),
+                vertices: v,
+            });
+        }
+        if !self.forehead.iter().all(|&i| (i as usize) < v) {
+            return Err(InvalidTrainingSet::ForeheadIndex);
+        }
         Ok(())
     }
 }

@@ -1,13 +1,114 @@
 //! Pose files and `sinew play`: an actor's frames (head, jaw, coefficients) posed through the
 //! core, one OBJ per frame.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
+use sinew_core::{BufferError, FormatError};
 
-use crate::io::mesh::Mesh;
+use crate::io::container::ContainerError;
+use crate::io::mesh::{Mesh, MeshError};
+
+/// Why a pose file could not be read; every variant names the file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PoseFileError {
+    /// The file could not be read.
+    #[error("{}: cannot read", path.display())]
+    Read {
+        /// The pose file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The text is not a pose file's JSON.
+    #[error("{}: invalid pose file", path.display())]
+    Parse {
+        /// The pose file.
+        path: PathBuf,
+        /// What the JSON reader said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A pose file without frames.
+    #[error("{}: no frames", path.display())]
+    NoFrames {
+        /// The pose file.
+        path: PathBuf,
+    },
+    /// A frame whose coefficient count is not the actor's.
+    #[error("{}: frame {frame} has {weights} weights, the model {shapes} shapes", path.display())]
+    WeightCount {
+        /// The pose file.
+        path: PathBuf,
+        /// The frame.
+        frame: usize,
+        /// Its coefficients.
+        weights: usize,
+        /// The actor's shapes.
+        shapes: usize,
+    },
+    /// A frame with a NaN or infinite value.
+    #[error("{}: frame {frame} has a non-finite value", path.display())]
+    NonFinite {
+        /// The pose file.
+        path: PathBuf,
+        /// The frame.
+        frame: usize,
+    },
+}
+
+/// Why `sinew play` failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlayError {
+    /// The model file could not be read or is no `.sinew` artefact.
+    #[error(transparent)]
+    Container(#[from] ContainerError),
+    /// The model is not an AIM actor.
+    #[error("{}", path.display())]
+    NotAnActor {
+        /// The model file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// The pose file is unreadable or does not fit the actor.
+    #[error(transparent)]
+    Poses(#[from] PoseFileError),
+    /// The output folder could not be created.
+    #[error("{}: cannot create folder", path.display())]
+    CreateFolder {
+        /// The folder.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The core refused to pose a frame.
+    #[error("frame {frame}")]
+    Pose {
+        /// The frame.
+        frame: usize,
+        /// The core's reason.
+        #[source]
+        source: BufferError,
+    },
+    /// A frame's OBJ could not be written.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+}
+
+/// Parses an AIM actor from `bytes`, naming `path` when they are not one.
+pub(crate) fn actor<'a>(path: &Path, bytes: &'a [u8]) -> Result<AimActor<'a>, PlayError> {
+    AimActor::from_bytes(bytes).map_err(|source| PlayError::NotAnActor {
+        path: path.to_path_buf(),
+        source,
+    })
+}
 
 /// One frame of a pose file.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -38,21 +139,29 @@ pub struct PoseFile {
 impl PoseFile {
     /// Reads a pose file for an actor with `shapes` coefficients; the error names the file and
     /// the first bad frame.
-    pub fn read(path: &Path, shapes: usize) -> Result<Self> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("{}: cannot read", path.display()))?;
-        let file: PoseFile = serde_json::from_str(&text)
-            .with_context(|| format!("{}: invalid pose file", path.display()))?;
+    pub fn read(path: &Path, shapes: usize) -> Result<Self, PoseFileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| PoseFileError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let file: PoseFile =
+            serde_json::from_str(&text).map_err(|source| PoseFileError::Parse {
+                path: path.to_path_buf(),
+                source,
+            })?;
         if file.frames.is_empty() {
-            bail!("{}: no frames", path.display());
+            return Err(PoseFileError::NoFrames {
+                path: path.to_path_buf(),
+            });
         }
         for (i, f) in file.frames.iter().enumerate() {
             if f.weights.len() != shapes {
-                bail!(
-                    "{}: frame {i} has {} weights, the model {shapes} shapes",
-                    path.display(),
-                    f.weights.len(),
-                );
+                return Err(PoseFileError::WeightCount {
+                    path: path.to_path_buf(),
+                    frame: i,
+                    weights: f.weights.len(),
+                    shapes,
+                });
             }
             if f.head
                 .iter()
@@ -60,7 +169,10 @@ impl PoseFile {
                 .chain(&f.weights)
                 .any(|v| !v.is_finite())
             {
-                bail!("{}: frame {i} has a non-finite value", path.display());
+                return Err(PoseFileError::NonFinite {
+                    path: path.to_path_buf(),
+                    frame: i,
+                });
             }
         }
         Ok(file)
@@ -68,10 +180,14 @@ impl PoseFile {
 }
 
 /// `sinew play`: poses the baked actor through the core, one OBJ per frame.
-pub fn play(model: &Path, poses: &Path, out: &Path, template: Option<&Mesh>) -> Result<usize> {
+pub fn play(
+    model: &Path,
+    poses: &Path,
+    out: &Path,
+    template: Option<&Mesh>,
+) -> Result<usize, PlayError> {
     let bytes = crate::io::container::read(model)?;
-    let actor =
-        AimActor::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
+    let actor = actor(model, &bytes)?;
     let file = PoseFile::read(poses, actor.shape_count())?;
     play_frames(&actor, &file.frames, out, template)
 }
@@ -82,13 +198,15 @@ pub fn play_frames(
     frames: &[Frame],
     out: &Path,
     template: Option<&Mesh>,
-) -> Result<usize> {
+) -> Result<usize, PlayError> {
     let mesh = match template {
         Some(t) => t.clone(),
         None => Mesh::of_actor(actor),
     };
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("{}: cannot create folder", out.display()))?;
+    std::fs::create_dir_all(out).map_err(|source| PlayError::CreateFolder {
+        path: out.to_path_buf(),
+        source,
+    })?;
     let mut buf = vec![0.0; 3 * actor.vertex_count()];
     // The core's f32 posing, as `sinew_core::replay::pose_frame` does it in f32 mode, without
     // the normals an OBJ does not carry.
@@ -96,7 +214,7 @@ pub fn play_frames(
         let pose = actor.pose_from_9d(&f.jaw, &f.head);
         actor
             .pose(&pose, &f.weights, &mut buf)
-            .map_err(|e| anyhow::anyhow!("frame {i}: {e}"))?;
+            .map_err(|source| PlayError::Pose { frame: i, source })?;
         let positions = crate::io::mesh::points(buf.iter().copied());
         mesh.with_positions(positions)
             .write(&out.join(format!("frame_{i:05}.obj")))?;
@@ -116,5 +234,50 @@ pub fn corrective_names(actor: &AimActor<'_>) -> Vec<String> {
     match recorded {
         Some(names) if names.len() == m => names,
         _ => (1..=m).map(|j| format!("shape_{j}")).collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pose_file_errors_name_the_failure() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("missing.json");
+        let err = PoseFile::read(&missing, 2).unwrap_err();
+        assert!(matches!(&err, PoseFileError::Read { path, .. } if *path == missing));
+
+        let damaged = dir.path().join("damaged.json");
+        std::fs::write(&damaged, "{\"frames\": [{\"weights\": [0.1,").unwrap();
+        let err = PoseFile::read(&damaged, 2).unwrap_err();
+        assert!(matches!(&err, PoseFileError::Parse { path, .. } if *path == damaged));
+
+        let short = dir.path().join("short.json");
+        std::fs::write(&short, "{\"frames\": [{\"weights\": [0.1]}]}").unwrap();
+        let err = PoseFile::read(&short, 2).unwrap_err();
+        assert!(matches!(
+            err,
+            PoseFileError::WeightCount {
+                frame: 0,
+                weights: 1,
+                shapes: 2,
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn play_refuses_a_damaged_model_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let model = dir.path().join("actor.sinew");
+        std::fs::write(&model, b"not an actor").unwrap();
+        let poses = dir.path().join("poses.json");
+        std::fs::write(&poses, "{\"frames\": []}").unwrap();
+        let err = play(&model, &poses, &dir.path().join("out"), None).unwrap_err();
+        assert!(matches!(
+            err,
+            PlayError::Container(ContainerError::Invalid { .. })
+        ));
     }
 }

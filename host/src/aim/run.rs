@@ -3,15 +3,77 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
 use serde::Serialize;
+use sinew_core::FormatError;
 use sinew_core::aim::AimActor;
 
 use super::bake::{BakeInput, bake, metadata};
-use super::eval::{SkinningWeightMeans, shape_errors, thickness_deviation};
-use super::train::{TERMS, TrainOptions, Trained, train};
+use super::eval::{EvalError, SkinningWeightMeans, shape_errors, thickness_deviation};
+use super::train::{TERMS, TrainError, TrainOptions, Trained, train};
 use super::{AimConfig, ErrorStats, TrainingSet};
-use crate::figures::render::{Image, View, render_heatmap};
+use crate::figures::render::{Image, PngError, View, render_heatmap};
+use crate::io::atomic::AtomicWriteError;
+use crate::io::container::WriterError;
+use crate::io::mesh::MeshError;
+
+/// Why an AIM run (train, bake, measure, report) or its pictures failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RunError {
+    /// Training failed or was interrupted.
+    #[error(transparent)]
+    Train(#[from] TrainError),
+    /// Training ended before its last step.
+    #[error("training stopped at step {steps_done} of {iterations}")]
+    Incomplete {
+        /// The steps done.
+        steps_done: usize,
+        /// The steps configured.
+        iterations: usize,
+    },
+    /// The configuration or report could not be laid out as JSON.
+    #[error(transparent)]
+    Json(serde_json::Error),
+    /// The baked actor could not be laid out.
+    #[error(transparent)]
+    Bake(#[from] WriterError),
+    /// The model, configuration or report could not be written.
+    #[error(transparent)]
+    Write(#[from] AtomicWriteError),
+    /// The model file is not an AIM actor.
+    #[error("{}", path.display())]
+    NotAnActor {
+        /// The model file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// The model's bytes are not an AIM actor (no file involved).
+    #[error("model")]
+    Model(#[source] FormatError),
+    /// The baked actor lacks its anatomy cache.
+    #[error("model has no cache.b0")]
+    NoAnatomyCache,
+    /// The actor could not be measured against its training shapes.
+    #[error(transparent)]
+    Eval(#[from] EvalError),
+    /// The pictures' folder could not be created.
+    #[error("{}: cannot create folder", path.display())]
+    CreateFolder {
+        /// The folder.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A picture could not be written.
+    #[error(transparent)]
+    Png(#[from] PngError),
+    /// An OBJ could not be written.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+}
 
 /// The JSON report of `sinew train aim` and `sinew eval aim`.
 #[derive(Clone, Debug, Serialize)]
@@ -73,19 +135,22 @@ pub fn run(
     config: &AimConfig,
     options: &TrainOptions,
     out: &Outputs,
-) -> Result<Report> {
+) -> Result<Report, RunError> {
     let Trained {
         model,
         state,
         complete,
     } = train(set, config, options)?;
-    anyhow::ensure!(
-        complete,
-        "training stopped at step {} of {}",
-        state.steps_done,
-        config.iterations
-    );
-    let device = options.backend.device(config.seed)?;
+    if !complete {
+        return Err(RunError::Incomplete {
+            steps_done: state.steps_done,
+            iterations: config.iterations,
+        });
+    }
+    let device = options
+        .backend
+        .device(config.seed)
+        .map_err(TrainError::backend)?;
     let triangles = set.template.triangles();
     let input = BakeInput {
         points: &set.template.positions,
@@ -93,13 +158,15 @@ pub fn run(
         jaw_pivot: set.jaw_pivot,
         normalisation: state.normalisation,
         playback_only: false,
-        metadata: metadata(set, config)?,
+        metadata: metadata(set, config).map_err(RunError::Json)?,
     };
     let (bytes, _) = bake(&model, &input, &device)?;
     crate::io::atomic::write(&out.model, &bytes)?;
     crate::io::atomic::write(
         &out.model.with_extension("config.json"),
-        serde_json::to_string_pretty(config)?.as_bytes(),
+        serde_json::to_string_pretty(config)
+            .map_err(RunError::Json)?
+            .as_bytes(),
     )?;
 
     let report = evaluate(
@@ -113,7 +180,9 @@ pub fn run(
     )?;
     crate::io::atomic::write(
         &out.report,
-        serde_json::to_string_pretty(&report)?.as_bytes(),
+        serde_json::to_string_pretty(&report)
+            .map_err(RunError::Json)?
+            .as_bytes(),
     )?;
     if let Some(dir) = &out.pictures {
         let series: Vec<(&str, Vec<(f64, f64)>)> = TERMS
@@ -133,7 +202,7 @@ pub fn run(
         let borrowed: Vec<(&str, &[(f64, f64)])> =
             series.iter().map(|(n, s)| (*n, s.as_slice())).collect();
         crate::figures::plot::loss_curves(&borrowed, "AIM training loss", true, 900, 600)
-            .write_png(&dir.join("loss.png"))?;
+            .save_png(&dir.join("loss.png"))?;
         pictures(&bytes, set, dir)?;
     }
     Ok(report)
@@ -148,9 +217,11 @@ pub fn evaluate(
     seconds: f64,
     iterations: usize,
     model: &Path,
-) -> Result<Report> {
-    let actor =
-        AimActor::from_bytes(bytes).map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
+) -> Result<Report, RunError> {
+    let actor = AimActor::from_bytes(bytes).map_err(|source| RunError::NotAnActor {
+        path: model.to_path_buf(),
+        source,
+    })?;
     let errors = shape_errors(&actor, &set.names, &set.shapes, set.mm_per_unit)?;
     let thickness = actor.thickness();
     Ok(Report {
@@ -186,10 +257,12 @@ pub const VIEWS: [(f32, &str); 2] = [(0.0, "front"), (-35.0, "three-quarter")];
 /// (0–1 mm) of the neutral and the worst expression (`error.png`), the anatomy surface coloured by
 /// thickness and the skin by skinning weight (`anatomy.png`); and OBJs of the skin and the
 /// anatomy surface.
-pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<()> {
-    let actor = AimActor::from_bytes(bytes).map_err(|e| anyhow::anyhow!("model: {e}"))?;
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("{}: cannot create folder", dir.display()))?;
+pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<(), RunError> {
+    let actor = AimActor::from_bytes(bytes).map_err(RunError::Model)?;
+    std::fs::create_dir_all(dir).map_err(|source| RunError::CreateFolder {
+        path: dir.to_path_buf(),
+        source,
+    })?;
     let errors = shape_errors(&actor, &set.names, &set.shapes, set.mm_per_unit)?;
     let tri = set.template.triangles();
     let skin: Vec<[f32; 3]> = crate::io::mesh::points(actor.rest().iter());
@@ -234,7 +307,7 @@ pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<()> {
         "error mm",
         &format!("{}: error", set.names[worst]),
     );
-    Image::vstack(&[neutral, worst_img]).write_png(&dir.join("error.png"))?;
+    Image::vstack(&[neutral, worst_img]).save_png(&dir.join("error.png"))?;
 
     let anatomy = anatomy_surface(bytes)?;
     let d_mm: Vec<f32> = actor
@@ -272,7 +345,7 @@ pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<()> {
     };
     let k: Vec<f32> = actor.skinning_weights().iter().collect();
     let weights = both(&skin, &k, 1.0, "k (0-1)", "jaw skinning weight");
-    Image::vstack(&[thick, weights]).write_png(&dir.join("anatomy.png"))?;
+    Image::vstack(&[thick, weights]).save_png(&dir.join("anatomy.png"))?;
     set.template
         .with_positions(skin)
         .write(&dir.join("skin.obj"))?;
@@ -324,13 +397,12 @@ pub fn bone_triangles(
 }
 
 /// The learned anatomy surface b0 at the template vertices.
-pub fn anatomy_surface(bytes: &[u8]) -> Result<Vec<[f32; 3]>> {
-    let file =
-        sinew_core::SinewFile::from_bytes(bytes).map_err(|e| anyhow::anyhow!("model: {e}"))?;
+pub fn anatomy_surface(bytes: &[u8]) -> Result<Vec<[f32; 3]>, RunError> {
+    let file = sinew_core::SinewFile::from_bytes(bytes).map_err(RunError::Model)?;
     let b = file
         .section("cache.b0")
         .and_then(|s| s.f32s())
-        .context("model has no cache.b0")?;
+        .ok_or(RunError::NoAnatomyCache)?;
     Ok(crate::io::mesh::points(b.iter()))
 }
 
@@ -371,5 +443,37 @@ mod tests {
         assert!(bone_triangles(&anchors, &skin, &bone, &tri).is_empty());
         // Indices beyond the vertices drop the triangle rather than panic.
         assert!(bone_triangles(&anchors, &skin, &bone, &[[0, 2, 9]]).is_empty());
+    }
+
+    #[test]
+    fn damaged_models_and_blocked_folders_are_refused() {
+        let golden = std::fs::read(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../tests/data/aim-procedural.sinew"
+        ))
+        .unwrap();
+        let set = crate::aim::testing::procedural_training_set(8);
+        let dir = tempfile::tempdir().unwrap();
+        let err = pictures(&golden[..64], &set, dir.path()).unwrap_err();
+        assert!(matches!(err, RunError::Model(_)), "{err}");
+        let file = dir.path().join("a-file");
+        std::fs::write(&file, b"").unwrap();
+        let err = pictures(&golden, &set, &file.join("pictures")).unwrap_err();
+        assert!(matches!(err, RunError::CreateFolder { .. }), "{err}");
+        let err = evaluate(
+            &golden[..64],
+            &set,
+            &AimConfig::default(),
+            crate::training::backend::Backend::Flex,
+            0.0,
+            0,
+            &file,
+        )
+        .unwrap_err();
+        assert!(
+            matches!(&err, RunError::NotAnActor { path, .. } if *path == file),
+            "{err}"
+        );
+        assert!(anatomy_surface(&golden).is_ok());
     }
 }

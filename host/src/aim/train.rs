@@ -5,19 +5,78 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
 use burn::module::Module;
 use burn::optim::{AdamConfig, GradientsParams};
 use burn::tensor::{Device, Int, Tensor, TensorData};
 use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 
-use super::config::JawInit;
+use super::config::{InvalidConfig, JawInit};
 use super::model::{AimNet, IDENTITY_9D, normalisation, normalise};
-use super::{AimConfig, TrainingSet};
+use super::{AimConfig, InvalidTrainingSet, TrainingSet};
+use crate::io::mesh::MeshError;
 use crate::training::backend::Backend;
 use crate::training::checkpoint::{self, CheckpointError, InvalidState, STATE_FILE, WeightFiles};
 use crate::training::nn::to_vec;
+
+/// Why AIM training could not start, continue or finish.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum TrainError {
+    /// The training set breaks a rule.
+    #[error(transparent)]
+    Set(#[from] InvalidTrainingSet),
+    /// The configuration breaks a rule.
+    #[error(transparent)]
+    Config(#[from] InvalidConfig),
+    /// The compute device could not be set up.
+    #[error(transparent)]
+    Backend(Box<dyn std::error::Error + Send + Sync>),
+    /// The checkpoint folder could not be created.
+    #[error("{}: cannot create checkpoint folder", path.display())]
+    CreateFolder {
+        /// The folder.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The configuration could not be recorded as JSON metadata.
+    #[error(transparent)]
+    Metadata(serde_json::Error),
+    /// A checkpoint could not be written, read or resumed from.
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    /// The template could not be written beside the checkpoint.
+    #[error(transparent)]
+    Template(#[from] MeshError),
+    /// The loss became NaN or infinite.
+    #[error("training diverged at step {step} (loss {terms:?}); lower the learning rate")]
+    Diverged {
+        /// The step.
+        step: usize,
+        /// The loss terms logged at it ([`TERMS`] order).
+        terms: [f32; 6],
+    },
+    /// Ctrl-C stopped the run after a checkpoint.
+    #[error(
+        "interrupted at step {step}; checkpoint saved in {} (continue with --resume)",
+        dir.display()
+    )]
+    Interrupted {
+        /// The steps done.
+        step: usize,
+        /// The checkpoint folder.
+        dir: PathBuf,
+    },
+}
+
+impl TrainError {
+    /// A device set-up failure of [`Backend`], kept whole as the source.
+    pub(crate) fn backend(e: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
+        Self::Backend(e.into())
+    }
+}
 
 /// Names of the logged loss terms, in [`LossRecord::terms`] order. "skinning" is eq. 15 (k = 0
 /// on the forehead) plus L_J (k = 1 on the skin over the jaw, `lambda_jaw`); checkpoints written
@@ -389,8 +448,10 @@ pub fn init(
     set: &TrainingSet,
     config: &AimConfig,
     backend: Backend,
-) -> Result<(AimNet, burn::optim::ModuleOptimizer, Device)> {
-    let device = backend.autodiff_device(config.seed)?;
+) -> Result<(AimNet, burn::optim::ModuleOptimizer, Device), TrainError> {
+    let device = backend
+        .autodiff_device(config.seed)
+        .map_err(TrainError::backend)?;
     Ok((
         AimNet::with_jaw(config, &initial_jaw(set, config), &device),
         AdamConfig::new().with_epsilon(1e-8).init(),
@@ -399,13 +460,22 @@ pub fn init(
 }
 
 /// Trains AIM on `set` (or resumes), checkpointing to `options.checkpoint_dir`.
-pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> Result<Trained> {
+pub fn train(
+    set: &TrainingSet,
+    config: &AimConfig,
+    options: &TrainOptions,
+) -> Result<Trained, TrainError> {
     set.validate()?;
     config.validate()?;
-    let device = options.backend.autodiff_device(config.seed)?;
+    let device = options
+        .backend
+        .autodiff_device(config.seed)
+        .map_err(TrainError::backend)?;
     let dir = &options.checkpoint_dir;
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("{}: cannot create checkpoint folder", dir.display()))?;
+    std::fs::create_dir_all(dir).map_err(|source| TrainError::CreateFolder {
+        path: dir.clone(),
+        source,
+    })?;
     let norm = normalisation(&set.template.positions);
     // A resumed run replaces the initial jaw transforms with its checkpoint's.
     let jaw = if options.resume {
@@ -423,7 +493,7 @@ pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> R
         normalisation: norm,
         names: set.names.clone(),
         jaw_pivot: set.jaw_pivot,
-        metadata: super::bake::metadata(set, config)?,
+        metadata: super::bake::metadata(set, config).map_err(TrainError::Metadata)?,
         files: WeightFiles::default(),
     };
     if options.resume {
@@ -458,10 +528,10 @@ pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> R
             };
             record.terms.copy_from_slice(&t[..6]);
             if !record.terms[5].is_finite() {
-                bail!(
-                    "training diverged at step {step} (loss {:?}); lower the learning rate",
-                    record.terms
-                );
+                return Err(TrainError::Diverged {
+                    step,
+                    terms: record.terms,
+                });
             }
             bar.set_message(format!(
                 "skin {:.3e} anat {:.3e} sym {:.2e} K {:.2e}",
@@ -480,11 +550,10 @@ pub fn train(set: &TrainingSet, config: &AimConfig, options: &TrainOptions) -> R
         }
         if interrupt {
             bar.abandon();
-            bail!(
-                "interrupted at step {}; checkpoint saved in {} (continue with --resume)",
-                state.steps_done,
-                dir.display()
-            );
+            return Err(TrainError::Interrupted {
+                step: state.steps_done,
+                dir: dir.clone(),
+            });
         }
     }
     bar.finish_and_clear();
@@ -608,9 +677,11 @@ pub fn check_same_run(
 }
 
 /// Loads only the model and state of a checkpoint (for baking), on an inference device.
-pub fn load_model(dir: &Path, backend: Backend) -> Result<(AimNet, CheckpointState)> {
+pub fn load_model(dir: &Path, backend: Backend) -> Result<(AimNet, CheckpointState), TrainError> {
     let state = read_state(dir)?;
-    let device = backend.device(state.config.seed)?;
+    let device = backend
+        .device(state.config.seed)
+        .map_err(TrainError::backend)?;
     let net = AimNet::new(&state.config, state.names.len(), &device);
     let (net, _, state) = load_checkpoint(dir, net, AdamConfig::new().init(), &device)?;
     Ok((net, state))

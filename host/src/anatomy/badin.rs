@@ -28,10 +28,86 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
-
 use crate::anatomy::constraints::{Bone, BoneScene, ConstraintParams, Constraints};
-use crate::io::mesh::Mesh;
+use crate::io::mesh::{Mesh, MeshError};
+
+/// Why the Badin data set could not be read; every variant names the file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum BadinError {
+    /// One of the four files is absent.
+    #[error("{}: missing (the Badin data set needs it)", path.display())]
+    Missing {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A node or element file could not be read.
+    #[error("{}: cannot read", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A line of a node or element file that breaks the format.
+    #[error("{}: line {line}: {problem}", path.display())]
+    Line {
+        /// The file.
+        path: PathBuf,
+        /// The line, from 1.
+        line: usize,
+        /// What is wrong with it.
+        problem: LineProblem,
+    },
+    /// A node file without nodes.
+    #[error("{}: no nodes", path.display())]
+    NoNodes {
+        /// The node file.
+        path: PathBuf,
+    },
+    /// An element file without elements.
+    #[error("{}: no elements", path.display())]
+    NoElements {
+        /// The element file.
+        path: PathBuf,
+    },
+    /// A bone mesh could not be read.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+}
+
+/// What is wrong with one line of an ANSYS node or element file.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LineProblem {
+    /// The node number is absent or not a number.
+    #[error("bad node number")]
+    NodeNumber,
+    /// A coordinate field is empty (counted from 1).
+    #[error("coordinate {0} missing")]
+    CoordinateMissing(usize),
+    /// A coordinate that is not a finite Fortran real.
+    #[error("bad coordinate {0:?}")]
+    Coordinate(String),
+    /// A node number used twice in the node file.
+    #[error("node {0} defined twice")]
+    NodeTwice(u32),
+    /// An element's node field (counted from 1) that is not a number.
+    #[error("bad node number in field {0}")]
+    ElementField(usize),
+    /// An element that names a node the node file lacks.
+    #[error("node {node} is not in {}", node_file.display())]
+    UnknownNode {
+        /// The node number.
+        node: u32,
+        /// The node file.
+        node_file: PathBuf,
+    },
+    /// An element with fewer than four distinct nodes.
+    #[error("element has only {0} distinct nodes")]
+    TooFewNodes(usize),
+}
 
 /// A finite-element mesh read from ANSYS node and element files.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -59,11 +135,15 @@ const HEX_FACES: [[usize; 4]; 6] = [
 
 impl Fem {
     /// Reads `node_path` and `elem_path`.
-    pub fn read(node_path: &Path, elem_path: &Path) -> Result<Fem> {
-        let nodes = std::fs::read_to_string(node_path)
-            .with_context(|| format!("{}: cannot read", node_path.display()))?;
-        let elems = std::fs::read_to_string(elem_path)
-            .with_context(|| format!("{}: cannot read", elem_path.display()))?;
+    pub fn read(node_path: &Path, elem_path: &Path) -> Result<Fem, BadinError> {
+        let read = |path: &Path| {
+            std::fs::read_to_string(path).map_err(|source| BadinError::Read {
+                path: path.to_path_buf(),
+                source,
+            })
+        };
+        let nodes = read(node_path)?;
+        let elems = read(elem_path)?;
         Self::parse(&nodes, node_path, &elems, elem_path)
     }
 
@@ -73,25 +153,29 @@ impl Fem {
         node_path: &Path,
         elem_text: &str,
         elem_path: &Path,
-    ) -> Result<Fem> {
+    ) -> Result<Fem, BadinError> {
         let mut fem = Fem::default();
         let mut index: HashMap<u32, u32> = HashMap::new();
         for (ln, line) in node_text.lines().enumerate() {
             if line.trim().is_empty() {
                 continue;
             }
-            let at = || format!("{}: line {}", node_path.display(), ln + 1);
+            let at = |problem| BadinError::Line {
+                path: node_path.to_path_buf(),
+                line: ln + 1,
+                problem,
+            };
             let id: u32 = field(line, 0, 8)
                 .and_then(|s| s.parse().ok())
-                .with_context(|| format!("{}: bad node number", at()))?;
+                .ok_or_else(|| at(LineProblem::NodeNumber))?;
             let mut p = [0.0f32; 3];
             for (k, c) in p.iter_mut().enumerate() {
                 let s = field(line, 8 + 20 * k, 20)
-                    .with_context(|| format!("{}: coordinate {} missing", at(), k + 1))?;
-                *c = parse_float(s).with_context(|| format!("{}: bad coordinate {:?}", at(), s))?;
+                    .ok_or_else(|| at(LineProblem::CoordinateMissing(k + 1)))?;
+                *c = parse_float(s).ok_or_else(|| at(LineProblem::Coordinate(s.to_string())))?;
             }
             if index.insert(id, fem.nodes.len() as u32).is_some() {
-                bail!("{}: node {} defined twice", at(), id);
+                return Err(at(LineProblem::NodeTwice(id)));
             }
             fem.node_ids.push(id);
             fem.nodes.push(p);
@@ -100,33 +184,40 @@ impl Fem {
             if line.trim().is_empty() {
                 continue;
             }
-            let at = || format!("{}: line {}", elem_path.display(), ln + 1);
+            let at = |problem| BadinError::Line {
+                path: elem_path.to_path_buf(),
+                line: ln + 1,
+                problem,
+            };
             let mut e = [0u32; 8];
             for (k, slot) in e.iter_mut().enumerate() {
                 let id: u32 = field(line, 6 * k, 6)
                     .and_then(|s| s.parse().ok())
-                    .with_context(|| format!("{}: bad node number in field {}", at(), k + 1))?;
-                *slot = *index.get(&id).with_context(|| {
-                    format!("{}: node {} is not in {}", at(), id, node_path.display())
+                    .ok_or_else(|| at(LineProblem::ElementField(k + 1)))?;
+                *slot = *index.get(&id).ok_or_else(|| {
+                    at(LineProblem::UnknownNode {
+                        node: id,
+                        node_file: node_path.to_path_buf(),
+                    })
                 })?;
             }
             let mut distinct = e.to_vec();
             distinct.sort_unstable();
             distinct.dedup();
             if distinct.len() < 4 {
-                bail!(
-                    "{}: element has only {} distinct nodes",
-                    at(),
-                    distinct.len()
-                );
+                return Err(at(LineProblem::TooFewNodes(distinct.len())));
             }
             fem.elements.push(e);
         }
         if fem.nodes.is_empty() {
-            bail!("{}: no nodes", node_path.display());
+            return Err(BadinError::NoNodes {
+                path: node_path.to_path_buf(),
+            });
         }
         if fem.elements.is_empty() {
-            bail!("{}: no elements", elem_path.display());
+            return Err(BadinError::NoElements {
+                path: elem_path.to_path_buf(),
+            });
         }
         Ok(fem)
     }
@@ -306,11 +397,11 @@ pub const BADIN_MAX_DEPTH: f32 = 0.03;
 
 impl Badin {
     /// Reads `face.node`, `face.elem`, `badinjaw.obj` and `badinmaxilla.obj` from `dir`.
-    pub fn open(dir: &Path) -> Result<Badin> {
+    pub fn open(dir: &Path) -> Result<Badin, BadinError> {
         let p = |n: &str| -> PathBuf { dir.join(n) };
         for n in ["face.node", "face.elem", "badinjaw.obj", "badinmaxilla.obj"] {
             if !p(n).is_file() {
-                bail!("{}: missing (the Badin data set needs it)", p(n).display());
+                return Err(BadinError::Missing { path: p(n) });
             }
         }
         Ok(Badin {
@@ -485,8 +576,11 @@ mod tests {
             Path::new("face.elem"),
         )
         .unwrap_err();
-        let msg = format!("{e:#}");
-        assert!(msg.contains("face.elem: line 1"), "{msg}");
+        assert!(
+            matches!(&e, BadinError::Line { path, line: 1, problem: LineProblem::ElementField(3) }
+                if path == Path::new("face.elem")),
+            "{e}"
+        );
         let e = Fem::parse(
             "       1 x",
             Path::new("face.node"),
@@ -494,7 +588,11 @@ mod tests {
             Path::new("face.elem"),
         )
         .unwrap_err();
-        assert!(format!("{e:#}").contains("face.node: line 1"));
+        assert!(
+            matches!(&e, BadinError::Line { path, line: 1, problem: LineProblem::Coordinate(c) }
+                if path == Path::new("face.node") && c == "x"),
+            "{e}"
+        );
         let e = Fem::parse(
             &nodes_text(),
             Path::new("face.node"),
@@ -502,7 +600,36 @@ mod tests {
             Path::new("face.elem"),
         )
         .unwrap_err();
-        assert!(format!("{e:#}").contains("node 99 is not in face.node"));
+        assert!(
+            matches!(&e, BadinError::Line { problem: LineProblem::UnknownNode { node: 99, node_file }, .. }
+                if node_file == Path::new("face.node")),
+            "{e}"
+        );
+        // The message keeps the file, the line and the problem.
+        assert!(
+            e.to_string()
+                .contains("face.elem: line 3: node 99 is not in face.node"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_missing_or_damaged_data_set_is_refused_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let err = Badin::open(dir.path()).unwrap_err();
+        assert!(matches!(&err, BadinError::Missing { path } if path.ends_with("face.node")));
+        std::fs::write(dir.path().join("face.node"), "       1 x\n").unwrap();
+        std::fs::write(dir.path().join("face.elem"), ELEMS).unwrap();
+        std::fs::write(dir.path().join("badinjaw.obj"), "v 0 0 0\n").unwrap();
+        std::fs::write(dir.path().join("badinmaxilla.obj"), "v 0 0 0\n").unwrap();
+        let err = Badin::open(dir.path()).unwrap_err();
+        assert!(
+            matches!(&err, BadinError::Line { path, line: 1, .. } if path.ends_with("face.node")),
+            "{err}"
+        );
+        let err =
+            Fem::read(&dir.path().join("none.node"), &dir.path().join("face.elem")).unwrap_err();
+        assert!(matches!(&err, BadinError::Read { path, .. } if path.ends_with("none.node")));
     }
 
     #[test]

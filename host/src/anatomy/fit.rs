@@ -4,10 +4,60 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use crate::anatomy::bones::BonesError;
+use crate::figures::render::PngError;
+use crate::io::atomic::AtomicWriteError;
+use crate::io::ict::{FACE_REGION, IctError, IctFaceKit};
+use crate::io::mesh::{Mesh, MeshError};
 
-use crate::io::ict::{FACE_REGION, IctFaceKit};
-use crate::io::mesh::Mesh;
+/// Why `sinew bones fit` failed; every variant names the file or folder.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum BonesFitError {
+    /// The folder holds no template bones.
+    #[error(
+        "{}: no template bones (artisynth-jaw, skull-odedstein) there; pass --bones DIR, or \
+         --templates DIR or SINEW_DATA",
+        path.display()
+    )]
+    NoTemplates {
+        /// The folder.
+        path: PathBuf,
+    },
+    /// The ICT-FaceKit folder could not be read.
+    #[error(transparent)]
+    Kit(#[from] IctError),
+    /// The templates could not be loaded or fitted.
+    #[error(transparent)]
+    Bones(#[from] BonesError),
+    /// The output folder could not be created.
+    #[error("{}: cannot create folder", path.display())]
+    CreateFolder {
+        /// The folder.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A fitted bone could not be written.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// The report could not be laid out as JSON.
+    #[error("{}: cannot lay out the report", path.display())]
+    Report {
+        /// The report file.
+        path: PathBuf,
+        /// What the JSON writer said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The report could not be written.
+    #[error(transparent)]
+    Write(#[from] AtomicWriteError),
+    /// The picture could not be written.
+    #[error(transparent)]
+    Png(#[from] PngError),
+}
 
 /// Fits the template bones in `templates` (a folder holding `artisynth-jaw/` and
 /// `skull-odedstein/`) to an ICT-FaceKit neutral, using its iBUG-68 landmarks.
@@ -15,7 +65,7 @@ pub fn fit_bones(
     neutral: &Mesh,
     landmarks: &[u32],
     templates: &Path,
-) -> Result<crate::anatomy::bones::FittedBones> {
+) -> Result<crate::anatomy::bones::FittedBones, BonesError> {
     let ibug: Vec<Option<u32>> = landmarks.iter().map(|&l| Some(l)).collect();
     let skin = crate::anatomy::bones::SkinLandmarks::from_ibug68(neutral, &ibug, 10.0)?;
     let t = crate::anatomy::bones::load_templates(templates)?;
@@ -31,18 +81,23 @@ pub fn bones_fit(
     identity: &[f32],
     templates: &Path,
     out: &Path,
-) -> Result<crate::anatomy::bones::FitReport> {
+) -> Result<crate::anatomy::bones::FitReport, BonesFitError> {
     let kit = IctFaceKit::open(data)?;
     let neutral = kit.neutral_of(identity)?;
     let fitted = fit_bones(&neutral, &kit.landmarks68()?, templates)?;
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("{}: cannot create folder", out.display()))?;
+    std::fs::create_dir_all(out).map_err(|source| BonesFitError::CreateFolder {
+        path: out.to_path_buf(),
+        source,
+    })?;
     fitted.skull.write(&out.join("skull.obj"))?;
     fitted.jaw.write(&out.join("jaw.obj"))?;
-    crate::io::atomic::write(
-        &out.join("fit.json"),
-        serde_json::to_string_pretty(&fitted.report)?.as_bytes(),
-    )?;
+    let report = out.join("fit.json");
+    let json =
+        serde_json::to_string_pretty(&fitted.report).map_err(|source| BonesFitError::Report {
+            path: report.clone(),
+            source,
+        })?;
+    crate::io::atomic::write(&report, json.as_bytes())?;
     let (face, _) = neutral.submesh(|v| FACE_REGION.contains(&v));
     let anchors = crate::anatomy::constraints::anchors(
         &face,
@@ -92,19 +147,33 @@ pub fn bones_fit(
         .collect();
     let bone_img =
         crate::figures::render::render(&bones.positions, &bones.triangles(), &colors, &view);
-    crate::figures::render::Image::hstack(&[bone_img, skin]).write_png(&out.join("bones.png"))?;
+    crate::figures::render::Image::hstack(&[bone_img, skin]).save_png(&out.join("bones.png"))?;
     Ok(fitted.report)
 }
 
 /// Checks that `root` holds the template bones (`artisynth-jaw/`, `skull-odedstein/`) and
 /// returns it; the error names the folder and what is missing.
-pub fn bone_templates(root: &Path) -> Result<PathBuf> {
+pub fn bone_templates(root: &Path) -> Result<PathBuf, BonesFitError> {
     if root.join("artisynth-jaw").is_dir() {
         Ok(root.to_path_buf())
     } else {
-        bail!(
-            "{}: no template bones (artisynth-jaw, skull-odedstein) there; pass --bones DIR, or --templates DIR or SINEW_DATA",
-            root.display()
-        )
+        Err(BonesFitError::NoTemplates {
+            path: root.to_path_buf(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_folder_without_templates_or_kit_is_refused_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let err = bone_templates(dir.path()).unwrap_err();
+        assert!(matches!(&err, BonesFitError::NoTemplates { path } if path == dir.path()));
+        let err = bones_fit(dir.path(), &[], dir.path(), &dir.path().join("out")).unwrap_err();
+        assert!(matches!(err, BonesFitError::Kit(_)), "{err}");
+        assert!(!dir.path().join("out").exists());
     }
 }

@@ -49,7 +49,7 @@ pub(crate) fn run(args: ViewArgs) -> Result<()> {
         track: args.track.as_deref(),
         neutral: args.neutral.as_deref(),
     };
-    sinew_host::view::view(
+    Ok(sinew_host::view::view(
         inputs,
         args.port,
         args.exit_after_seconds.map(Duration::from_secs),
@@ -60,5 +60,5 @@ pub(crate) fn run(args: ViewArgs) -> Result<()> {
                 args.model.display()
             );
         },
-    )
+    )?)
 }

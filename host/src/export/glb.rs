@@ -2,7 +2,61 @@
 //! (`glTF`, version 2, total length), a JSON chunk padded with spaces and a BIN chunk padded with
 //! zeros, every chunk 4-byte aligned and all integers little-endian.
 
-use anyhow::{Result, bail, ensure};
+/// Why bytes could not be laid out as, or read as, a binary glTF.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum GlbError {
+    /// The container's 32-bit length cannot hold the file.
+    #[error("a .glb holds at most 4 GiB, this one would be {bytes} bytes")]
+    TooLarge {
+        /// The bytes the file would have.
+        bytes: usize,
+    },
+    /// The file ends inside a header or chunk header.
+    #[error("truncated at byte {at}")]
+    Truncated {
+        /// Where a word was expected.
+        at: usize,
+    },
+    /// The file does not start with `glTF`.
+    #[error("not a binary glTF (magic)")]
+    Magic,
+    /// A container version other than 2.
+    #[error("glTF container version {version}, not 2")]
+    Version {
+        /// The file's version.
+        version: u32,
+    },
+    /// The header's length is not the file's.
+    #[error("header says {header} bytes, the file has {file}")]
+    Length {
+        /// The header's length.
+        header: u32,
+        /// The file's length.
+        file: usize,
+    },
+    /// A chunk of the wrong type where JSON or BIN was expected.
+    #[error("chunk at byte {at} has the wrong type")]
+    ChunkType {
+        /// Where the chunk starts.
+        at: usize,
+    },
+    /// A chunk whose length is not a multiple of 4.
+    #[error("chunk at byte {at} is not 4-byte aligned")]
+    ChunkAlignment {
+        /// Where the chunk starts.
+        at: usize,
+    },
+    /// A chunk longer than the rest of the file.
+    #[error("chunk at byte {at} runs past the end")]
+    ChunkPastEnd {
+        /// Where the chunk starts.
+        at: usize,
+    },
+    /// Bytes after the BIN chunk.
+    #[error("bytes after the BIN chunk")]
+    TrailingBytes,
+}
 
 /// `glTF` as a little-endian u32.
 pub const MAGIC: u32 = 0x4654_6C67;
@@ -22,12 +76,12 @@ fn padded(bytes: &[u8], fill: u8) -> Vec<u8> {
 }
 
 /// A `.glb` from the JSON document and the binary buffer.
-pub fn write(json: &[u8], bin: &[u8]) -> Result<Vec<u8>> {
+pub fn write(json: &[u8], bin: &[u8]) -> Result<Vec<u8>, GlbError> {
     let json = padded(json, b' ');
     let bin = padded(bin, 0);
     let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
     let Ok(total32) = u32::try_from(total) else {
-        bail!("a .glb holds at most 4 GiB, this one would be {total} bytes");
+        return Err(GlbError::TooLarge { bytes: total });
     };
     let mut out = Vec::with_capacity(total);
     for word in [MAGIC, VERSION, total32, json.len() as u32, CHUNK_JSON] {
@@ -44,38 +98,38 @@ pub fn write(json: &[u8], bin: &[u8]) -> Result<Vec<u8>> {
 
 /// The JSON and BIN chunks of a `.glb` (BIN empty when absent), after checking the header and
 /// chunk layout.
-pub fn read(bytes: &[u8]) -> Result<(&[u8], &[u8])> {
-    let word = |at: usize| -> Result<u32> {
+pub fn read(bytes: &[u8]) -> Result<(&[u8], &[u8]), GlbError> {
+    let word = |at: usize| -> Result<u32, GlbError> {
         match bytes.get(at..at + 4) {
             Some(b) => Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-            None => bail!("truncated at byte {at}"),
+            None => Err(GlbError::Truncated { at }),
         }
     };
-    ensure!(word(0)? == MAGIC, "not a binary glTF (magic)");
-    ensure!(
-        word(4)? == VERSION,
-        "glTF container version {}, not 2",
-        word(4)?
-    );
-    ensure!(
-        word(8)? as usize == bytes.len(),
-        "header says {} bytes, the file has {}",
-        word(8)?,
-        bytes.len()
-    );
-    let chunk = |at: usize, kind: u32| -> Result<(&[u8], usize)> {
+    if word(0)? != MAGIC {
+        return Err(GlbError::Magic);
+    }
+    let version = word(4)?;
+    if version != VERSION {
+        return Err(GlbError::Version { version });
+    }
+    let header = word(8)?;
+    if header as usize != bytes.len() {
+        return Err(GlbError::Length {
+            header,
+            file: bytes.len(),
+        });
+    }
+    let chunk = |at: usize, kind: u32| -> Result<(&[u8], usize), GlbError> {
         let len = word(at)? as usize;
-        ensure!(
-            word(at + 4)? == kind,
-            "chunk at byte {at} has the wrong type"
-        );
-        ensure!(
-            len.is_multiple_of(4),
-            "chunk at byte {at} is not 4-byte aligned"
-        );
+        if word(at + 4)? != kind {
+            return Err(GlbError::ChunkType { at });
+        }
+        if !len.is_multiple_of(4) {
+            return Err(GlbError::ChunkAlignment { at });
+        }
         let body = bytes
             .get(at + 8..at + 8 + len)
-            .ok_or_else(|| anyhow::anyhow!("chunk at byte {at} runs past the end"))?;
+            .ok_or(GlbError::ChunkPastEnd { at })?;
         Ok((body, at + 8 + len))
     };
     let (json, next) = chunk(12, CHUNK_JSON)?;
@@ -83,7 +137,9 @@ pub fn read(bytes: &[u8]) -> Result<(&[u8], &[u8])> {
         return Ok((json, &[]));
     }
     let (bin, end) = chunk(next, CHUNK_BIN)?;
-    ensure!(end == bytes.len(), "bytes after the BIN chunk");
+    if end != bytes.len() {
+        return Err(GlbError::TrailingBytes);
+    }
     Ok((json, bin))
 }
 
@@ -101,7 +157,17 @@ mod tests {
         assert_eq!(bin, [1, 2, 3, 4, 5, 0, 0, 0]);
         let mut bad = glb.clone();
         bad[8] ^= 1;
-        assert!(read(&bad).unwrap_err().to_string().contains("header says"));
-        assert!(read(&glb[..10]).is_err());
+        assert!(matches!(read(&bad), Err(GlbError::Length { .. })));
+        assert_eq!(read(&glb[..10]), Err(GlbError::Truncated { at: 8 }));
+        let mut more = glb.clone();
+        more.extend_from_slice(&[0; 4]);
+        let len = more.len() as u32;
+        more[8..12].copy_from_slice(&len.to_le_bytes());
+        assert_eq!(read(&more), Err(GlbError::TrailingBytes));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("cut.glb");
+        std::fs::write(&path, &glb[..glb.len() - 4]).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        assert!(matches!(read(&bytes), Err(GlbError::Length { .. })));
     }
 }

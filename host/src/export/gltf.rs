@@ -18,16 +18,125 @@
 //! `training::tolerance::GLTF_RIG` give the difference both make.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
 use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use serde::Serialize;
+use sinew_core::FormatError;
 use sinew_core::aim::AimActor;
 use sinew_core::linalg::Mat3;
+use sinew_core::replay::ReplayError;
 
-use crate::aim::play::{Frame, PoseFile, corrective_names};
+use super::glb::GlbError;
+use crate::aim::arkit::ArkitError;
+use crate::aim::play::{Frame, PoseFile, PoseFileError, corrective_names};
+use crate::io::atomic::AtomicWriteError;
+use crate::io::container::ContainerError;
+use crate::io::units::UnknownUnit;
+
+/// Why `sinew export gltf` failed; every variant names the file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ExportError {
+    /// A frame rate that is not a positive number.
+    #[error("--fps must be a positive number, got {fps}")]
+    Fps {
+        /// The rate given.
+        fps: f32,
+    },
+    /// The model or performance file could not be read or is no `.sinew` artefact.
+    #[error(transparent)]
+    Container(#[from] ContainerError),
+    /// The model is not an AIM actor.
+    #[error("{}", path.display())]
+    NotAnActor {
+        /// The model file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// The pose file is unreadable or does not fit the actor.
+    #[error(transparent)]
+    Poses(#[from] PoseFileError),
+    /// The capture could not be read or mapped onto the actor.
+    #[error(transparent)]
+    Arkit(#[from] ArkitError),
+    /// The performance file is not a fitted performance.
+    #[error("{}: not a fitted performance", path.display())]
+    NotAPerformance {
+        /// The performance file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// A performance fitted to another actor.
+    #[error("{}", path.display())]
+    OtherActor {
+        /// The performance file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: ReplayError,
+    },
+    /// A local fit, whose coefficients glTF's per-mesh morph weights cannot carry.
+    #[error(
+        "{}: a local fit's coefficients vary over the face, which glTF's per-mesh morph \
+         weights cannot carry; fit with --global for an engine, or write the meshes with \
+         sinew play --performance",
+        path.display()
+    )]
+    LocalFit {
+        /// The performance file.
+        path: PathBuf,
+    },
+    /// A performance frame whose coefficients or transforms cannot be read.
+    #[error("{}: frame {frame} unreadable", path.display())]
+    Frame {
+        /// The performance file.
+        path: PathBuf,
+        /// The frame.
+        frame: usize,
+    },
+    /// The actor could not be laid out as glTF.
+    #[error("{}: cannot export", path.display())]
+    Gltf {
+        /// The model file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: GltfError,
+    },
+    /// The `.glb` could not be written.
+    #[error(transparent)]
+    Write(#[from] AtomicWriteError),
+}
+
+/// Why an actor could not be laid out as a glTF rig.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum GltfError {
+    /// The artefact's `units` metadata names no known unit.
+    #[error(transparent)]
+    Units(#[from] UnknownUnit),
+    /// A cache section of the wrong shape or type.
+    #[error("{name}")]
+    Section {
+        /// The section.
+        name: String,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// The glTF document could not be serialised.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    /// The container could not be laid out.
+    #[error(transparent)]
+    Glb(#[from] GlbError),
+}
 
 /// Where the animation's frames come from.
 #[derive(Clone, Copy, Debug)]
@@ -72,13 +181,15 @@ pub fn export(
     frames: Frames<'_>,
     fps: f32,
     bones: bool,
-) -> Result<Summary> {
+) -> Result<Summary, ExportError> {
     if !(fps.is_finite() && fps > 0.0) {
-        bail!("--fps must be a positive number, got {fps}");
+        return Err(ExportError::Fps { fps });
     }
     let bytes = crate::io::container::read(model)?;
-    let actor =
-        AimActor::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
+    let actor = AimActor::from_bytes(&bytes).map_err(|source| ExportError::NotAnActor {
+        path: model.to_path_buf(),
+        source,
+    })?;
     let (poses, unplayable) = match frames {
         Frames::None => (Vec::new(), Vec::new()),
         Frames::Poses(p) => (PoseFile::read(p, actor.shape_count())?.frames, Vec::new()),
@@ -88,8 +199,11 @@ pub fn export(
         }
         Frames::Performance(p) => (performance_frames(&bytes, &actor, p)?, Vec::new()),
     };
-    let (glb, mut summary) = glb(&actor, &poses, fps, bones)
-        .with_context(|| format!("{}: cannot export", model.display()))?;
+    let (glb, mut summary) =
+        glb(&actor, &poses, fps, bones).map_err(|source| ExportError::Gltf {
+            path: model.to_path_buf(),
+            source,
+        })?;
     crate::io::atomic::write(out, &glb)?;
     summary.unplayable = unplayable;
     Ok(summary)
@@ -97,33 +211,44 @@ pub fn export(
 
 /// The frames of a global fit of `actor` (whose bytes are `actor_bytes`); a local fit is refused:
 /// its coefficients vary over the face, and glTF's morph weights are one per mesh.
-fn performance_frames(actor_bytes: &[u8], actor: &AimActor<'_>, path: &Path) -> Result<Vec<Frame>> {
+fn performance_frames(
+    actor_bytes: &[u8],
+    actor: &AimActor<'_>,
+    path: &Path,
+) -> Result<Vec<Frame>, ExportError> {
     let bytes = crate::io::container::read(path)?;
-    let perf = sinew_core::performance::Performance::from_bytes(&bytes)
-        .map_err(|e| anyhow::anyhow!("{}: not a fitted performance: {e}", path.display()))?;
+    let perf = sinew_core::performance::Performance::from_bytes(&bytes).map_err(|source| {
+        ExportError::NotAPerformance {
+            path: path.to_path_buf(),
+            source,
+        }
+    })?;
     perf.check_actor(actor_bytes, actor)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        .map_err(|source| ExportError::OtherActor {
+            path: path.to_path_buf(),
+            source,
+        })?;
     if perf.is_local() {
-        bail!(
-            "{}: a local fit's coefficients vary over the face, which glTF's per-mesh morph \
-             weights cannot carry; fit with --global for an engine, or write the meshes with \
-             sinew play --performance",
-            path.display()
-        );
+        return Err(ExportError::LocalFit {
+            path: path.to_path_buf(),
+        });
     }
     (0..perf.frames())
         .map(|f| {
             let mut weights = vec![0.0; perf.shape_count()];
             let (head, jaw) = perf.head_jaw(f).unwrap_or_default();
             perf.global_weights(f, &mut weights)
-                .ok_or_else(|| anyhow::anyhow!("{}: frame {f} unreadable", path.display()))?;
+                .ok_or_else(|| ExportError::Frame {
+                    path: path.to_path_buf(),
+                    frame: f,
+                })?;
             Ok(Frame { head, jaw, weights })
         })
         .collect()
 }
 
 /// Metres per unit of the artefact's `units` metadata (1 when it records none).
-pub fn metres_per_unit(actor: &AimActor<'_>) -> Result<f32> {
+pub fn metres_per_unit(actor: &AimActor<'_>) -> Result<f32, UnknownUnit> {
     match actor.file().metadata().get("units") {
         Some(u) => {
             let unit: crate::io::units::Unit = u.parse()?;
@@ -298,7 +423,7 @@ pub fn glb(
     frames: &[Frame],
     fps: f32,
     bones: bool,
-) -> Result<(Vec<u8>, Summary)> {
+) -> Result<(Vec<u8>, Summary), GltfError> {
     use json::accessor::{ComponentType, Type};
     use json::buffer::Target::{ArrayBuffer, ElementArrayBuffer};
     let v = actor.vertex_count();
@@ -308,7 +433,10 @@ pub fn glb(
     let file = actor.file();
     let section = |name: &str, shape: &[u32]| {
         file.f32_tensor(name, shape)
-            .map_err(|e| anyhow::anyhow!("{name}: {e}"))
+            .map_err(|source| GltfError::Section {
+                name: name.to_string(),
+                source,
+            })
     };
     let (v32, m32) = (v as u32, m as u32);
     let correctives = section("cache.e", &[v32, m32, 3])?;
@@ -484,7 +612,7 @@ pub fn glb(
             scale,
             pivot_m,
             [face_node, jaw, head],
-        )?;
+        );
     }
     let scene = b.root.push(json::Scene {
         extensions: None,
@@ -528,7 +656,7 @@ fn animate(
     scale: f32,
     pivot_m: [f32; 3],
     [face, jaw, head]: [json::Index<json::Node>; 3],
-) -> Result<()> {
+) {
     use json::accessor::Type;
     use json::animation::Property;
     let times: Vec<f32> = (0..frames.len()).map(|i| i as f32 / fps).collect();
@@ -606,5 +734,44 @@ fn animate(
         name: Some("performance".into()),
         samplers,
     });
-    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_inputs_are_refused_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let model = dir.path().join("actor.sinew");
+        std::fs::write(
+            &model,
+            std::fs::read(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../tests/data/aim-procedural.sinew"
+            ))
+            .unwrap(),
+        )
+        .unwrap();
+        let out = dir.path().join("actor.glb");
+        let err = export(&model, &out, Frames::None, 0.0, false).unwrap_err();
+        assert!(matches!(err, ExportError::Fps { .. }), "{err}");
+        let missing = dir.path().join("missing.sinew");
+        let err = export(&missing, &out, Frames::None, 30.0, false).unwrap_err();
+        assert!(
+            matches!(&err, ExportError::Container(ContainerError::Read { path, .. }) if *path == missing),
+            "{err}"
+        );
+        // The actor is no performance of itself.
+        let err = export(&model, &out, Frames::Performance(&model), 30.0, false).unwrap_err();
+        assert!(
+            matches!(&err, ExportError::NotAPerformance { path, .. } if *path == model),
+            "{err}"
+        );
+        let poses = dir.path().join("poses.json");
+        std::fs::write(&poses, "{\"frames\": [{\"weights\": [1e40]}]}").unwrap();
+        let err = export(&model, &out, Frames::Poses(&poses), 30.0, false).unwrap_err();
+        assert!(matches!(err, ExportError::Poses(_)), "{err}");
+        assert!(!out.exists());
+    }
 }

@@ -7,9 +7,42 @@
 //! gives the same bytes on every run of the same build.
 
 use std::fmt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use crate::io::atomic::AtomicWriteError;
+
+/// Why a picture could not be written as a PNG; every variant names the file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PngError {
+    /// An empty picture, or one whose pixel bytes do not match its size.
+    #[error(
+        "{}: cannot write a {width}x{height} picture with {bytes} bytes of pixels (PNG needs a \
+         non-empty picture of {expected} bytes)",
+        path.display()
+    )]
+    BadPicture {
+        /// The PNG file.
+        path: PathBuf,
+        /// The picture's width.
+        width: u32,
+        /// The picture's height.
+        height: u32,
+        /// Its bytes of pixels.
+        bytes: usize,
+        /// The bytes its size needs.
+        expected: usize,
+    },
+    /// The encoder or the atomic write failed.
+    #[error("{}: cannot write PNG", path.display())]
+    Write {
+        /// The PNG file.
+        path: PathBuf,
+        /// The failed write.
+        #[source]
+        source: AtomicWriteError,
+    },
+}
 
 /// The light grey behind rendered meshes.
 pub const BACKGROUND: [u8; 3] = [235, 235, 235];
@@ -203,18 +236,23 @@ impl Image {
         out
     }
 
+    /// [`Self::save_png`] for the figure writers that still return `anyhow` (in `motion`, `s2d`
+    /// and `fit`); the message is the same.
+    pub fn write_png(&self, path: &Path) -> anyhow::Result<()> {
+        Ok(self.save_png(path)?)
+    }
+
     /// Writes the picture as an 8-bit RGB PNG, atomically (temporary file, then rename).
-    pub fn write_png(&self, path: &Path) -> Result<()> {
+    pub fn save_png(&self, path: &Path) -> Result<(), PngError> {
         let expected = self.width as usize * self.height as usize * 3;
         if self.width == 0 || self.height == 0 || self.rgb.len() != expected {
-            anyhow::bail!(
-                "{}: cannot write a {}x{} picture with {} bytes of pixels (PNG needs a non-empty picture of {} bytes)",
-                path.display(),
-                self.width,
-                self.height,
-                self.rgb.len(),
-                expected
-            );
+            return Err(PngError::BadPicture {
+                path: path.to_path_buf(),
+                width: self.width,
+                height: self.height,
+                bytes: self.rgb.len(),
+                expected,
+            });
         }
         crate::io::atomic::write_with(path, |w| {
             let mut enc = png::Encoder::new(w, self.width, self.height);
@@ -226,7 +264,10 @@ impl Image {
                 .map_err(std::io::Error::other)?;
             writer.finish().map_err(std::io::Error::other)
         })
-        .with_context(|| format!("{}: cannot write PNG", path.display()))
+        .map_err(|source| PngError::Write {
+            path: path.to_path_buf(),
+            source,
+        })
     }
 
     /// Draws `s` with the built-in 5 × 7 font, each font pixel a `scale` × `scale` square, with the

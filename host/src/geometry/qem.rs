@@ -5,8 +5,6 @@
 use std::cmp::{Ordering, Reverse};
 use std::collections::BinaryHeap;
 
-use anyhow::{Result, bail};
-
 use crate::geometry::topology::incident_triangles;
 use crate::geometry::vec3::{cross, dot, norm2, scale, sub, to64};
 
@@ -109,6 +107,25 @@ struct Decimator {
     heap: BinaryHeap<Reverse<Candidate>>,
 }
 
+/// A decimation that cannot reach its target.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DecimateError {
+    /// Every remaining collapse would flip, degenerate or disconnect the surface.
+    #[error(
+        "cannot decimate {vertices} vertices to {target}: every remaining collapse would flip, \
+         degenerate or disconnect the surface (stopped at {stopped_at})"
+    )]
+    Stuck {
+        /// The mesh's vertices.
+        vertices: usize,
+        /// The vertex count asked for.
+        target: usize,
+        /// The vertices left when no collapse remained.
+        stopped_at: usize,
+    },
+}
+
 /// Decimates one level to `target` vertices. Returns the kept vertices (increasing) and the
 /// coarse triangles in the kept vertices' numbering (in the order of the fine triangles they
 /// came from).
@@ -116,7 +133,7 @@ pub(crate) fn decimate(
     positions: &[[f32; 3]],
     triangles: &[[u32; 3]],
     target: usize,
-) -> Result<(Vec<u32>, Vec<[u32; 3]>)> {
+) -> Result<(Vec<u32>, Vec<[u32; 3]>), DecimateError> {
     let n = positions.len();
     let mut d = Decimator {
         pos: positions.iter().map(|&p| to64(p)).collect(),
@@ -137,10 +154,11 @@ pub(crate) fn decimate(
     let mut alive = n;
     while alive > target {
         let Some(Reverse(c)) = d.heap.pop() else {
-            bail!(
-                "cannot decimate {n} vertices to {target}: every remaining collapse would flip, \
-                 degenerate or disconnect the surface (stopped at {alive})"
-            );
+            return Err(DecimateError::Stuck {
+                vertices: n,
+                target,
+                stopped_at: alive,
+            });
         };
         if !d.vertex_alive[c.from as usize]
             || !d.vertex_alive[c.to as usize]
@@ -380,5 +398,31 @@ impl Decimator {
                 self.push(b, a);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_target_no_collapse_reaches_is_refused() {
+        // A tetrahedron: every collapse below four vertices would flatten the closed surface.
+        let positions = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let triangles = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let err = decimate(&positions, &triangles, 1).unwrap_err();
+        assert!(matches!(
+            err,
+            DecimateError::Stuck {
+                vertices: 4,
+                target: 1,
+                ..
+            }
+        ));
     }
 }

@@ -5,12 +5,12 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow, bail};
 use serde::Serialize;
 use sinew_core::aim::AimActor;
 use sinew_core::performance::Performance;
 use sinew_core::replay::{AimReplay, check_model};
 
+use super::error::ViewError;
 use crate::aim::play::PoseFile;
 
 /// The page, its script and style, and the core's JavaScript binding (core/wasm/js).
@@ -109,20 +109,18 @@ impl Site {
     /// container; [`Site::load`] chooses by the model's kind) and builds the table. Errors name
     /// the file and what is wrong with it: not an AIM actor, a replay of another model, a pose
     /// file of the wrong shape, a performance fitted to another actor, a file for an S2D decoder.
-    pub(super) fn load_aim(inputs: Inputs<'_>, model: Vec<u8>) -> Result<Self> {
-        let actor = AimActor::from_bytes(&model).map_err(|e| {
-            anyhow!(
-                "{}: neither an AIM actor nor an S2D decoder that the viewer can show: {e}",
-                inputs.model.display()
-            )
+    pub(super) fn load_aim(inputs: Inputs<'_>, model: Vec<u8>) -> Result<Self, ViewError> {
+        let actor = AimActor::from_bytes(&model).map_err(|source| ViewError::NotViewable {
+            path: inputs.model.to_path_buf(),
+            source,
         })?;
         for (flag, path) in [("--track", inputs.track), ("--neutral", inputs.neutral)] {
             if let Some(path) = path {
-                bail!(
-                    "{}: {flag} is for an S2D decoder, and {} is an AIM actor",
-                    path.display(),
-                    inputs.model.display()
-                );
+                return Err(ViewError::S2dFileForActor {
+                    path: path.to_path_buf(),
+                    flag,
+                    model: inputs.model.to_path_buf(),
+                });
             }
         }
         let model_name = file_name(inputs.model);
@@ -130,14 +128,15 @@ impl Site {
         let mut replay = None;
         if let Some(path) = inputs.replay {
             let bytes = crate::io::container::read(path)?;
-            let parsed = AimReplay::from_bytes(&bytes)
-                .map_err(|e| anyhow!("{}: not an AIM replay: {e}", path.display()))?;
-            check_model(&model, &actor, &parsed).map_err(|e| {
-                anyhow!(
-                    "{}: does not play {}: {e}",
-                    path.display(),
-                    inputs.model.display()
-                )
+            let parsed =
+                AimReplay::from_bytes(&bytes).map_err(|source| ViewError::NotAnAimReplay {
+                    path: path.to_path_buf(),
+                    source,
+                })?;
+            check_model(&model, &actor, &parsed).map_err(|source| ViewError::DoesNotPlay {
+                path: path.to_path_buf(),
+                model: inputs.model.to_path_buf(),
+                source,
             })?;
             let mode = parsed.mode().to_string();
             replay = Some((file_name(path), parsed.frames(), mode, bytes));
@@ -145,23 +144,28 @@ impl Site {
         let mut poses = None;
         if let Some(path) = inputs.poses {
             let file = PoseFile::read(path, actor.shape_count())?;
-            let json = serde_json::to_vec(&file)
-                .with_context(|| format!("{}: cannot serialise", path.display()))?;
+            let json = serde_json::to_vec(&file).map_err(|source| ViewError::Serialise {
+                path: path.to_path_buf(),
+                source,
+            })?;
             poses = Some((file_name(path), file.frames.len(), json));
         }
 
         let mut performance = None;
         if let Some(path) = inputs.performance {
             let bytes = crate::io::container::read(path)?;
-            let parsed = Performance::from_bytes(&bytes)
-                .map_err(|e| anyhow!("{}: not a fitted performance: {e}", path.display()))?;
-            parsed.check_actor(&model, &actor).map_err(|e| {
-                anyhow!(
-                    "{}: was fitted to another actor than {} ({e})",
-                    path.display(),
-                    inputs.model.display()
-                )
-            })?;
+            let parsed =
+                Performance::from_bytes(&bytes).map_err(|source| ViewError::NotAPerformance {
+                    path: path.to_path_buf(),
+                    source,
+                })?;
+            parsed
+                .check_actor(&model, &actor)
+                .map_err(|reason| ViewError::OtherActor {
+                    path: path.to_path_buf(),
+                    model: inputs.model.to_path_buf(),
+                    reason,
+                })?;
             let described = (
                 file_name(path),
                 parsed.frames(),
@@ -189,7 +193,8 @@ impl Site {
                     hashes: Some(*hashes),
                     ..Described::new(name, *frames)
                 }),
-        })?;
+        })
+        .map_err(ViewError::Json)?;
 
         let mut entries = page(&config, &model);
         if let Some((_, _, _, bytes)) = replay {
@@ -217,9 +222,9 @@ impl Site {
     }
 
     /// The table of `entries`, refused if one is empty (an embedded file missing from the build).
-    pub(super) fn new(entries: Vec<Entry>) -> Result<Self> {
+    pub(super) fn new(entries: Vec<Entry>) -> Result<Self, ViewError> {
         if entries.iter().any(|e| e.body.is_empty()) {
-            bail!("an embedded file of the viewer is empty: the build is broken");
+            return Err(ViewError::EmptyEntry);
         }
         Ok(Self { entries })
     }

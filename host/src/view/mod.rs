@@ -5,15 +5,16 @@
 //! [`files`] is the fixed table of what is served (`s2d` its S2D decoder's part), [`server`]
 //! the HTTP side and its safety rules.
 
+mod error;
 pub mod files;
 mod s2d;
 pub mod server;
 
 use std::time::{Duration, Instant};
 
-use anyhow::{Result, anyhow};
 use sinew_core::format::{ArtifactKind, SinewFile};
 
+pub use error::ViewError;
 pub use files::{Inputs, Site};
 pub use server::Viewer;
 
@@ -24,10 +25,13 @@ impl Site {
     /// decoder, a replay of another model, a pose file of the wrong shape, a performance fitted
     /// to another actor, a file given for the other kind of model, a neutral of another
     /// topology.
-    pub fn load(inputs: Inputs<'_>) -> Result<Self> {
+    pub fn load(inputs: Inputs<'_>) -> Result<Self, ViewError> {
         let model = crate::io::container::read(inputs.model)?;
         let kind = SinewFile::from_bytes(&model)
-            .map_err(|e| anyhow!("{}: {e}", inputs.model.display()))?
+            .map_err(|source| ViewError::Model {
+                path: inputs.model.to_path_buf(),
+                source,
+            })?
             .kind;
         if kind == ArtifactKind::S2dDecoder {
             s2d::load(inputs, model)
@@ -45,7 +49,7 @@ pub fn view(
     port: u16,
     exit_after: Option<Duration>,
     ready: impl FnOnce(&str),
-) -> Result<()> {
+) -> Result<(), ViewError> {
     let viewer = Viewer::bind(Site::load(inputs)?, port)?;
     crate::training::interrupt::watch_ctrl_c();
     ready(&viewer.url());
@@ -221,7 +225,7 @@ mod tests {
 
     #[test]
     fn bad_files_are_named() {
-        let err = |inputs: Inputs<'_>| format!("{:#}", Site::load(inputs).unwrap_err());
+        let err = |inputs: Inputs<'_>| Site::load(inputs).unwrap_err();
         // A replay is neither kind of model.
         let other = data("aim-ict.f32.replay.sinew");
         let e = err(Inputs {
@@ -233,8 +237,7 @@ mod tests {
             neutral: None,
         });
         assert!(
-            e.contains("aim-ict.f32.replay.sinew")
-                && e.contains("neither an AIM actor nor an S2D decoder"),
+            matches!(&e, ViewError::NotViewable { path, .. } if *path == other),
             "{e}"
         );
         let model = data("aim-procedural.sinew");
@@ -249,7 +252,7 @@ mod tests {
             neutral: None,
         });
         assert!(
-            e.contains("s2d-ict.replay.sinew") && e.contains("--track is for an S2D decoder"),
+            matches!(&e, ViewError::S2dFileForActor { path, flag: "--track", .. } if *path == track),
             "{e}"
         );
         let e = err(Inputs {
@@ -261,7 +264,7 @@ mod tests {
             neutral: None,
         });
         assert!(
-            e.contains("aim-ict.f32.replay.sinew") && e.contains("does not play"),
+            matches!(&e, ViewError::DoesNotPlay { path, model: m, .. } if *path == other && *m == model),
             "{e}"
         );
         let e = err(Inputs {
@@ -272,7 +275,7 @@ mod tests {
             track: None,
             neutral: None,
         });
-        assert!(e.contains("not an AIM replay"), "{e}");
+        assert!(matches!(e, ViewError::NotAnAimReplay { .. }), "{e}");
         let dir = tempfile::tempdir().unwrap();
         let poses = dir.path().join("p.json");
         std::fs::write(&poses, r#"{"frames": [{"weights": [1]}]}"#).unwrap();
@@ -284,7 +287,10 @@ mod tests {
             track: None,
             neutral: None,
         });
-        assert!(e.contains("p.json") && e.contains("weights"), "{e}");
+        assert!(
+            matches!(&e, ViewError::Poses(crate::aim::play::PoseFileError::WeightCount { path, .. }) if *path == poses),
+            "{e}"
+        );
         let missing = dir.path().join("missing.sinew");
         let e = err(Inputs {
             model: &missing,
@@ -294,7 +300,25 @@ mod tests {
             track: None,
             neutral: None,
         });
-        assert!(e.contains("missing.sinew"), "{e}");
+        assert!(
+            matches!(&e, ViewError::Container(crate::io::container::ContainerError::Read { path, .. }) if *path == missing),
+            "{e}"
+        );
+        // A damaged model is refused by the container reader, naming it.
+        let damaged = dir.path().join("damaged.sinew");
+        std::fs::write(&damaged, &std::fs::read(&model).unwrap()[..100]).unwrap();
+        let e = err(Inputs {
+            model: &damaged,
+            replay: None,
+            poses: None,
+            performance: None,
+            track: None,
+            neutral: None,
+        });
+        assert!(
+            matches!(&e, ViewError::Container(crate::io::container::ContainerError::Invalid { path, .. }) if *path == damaged),
+            "{e}"
+        );
     }
 
     #[test]
@@ -326,7 +350,7 @@ mod tests {
     #[test]
     fn refuses_a_performance_of_another_actor_naming_it() {
         let err = |model: &str, performance: &str| {
-            let e = Site::load(Inputs {
+            Site::load(Inputs {
                 model: &data(model),
                 replay: None,
                 poses: None,
@@ -334,20 +358,22 @@ mod tests {
                 track: None,
                 neutral: None,
             })
-            .unwrap_err();
-            format!("{e:#}")
+            .unwrap_err()
         };
         // fit-ict.sinew was fitted to aim-ict.sinew, not to the procedural actor.
         let e = err("aim-procedural.sinew", "fit-ict.sinew");
         assert!(
-            e.contains("fit-ict.sinew")
-                && e.contains("was fitted to another actor than")
-                && e.contains("aim-procedural.sinew"),
+            matches!(&e, ViewError::OtherActor { path, model, .. }
+                if path.ends_with("fit-ict.sinew") && model.ends_with("aim-procedural.sinew")),
+            "{e}"
+        );
+        assert!(
+            e.to_string().contains("was fitted to another actor than"),
             "{e}"
         );
         let e = err("aim-ict.sinew", "aim-ict.f32.replay.sinew");
         assert!(
-            e.contains("aim-ict.f32.replay.sinew") && e.contains("not a fitted performance"),
+            matches!(&e, ViewError::NotAPerformance { path, .. } if path.ends_with("aim-ict.f32.replay.sinew")),
             "{e}"
         );
     }

@@ -4,11 +4,11 @@
 //! hash recorded for it. The face decoded onto is `--neutral` (a face in the decoder's topology,
 //! whose polygons the page draws), else the replay's neutral, else the decoder's template.
 
-use anyhow::{Result, anyhow, bail};
 use serde::Serialize;
 use sinew_core::replay::{S2dReplay, check_s2d_model};
 use sinew_core::s2d::S2dDecoder;
 
+use super::error::ViewError;
 use super::files::{Entry, Inputs, Site, file_name, page};
 use crate::io::mesh::Mesh;
 
@@ -51,12 +51,10 @@ struct NeutralFile {
 
 /// Reads and checks an S2D decoder's files (`model` holds the decoder's bytes, a valid
 /// container) and builds the table.
-pub(super) fn load(inputs: Inputs<'_>, model: Vec<u8>) -> Result<Site> {
-    let decoder = S2dDecoder::from_bytes(&model).map_err(|e| {
-        anyhow!(
-            "{}: not an S2D decoder that the viewer can show: {e}",
-            inputs.model.display()
-        )
+pub(super) fn load(inputs: Inputs<'_>, model: Vec<u8>) -> Result<Site, ViewError> {
+    let decoder = S2dDecoder::from_bytes(&model).map_err(|source| ViewError::NotAnS2dDecoder {
+        path: inputs.model.to_path_buf(),
+        source,
     })?;
     for (flag, path) in [
         ("--replay", inputs.replay),
@@ -64,29 +62,25 @@ pub(super) fn load(inputs: Inputs<'_>, model: Vec<u8>) -> Result<Site> {
         ("--performance", inputs.performance),
     ] {
         if let Some(path) = path {
-            bail!(
-                "{}: {flag} is for an AIM actor, and {} is an S2D decoder (it plays a --track)",
-                path.display(),
-                inputs.model.display()
-            );
+            return Err(ViewError::ActorFileForS2d {
+                path: path.to_path_buf(),
+                flag,
+                model: inputs.model.to_path_buf(),
+            });
         }
     }
 
     let mut track = None;
     if let Some(path) = inputs.track {
         let bytes = crate::io::container::read(path)?;
-        let parsed = S2dReplay::from_bytes(&bytes).map_err(|e| {
-            anyhow!(
-                "{}: not an S2D replay (a landmark track): {e}",
-                path.display()
-            )
+        let parsed = S2dReplay::from_bytes(&bytes).map_err(|source| ViewError::NotAnS2dReplay {
+            path: path.to_path_buf(),
+            source,
         })?;
-        check_s2d_model(&model, &decoder, &parsed).map_err(|e| {
-            anyhow!(
-                "{}: does not play {}: {e}",
-                path.display(),
-                inputs.model.display()
-            )
+        check_s2d_model(&model, &decoder, &parsed).map_err(|source| ViewError::DoesNotPlay {
+            path: path.to_path_buf(),
+            model: inputs.model.to_path_buf(),
+            source,
         })?;
         let carries = parsed.neutral().is_some();
         track = Some((file_name(path), parsed.frames(), carries, bytes));
@@ -97,21 +91,23 @@ pub(super) fn load(inputs: Inputs<'_>, model: Vec<u8>) -> Result<Site> {
         let mesh = Mesh::read(path)?;
         let vertices = decoder.vertex_count();
         if mesh.positions.len() != vertices {
-            bail!(
-                "{}: has {} vertices, the decoder {} {vertices}: not a face in its topology",
-                path.display(),
-                mesh.positions.len(),
-                inputs.model.display()
-            );
+            return Err(ViewError::NeutralVertices {
+                path: path.to_path_buf(),
+                vertices: mesh.positions.len(),
+                model: inputs.model.to_path_buf(),
+                expected: vertices,
+            });
         }
         let file = NeutralFile {
             positions: mesh.positions.iter().flatten().copied().collect(),
             triangles: mesh.triangles().into_iter().flatten().collect(),
         };
         if file.positions.iter().any(|x| !x.is_finite()) {
-            bail!("{}: a vertex position is not finite", path.display());
+            return Err(ViewError::NeutralNonFinite {
+                path: path.to_path_buf(),
+            });
         }
-        let json = serde_json::to_vec(&file)?;
+        let json = serde_json::to_vec(&file).map_err(ViewError::Json)?;
         neutral = Some((file_name(path), vertices, file.triangles.len() / 3, json));
     }
 
@@ -132,7 +128,8 @@ pub(super) fn load(inputs: Inputs<'_>, model: Vec<u8>) -> Result<Site> {
                 vertices: *vertices,
                 triangles: *triangles,
             }),
-    })?;
+    })
+    .map_err(ViewError::Json)?;
     let mut entries = page(&config, &model);
     if let Some((_, _, _, bytes)) = track {
         entries.push(Entry {
@@ -281,7 +278,7 @@ mod tests {
 
     #[test]
     fn refuses_files_of_the_wrong_kind_or_topology_naming_them() {
-        let err = |inputs: Inputs<'_>| format!("{:#}", Site::load(inputs).unwrap_err());
+        let err = |inputs: Inputs<'_>| Site::load(inputs).unwrap_err();
         let model = data("s2d-ict.sinew");
         let replay = data("aim-ict.f32.replay.sinew");
         let e = err(Inputs {
@@ -289,7 +286,7 @@ mod tests {
             ..inputs(&model)
         });
         assert!(
-            e.contains("aim-ict.f32.replay.sinew") && e.contains("--replay is for an AIM actor"),
+            matches!(&e, ViewError::ActorFileForS2d { path, flag: "--replay", .. } if *path == replay),
             "{e}"
         );
         let fit = data("fit-ict.sinew");
@@ -298,7 +295,7 @@ mod tests {
             ..inputs(&model)
         });
         assert!(
-            e.contains("fit-ict.sinew") && e.contains("--performance"),
+            matches!(&e, ViewError::ActorFileForS2d { path, flag: "--performance", .. } if *path == fit),
             "{e}"
         );
         // An AIM replay is not a landmark track.
@@ -307,7 +304,7 @@ mod tests {
             ..inputs(&model)
         });
         assert!(
-            e.contains("aim-ict.f32.replay.sinew") && e.contains("not an S2D replay"),
+            matches!(&e, ViewError::NotAnS2dReplay { path, .. } if *path == replay),
             "{e}"
         );
         let dir = tempfile::tempdir().unwrap();
@@ -317,7 +314,8 @@ mod tests {
             ..inputs(&model)
         });
         assert!(
-            e.contains("face.obj") && e.contains("has 1172 vertices") && e.contains("1177"),
+            matches!(&e, ViewError::NeutralVertices { path, vertices: 1172, expected: 1177, .. }
+                if *path == face),
             "{e}"
         );
         let missing = dir.path().join("missing.obj");
@@ -325,6 +323,9 @@ mod tests {
             neutral: Some(&missing),
             ..inputs(&model)
         });
-        assert!(e.contains("missing.obj"), "{e}");
+        assert!(
+            matches!(&e, ViewError::Mesh(crate::io::mesh::MeshError::Read { path, .. }) if *path == missing),
+            "{e}"
+        );
     }
 }

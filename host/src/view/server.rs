@@ -14,9 +14,9 @@ use std::io::Cursor;
 use std::net::{Ipv4Addr, SocketAddr};
 use std::time::{Duration, Instant};
 
-use anyhow::{Result, anyhow};
 use tiny_http::{Header, Method, Request, Response, Server};
 
+use super::error::ViewError;
 use super::files::Site;
 
 /// How often the serving loop looks at its stop conditions.
@@ -110,14 +110,14 @@ impl std::fmt::Debug for Viewer {
 
 impl Viewer {
     /// Binds 127.0.0.1:`port` (0: any free port).
-    pub fn bind(site: Site, port: u16) -> Result<Self> {
+    pub fn bind(site: Site, port: u16) -> Result<Self, ViewError> {
         let server = Server::http(SocketAddr::from((Ipv4Addr::LOCALHOST, port)))
-            .map_err(|e| anyhow!("cannot listen on 127.0.0.1:{port}: {e}"))?;
+            .map_err(|source| ViewError::Listen { port, source })?;
         let port = server
             .server_addr()
             .to_ip()
             .map(|a| a.port())
-            .ok_or_else(|| anyhow!("the server is not on an IP socket"))?;
+            .ok_or(ViewError::NotIp)?;
         Ok(Self { server, site, port })
     }
 
@@ -132,12 +132,16 @@ impl Viewer {
     }
 
     /// Answers requests until `stop()` says so or `deadline` has passed (checked every 100 ms).
-    pub fn serve(&self, deadline: Option<Instant>, stop: impl Fn() -> bool) -> Result<()> {
+    pub fn serve(
+        &self,
+        deadline: Option<Instant>,
+        stop: impl Fn() -> bool,
+    ) -> Result<(), ViewError> {
         loop {
             if stop() || deadline.is_some_and(|d| Instant::now() >= d) {
                 return Ok(());
             }
-            let Some(request) = self.server.recv_timeout(POLL)? else {
+            let Some(request) = self.server.recv_timeout(POLL).map_err(ViewError::Receive)? else {
                 continue;
             };
             self.answer(request);

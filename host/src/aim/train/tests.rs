@@ -254,15 +254,15 @@ fn a_checkpoint_from_before_the_jaw_fields_resumes_with_the_paper_objective() {
     .unwrap_err();
     assert!(
         matches!(
-            err.downcast_ref::<CheckpointError>(),
-            Some(CheckpointError::Invalid { path, source: InvalidState::OtherRun { differences } })
+            &err,
+            TrainError::Checkpoint(CheckpointError::Invalid { path, source: InvalidState::OtherRun { differences } })
                 if path.ends_with(STATE_FILE)
                     && differences == &[
                         r#"config.jaw_init: "identity" in the checkpoint, "bones" now"#,
                         "config.lambda_jaw: 0.0 in the checkpoint, 1.0 now",
                     ]
         ),
-        "{err:#}"
+        "{err:?}"
     );
     // So is a training set of other shapes.
     let mut fewer = set.clone();
@@ -270,14 +270,36 @@ fn a_checkpoint_from_before_the_jaw_fields_resumes_with_the_paper_objective() {
     let err = train(&fewer, &paper, &options(true, None)).unwrap_err();
     assert!(
         matches!(
-            err.downcast_ref::<CheckpointError>(),
-            Some(CheckpointError::Invalid { source: InvalidState::OtherRun { differences }, .. })
-                if differences.len() == 1 && differences[0].starts_with("shapes: ")
+            &err,
+            TrainError::Checkpoint(CheckpointError::Invalid { source: InvalidState::OtherRun { differences }, .. })
+                if differences.len() == 1
+                    && differences[0].starts_with("shapes: ")
+                    && differences[0].contains("renamed")
         ),
-        "{err:#}"
+        "{err:?}"
     );
-    assert!(format!("{err:#}").contains("renamed"), "{err:#}");
     let done = train(&set, &paper, &options(true, None)).unwrap();
     assert!(done.complete);
     assert_eq!(done.state.config, paper);
+}
+
+#[test]
+fn an_unusable_checkpoint_folder_is_refused_by_name() {
+    let set = small_set();
+    let config = crate::aim::testing::small_aim_config(2);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, b"").unwrap();
+    let blocked = file.join("ckpt");
+    let options = crate::aim::testing::aim_train_options(&blocked, false, None);
+    let err = train(&set, &config, &options).unwrap_err();
+    assert!(
+        matches!(&err, TrainError::CreateFolder { path, .. } if *path == blocked),
+        "{err}"
+    );
+    // Resuming from a folder without a checkpoint names its missing state file.
+    let empty = dir.path().join("empty");
+    let options = crate::aim::testing::aim_train_options(&empty, true, None);
+    let err = train(&set, &config, &options).unwrap_err();
+    assert!(matches!(err, TrainError::Checkpoint(_)), "{err}");
 }

@@ -4,7 +4,6 @@ use super::*;
 use crate::geometry::spatial::{components, nearest_in_component, oriented_normals};
 use crate::geometry::vec3::{cross, dot, lerp, norm, normalize, scale, sub, to32, to64};
 use crate::io::mesh::Mesh;
-use anyhow::{Result, anyhow, bail};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -22,19 +21,29 @@ impl SkinLandmarks {
     /// Derives the skin landmarks from the 68 iBUG landmark vertices (`None` where a landmark is
     /// not on the mesh; landmarks that need it are left out), following each bone landmark's
     /// [`SkinRule`].
-    pub fn from_ibug68(neutral: &Mesh, ibug: &[Option<u32>], mm_per_unit: f32) -> Result<Self> {
+    pub fn from_ibug68(
+        neutral: &Mesh,
+        ibug: &[Option<u32>],
+        mm_per_unit: f32,
+    ) -> Result<Self, BonesError> {
         if ibug.len() != 68 {
-            bail!("{} iBUG landmarks given, 68 expected", ibug.len());
+            return Err(BonesError::IbugCount { given: ibug.len() });
         }
         if !(mm_per_unit > 0.0 && mm_per_unit.is_finite()) {
-            bail!("mm per unit must be positive, got {mm_per_unit}");
+            return Err(BonesError::MmPerUnit { mm_per_unit });
         }
         neutral
             .validate()
-            .context("the neutral mesh to find skin landmarks on")?;
+            .map_err(|source| BonesError::InvalidNeutral {
+                purpose: "find skin landmarks on",
+                source,
+            })?;
         let nv = neutral.positions.len();
-        if let Some(v) = ibug.iter().flatten().find(|&&v| v as usize >= nv) {
-            bail!("iBUG landmark vertex {v} is not below the mesh's {nv} vertices");
+        if let Some(&v) = ibug.iter().flatten().find(|&&v| v as usize >= nv) {
+            return Err(BonesError::IbugVertex {
+                vertex: v,
+                vertices: nv,
+            });
         }
         let comp = components(neutral);
         let normals = oriented_normals(neutral, &comp);
@@ -109,23 +118,31 @@ pub struct FaceFrame {
 
 impl FaceFrame {
     /// The frame from the `nasion`, `menton`, `zygion_l` and `zygion_r` skin landmarks.
-    pub fn new(neutral: &Mesh, skin: &SkinLandmarks) -> Result<Self> {
-        let get = |n: &str| -> Result<[f64; 3]> {
-            let v = skin.vertices.get(n).ok_or_else(|| {
-                anyhow!("skin landmark {n} is missing (needed for the face frame)")
-            })?;
+    pub fn new(neutral: &Mesh, skin: &SkinLandmarks) -> Result<Self, BonesError> {
+        let get = |n: &str| -> Result<[f64; 3], BonesError> {
+            let v = skin
+                .vertices
+                .get(n)
+                .ok_or_else(|| BonesError::SkinLandmarkMissing {
+                    name: n.to_string(),
+                    needed_for: "the face frame",
+                })?;
             neutral
                 .positions
                 .get(*v as usize)
                 .map(|p| to64(*p))
-                .ok_or_else(|| anyhow!("skin landmark {n} is vertex {v}, beyond the mesh"))
+                .ok_or_else(|| BonesError::SkinLandmarkVertex {
+                    name: n.to_string(),
+                    vertex: *v,
+                    vertices: neutral.positions.len(),
+                })
         };
         let up = normalize(sub(get("nasion")?, get("menton")?));
         let l = sub(get("zygion_l")?, get("zygion_r")?);
         let left = normalize(sub(l, scale(up, dot(l, up))));
         let forward = cross(left, up);
         if !(norm(up) > 0.5 && norm(left) > 0.5) {
-            bail!("degenerate skin landmarks: cannot build the face frame");
+            return Err(BonesError::DegenerateFrame);
         }
         Ok(Self {
             left: to32(left),

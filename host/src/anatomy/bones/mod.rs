@@ -21,7 +21,6 @@
 //!    jaw gets a similarity; the skull a general affine map when the skin is a whole head (so
 //!    the template vault can take the head's proportions), a similarity otherwise.
 
-use anyhow::{Context, Result, anyhow, bail};
 use serde::Serialize;
 
 use crate::anatomy::constraints::Bone;
@@ -33,17 +32,17 @@ use crate::geometry::vec3::{V3, dot, norm, normalize, scale, sub, to32, to64};
 use crate::io::mesh::Mesh;
 
 pub use self::behind::*;
+pub use self::error::BonesError;
 pub use self::landmarks::*;
 pub use self::templates::*;
 
 mod behind;
+mod error;
 mod landmarks;
 mod templates;
 
 /// The landmark data file, compiled in.
 const LANDMARKS_JSON: &str = include_str!("../../../data/bone_landmarks.json");
-/// The data file's name in messages.
-const LANDMARKS_NAME: &str = "host/data/bone_landmarks.json";
 
 /// The landmarks' share of the ICP objective (their summed weight relative to the surface pairs).
 const LANDMARK_SHARE: f64 = 0.3;
@@ -163,21 +162,30 @@ pub fn fit(
     neutral: &Mesh,
     skin_landmarks: &SkinLandmarks,
     templates: &BoneTemplates,
-) -> Result<FittedBones> {
+) -> Result<FittedBones, BonesError> {
     let mm = skin_landmarks.mm_per_unit as f64;
     if !(mm > 0.0 && mm.is_finite()) {
-        bail!("mm per unit must be positive, got {mm}");
+        return Err(BonesError::MmPerUnit {
+            mm_per_unit: skin_landmarks.mm_per_unit,
+        });
     }
     neutral
         .validate()
-        .context("the neutral mesh to fit bones to")?;
+        .map_err(|source| BonesError::InvalidNeutral {
+            purpose: "fit bones to",
+            source,
+        })?;
     let nv = neutral.positions.len();
     if let Some((n, v)) = skin_landmarks
         .vertices
         .iter()
         .find(|(_, v)| **v as usize >= nv)
     {
-        bail!("skin landmark {n} is vertex {v}, beyond the mesh's {nv} vertices");
+        return Err(BonesError::SkinLandmarkVertex {
+            name: n.clone(),
+            vertex: *v,
+            vertices: nv,
+        });
     }
     let frame = FaceFrame::new(neutral, skin_landmarks)?;
     let comp = components(neutral);
@@ -210,7 +218,7 @@ pub fn fit(
             .filter(|p| p.lm.bone == bone && p.lm.weight > 0.0)
             .count();
         if n < 3 {
-            bail!("only {n} weighted skin landmarks for the {bone:?}; 3 needed");
+            return Err(BonesError::TooFewLandmarks { bone, count: n });
         }
     }
     let (lx, ly, lw): (Vec<_>, Vec<_>, Vec<_>) = {
@@ -294,10 +302,14 @@ pub fn fit(
     }
     let up = to64(frame.up);
     let forward = to64(frame.forward);
-    let nasion = *skin_landmarks
-        .vertices
-        .get("nasion")
-        .ok_or_else(|| anyhow!("skin landmark nasion is missing"))?;
+    let nasion =
+        *skin_landmarks
+            .vertices
+            .get("nasion")
+            .ok_or_else(|| BonesError::SkinLandmarkMissing {
+                name: "nasion".to_string(),
+                needed_for: "the calvarium targets",
+            })?;
     let brow = ["supraorbitale_r", "supraorbitale_l"]
         .iter()
         .filter_map(|n| skin_landmarks.vertices.get(*n))

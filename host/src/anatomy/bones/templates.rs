@@ -7,7 +7,6 @@ use crate::geometry::align::fit_similarity;
 use crate::geometry::spatial::{Grid, cell_for};
 use crate::geometry::vec3::{to32, to64};
 use crate::io::mesh::Mesh;
-use anyhow::{Result, anyhow, bail};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::path::Path;
@@ -116,8 +115,8 @@ pub struct SkinPatch {
     pub patch_mm: f32,
 }
 
-pub(crate) fn spec() -> Result<Spec> {
-    serde_json::from_str(LANDMARKS_JSON).with_context(|| format!("{LANDMARKS_NAME}: invalid"))
+pub(crate) fn spec() -> Result<Spec, BonesError> {
+    serde_json::from_str(LANDMARKS_JSON).map_err(BonesError::LandmarkFile)
 }
 
 /// One bone landmark on the templates, in the templates' common (ArtiSynth) frame, mm.
@@ -175,16 +174,15 @@ pub struct BoneTemplates {
 /// Reads the template bones from the data folder (`artisynth-jaw/`, `skull-odedstein/`), checks
 /// every landmark vertex against `host/data/bone_landmarks.json`, cuts and registers the
 /// cranium. Errors name the missing or mismatching file.
-pub fn load_templates(data_dir: &Path) -> Result<BoneTemplates> {
+pub fn load_templates(data_dir: &Path) -> Result<BoneTemplates, BonesError> {
     let spec = spec()?;
-    let read = |file: &str| -> Result<Mesh> {
+    let read = |file: &str| -> Result<Mesh, BonesError> {
         let path = data_dir.join(file);
         if !path.is_file() {
-            bail!(
-                "{}: missing (a bone template; the data folder is described in {})",
-                path.display(),
-                data_dir.join("README.md").display()
-            );
+            return Err(BonesError::TemplateMissing {
+                path,
+                readme: data_dir.join("README.md"),
+            });
         }
         Ok(Mesh::read(&path)?)
     };
@@ -200,26 +198,24 @@ pub fn load_templates(data_dir: &Path) -> Result<BoneTemplates> {
     // silently move the landmarks otherwise.
     for l in &spec.landmarks {
         let (mesh, file) = mesh_of(l.template);
-        let p = mesh.positions.get(l.vertex as usize).ok_or_else(|| {
-            anyhow!(
-                "{}: landmark {} names vertex {}, but the file has {} vertices",
-                data_dir.join(file).display(),
-                l.name,
-                l.vertex,
-                mesh.positions.len()
-            )
-        })?;
+        let p =
+            mesh.positions
+                .get(l.vertex as usize)
+                .ok_or_else(|| BonesError::LandmarkVertex {
+                    path: data_dir.join(file),
+                    landmark: l.name.clone(),
+                    vertex: l.vertex,
+                    vertices: mesh.positions.len(),
+                })?;
         let scale = 1.0 + l.position.iter().fold(0.0f32, |m, c| m.max(c.abs()));
         if (0..3).any(|k| (p[k] - l.position[k]).abs() > 1e-4 * scale) {
-            bail!(
-                "{}: vertex {} (landmark {}) is at {:?}, {LANDMARKS_NAME} expects {:?}: not the \
-                 published file?",
-                data_dir.join(file).display(),
-                l.vertex,
-                l.name,
-                p,
-                l.position
-            );
+            return Err(BonesError::LandmarkMoved {
+                path: data_dir.join(file),
+                vertex: l.vertex,
+                landmark: l.name.clone(),
+                at: *p,
+                expected: l.position,
+            });
         }
     }
     let by_name: HashMap<&str, &LandmarkSpec> = spec
@@ -233,14 +229,13 @@ pub fn load_templates(data_dir: &Path) -> Result<BoneTemplates> {
     let mut src = Vec::new();
     let mut dst = Vec::new();
     for [c, m] in &reg.pairs {
-        let get = |n: &str, want: Template| -> Result<[f64; 3]> {
+        let get = |n: &str, want: Template| -> Result<[f64; 3], BonesError> {
             let l = by_name
                 .get(n)
                 .filter(|l| l.template == want)
-                .ok_or_else(|| {
-                    anyhow!(
-                        "{LANDMARKS_NAME}: registration pair names {n}, not a {want:?} landmark"
-                    )
+                .ok_or_else(|| BonesError::RegistrationPair {
+                    name: n.to_string(),
+                    want: format!("{want:?}"),
                 })?;
             Ok(to64(l.position))
         };
@@ -248,7 +243,7 @@ pub fn load_templates(data_dir: &Path) -> Result<BoneTemplates> {
         dst.push(get(c, Template::Cranium)?);
     }
     if src.len() < 3 {
-        bail!("{LANDMARKS_NAME}: cranium registration needs at least 3 pairs");
+        return Err(BonesError::TooFewPairs);
     }
     let w = vec![1.0; src.len()];
     let mut to_skull = fit_similarity(&src, &dst, &w);
@@ -283,12 +278,12 @@ pub fn load_templates(data_dir: &Path) -> Result<BoneTemplates> {
     let skull_scale = to_skull.scale();
     let to_frame = to_skull
         .inverse()
-        .ok_or_else(|| anyhow!("cranium registration failed: degenerate transform"))?;
+        .ok_or(BonesError::DegenerateRegistration)?;
 
     // Cut the skull above the plane and map it into the frame.
     let cut = &spec.templates.cranium;
     if cut.keep_axis > 2 {
-        bail!("{LANDMARKS_NAME}: keep_axis must be 0, 1 or 2");
+        return Err(BonesError::KeepAxis);
     }
     let (mut cranium, _) =
         skull.submesh(|v| skull.positions[v as usize][cut.keep_axis] >= cut.keep_min);
@@ -311,11 +306,8 @@ pub fn load_templates(data_dir: &Path) -> Result<BoneTemplates> {
             bone,
             position,
             skin,
-            fstt_mm: l.fstt_mm.ok_or_else(|| {
-                anyhow!(
-                    "{LANDMARKS_NAME}: landmark {} has a skin rule but no fstt_mm",
-                    l.name
-                )
+            fstt_mm: l.fstt_mm.ok_or_else(|| BonesError::NoThickness {
+                name: l.name.clone(),
             })?,
             patch_mm: l.patch_mm.unwrap_or(0.0),
             weight: l.weight.unwrap_or(1.0),

@@ -216,7 +216,21 @@ fn landmark_file_is_consistent() {
 fn missing_template_is_named() {
     let dir = tempfile::tempdir().unwrap();
     let e = load_templates(dir.path()).unwrap_err();
-    assert!(format!("{e:#}").contains("jaw.obj: missing"), "{e:#}");
+    assert!(
+        matches!(&e, BonesError::TemplateMissing { path, .. } if path.ends_with("artisynth-jaw/jaw.obj")),
+        "{e}"
+    );
+    // A damaged template is refused by the mesh reader, naming the file.
+    std::fs::create_dir_all(dir.path().join("artisynth-jaw")).unwrap();
+    std::fs::write(dir.path().join("artisynth-jaw/jaw.obj"), "v 1 2\nf 1 2 3\n").unwrap();
+    let e = load_templates(dir.path()).unwrap_err();
+    assert!(
+        matches!(
+            &e,
+            BonesError::Mesh(crate::io::mesh::MeshError::Parse { .. })
+        ),
+        "{e}"
+    );
 }
 
 #[test]

@@ -232,8 +232,12 @@ fn png_round_trip() {
     assert_eq!(info.color_type, png::ColorType::Rgb);
     assert_eq!(&buf[..info.buffer_size()], &img.rgb[..]);
     // An empty picture is refused with the path in the message, not written.
-    let err = Image::new(0, 3, BACKGROUND).write_png(&path).unwrap_err();
-    assert!(format!("{err:#}").contains("b.png"));
+    let err = Image::new(0, 3, BACKGROUND).save_png(&path).unwrap_err();
+    assert!(matches!(&err, PngError::BadPicture { path: p, width: 0, .. } if *p == path));
+    // A destination whose folder is a file cannot be written; the error names the PNG.
+    let blocked = dir.path().join("a/b.png/c.png");
+    let err = img.save_png(&blocked).unwrap_err();
+    assert!(matches!(&err, PngError::Write { path: p, .. } if *p == blocked));
 }
 
 #[test]

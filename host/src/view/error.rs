@@ -1,0 +1,189 @@
+//! [`ViewError`]: why `sinew view` could not load its files or serve them.
+
+use std::path::PathBuf;
+
+use sinew_core::FormatError;
+use sinew_core::replay::ReplayError;
+
+use crate::aim::play::PoseFileError;
+use crate::io::container::ContainerError;
+use crate::io::mesh::MeshError;
+
+/// Why `sinew view` could not load its files or serve them. Every variant about a file names
+/// it, and the model where the file does not fit it.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ViewError {
+    /// A `.sinew` file could not be read or is no valid artefact.
+    #[error(transparent)]
+    Container(#[from] ContainerError),
+    /// The model's header could not be read.
+    #[error("{}", path.display())]
+    Model {
+        /// The model file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// The model is neither an AIM actor nor an S2D decoder.
+    #[error(
+        "{}: neither an AIM actor nor an S2D decoder that the viewer can show",
+        path.display()
+    )]
+    NotViewable {
+        /// The model file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// An S2D decoder's artefact that the core refuses.
+    #[error("{}: not an S2D decoder that the viewer can show", path.display())]
+    NotAnS2dDecoder {
+        /// The model file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// A file for an S2D decoder (`--track`, `--neutral`) given with an AIM actor.
+    #[error(
+        "{}: {flag} is for an S2D decoder, and {} is an AIM actor",
+        path.display(),
+        model.display()
+    )]
+    S2dFileForActor {
+        /// The file.
+        path: PathBuf,
+        /// Its flag.
+        flag: &'static str,
+        /// The model file.
+        model: PathBuf,
+    },
+    /// A file for an AIM actor (`--replay`, `--poses`, `--performance`) given with an S2D
+    /// decoder.
+    #[error(
+        "{}: {flag} is for an AIM actor, and {} is an S2D decoder (it plays a --track)",
+        path.display(),
+        model.display()
+    )]
+    ActorFileForS2d {
+        /// The file.
+        path: PathBuf,
+        /// Its flag.
+        flag: &'static str,
+        /// The model file.
+        model: PathBuf,
+    },
+    /// The `--replay` file is not an AIM replay.
+    #[error("{}: not an AIM replay", path.display())]
+    NotAnAimReplay {
+        /// The replay file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// The `--track` file is not an S2D replay.
+    #[error("{}: not an S2D replay (a landmark track)", path.display())]
+    NotAnS2dReplay {
+        /// The track file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// A replay or track recorded with another model.
+    #[error("{}: does not play {}", path.display(), model.display())]
+    DoesNotPlay {
+        /// The replay or track file.
+        path: PathBuf,
+        /// The model file.
+        model: PathBuf,
+        /// What the core said.
+        #[source]
+        source: ReplayError,
+    },
+    /// The pose file is unreadable or does not fit the actor.
+    #[error(transparent)]
+    Poses(#[from] PoseFileError),
+    /// The pose file could not be serialised for the page.
+    #[error("{}: cannot serialise", path.display())]
+    Serialise {
+        /// The pose file.
+        path: PathBuf,
+        /// What the JSON writer said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The `--performance` file is not a fitted performance.
+    #[error("{}: not a fitted performance", path.display())]
+    NotAPerformance {
+        /// The performance file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// A performance fitted to another actor.
+    #[error(
+        "{}: was fitted to another actor than {} ({reason})",
+        path.display(),
+        model.display()
+    )]
+    OtherActor {
+        /// The performance file.
+        path: PathBuf,
+        /// The model file.
+        model: PathBuf,
+        /// What the core said.
+        reason: ReplayError,
+    },
+    /// The `--neutral` face could not be read.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// A `--neutral` face of another vertex count than the decoder's.
+    #[error(
+        "{}: has {vertices} vertices, the decoder {} {expected}: not a face in its topology",
+        path.display(),
+        model.display()
+    )]
+    NeutralVertices {
+        /// The face file.
+        path: PathBuf,
+        /// Its vertices.
+        vertices: usize,
+        /// The model file.
+        model: PathBuf,
+        /// The decoder's vertices.
+        expected: usize,
+    },
+    /// A `--neutral` face with a NaN or infinite position.
+    #[error("{}: a vertex position is not finite", path.display())]
+    NeutralNonFinite {
+        /// The face file.
+        path: PathBuf,
+    },
+    /// The page's configuration could not be serialised.
+    #[error(transparent)]
+    Json(serde_json::Error),
+    /// An embedded file of the page is empty.
+    #[error("an embedded file of the viewer is empty: the build is broken")]
+    EmptyEntry,
+    /// The port could not be listened on.
+    #[error("cannot listen on 127.0.0.1:{port}")]
+    Listen {
+        /// The port.
+        port: u16,
+        /// What the server said.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+    /// The server's socket is not an IP socket.
+    #[error("the server is not on an IP socket")]
+    NotIp,
+    /// Waiting for a request failed.
+    #[error(transparent)]
+    Receive(std::io::Error),
+}
