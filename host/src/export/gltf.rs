@@ -774,4 +774,26 @@ mod tests {
         assert!(matches!(err, ExportError::Poses(_)), "{err}");
         assert!(!out.exists());
     }
+
+    #[test]
+    fn an_actor_of_an_unknown_unit_is_refused() {
+        use crate::aim::bake::{BakeInput, bake};
+        let set = crate::aim::testing::procedural_training_set(8);
+        let config = crate::aim::testing::small_aim_config(1);
+        let device = crate::training::backend::Backend::Flex.device(0).unwrap();
+        let net = crate::aim::model::AimNet::new(&config, set.shapes.len(), &device);
+        let triangles = set.template.triangles();
+        let input = BakeInput {
+            points: &set.template.positions,
+            triangles: &triangles,
+            jaw_pivot: set.jaw_pivot,
+            normalisation: crate::aim::model::normalisation(&set.template.positions),
+            playback_only: true,
+            metadata: vec![("units".into(), "furlong".into())],
+        };
+        let (bytes, _) = bake(&net, &input, &device).unwrap();
+        let actor = AimActor::from_bytes(&bytes).unwrap();
+        let err = glb(&actor, &[], 30.0, false).unwrap_err();
+        assert!(matches!(err, GltfError::Units(_)), "{err}");
+    }
 }
