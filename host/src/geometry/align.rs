@@ -292,12 +292,26 @@ pub(crate) fn cofactor(a: M3) -> M3 {
 pub(crate) fn det3(a: M3) -> f64 {
     dot(a[0], cross(a[1], a[2]))
 }
+/// The inverse of `a`, or `None` when it is near singular (determinant within 1e-12 of the cube
+/// of its largest entry) or not finite.
 pub(crate) fn inv3(a: M3) -> Option<M3> {
     let d = det3(a);
     let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     if d.is_nan() || d.abs() <= 1e-12 * scale * scale * scale {
         return None;
     }
-    // a⁻¹ = cofactor(a)ᵀ / det.
+    cofactor_inverse(a, d)
+}
+/// The inverse of `a` whenever its determinant is non-zero and finite (the caller judges how
+/// thin a matrix may be; deformation transfer rejects thin triangles itself).
+pub(crate) fn inverse_unless_singular(a: M3) -> Option<M3> {
+    let d = det3(a);
+    if d == 0.0 || !d.is_finite() {
+        return None;
+    }
+    cofactor_inverse(a, d)
+}
+/// `a⁻¹ = cofactor(a)ᵀ / det`, with `d = det3(a)`.
+fn cofactor_inverse(a: M3, d: f64) -> Option<M3> {
     Some(transpose(cofactor(a)).map(|row| row.map(|v| v / d)))
 }

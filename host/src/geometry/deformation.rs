@@ -33,6 +33,7 @@ use nalgebra_sparse::{
     factorization::{CholeskyError, CscCholesky},
 };
 
+use crate::geometry::align::{M3, inverse_unless_singular, mat_mul};
 use crate::geometry::vec3::{V3, cross, dot, norm, sub};
 
 /// The pull toward the source displacement, relative to the Laplacian: fixes the translation
@@ -158,7 +159,7 @@ fn corners(points: &[[f32; 3]], t: [u32; 3]) -> [V3; 3] {
 }
 
 /// `[e1, e2, n / √|n|]` of a triangle as columns (row-major 3 × 3), and `|n|` (twice its area).
-fn frame(c: [V3; 3]) -> ([[f64; 3]; 3], f64) {
+fn frame(c: [V3; 3]) -> (M3, f64) {
     let (e1, e2) = (sub(c[1], c[0]), sub(c[2], c[0]));
     let n = cross(e1, e2);
     let len = norm(n);
@@ -171,37 +172,6 @@ fn frame(c: [V3; 3]) -> ([[f64; 3]; 3], f64) {
         ],
         len,
     )
-}
-
-/// The inverse of a 3 × 3 matrix (row-major), or `None` if singular.
-fn inverse(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
-    let c = |r: usize, k: usize| -> f64 {
-        let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
-        let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
-        m[r1][k1] * m[r2][k2] - m[r1][k2] * m[r2][k1]
-    };
-    let det = m[0][0] * c(0, 0) + m[0][1] * c(0, 1) + m[0][2] * c(0, 2);
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
-    // inverse[k][r] = cofactor(r, k) / det.
-    let mut out = [[0.0; 3]; 3];
-    for (k, row) in out.iter_mut().enumerate() {
-        for (r, x) in row.iter_mut().enumerate() {
-            *x = c(r, k) / det;
-        }
-    }
-    Some(out)
-}
-
-fn product(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    let mut out = [[0.0; 3]; 3];
-    for (r, row) in out.iter_mut().enumerate() {
-        for (k, x) in row.iter_mut().enumerate() {
-            *x = (0..3).map(|j| a[r][j] * b[j][k]).sum();
-        }
-    }
-    out
 }
 
 /// Whether triangle `c`, whose edge cross product has length `n2` (twice its area), is too thin
@@ -261,7 +231,7 @@ pub struct Transfer {
     triangles: Vec<[u32; 3]>,
     source: Vec<[f32; 3]>,
     /// V⁻¹ of each source triangle.
-    source_inverse: Vec<[[f64; 3]; 3]>,
+    source_inverse: Vec<M3>,
     /// A_t ∇φ_i of each target triangle's corners.
     gradients: Vec<[V3; 3]>,
     /// ε M_ii.
@@ -333,7 +303,7 @@ impl Transfer {
         for (k, &t) in triangles.iter().enumerate() {
             let s = corners(source, t);
             let (v, len) = frame(s);
-            let inv = inverse(v).filter(|_| !degenerate(s, len));
+            let inv = inverse_unless_singular(v).filter(|_| !degenerate(s, len));
             let Some(inv) = inv else {
                 return Err(TransferError::DegenerateSource {
                     what: what(),
@@ -445,7 +415,7 @@ impl Transfer {
                         triangle: t,
                     });
                 }
-                let mut s = product(v, *inv);
+                let mut s = mat_mul(v, *inv);
                 for (d, row) in s.iter_mut().enumerate() {
                     row[d] -= 1.0;
                 }
