@@ -118,3 +118,20 @@ fn a_short_run_generates_each_label_nearer_its_own_class() {
         }
     }
 }
+
+#[test]
+fn motions_without_a_tangent_space_are_refused_by_variant() {
+    assert_eq!(
+        TangentData::from_motions(&[], Vec::new()),
+        Err(TangentError::NoMotions)
+    );
+    let q = vec![1.0f32; FRAMES * 3];
+    assert_eq!(
+        TangentData::from_motions(&[q.clone(), q[..FRAMES].to_vec()], vec![0, 1]),
+        Err(TangentError::Shapes)
+    );
+    assert_eq!(
+        TangentData::from_motions(&[vec![0.0; FRAMES * 3]], vec![0]),
+        Err(TangentError::ZeroMean)
+    );
+}
