@@ -14,8 +14,10 @@ use sinew_core::error::{BufferError, FormatError};
 use sinew_core::performance::{self as perf, Performance};
 use sinew_core::replay::ReplayError;
 use sinew_host::fit::bake::play;
-use sinew_host::fit::retarget::{Input, Part, RetargetError, retarget};
-use sinew_host::io::container::SinewWriter;
+use sinew_host::fit::retarget::{
+    Input, Part, RetargetError, create_output, read_actor, retarget, write_parts,
+};
+use sinew_host::io::container::{ContainerError, SinewWriter};
 
 fn golden(name: &str) -> PathBuf {
     PathBuf::from(repo(&format!("tests/data/{name}")))
@@ -238,6 +240,113 @@ fn retargeting_refuses_actors_out_of_correspondence_and_fits_of_another_actor() 
         matches!(&e, RetargetError::NotAPerformance { path, .. } if path.ends_with("aim-ict.sinew")),
         "{e:?}"
     );
+}
+
+/// The golden actor `aim-ict.sinew` rewritten by `change` into `dir/name`; returns the path.
+fn altered_actor(
+    dir: &std::path::Path,
+    name: &str,
+    change: impl FnOnce(&AimActor<'_>, &mut SinewWriter),
+) -> PathBuf {
+    let bytes = read("aim-ict.sinew");
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let mut w =
+        SinewWriter::from_file(&sinew_core::SinewFile::from_bytes(&bytes).unwrap()).unwrap();
+    change(&actor, &mut w);
+    let path = dir.join(name);
+    w.write(&path).unwrap();
+    path
+}
+
+/// [`retarget`] of `aim-ict.sinew`'s golden fit onto the actor file at `target`.
+fn retarget_onto(target: &std::path::Path) -> Result<Vec<u8>, RetargetError> {
+    let (source, fit) = (golden("aim-ict.sinew"), golden("fit-ict.sinew"));
+    let (s, f) = (read("aim-ict.sinew"), read("fit-ict.sinew"));
+    let t = read_actor(target)?;
+    retarget(
+        Input {
+            path: &source,
+            bytes: &s,
+        },
+        Input {
+            path: target,
+            bytes: &t,
+        },
+        Input {
+            path: &fit,
+            bytes: &f,
+        },
+        Part::Full,
+    )
+}
+
+#[test]
+fn retargeting_refuses_an_actor_with_other_triangles_or_another_shape_count() {
+    let dir = tempfile::tempdir().unwrap();
+    // The same vertices, one triangle turned the other way round.
+    let turned = altered_actor(dir.path(), "turned.sinew", |actor, w| {
+        let mut tri: Vec<u32> = actor.triangles().indices().iter().collect();
+        tri.swap(1, 2);
+        w.remove_prefixed("tpl.tri");
+        w.u32s("tpl.tri", &[tri.len() / 3, 3], &tri).unwrap();
+    });
+    let e = retarget_onto(&turned).unwrap_err();
+    assert!(
+        matches!(&e, RetargetError::Triangles { source_actor, target_actor }
+            if source_actor.ends_with("aim-ict.sinew") && target_actor.ends_with("turned.sinew")),
+        "{e:?}"
+    );
+    // The same vertices and triangles, one corrective fewer: a playback-only actor (no networks
+    // to agree with the count) without the Q16 cache.
+    let fewer = altered_actor(dir.path(), "fewer.sinew", |actor, w| {
+        let (v, m) = (actor.vertex_count(), actor.shape_count());
+        let e: Vec<f32> = actor.correctives().iter().collect();
+        let kept: Vec<f32> = e
+            .chunks_exact(3 * m)
+            .flat_map(|vertex| vertex[..3 * (m - 1)].iter().copied())
+            .collect();
+        w.remove_prefixed("cache.e");
+        w.remove_prefixed("q16.");
+        w.f32s("cache.e", &[v, m - 1, 3], &kept).unwrap();
+        w.flags(sinew_core::format::FLAG_PLAYBACK_ONLY);
+    });
+    let m = AimActor::from_bytes(&read("aim-ict.sinew"))
+        .unwrap()
+        .shape_count();
+    let e = retarget_onto(&fewer).unwrap_err();
+    assert!(
+        matches!(&e, RetargetError::ShapeCount { target_actor, source_shapes, target_shapes, .. }
+            if target_actor.ends_with("fewer.sinew")
+                && *source_shapes == m
+                && *target_shapes == m - 1),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn writing_the_parts_names_a_missing_fit_and_an_output_that_cannot_be_a_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let actor_path = golden("aim-ict.sinew");
+    let actor = read_actor(&actor_path).unwrap();
+    let input = Input {
+        path: &actor_path,
+        bytes: &actor,
+    };
+    let missing = dir.path().join("missing.sinew");
+    let e = write_parts(input, input, &missing, dir.path(), None).unwrap_err();
+    assert!(
+        matches!(&e, RetargetError::Read(ContainerError::Read { path, .. }) if *path == missing),
+        "{e:?}"
+    );
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, b"not a folder").unwrap();
+    let e = create_output(&file.join("out")).unwrap_err();
+    assert!(
+        matches!(&e, RetargetError::CreateFolder { path, .. } if path.ends_with("a-file/out")),
+        "{e:?}"
+    );
+    let e = read_actor(&golden("fit-ict.sinew")).unwrap_err();
+    assert!(matches!(e, RetargetError::NotAnActor { .. }), "{e:?}");
 }
 
 #[test]

@@ -8,7 +8,9 @@ use std::path::Path;
 use sinew_host::s2d::checkpoint::{STATE_FILE, read_state};
 use sinew_host::s2d::decoder::S2dDecoder;
 use sinew_host::s2d::synthetic;
-use sinew_host::s2d::train::{Sample, TrainConfig, TrainOptions, Trained, request_stop, train};
+use sinew_host::s2d::train::{
+    Sample, TrainConfig, TrainError, TrainOptions, Trained, request_stop, train,
+};
 use sinew_host::training::backend::Backend;
 use sinew_host::training::checkpoint::{CheckpointError, InvalidState};
 use sinew_host::training::nn::to_vec;
@@ -71,10 +73,10 @@ fn run(
     weights: &[f32],
     config: &TrainConfig,
     options: &TrainOptions,
-) -> anyhow::Result<Trained> {
-    let device = Backend::Flex.autodiff_device(config.seed)?;
+) -> Result<Trained, TrainError> {
+    let device = Backend::Flex.autodiff_device(config.seed).unwrap();
     let h = synthetic::hierarchy(&[30, 12, 5], &[5, 4, 3], 1);
-    let decoder = S2dDecoder::new(&synthetic::small_config(), &h, &device)?;
+    let decoder = S2dDecoder::new(&synthetic::small_config(), &h, &device).unwrap();
     train(decoder, set, weights, config, &device, options)
 }
 
@@ -218,8 +220,8 @@ fn resuming_another_run_is_refused_with_the_folder_and_the_difference() {
         run(set, &w, config, options).expect_err("resumed another run")
     };
     // The differences named by a refusal as another run's checkpoint, in `state`.
-    let differences = |e: &anyhow::Error| match e.downcast_ref::<CheckpointError>() {
-        Some(CheckpointError::Invalid {
+    let differences = |e: &TrainError| match e {
+        TrainError::Checkpoint(CheckpointError::Invalid {
             path,
             source: InvalidState::OtherRun { differences },
         }) if *path == state => differences.clone(),
@@ -261,7 +263,7 @@ fn resuming_another_run_is_refused_with_the_folder_and_the_difference() {
     let empty = tempfile::tempdir().unwrap();
     let e = refused(&set, &config, &options(empty.path(), true, None));
     assert!(
-        matches!(e.downcast_ref::<CheckpointError>(), Some(CheckpointError::StateRead { path, .. }) if *path == empty.path().join(STATE_FILE)),
+        matches!(&e, TrainError::Checkpoint(CheckpointError::StateRead { path, .. }) if *path == empty.path().join(STATE_FILE)),
         "{e:#}"
     );
 

@@ -6,9 +6,9 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 use sinew_host::fit::aim::{Coefficients, Constrain, FitConfig, Mode};
-use sinew_host::fit::commands::{eval_fit, fit_command};
+use sinew_host::fit::commands::{eval_fit, fit_command, retarget_command};
 use sinew_host::fit::performance::{PerformanceConfig, generate};
-use sinew_host::fit::retarget::{SourceFit, retarget_command};
+use sinew_host::fit::retarget::SourceFit;
 use sinew_host::training::backend::Backend;
 
 /// `sinew data performance`.

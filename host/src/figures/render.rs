@@ -236,12 +236,6 @@ impl Image {
         out
     }
 
-    /// [`Self::save_png`] for the figure writers that still return `anyhow` (in `motion`, `s2d`
-    /// and `fit`); the message is the same.
-    pub fn write_png(&self, path: &Path) -> anyhow::Result<()> {
-        Ok(self.save_png(path)?)
-    }
-
     /// Writes the picture as an 8-bit RGB PNG, atomically (temporary file, then rename).
     pub fn save_png(&self, path: &Path) -> Result<(), PngError> {
         let expected = self.width as usize * self.height as usize * 3;

@@ -14,9 +14,9 @@
 //! Each step draws `points` template vertices (the same for every frame, seeded by the step)
 //! and constrains every frame there; the reported error uses every vertex.
 
+use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Result, anyhow, bail, ensure};
 use burn::module::Param;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Distribution, Int, Tensor, TensorData};
@@ -28,11 +28,12 @@ use sinew_core::replay::model_hash;
 
 pub use crate::fit::setup::{Coefficients, Constrain, FitConfig, FitNet, Mode};
 
-use crate::fit::baseline::{mean_error_mm, performance_unit};
+use crate::fit::baseline::{BaselineError, mean_error_mm, performance_unit};
 use crate::fit::checkpoint::{CHECKPOINT_FORMAT, Checkpointing, EVERY, FitState, target_crc};
 use crate::fit::performance::Performance;
 use crate::fit::setup::gelu_mlp;
-use crate::training::backend::Backend;
+use crate::training::backend::{Backend, BackendError};
+use crate::training::checkpoint::CheckpointError;
 use crate::training::nn::{LayerWeights, tensor, to_vec};
 use crate::training::rotation::rotate_6d;
 
@@ -221,13 +222,79 @@ pub struct FitResult {
     pub normalisation: [f32; 4],
 }
 
+/// An AIM fit that was refused or failed; each names the file concerned.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum FitError {
+    /// Settings with no iteration, point, code dimension or hidden unit.
+    #[error("the fit needs at least one iteration, point, code dimension and hidden unit")]
+    EmptyConfig,
+    /// The performance's unit cannot be read.
+    #[error(transparent)]
+    Unit(#[from] BaselineError),
+    /// A frame with another vertex count than the actor's.
+    #[error("{}: {frame_vertices} vertices, the actor has {actor_vertices}", path.display())]
+    VertexCount {
+        /// The frame's mesh.
+        path: PathBuf,
+        /// Its vertices.
+        frame_vertices: usize,
+        /// The actor's vertices.
+        actor_vertices: usize,
+    },
+    /// The backend cannot run.
+    #[error(transparent)]
+    Backend(#[from] BackendError),
+    /// A checkpoint that cannot be saved or resumed (the error names the file).
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    /// Landmark vertices that do not index the performance's meshes.
+    #[error("{}: the landmark vertices do not index the meshes", path.display())]
+    Landmarks {
+        /// The performance's manifest.
+        path: PathBuf,
+    },
+    /// Landmark tracks without one pixel per landmark and frame.
+    #[error(
+        "{}: the landmark tracks do not have one pixel per landmark and frame",
+        path.display()
+    )]
+    LandmarkTracks {
+        /// The performance's manifest.
+        path: PathBuf,
+    },
+    /// Ctrl-C: the fit stopped after saving a checkpoint.
+    #[error(
+        "stopped after step {step} of {iterations}; the fit is saved in {}: continue with \
+         --resume {}",
+        dir.display(),
+        dir.display()
+    )]
+    Stopped {
+        /// Steps done.
+        step: usize,
+        /// Steps asked for.
+        iterations: usize,
+        /// The checkpoint folder.
+        dir: PathBuf,
+    },
+    /// The fit's mean error is not finite.
+    #[error(
+        "the fit diverged (mean error {mean_error_mm}); try fewer points or a smaller learning rate"
+    )]
+    Diverged {
+        /// The mean error, mm.
+        mean_error_mm: f64,
+    },
+}
+
 /// Fits `actor` (its bytes, `unit_mm` millimetres per unit) to every frame of `perf`.
 pub fn fit(
     actor: &AimActor<'_>,
     perf: &Performance,
     config: &FitConfig,
     backend: Backend,
-) -> Result<FitResult> {
+) -> Result<FitResult, FitError> {
     fit_resumable(actor, perf, config, backend, None)
 }
 
@@ -239,20 +306,19 @@ pub fn fit_resumable(
     config: &FitConfig,
     backend: Backend,
     checkpoints: Option<Checkpointing<'_>>,
-) -> Result<FitResult> {
-    ensure!(
-        config.iterations > 0 && config.points > 0 && config.code > 0 && config.hidden > 0,
-        "the fit needs at least one iteration, point, code dimension and hidden unit"
-    );
+) -> Result<FitResult, FitError> {
+    if !(config.iterations > 0 && config.points > 0 && config.code > 0 && config.hidden > 0) {
+        return Err(FitError::EmptyConfig);
+    }
     let unit = performance_unit(perf)?;
     let v = actor.vertex_count();
     for (f, frame) in perf.frames.iter().enumerate() {
         if frame.len() != v {
-            bail!(
-                "{}: {} vertices, the actor has {v}",
-                perf.frame_path(f).display(),
-                frame.len()
-            );
+            return Err(FitError::VertexCount {
+                path: perf.frame_path(f),
+                frame_vertices: frame.len(),
+                actor_vertices: v,
+            });
         }
     }
     let mm = unit.mm() as f32;
@@ -410,14 +476,11 @@ pub fn fit_resumable(
                 crate::fit::checkpoint::save(c.dir, &net, &optim, saved)?;
                 if stop {
                     bar.finish_and_clear();
-                    bail!(
-                        "stopped after step {} of {}; the fit is saved in {}: continue with \
-                         --resume {}",
-                        step + 1,
-                        config.iterations,
-                        c.dir.display(),
-                        c.dir.display()
-                    );
+                    return Err(FitError::Stopped {
+                        step: step + 1,
+                        iterations: config.iterations,
+                        dir: c.dir.to_owned(),
+                    });
                 }
             }
         }
@@ -430,10 +493,9 @@ pub fn fit_resumable(
         .error_history
         .push((config.iterations, result.mean_error_mm));
     if !result.mean_error_mm.is_finite() {
-        return Err(anyhow!(
-            "the fit diverged (mean error {}); try fewer points or a smaller learning rate",
-            result.mean_error_mm
-        ));
+        return Err(FitError::Diverged {
+            mean_error_mm: result.mean_error_mm,
+        });
     }
     result.frame_error_mm = errors;
     result.reprojection_px = reprojection_px(perf, &meshes);
@@ -473,15 +535,15 @@ fn constrained_vertices(
     perf: &Performance,
     config: &FitConfig,
     rng: &mut rand_pcg::Pcg64,
-) -> Result<Option<Vec<i64>>> {
+) -> Result<Option<Vec<i64>>, FitError> {
     let v = perf.frames.first().map_or(0, Vec::len);
-    let landmarks = || -> Result<Vec<i64>> {
+    let landmarks = || -> Result<Vec<i64>, FitError> {
         let l = &perf.manifest.landmarks.vertices;
-        ensure!(
-            !l.is_empty() && l.iter().all(|&i| (i as usize) < v),
-            "{}: the landmark vertices do not index the meshes",
-            perf.dir.join("performance.json").display()
-        );
+        if l.is_empty() || !l.iter().all(|&i| (i as usize) < v) {
+            return Err(FitError::Landmarks {
+                path: perf.dir.join("performance.json"),
+            });
+        }
         Ok(l.iter().map(|&i| i64::from(i)).collect())
     };
     Ok(match (config.mode, config.constrain) {
@@ -517,7 +579,7 @@ impl TwoDTargets {
         config: &FitConfig,
         mm: f32,
         device: &Device,
-    ) -> Result<Option<Self>> {
+    ) -> Result<Option<Self>, FitError> {
         if config.mode != Mode::TwoD {
             return Ok(None);
         }
@@ -531,12 +593,13 @@ impl TwoDTargets {
             .flatten()
             .copied()
             .collect();
-        ensure!(
-            m.landmarks.pixels.len() == perf.frames.len()
-                && pixels.len() == perf.frames.len() * l * 2,
-            "{}: the landmark tracks do not have one pixel per landmark and frame",
-            perf.dir.join("performance.json").display()
-        );
+        if !(m.landmarks.pixels.len() == perf.frames.len()
+            && pixels.len() == perf.frames.len() * l * 2)
+        {
+            return Err(FitError::LandmarkTracks {
+                path: perf.dir.join("performance.json"),
+            });
+        }
         let c = &m.camera;
         Ok(Some(Self {
             pixels: tensor(pixels, [perf.frames.len() * l, 2], device),

@@ -11,17 +11,16 @@
 //!   cell); each patch's weights minimise `Σ_v φ_p(v) |D_v w_p − r_v|²`, and the shape is the
 //!   blend `n_v + Σ_p φ_p(v) D_v w_p`.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, anyhow, bail};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::fit::performance::Performance;
 use crate::geometry::align::{RigidFit, fit_rigid};
-use crate::io::ict::{DEFAULT_SHAPES, FACE_REGION, IctFaceKit};
-use crate::io::units::Unit;
+use crate::io::ict::{DEFAULT_SHAPES, FACE_REGION, IctError, IctFaceKit};
+use crate::io::units::{Unit, UnknownUnit};
 
 /// Most alternations of rigid alignment and least squares per frame for GBS, which stops
 /// earlier once no weight changes by more than [`CONVERGED`].
@@ -32,6 +31,61 @@ pub const CONVERGED: f64 = 1e-7;
 pub const PATCH_ALTERNATIONS: usize = 5;
 /// Patch grid of PBS over the neutral's front view (columns, rows).
 pub const PATCH_GRID: [usize; 2] = [4, 4];
+
+/// A baseline fit that could not be set up or run; each names the file concerned.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum BaselineError {
+    /// An actor file that is not a `.sinew` artefact.
+    #[error("{}: invalid .sinew file", path.display())]
+    NotASinewFile {
+        /// The actor file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: sinew_core::error::FormatError,
+    },
+    /// An actor whose `shapes` metadata does not start with the neutral.
+    #[error("{}: the shapes metadata must start with the neutral, not {first:?}", path.display())]
+    ShapesMetadata {
+        /// The actor file.
+        path: PathBuf,
+        /// The first name it lists.
+        first: Option<String>,
+    },
+    /// The ICT-FaceKit folder a performance was made from cannot give the actor's shapes.
+    #[error("{}: the performance's ICT-FaceKit folder", path.display())]
+    Kit {
+        /// The performance's manifest, which names the folder.
+        path: PathBuf,
+        /// What the kit reader said.
+        #[source]
+        source: IctError,
+    },
+    /// A performance whose manifest names an unknown unit.
+    #[error("{}: the performance's unit", path.display())]
+    Unit {
+        /// The performance's manifest.
+        path: PathBuf,
+        /// The unit it names.
+        #[source]
+        source: UnknownUnit,
+    },
+    /// A frame the fit cannot align to.
+    #[error("{}", path.display())]
+    Frame {
+        /// The frame's mesh.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: NoRigidAlignment,
+    },
+}
+
+/// A target frame that no rigid motion aligns the model to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("no rigid alignment (degenerate or non-finite target)")]
+pub struct NoRigidAlignment;
 
 /// The actor's training shapes at a performance's vertices.
 #[derive(Clone, Debug)]
@@ -46,9 +100,13 @@ pub struct Basis {
 
 /// The shape names a baked actor was trained on (its `shapes` metadata, neutral first), or the
 /// default ICT actor's when it records none.
-pub fn actor_shape_names(model: &Path, bytes: &[u8]) -> Result<Vec<String>> {
-    let file = sinew_core::SinewFile::from_bytes(bytes)
-        .map_err(|e| anyhow!("{}: {e}", model.display()))?;
+pub fn actor_shape_names(model: &Path, bytes: &[u8]) -> Result<Vec<String>, BaselineError> {
+    let file = sinew_core::SinewFile::from_bytes(bytes).map_err(|source| {
+        BaselineError::NotASinewFile {
+            path: model.to_owned(),
+            source,
+        }
+    })?;
     let names: Vec<String> = match file.metadata().get("shapes") {
         Some(list) => list.split(',').map(str::to_owned).collect(),
         None => std::iter::once("neutral")
@@ -57,11 +115,10 @@ pub fn actor_shape_names(model: &Path, bytes: &[u8]) -> Result<Vec<String>> {
             .collect(),
     };
     if names.first().map(String::as_str) != Some("neutral") {
-        bail!(
-            "{}: the shapes metadata must start with the neutral, not {:?}",
-            model.display(),
-            names.first()
-        );
+        return Err(BaselineError::ShapesMetadata {
+            path: model.to_owned(),
+            first: names.first().cloned(),
+        });
     }
     Ok(names)
 }
@@ -69,15 +126,16 @@ pub fn actor_shape_names(model: &Path, bytes: &[u8]) -> Result<Vec<String>> {
 impl Basis {
     /// The kit's shapes `names` (neutral first) at the performance's vertices, read from the
     /// kit folder the performance was made from.
-    pub fn of_performance(perf: &Performance, names: &[String]) -> Result<Self> {
-        let kit = IctFaceKit::open(&perf.manifest.data).with_context(|| {
-            format!(
-                "{}: the performance's ICT-FaceKit folder",
-                perf.dir.join(super::performance::MANIFEST).display()
-            )
-        })?;
+    pub fn of_performance(perf: &Performance, names: &[String]) -> Result<Self, BaselineError> {
+        let kit_error = |source| BaselineError::Kit {
+            path: perf.dir.join(super::performance::MANIFEST),
+            source,
+        };
+        let kit = IctFaceKit::open(&perf.manifest.data).map_err(kit_error)?;
         let expressions: Vec<&str> = names.iter().skip(1).map(String::as_str).collect();
-        let actor = kit.actor(&[], &expressions, FACE_REGION)?;
+        let actor = kit
+            .actor(&[], &expressions, FACE_REGION)
+            .map_err(kit_error)?;
         let pick = |s: &[[f32; 3]]| -> Vec<[f64; 3]> {
             perf.manifest
                 .kit_vertices
@@ -176,7 +234,7 @@ fn to32(p: &[[f64; 3]]) -> Vec<[f32; 3]> {
 /// A blendshape model fitted frame by frame.
 pub trait Blendshapes {
     /// Fits one target frame; returns the fitted positions `[V]`.
-    fn fit_frame(&self, target: &[[f32; 3]]) -> Result<Vec<[f32; 3]>>;
+    fn fit_frame(&self, target: &[[f32; 3]]) -> Result<Vec<[f32; 3]>, NoRigidAlignment>;
 }
 
 /// Global blendshapes.
@@ -194,15 +252,14 @@ impl Gbs {
     }
 
     /// The weights and the rigid alignment for `target`.
-    fn fit(&self, target: &[[f32; 3]]) -> Result<(DVector<f64>, RigidFit)> {
+    fn fit(&self, target: &[[f32; 3]]) -> Result<(DVector<f64>, RigidFit), NoRigidAlignment> {
         let b = &self.basis;
         let ones = vec![1.0; b.neutral.len()];
         let mut w = DVector::zeros(b.shapes());
         let mut shape = b.neutral.clone();
         let mut rigid = None;
         for _ in 0..ALTERNATIONS {
-            let r = fit_rigid(&to32(&shape), target)
-                .ok_or_else(|| anyhow!("no rigid alignment (degenerate or non-finite target)"))?;
+            let r = fit_rigid(&to32(&shape), target).ok_or(NoRigidAlignment)?;
             let residual: Vec<[f64; 3]> = target
                 .iter()
                 .zip(&b.neutral)
@@ -222,13 +279,13 @@ impl Gbs {
         }
         let r = fit_rigid(&to32(&shape), target)
             .or(rigid)
-            .ok_or_else(|| anyhow!("no rigid alignment (degenerate or non-finite target)"))?;
+            .ok_or(NoRigidAlignment)?;
         Ok((w, r))
     }
 }
 
 impl Blendshapes for Gbs {
-    fn fit_frame(&self, target: &[[f32; 3]]) -> Result<Vec<[f32; 3]>> {
+    fn fit_frame(&self, target: &[[f32; 3]]) -> Result<Vec<[f32; 3]>, NoRigidAlignment> {
         let (w, r) = self.fit(target)?;
         Ok(self
             .basis
@@ -294,7 +351,7 @@ impl Pbs {
 }
 
 impl Blendshapes for Pbs {
-    fn fit_frame(&self, target: &[[f32; 3]]) -> Result<Vec<[f32; 3]>> {
+    fn fit_frame(&self, target: &[[f32; 3]]) -> Result<Vec<[f32; 3]>, NoRigidAlignment> {
         let b = &self.global.basis;
         let (_, mut r) = self.global.fit(target)?;
         let mut shape = Vec::new();
@@ -319,8 +376,7 @@ impl Blendshapes for Pbs {
                     }
                 }
             }
-            r = fit_rigid(&to32(&shape), target)
-                .ok_or_else(|| anyhow!("no rigid alignment (degenerate or non-finite target)"))?;
+            r = fit_rigid(&to32(&shape), target).ok_or(NoRigidAlignment)?;
         }
         Ok(shape
             .iter()
@@ -356,20 +412,24 @@ pub fn mean_error_mm(fit: &[[f32; 3]], target: &[[f32; 3]], unit: Unit) -> f64 {
 }
 
 /// The unit of a performance's meshes.
-pub fn performance_unit(perf: &Performance) -> Result<Unit> {
-    perf.manifest.units.parse().map_err(|e| {
-        anyhow!(
-            "{}: {e}",
-            perf.dir.join(super::performance::MANIFEST).display()
-        )
-    })
+pub fn performance_unit(perf: &Performance) -> Result<Unit, BaselineError> {
+    perf.manifest
+        .units
+        .parse()
+        .map_err(|source| BaselineError::Unit {
+            path: perf.dir.join(super::performance::MANIFEST),
+            source,
+        })
 }
+
+/// Fitted positions per frame, `[J][V]`.
+pub type FittedMeshes = Vec<Vec<[f32; 3]>>;
 
 /// Fits every frame of `perf` with `model`; the fitted meshes and the errors.
 pub fn fit_performance(
     model: &dyn Blendshapes,
     perf: &Performance,
-) -> Result<(Vec<Vec<[f32; 3]>>, MethodResult)> {
+) -> Result<(FittedMeshes, MethodResult), BaselineError> {
     let unit = performance_unit(perf)?;
     let start = Instant::now();
     let fits = perf
@@ -379,9 +439,12 @@ pub fn fit_performance(
         .map(|(f, target)| {
             model
                 .fit_frame(target)
-                .with_context(|| format!("{}", perf.frame_path(f).display()))
+                .map_err(|source| BaselineError::Frame {
+                    path: perf.frame_path(f),
+                    source,
+                })
         })
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>, _>>()?;
     let seconds = start.elapsed().as_secs_f64();
     let frame_error_mm: Vec<f64> = fits
         .iter()

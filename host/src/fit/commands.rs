@@ -2,6 +2,7 @@
 
 use std::collections::BTreeMap;
 use std::path::Path;
+use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow};
 use serde::{Deserialize, Serialize};
@@ -12,6 +13,7 @@ use crate::fit::bake::{bake, play};
 use crate::fit::baseline::{Basis, Gbs, PATCH_GRID, Pbs, actor_shape_names, fit_performance};
 use crate::fit::checkpoint::Checkpointing;
 use crate::fit::performance::Performance;
+use crate::fit::retarget::{Input, RetargetReport, SourceFit, create_output, write_parts};
 use crate::io::mesh::Mesh;
 use crate::training::backend::Backend;
 
@@ -226,4 +228,73 @@ pub fn eval_fit(
     };
     crate::io::atomic::write(report, &serde_json::to_vec_pretty(&r)?)?;
     Ok(r)
+}
+
+/// `sinew retarget`: the source's performance (fitted now or baked before) played on the target,
+/// written to `out`: `target.sinew`, `jaw.sinew`, `soft.sinew` (performances of the target),
+/// one OBJ per frame of each in `target/`, `jaw/`, `soft/`, `strip.png` (rows: `strip` frames;
+/// columns: the source as fitted, the target, jaw only, soft tissue only) and `report.json`.
+/// With a performance folder the source's fit goes to `source.sinew` (and its report and
+/// meshes beside it).
+pub fn retarget_command(
+    source: &Path,
+    target: &Path,
+    input: &SourceFit,
+    out: &Path,
+    strip: Option<&[usize]>,
+) -> Result<RetargetReport> {
+    let source_bytes = crate::fit::retarget::read_actor(source)?;
+    let target_bytes = crate::fit::retarget::read_actor(target)?;
+    create_output(out)?;
+    let (fit_path, fit_seconds, fit_error) = match input {
+        SourceFit::Baked(path) => (path.clone(), None, None),
+        SourceFit::Fit {
+            performance,
+            config,
+            backend,
+        } => {
+            let path = out.join("source.sinew");
+            let start = Instant::now();
+            let r = fit_command(
+                source,
+                performance,
+                &path,
+                &out.join("source.json"),
+                config,
+                None,
+                *backend,
+            )?;
+            let seconds = start.elapsed().as_secs_f64() / r.frames.max(1) as f64;
+            (path, Some(seconds), Some(r.fit.mean_error_mm))
+        }
+    };
+    let parts = write_parts(
+        Input {
+            path: source,
+            bytes: &source_bytes,
+        },
+        Input {
+            path: target,
+            bytes: &target_bytes,
+        },
+        &fit_path,
+        out,
+        strip,
+    )?;
+    parts.strip.save_png(&out.join("strip.png"))?;
+    let report = RetargetReport {
+        frames: parts.frames,
+        source: source.to_owned(),
+        target: target.to_owned(),
+        performance: out.join("target.sinew"),
+        fit_seconds_per_frame: fit_seconds,
+        fit_mean_error_mm: fit_error,
+        seconds_per_frame: parts.seconds_per_frame,
+        strip_frames: parts.strip_frames,
+    };
+    crate::io::atomic::write(
+        &out.join("report.json"),
+        &serde_json::to_vec_pretty(&report)?,
+    )?;
+    Ok(report)
 }

@@ -4,11 +4,35 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Result, bail};
-
 use crate::figures::render::{Image, View, render_heatmap};
-use crate::fit::baseline::performance_unit;
+use crate::fit::baseline::{BaselineError, performance_unit};
 use crate::fit::performance::Performance;
+
+/// Heatmaps that could not be drawn or written.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum HeatmapError {
+    /// The performance's unit cannot be read (the error names its manifest).
+    #[error(transparent)]
+    Unit(#[from] BaselineError),
+    /// A method without a fitted mesh for a frame asked for.
+    #[error("frame {frame}: {method} has no fitted mesh for it")]
+    MissingFrame {
+        /// The frame.
+        frame: usize,
+        /// The method.
+        method: String,
+    },
+    /// A picture that cannot be written.
+    #[error("{}: cannot write the heatmap", path.display())]
+    Png {
+        /// The picture's file.
+        path: PathBuf,
+        /// What the picture writer said.
+        #[source]
+        source: crate::figures::render::PngError,
+    },
+}
 
 /// The top of the colour scale, mm.
 pub const ERROR_SCALE_MM: f32 = 1.0;
@@ -34,7 +58,7 @@ pub fn write(
     methods: &[(&str, &[Vec<[f32; 3]>])],
     frames: &[usize],
     out: &Path,
-) -> Result<Vec<PathBuf>> {
+) -> Result<Vec<PathBuf>, HeatmapError> {
     let unit_mm = performance_unit(perf)?.mm();
     let triangles = fan_triangles(&perf.polygons);
     let mut written = Vec::new();
@@ -43,7 +67,10 @@ pub fn write(
         let mut panels = Vec::new();
         for (name, meshes) in methods {
             let (Some(mesh), Some(target)) = (meshes.get(f), target) else {
-                bail!("frame {f}: {name} has no fitted mesh for it");
+                return Err(HeatmapError::MissingFrame {
+                    frame: f,
+                    method: (*name).to_owned(),
+                });
             };
             let errors = vertex_errors_mm(mesh, target, unit_mm);
             let mean =
@@ -60,7 +87,12 @@ pub fn write(
             ));
         }
         let path = out.join(format!("heatmap_{f:05}.png"));
-        Image::hstack(&panels).write_png(&path)?;
+        Image::hstack(&panels)
+            .save_png(&path)
+            .map_err(|e| HeatmapError::Png {
+                path: path.clone(),
+                source: e.into(),
+            })?;
         written.push(path);
     }
     Ok(written)
@@ -151,5 +183,37 @@ mod tests {
         assert_eq!(files, ["heatmap_00000.png", "heatmap_00001.png"]);
         let (w, h) = png_size(&maps.join(&files[0]));
         assert_eq!((w, h), (4 * 360, 420));
+    }
+
+    #[test]
+    fn a_missing_fit_and_an_unwritable_folder_are_refused_by_variant() {
+        let Some(data) = data_dir() else { return };
+        let dir = tempfile::tempdir().unwrap();
+        let perf_dir = dir.path().join("perf");
+        let config = PerformanceConfig {
+            frames: 1,
+            ..PerformanceConfig::default()
+        };
+        generate(
+            &data.join("ict-facekit"),
+            Some(&golden_actor()),
+            &config,
+            &perf_dir,
+        )
+        .unwrap();
+        let perf = Performance::read(&perf_dir).unwrap();
+        let e = write(&perf, &[("GBS", &[])], &[0], dir.path()).unwrap_err();
+        assert!(
+            matches!(&e, HeatmapError::MissingFrame { frame: 0, method } if method == "GBS"),
+            "{e:?}"
+        );
+        // The output "folder" is a file: the picture cannot be written there.
+        let file = dir.path().join("a-file");
+        std::fs::write(&file, b"not a folder").unwrap();
+        let e = write(&perf, &[("GBS", &perf.frames)], &[0], &file).unwrap_err();
+        assert!(
+            matches!(&e, HeatmapError::Png { path, .. } if path.starts_with(&file)),
+            "{e:?}"
+        );
     }
 }

@@ -17,7 +17,6 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, ensure};
 use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
@@ -28,6 +27,9 @@ use sinew_core::skinning::{BoneTransform, lbs};
 use crate::io::dataset::{self, DataSetError};
 use crate::io::ict::{FACE_REGION, IctFaceKit};
 use crate::io::mesh::{Mesh, MeshError};
+
+mod error;
+pub use error::{GenerateError, InvalidPerformanceConfig};
 
 /// The manifest's file name.
 pub const MANIFEST: &str = "performance.json";
@@ -183,23 +185,23 @@ impl Default for PerformanceConfig {
 
 impl PerformanceConfig {
     /// Rejects settings that cannot make a performance.
-    pub fn validate(&self) -> Result<()> {
-        ensure!(self.frames > 0, "--frames must be at least 1");
-        ensure!(
-            self.noise_mm.is_finite() && self.noise_mm >= 0.0,
-            "--noise-mm must be finite and not negative, not {}",
-            self.noise_mm
-        );
-        ensure!(
-            self.landmark_noise_px.is_finite() && self.landmark_noise_px >= 0.0,
-            "--landmark-noise-px must be finite and not negative, not {}",
-            self.landmark_noise_px
-        );
-        ensure!(self.fps > 0.0, "fps must be positive");
-        ensure!(
-            self.focal > 0.0 && self.distance > 0.0 && self.image.iter().all(|&s| s > 0),
-            "the camera needs a positive focal length, distance and image size"
-        );
+    pub fn validate(&self) -> Result<(), InvalidPerformanceConfig> {
+        use InvalidPerformanceConfig as Invalid;
+        if self.frames == 0 {
+            return Err(Invalid::NoFrames);
+        }
+        if !(self.noise_mm.is_finite() && self.noise_mm >= 0.0) {
+            return Err(Invalid::NoiseMm(self.noise_mm));
+        }
+        if !(self.landmark_noise_px.is_finite() && self.landmark_noise_px >= 0.0) {
+            return Err(Invalid::LandmarkNoisePx(self.landmark_noise_px));
+        }
+        if self.fps.is_nan() || self.fps <= 0.0 {
+            return Err(Invalid::Fps);
+        }
+        if !(self.focal > 0.0 && self.distance > 0.0 && self.image.iter().all(|&s| s > 0)) {
+            return Err(Invalid::Camera);
+        }
         Ok(())
     }
 }
@@ -361,10 +363,12 @@ struct Topology {
 
 /// The actor's topology in terms of the kit's face region: each template point must be, bit for
 /// bit, a vertex of the face region (decimation keeps vertices; it does not move them).
-fn actor_topology(actor_path: &Path, face: &Mesh) -> Result<Topology> {
+fn actor_topology(actor_path: &Path, face: &Mesh) -> Result<Topology, GenerateError> {
     let bytes = crate::io::container::read(actor_path)?;
-    let actor = AimActor::from_bytes(&bytes)
-        .map_err(|e| anyhow!("{}: not an AIM actor: {e}", actor_path.display()))?;
+    let actor = AimActor::from_bytes(&bytes).map_err(|source| GenerateError::NotAnActor {
+        path: actor_path.to_owned(),
+        source,
+    })?;
     let by_bits: HashMap<[u32; 3], u32> = face
         .positions
         .iter()
@@ -375,16 +379,16 @@ fn actor_topology(actor_path: &Path, face: &Mesh) -> Result<Topology> {
     let kit_vertices = (0..actor.vertex_count())
         .map(|i| {
             let p = [tpl.at(3 * i), tpl.at(3 * i + 1), tpl.at(3 * i + 2)];
-            by_bits.get(&p.map(f32::to_bits)).copied().ok_or_else(|| {
-                anyhow!(
-                    "{}: template vertex {i} at {p:?} is not a vertex of the ICT-FaceKit face \
-                     region; the actor must be made on the kit's generic neutral (or a \
-                     decimation of it)",
-                    actor_path.display()
-                )
-            })
+            by_bits
+                .get(&p.map(f32::to_bits))
+                .copied()
+                .ok_or_else(|| GenerateError::OffTheKit {
+                    path: actor_path.to_owned(),
+                    vertex: i,
+                    position: p,
+                })
         })
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>, _>>()?;
     let tri = actor.triangles().indices();
     let polygons = (0..tri.len() / 3)
         .map(|t| vec![tri.at(3 * t), tri.at(3 * t + 1), tri.at(3 * t + 2)])
@@ -403,7 +407,7 @@ pub fn generate(
     actor: Option<&Path>,
     config: &PerformanceConfig,
     out: &Path,
-) -> Result<Manifest> {
+) -> Result<Manifest, GenerateError> {
     config.validate()?;
     let kit = IctFaceKit::open(data)?;
     let names = kit.expression_names();
@@ -471,8 +475,10 @@ pub fn generate(
             pixels: Vec::new(),
         },
     };
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("{}: cannot create the output folder", out.display()))?;
+    std::fs::create_dir_all(out).map_err(|source| GenerateError::CreateFolder {
+        path: out.to_owned(),
+        source,
+    })?;
     for f in 0..config.frames {
         let params = trajectories.at(f as f64 / f64::from(config.fps), topology.jaw.is_some());
         let mut positions = pose(&neutral, &deltas, topology.jaw.as_ref(), &params);
@@ -498,25 +504,32 @@ pub fn generate(
                         [u, w]
                     }
                 };
-                camera.project(p).map(detected).filter(|uv| camera.inside(*uv)).ok_or_else(|| {
-                    anyhow!(
-                        "{}: frame {f}: landmark {l} (vertex {v} at {p:?}) projects outside the \
-                         {}×{} image of the camera at {:?}",
-                        out.display(),
-                        camera.width,
-                        camera.height,
-                        camera.position
-                    )
-                })
+                camera
+                    .project(p)
+                    .map(detected)
+                    .filter(|uv| camera.inside(*uv))
+                    .ok_or_else(|| GenerateError::LandmarkOutsideImage {
+                        path: out.to_owned(),
+                        frame: f,
+                        landmark: l,
+                        vertex: v,
+                        position: p,
+                        width: camera.width,
+                        height: camera.height,
+                        camera: camera.position,
+                    })
             })
-            .collect::<Result<Vec<_>>>()?;
+            .collect::<Result<Vec<_>, _>>()?;
         let file = format!("frame_{f:05}.obj");
         Mesh::new(positions, topology.polygons.clone()).write(&out.join(&file))?;
         manifest.files.push(file);
         manifest.parameters.push(params);
         manifest.landmarks.pixels.push(pixels);
     }
-    let json = serde_json::to_vec_pretty(&manifest)?;
+    let json = serde_json::to_vec_pretty(&manifest).map_err(|source| GenerateError::Encode {
+        path: out.join(MANIFEST),
+        source,
+    })?;
     crate::io::atomic::write(&out.join(MANIFEST), &json)?;
     Ok(manifest)
 }
@@ -531,7 +544,7 @@ pub fn write_neutral(
     identity: &[f32],
     like: Option<&Path>,
     out: &Path,
-) -> Result<Mesh> {
+) -> Result<Mesh, GenerateError> {
     let kit = IctFaceKit::open(data)?;
     let face = kit.actor(identity, &[], FACE_REGION)?;
     let mesh = match like {
@@ -584,7 +597,7 @@ fn landmark_vertices(
     landmarks: &[Option<u32>],
     face: &Mesh,
     topology: &Topology,
-) -> Result<Vec<u32>> {
+) -> Result<Vec<u32>, GenerateError> {
     let index: HashMap<u32, u32> = topology
         .kit_vertices
         .iter()
@@ -595,7 +608,7 @@ fn landmark_vertices(
         .iter()
         .enumerate()
         .map(|(l, v)| {
-            let v = v.ok_or_else(|| anyhow!("iBUG landmark {l} lies outside the face region"))?;
+            let v = v.ok_or(GenerateError::LandmarkOutsideRegion { landmark: l })?;
             if let Some(&i) = index.get(&v) {
                 return Ok(i);
             }

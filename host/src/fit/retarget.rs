@@ -16,7 +16,6 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 use sinew_core::SinewFile;
 use sinew_core::aim::AimActor;
@@ -26,10 +25,10 @@ use sinew_core::replay::{ReplayError, hash_words, model_hash};
 
 use crate::figures::render::{Image, View, render, text_scale, text_width};
 use crate::fit::bake::{BakeError, play};
-use crate::fit::commands::fit_command;
 use crate::fit::setup::FitConfig;
-use crate::io::container::{SinewWriter, WriterError};
-use crate::io::mesh::{Mesh, points};
+use crate::io::atomic::AtomicWriteError;
+use crate::io::container::{ContainerError, SinewWriter, WriterError};
+use crate::io::mesh::{Mesh, MeshError, points};
 use crate::training::backend::Backend;
 
 /// The jaw transform of the jaw at rest: the identity's 6D rotation, no translation.
@@ -180,6 +179,35 @@ pub enum RetargetError {
         #[source]
         source: Box<BakeError>,
     },
+    /// The fit does not play on the source actor it was fitted to.
+    #[error("{}: cannot play on {}", fit.display(), actor.display())]
+    PlaySource {
+        /// The fit file.
+        fit: PathBuf,
+        /// The source actor's file.
+        actor: PathBuf,
+        /// Why it does not play.
+        #[source]
+        source: Box<BakeError>,
+    },
+    /// A file that cannot be read as a `.sinew` file (the error names it).
+    #[error(transparent)]
+    Read(#[from] ContainerError),
+    /// The output folder cannot be created.
+    #[error("{}: cannot create the output folder", path.display())]
+    CreateFolder {
+        /// The folder.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A retargeted performance that cannot be written (the error names the file).
+    #[error(transparent)]
+    Write(#[from] AtomicWriteError),
+    /// A frame's mesh that cannot be written (the error names the file).
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
     /// A strip frame past the performance's end.
     #[error("{}: strip frame {frame} is past the performance's {frames} frames", fit.display())]
     StripFrame {
@@ -366,65 +394,76 @@ pub struct RetargetReport {
     pub strip_frames: Vec<usize>,
 }
 
-/// `sinew retarget`: the source's performance (fitted now or baked before) played on the target,
-/// written to `out`: `target.sinew`, `jaw.sinew`, `soft.sinew` (performances of the target),
-/// one OBJ per frame of each in `target/`, `jaw/`, `soft/`, `strip.png` (rows: `strip` frames;
-/// columns: the source as fitted, the target, jaw only, soft tissue only) and `report.json`.
-/// With a performance folder the source's fit goes to `source.sinew` (and its report and
-/// meshes beside it).
-pub fn retarget_command(
-    source: &Path,
-    target: &Path,
-    input: &SourceFit,
+/// The three parts of a fit retargeted and written by [`write_parts`], with what the report
+/// and the strip need.
+#[derive(Debug)]
+pub struct Retargeted {
+    /// Frames retargeted.
+    pub frames: usize,
+    /// Seconds per frame to retarget (all three parts baked and played through the core).
+    pub seconds_per_frame: f64,
+    /// Frames drawn in the strip (0-based).
+    pub strip_frames: Vec<usize>,
+    /// The strip: one row per strip frame; columns the source as fitted, the target, jaw only,
+    /// soft tissue only.
+    pub strip: Image,
+}
+
+/// Reads `path` and checks that it is an AIM actor; returns its bytes.
+///
+/// # Errors
+/// [`RetargetError::Read`] if the file cannot be read as a `.sinew` file,
+/// [`RetargetError::NotAnActor`] if it is not an actor.
+pub fn read_actor(path: &Path) -> Result<Vec<u8>, RetargetError> {
+    let bytes = crate::io::container::read(path)?;
+    actor(Input {
+        path,
+        bytes: &bytes,
+    })?;
+    Ok(bytes)
+}
+
+/// Creates the output folder `out`.
+///
+/// # Errors
+/// [`RetargetError::CreateFolder`], naming the folder.
+pub fn create_output(out: &Path) -> Result<(), RetargetError> {
+    std::fs::create_dir_all(out).map_err(|source| RetargetError::CreateFolder {
+        path: out.to_owned(),
+        source,
+    })
+}
+
+/// The fit at `fit_path` (a performance of `source`) retargeted onto `target` in each of the
+/// three [`Part`]s, written to `out`: `target.sinew`, `jaw.sinew`, `soft.sinew` (performances of
+/// the target) and one OBJ per frame of each in `target/`, `jaw/`, `soft/`. The strip shows the
+/// `strip` frames (default: four spread over the performance).
+///
+/// # Errors
+/// Any refusal of [`retarget`]; a fit that does not play ([`RetargetError::Play`],
+/// [`RetargetError::PlaySource`]); a strip frame past the end; a file that cannot be read or
+/// written. Each names the files concerned.
+pub fn write_parts(
+    source: Input<'_>,
+    target: Input<'_>,
+    fit_path: &Path,
     out: &Path,
     strip: Option<&[usize]>,
-) -> Result<RetargetReport> {
-    let source_bytes = read_actor(source)?;
-    let target_bytes = read_actor(target)?;
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("{}: cannot create the output folder", out.display()))?;
-    let (fit_path, fit_seconds, fit_error) = match input {
-        SourceFit::Baked(path) => (path.clone(), None, None),
-        SourceFit::Fit {
-            performance,
-            config,
-            backend,
-        } => {
-            let path = out.join("source.sinew");
-            let start = Instant::now();
-            let r = fit_command(
-                source,
-                performance,
-                &path,
-                &out.join("source.json"),
-                config,
-                None,
-                *backend,
-            )?;
-            let seconds = start.elapsed().as_secs_f64() / r.frames.max(1) as f64;
-            (path, Some(seconds), Some(r.fit.mean_error_mm))
-        }
+) -> Result<Retargeted, RetargetError> {
+    let fit = crate::io::container::read(fit_path)?;
+    let fit_input = Input {
+        path: fit_path,
+        bytes: &fit,
     };
-    let fit = crate::io::container::read(&fit_path)?;
     let start = Instant::now();
     let mut parts = Vec::with_capacity(Part::ALL.len());
     for part in Part::ALL {
-        let baked = retarget(
-            Input {
-                path: source,
-                bytes: &source_bytes,
-            },
-            Input {
-                path: target,
-                bytes: &target_bytes,
-            },
-            Input {
-                path: &fit_path,
-                bytes: &fit,
-            },
-            part,
-        )?;
-        let (frames, _) = play(&target_bytes, &baked)?;
+        let baked = retarget(source, target, fit_input, part)?;
+        let (frames, _) = play(target.bytes, &baked).map_err(|e| RetargetError::Play {
+            fit: fit_path.to_owned(),
+            target_actor: target.path.to_owned(),
+            source: Box::new(e),
+        })?;
         parts.push((part, baked, frames));
     }
     let frames = parts[0].2.len();
@@ -433,20 +472,16 @@ pub fn retarget_command(
         Some(s) => {
             if let Some(&frame) = s.iter().find(|&&f| f >= frames) {
                 return Err(RetargetError::StripFrame {
-                    fit: fit_path,
+                    fit: fit_path.to_owned(),
                     frame,
                     frames,
-                }
-                .into());
+                });
             }
             s.to_vec()
         }
         None => spread(frames, 4),
     };
-    let dst = actor(Input {
-        path: target,
-        bytes: &target_bytes,
-    })?;
+    let dst = actor(target)?;
     let mesh = Mesh::of_actor(&dst);
     for (part, baked, played) in &parts {
         crate::io::atomic::write(&out.join(format!("{}.sinew", part.name())), baked)?;
@@ -456,38 +491,23 @@ pub fn retarget_command(
                 .write(&dir.join(format!("frame_{f:05}.obj")))?;
         }
     }
-    let (source_frames, _) = play(&source_bytes, &fit)?;
+    let (source_frames, _) = play(source.bytes, &fit).map_err(|e| RetargetError::PlaySource {
+        fit: fit_path.to_owned(),
+        actor: source.path.to_owned(),
+        source: Box::new(e),
+    })?;
     let mut columns = vec![("source", &source_frames)];
     columns.extend(
         parts
             .iter()
             .map(|(part, _, played)| (column_title(*part), played)),
     );
-    strip_picture(&mesh, &columns, &strip_frames).write_png(&out.join("strip.png"))?;
-    let report = RetargetReport {
+    Ok(Retargeted {
         frames,
-        source: source.to_owned(),
-        target: target.to_owned(),
-        performance: out.join("target.sinew"),
-        fit_seconds_per_frame: fit_seconds,
-        fit_mean_error_mm: fit_error,
         seconds_per_frame,
+        strip: strip_picture(&mesh, &columns, &strip_frames),
         strip_frames,
-    };
-    crate::io::atomic::write(
-        &out.join("report.json"),
-        &serde_json::to_vec_pretty(&report)?,
-    )?;
-    Ok(report)
-}
-
-fn read_actor(path: &Path) -> Result<Vec<u8>> {
-    let bytes = crate::io::container::read(path)?;
-    actor(Input {
-        path,
-        bytes: &bytes,
-    })?;
-    Ok(bytes)
+    })
 }
 
 fn column_title(part: Part) -> &'static str {

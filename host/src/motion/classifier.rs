@@ -9,7 +9,6 @@
 //! Motion3DGAN generates), and frame 0 subtracted from frames 1 to `FRAMES`: `FRAMES` steps of
 //! the landmark displacement, so that a motion on any face reads the same.
 
-use anyhow::{Result, ensure};
 use burn::module::Module;
 use burn::nn::{Gru, GruConfig, Linear};
 use burn::optim::{AdamConfig, GradientsParams};
@@ -148,6 +147,25 @@ impl Classifier {
     }
 }
 
+/// A training set or settings that the sequence models cannot train on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TrainingSetError {
+    /// No sequences, or labels not one per sequence.
+    #[error("no training sequences, or labels not one per sequence")]
+    NoSequences,
+    /// A label at or above the class count.
+    #[error("a label is out of range")]
+    LabelOutOfRange,
+    /// Empty sequences, sequences of different lengths, or of a length that is not a whole
+    /// number of frames.
+    #[error("training sequences of different lengths")]
+    Lengths,
+    /// A zero epoch count, batch or width.
+    #[error("epochs, batch and hidden width must be positive")]
+    Settings,
+}
+
 /// Checks what both sequence models train on: sequences, one label each below `classes`, all of
 /// one length (a multiple of the frame count), and positive epochs, batch and width. Returns the
 /// sequences' length.
@@ -159,24 +177,20 @@ pub fn check_training_set(
     labels: &[usize],
     classes: usize,
     config: &SequenceTraining,
-) -> Result<usize> {
-    ensure!(
-        !seqs.is_empty() && seqs.len() == labels.len(),
-        "no training sequences, or labels not one per sequence"
-    );
-    ensure!(
-        labels.iter().all(|&l| l < classes),
-        "a label is out of range"
-    );
+) -> Result<usize, TrainingSetError> {
+    if seqs.is_empty() || seqs.len() != labels.len() {
+        return Err(TrainingSetError::NoSequences);
+    }
+    if labels.iter().any(|&l| l >= classes) {
+        return Err(TrainingSetError::LabelOutOfRange);
+    }
     let len = seqs[0].len();
-    ensure!(
-        len > 0 && len.is_multiple_of(FRAMES) && seqs.iter().all(|s| s.len() == len),
-        "training sequences of different lengths"
-    );
-    ensure!(
-        config.epochs > 0 && config.batch > 0 && config.hidden > 0,
-        "epochs, batch and hidden width must be positive"
-    );
+    if !(len > 0 && len.is_multiple_of(FRAMES) && seqs.iter().all(|s| s.len() == len)) {
+        return Err(TrainingSetError::Lengths);
+    }
+    if config.epochs == 0 || config.batch == 0 || config.hidden == 0 {
+        return Err(TrainingSetError::Settings);
+    }
     Ok(len)
 }
 
@@ -194,7 +208,7 @@ pub fn train(
     config: &SequenceTraining,
     device: &Device,
     on_epoch: &mut dyn FnMut(usize, f32),
-) -> Result<(Classifier, Vec<f32>)> {
+) -> Result<(Classifier, Vec<f32>), TrainingSetError> {
     let len = check_training_set(seqs, labels, classes, config)?;
     device.seed(config.seed);
     let mut model = Classifier::new(

@@ -162,7 +162,7 @@ pub fn train_motion(opts: &TrainMotion) -> Result<TrainReport> {
         800,
         500,
     );
-    png.write_png(&opts.out.with_extension("losses.png"))?;
+    png.save_png(&opts.out.with_extension("losses.png"))?;
     let report = TrainReport {
         config: config.clone(),
         sequences: data.tangents.len(),

@@ -18,14 +18,14 @@
 //! label) is the test set, the rest trains (the paper's split, section 4.3: "the first
 //! sub-sequence for each subject and expression is used as test set").
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
 use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 
 use super::classes::{LABELS, PATTERNS, used_expressions};
-use crate::io::ict::{FACE_REGION, IctFaceKit};
+use crate::io::dataset::DataSetError;
+use crate::io::ict::{FACE_REGION, IctError, IctFaceKit};
 use crate::io::mesh::Mesh;
 
 /// Range of a sequence's apex intensity.
@@ -89,6 +89,59 @@ impl MotionsConfig {
         }
         Ok(())
     }
+}
+
+/// A motion set that could not be generated or written; each names the file concerned.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MotionDataError {
+    /// Settings that cannot make a motion set.
+    #[error(transparent)]
+    Config(#[from] InvalidMotionsConfig),
+    /// The ICT-FaceKit folder cannot be read (the error names the file).
+    #[error(transparent)]
+    Kit(#[from] IctError),
+    /// A kit without an expression a motion class uses.
+    #[error("{}: the kit has no expression {name:?}, which a motion class uses", path.display())]
+    MissingExpression {
+        /// The kit's folder.
+        path: PathBuf,
+        /// The expression.
+        name: String,
+    },
+    /// A kit neutral smaller than the face region.
+    #[error(
+        "{}: the neutral has {found} vertices, the face region needs {needed}",
+        path.display()
+    )]
+    NeutralVertices {
+        /// The kit's folder.
+        path: PathBuf,
+        /// The neutral's vertices.
+        found: usize,
+        /// The face region's end.
+        needed: usize,
+    },
+    /// A kit landmark outside the face region.
+    #[error("{}: landmark vertex {vertex} lies outside the face region", path.display())]
+    LandmarkOutside {
+        /// The kit's folder.
+        path: PathBuf,
+        /// The landmark's vertex.
+        vertex: u32,
+    },
+    /// The expressions cannot be transferred onto an identity.
+    #[error("transferring the expressions onto identity {identity}")]
+    Transfer {
+        /// The identity.
+        identity: usize,
+        /// What the deformation transfer said.
+        #[source]
+        source: crate::geometry::deformation::TransferError,
+    },
+    /// The motion set cannot be written (the error names the file).
+    #[error(transparent)]
+    Write(#[from] DataSetError),
 }
 
 /// Which side of the split a sequence is on.
@@ -409,7 +462,7 @@ pub(crate) fn frame_of(
 }
 
 /// Generates a motion set from the ICT-FaceKit in `kit`.
-pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet> {
+pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet, MotionDataError> {
     use rayon::prelude::*;
     config.validate()?;
     let expressions = used_expressions();
@@ -418,30 +471,29 @@ pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet> {
         .iter()
         .find(|n| !available.iter().any(|a| a == *n))
     {
-        bail!(
-            "{}: the kit has no expression {missing:?}, which a motion class uses",
-            kit.dir().display()
-        );
+        return Err(MotionDataError::MissingExpression {
+            path: kit.dir().to_owned(),
+            name: (*missing).to_owned(),
+        });
     }
     let modes = kit.identity_count();
     let (identities, sequences, weights) = draw(config, &expressions, modes);
     let region = FACE_REGION.start as usize..FACE_REGION.end as usize;
     let full = kit.neutral();
     if full.positions.len() < region.end {
-        bail!(
-            "{}: the neutral has {} vertices, the face region needs {}",
-            kit.dir().display(),
-            full.positions.len(),
-            region.end
-        );
+        return Err(MotionDataError::NeutralVertices {
+            path: kit.dir().to_owned(),
+            found: full.positions.len(),
+            needed: region.end,
+        });
     }
     let (template, _) = full.submesh(|v| FACE_REGION.contains(&v));
     let landmarks = kit.landmarks68()?;
     if let Some(&l) = landmarks.iter().find(|&&l| !FACE_REGION.contains(&l)) {
-        bail!(
-            "{}: landmark vertex {l} lies outside the face region",
-            kit.dir().display()
-        );
+        return Err(MotionDataError::LandmarkOutside {
+            path: kit.dir().to_owned(),
+            vertex: l,
+        });
     }
     let crop = |d: Vec<[f32; 3]>| d[region.clone()].to_vec();
     let kit_deltas: Vec<Vec<[f32; 3]>> = kit
@@ -472,16 +524,21 @@ pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet> {
         .par_iter()
         .enumerate()
         .map(|(i, n)| {
+            let transfer = |source| MotionDataError::Transfer {
+                identity: i,
+                source,
+            };
             crate::geometry::deformation::Transfer::new(
                 base,
                 n,
                 &triangles,
                 &format!("identity {i}"),
-            )?
+            )
+            .map_err(|e| transfer(e.into()))?
             .apply(&sources)
-            .with_context(|| format!("transferring the expressions onto identity {i}"))
+            .map_err(|e| transfer(e.into()))
         })
-        .collect::<Result<_>>()?;
+        .collect::<Result<_, _>>()?;
     let deltas: Vec<Vec<[f32; 3]>> = per_identity.into_iter().flatten().collect();
     let e = expressions.len();
     let landmark_seqs: Vec<Vec<f32>> = sequences
@@ -538,7 +595,11 @@ pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet> {
 }
 
 /// `sinew data motions`: generates from the kit in `data` and writes to `out`.
-pub fn generate_to(data: &Path, out: &Path, config: &MotionsConfig) -> Result<MotionSet> {
+pub fn generate_to(
+    data: &Path,
+    out: &Path,
+    config: &MotionsConfig,
+) -> Result<MotionSet, MotionDataError> {
     let kit = IctFaceKit::open(data)?;
     let set = generate(&kit, config)?;
     set.write(out)?;

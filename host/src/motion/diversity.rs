@@ -2,18 +2,57 @@
 //! between motions of one label generated from different seeds, through the core's generator. A
 //! deterministic generator (the LSTM baseline) scores 0.
 
-use anyhow::{Result, anyhow, ensure};
+use sinew_core::error::BufferError;
 use sinew_core::motion::{LABELS, MotionGenerator};
 
-use super::srvf;
+use super::srvf::{self, SrvfError};
+
+/// A diversity that cannot be measured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DiversityError {
+    /// Fewer than 2 seeds.
+    #[error("diversity needs at least 2 seeds")]
+    TooFewSeeds,
+    /// The generator refused a motion.
+    #[error("generating label {label}, seed {seed}")]
+    Generate {
+        /// The label.
+        label: usize,
+        /// The seed.
+        seed: u64,
+        /// What the core said.
+        #[source]
+        source: BufferError,
+    },
+    /// No groups.
+    #[error("diversity needs at least one group")]
+    NoGroups,
+    /// A group of fewer than 2 motions.
+    #[error("diversity needs at least 2 motions per group; group {group} has {motions}")]
+    TooFewMotions {
+        /// The group.
+        group: usize,
+        /// Its motions.
+        motions: usize,
+    },
+    /// Motions with no geodesic distance (of different shapes).
+    #[error(transparent)]
+    Srvf(#[from] SrvfError),
+}
 
 /// Per label, the mean geodesic distance over every pair of the motions generated from seeds
 /// `0..seeds`; then their mean over the labels, last.
 ///
 /// # Errors
 /// Fewer than 2 seeds, or a generation error.
-pub fn diversity(generator: &MotionGenerator<'_>, seeds: u64) -> Result<(Vec<f32>, f32)> {
-    ensure!(seeds >= 2, "diversity needs at least 2 seeds");
+pub fn diversity(
+    generator: &MotionGenerator<'_>,
+    seeds: u64,
+) -> Result<(Vec<f32>, f32), DiversityError> {
+    if seeds < 2 {
+        return Err(DiversityError::TooFewSeeds);
+    }
     let mut scratch = vec![0.0f32; generator.scratch_len()];
     let mut per_label = Vec::with_capacity(LABELS);
     for label in 0..LABELS {
@@ -23,9 +62,13 @@ pub fn diversity(generator: &MotionGenerator<'_>, seeds: u64) -> Result<(Vec<f32
                 generator
                     .motion(label, seed, &mut scratch, &mut q)
                     .map(|()| q)
-                    .map_err(|e| anyhow!("generating label {label}, seed {seed}: {e}"))
+                    .map_err(|source| DiversityError::Generate {
+                        label,
+                        seed,
+                        source,
+                    })
             })
-            .collect::<Result<Vec<_>>>()?;
+            .collect::<Result<Vec<_>, _>>()?;
         per_label.push(motions);
     }
     mean_pairwise(&per_label)
@@ -36,15 +79,18 @@ pub fn diversity(generator: &MotionGenerator<'_>, seeds: u64) -> Result<(Vec<f32
 ///
 /// # Errors
 /// No groups, a group of fewer than 2 motions, or motions of different shapes.
-pub fn mean_pairwise(groups: &[Vec<Vec<f32>>]) -> Result<(Vec<f32>, f32)> {
-    ensure!(!groups.is_empty(), "diversity needs at least one group");
+pub fn mean_pairwise(groups: &[Vec<Vec<f32>>]) -> Result<(Vec<f32>, f32), DiversityError> {
+    if groups.is_empty() {
+        return Err(DiversityError::NoGroups);
+    }
     let mut per_group = Vec::with_capacity(groups.len());
     for (g, motions) in groups.iter().enumerate() {
-        ensure!(
-            motions.len() >= 2,
-            "diversity needs at least 2 motions per group; group {g} has {}",
-            motions.len()
-        );
+        if motions.len() < 2 {
+            return Err(DiversityError::TooFewMotions {
+                group: g,
+                motions: motions.len(),
+            });
+        }
         let (mut sum, mut pairs) = (0.0f64, 0usize);
         for a in 0..motions.len() {
             for b in a + 1..motions.len() {

@@ -23,20 +23,155 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, ensure};
 use burn::tensor::Device;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use sinew_core::error::BufferError;
 use sinew_core::motion::MotionGenerator;
 use sinew_core::s2d::S2dDecoder;
 
 use super::classes::LABELS;
-use super::classifier::{self, Classifier, SequenceTraining, sequence_features};
+use super::classifier::{self, Classifier, SequenceTraining, TrainingSetError, sequence_features};
 use super::data::{MotionSet, Split};
-use super::generate::{open_decoder, open_generator};
-use super::lstm_baseline;
+use super::diversity::DiversityError;
+use super::frechet::FrechetError;
+use super::generate::{MotionGenerateError, open_decoder, open_generator};
+use super::lstm_baseline::{self, UnknownLabel};
+use super::srvf::SrvfError;
 use super::{diversity, frechet, srvf};
-use crate::training::backend::Backend;
+use crate::io::atomic::AtomicWriteError;
+use crate::io::container::ContainerError;
+use crate::io::dataset::DataSetError;
+use crate::training::backend::{Backend, BackendError};
+
+/// An evaluation that was refused or failed; each names the file concerned.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum EvalError {
+    /// Fewer than 2 diversity seeds.
+    #[error("--diversity-seeds must be at least 2")]
+    DiversitySeeds,
+    /// A model or decoder file that cannot be read as a `.sinew` file (the error names it).
+    #[error(transparent)]
+    Read(#[from] ContainerError),
+    /// A generator or decoder that cannot be used (the error names the file).
+    #[error(transparent)]
+    Open(#[from] MotionGenerateError),
+    /// A generator whose labels are not CoMA's twelve in order.
+    #[error("{}: the generator's labels {labels:?} are not CoMA's twelve in order", path.display())]
+    Labels {
+        /// The model file.
+        path: PathBuf,
+        /// Its labels.
+        labels: Vec<String>,
+    },
+    /// A motion set that cannot be read (the error names the file).
+    #[error(transparent)]
+    Motions(#[from] DataSetError),
+    /// Motions of other landmarks than the generator moves.
+    #[error(
+        "{}: the motions have {landmarks} landmarks, the generator {} moves {moved}",
+        motions.display(),
+        model.display()
+    )]
+    Landmarks {
+        /// The motion set's folder.
+        motions: PathBuf,
+        /// Its landmarks.
+        landmarks: usize,
+        /// The model file.
+        model: PathBuf,
+        /// The generator's landmarks.
+        moved: usize,
+    },
+    /// A motion set without training sequences or with fewer than 2 test sequences.
+    #[error(
+        "{}: {train} training and {test} test sequences; the evaluation needs some of each \
+         (2 tests)",
+        path.display()
+    )]
+    Split {
+        /// The motion set's folder.
+        path: PathBuf,
+        /// Its training sequences.
+        train: usize,
+        /// Its test sequences.
+        test: usize,
+    },
+    /// A motion whose features cannot be computed (it does not move).
+    #[error("{what} motion {motion}")]
+    Features {
+        /// Which motions: the set and row.
+        what: String,
+        /// The motion's index among them.
+        motion: usize,
+        /// Why.
+        #[source]
+        source: SrvfError,
+    },
+    /// A motion with no SRVF.
+    #[error(transparent)]
+    Srvf(#[from] SrvfError),
+    /// The core refused to generate a motion.
+    #[error("generating label {label}, seed {seed}")]
+    Generate {
+        /// The label.
+        label: usize,
+        /// The seed.
+        seed: u64,
+        /// What the core said.
+        #[source]
+        source: BufferError,
+    },
+    /// The decoder refused a motion whose landmarks are re-extracted.
+    #[error("{}: re-extracting landmarks", path.display())]
+    Redetect {
+        /// The decoder file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: RedetectError,
+    },
+    /// The backend cannot run.
+    #[error(transparent)]
+    Backend(#[from] BackendError),
+    /// The training features or settings that the classifier or the LSTM cannot train on.
+    #[error(transparent)]
+    TrainingSet(#[from] TrainingSetError),
+    /// A label the LSTM baseline does not know.
+    #[error(transparent)]
+    Label(#[from] UnknownLabel),
+    /// A diversity that cannot be measured.
+    #[error(transparent)]
+    Diversity(#[from] DiversityError),
+    /// A Fréchet distance that cannot be measured.
+    #[error(transparent)]
+    Frechet(#[from] FrechetError),
+    /// The report cannot be encoded as JSON.
+    #[error("{}: cannot encode the report", path.display())]
+    Encode {
+        /// The report file.
+        path: PathBuf,
+        /// What serde said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The report cannot be written (the error names the file).
+    #[error(transparent)]
+    Write(#[from] AtomicWriteError),
+}
+
+/// A frame the decoder refused while its landmarks were re-extracted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RedetectError {
+    /// The frame cannot be the decoder's input.
+    #[error("decoder input")]
+    Input(#[source] BufferError),
+    /// The frame cannot be decoded.
+    #[error("decoding")]
+    Decode(#[source] BufferError),
+}
 
 /// Seeds of the k-th generated test motion: `seed · SEED_STRIDE + k`; diversity seed j:
 /// `seed · SEED_STRIDE + DIVERSITY_OFFSET + j`.
@@ -200,7 +335,7 @@ impl<'a> Redetector<'a> {
     }
 
     /// Each frame decoded (`input(frames[0], frame)`) onto the neutral, its landmarks read back.
-    fn frames(&self, frames: &[Vec<f32>]) -> Result<Vec<Vec<f32>>> {
+    fn frames(&self, frames: &[Vec<f32>]) -> Result<Vec<Vec<f32>>, RedetectError> {
         let d = self.decoder;
         let mut scratch = vec![0.0f32; d.scratch_len()];
         let mut input = vec![0.0f32; d.input_len()];
@@ -209,9 +344,9 @@ impl<'a> Redetector<'a> {
             .iter()
             .map(|f| {
                 d.input(&frames[0], f, &mut input)
-                    .map_err(|e| anyhow!("decoder input: {e}"))?;
+                    .map_err(RedetectError::Input)?;
                 d.decode_onto(&self.base, &input, &mut scratch, &mut mesh)
-                    .map_err(|e| anyhow!("decoding: {e}"))?;
+                    .map_err(RedetectError::Decode)?;
                 Ok(self
                     .lmk
                     .iter()
@@ -221,22 +356,26 @@ impl<'a> Redetector<'a> {
             .collect()
     }
 
-    fn all(&self, seqs: &[Vec<Vec<f32>>]) -> Result<Vec<Vec<Vec<f32>>>> {
+    fn all(&self, seqs: &[Vec<Vec<f32>>]) -> Result<Vec<Vec<Vec<f32>>>, RedetectError> {
         seqs.par_iter().map(|s| self.frames(s)).collect()
     }
 }
 
-fn features(seqs: &[Vec<Vec<f32>>], what: &str) -> Result<Vec<Vec<f32>>> {
+fn features(seqs: &[Vec<Vec<f32>>], what: &str) -> Result<Vec<Vec<f32>>, EvalError> {
     seqs.par_iter()
         .enumerate()
         .map(|(i, s)| {
             let refs: Vec<&[f32]> = s.iter().map(Vec::as_slice).collect();
-            sequence_features(&refs).with_context(|| format!("{what} motion {i}"))
+            sequence_features(&refs).map_err(|source| EvalError::Features {
+                what: what.to_owned(),
+                motion: i,
+                source,
+            })
         })
         .collect()
 }
 
-fn srvfs(seqs: &[Vec<Vec<f32>>]) -> Result<Vec<Vec<f32>>> {
+fn srvfs(seqs: &[Vec<Vec<f32>>]) -> Result<Vec<Vec<f32>>, SrvfError> {
     seqs.iter()
         .map(|s| {
             let refs: Vec<&[f32]> = s.iter().map(Vec::as_slice).collect();
@@ -251,12 +390,16 @@ fn generated(
     label: usize,
     seed: u64,
     neutral: &[f32],
-) -> Result<Vec<Vec<f32>>> {
+) -> Result<Vec<Vec<f32>>, EvalError> {
     let mut scratch = vec![0.0f32; generator.scratch_len()];
     let mut curve = vec![0.0f32; generator.curve_len()];
     generator
         .landmarks(label, seed, 1.0, neutral, &mut scratch, &mut curve)
-        .map_err(|e| anyhow!("generating label {label}, seed {seed}: {e}"))?;
+        .map_err(|source| EvalError::Generate {
+            label,
+            seed,
+            source,
+        })?;
     Ok(curve
         .chunks_exact(generator.dims())
         .map(<[f32]>::to_vec)
@@ -271,13 +414,13 @@ struct Reading {
 }
 
 impl Reading {
-    fn redetected(&self, r: &Redetector<'_>) -> Result<Self> {
+    fn redetected(&self, r: &Redetector<'_>) -> Result<Self, RedetectError> {
         let rows = [
             r.all(&self.rows[0])?,
             r.all(&self.rows[1])?,
             r.all(&self.rows[2])?,
         ];
-        let group = |g: &Vec<Vec<Vec<Vec<f32>>>>| -> Result<Vec<_>> {
+        let group = |g: &Vec<Vec<Vec<Vec<f32>>>>| -> Result<Vec<_>, RedetectError> {
             g.iter().map(|label| r.all(label)).collect()
         };
         Ok(Self {
@@ -300,7 +443,7 @@ struct Judge<'a> {
 impl Judge<'_> {
     /// The row of `reading`; `with_train`: also the training sequences' Fréchet distance (for
     /// the reading whose landmarks are the training sequences' own).
-    fn row(&self, reading: &Reading, name: &str, with_train: bool) -> Result<Row> {
+    fn row(&self, reading: &Reading, name: &str, with_train: bool) -> Result<Row, EvalError> {
         let mut accuracy = Vec::new();
         let mut per_label: [Vec<f32>; 3] = Default::default();
         let mut feats = Vec::new();
@@ -321,7 +464,8 @@ impl Judge<'_> {
         }
         let mut div = Vec::new();
         for groups in &reading.diversity {
-            let qs: Vec<Vec<Vec<f32>>> = groups.iter().map(|g| srvfs(g)).collect::<Result<_>>()?;
+            let qs: Vec<Vec<Vec<f32>>> =
+                groups.iter().map(|g| srvfs(g)).collect::<Result<_, _>>()?;
             div.push(diversity::mean_pairwise(&qs)?.1);
         }
         let gt_groups: Vec<Vec<Vec<f32>>> = self
@@ -332,7 +476,7 @@ impl Judge<'_> {
                     rows.iter().map(|&r| reading.rows[0][r].clone()).collect();
                 srvfs(&seqs)
             })
-            .collect::<Result<_>>()?;
+            .collect::<Result<_, _>>()?;
         let diversity_gt = if gt_groups.iter().all(|g| g.len() >= 2) {
             Some(diversity::mean_pairwise(&gt_groups)?.1)
         } else {
@@ -359,39 +503,39 @@ impl Judge<'_> {
 
 /// `sinew eval motion`: trains the classifier and the LSTM baseline, generates and reads the
 /// three rows twice, writes the report (atomically) and returns it.
-pub fn eval_motion(opts: &EvalMotion) -> Result<EvalReport> {
+pub fn eval_motion(opts: &EvalMotion) -> Result<EvalReport, EvalError> {
     let started = std::time::Instant::now();
     let settings = &opts.settings;
-    ensure!(
-        settings.diversity_seeds >= 2,
-        "--diversity-seeds must be at least 2"
-    );
+    if settings.diversity_seeds < 2 {
+        return Err(EvalError::DiversitySeeds);
+    }
     let gen_bytes = crate::io::container::read(&opts.model)?;
     let (generator, labels) = open_generator(&opts.model, &gen_bytes)?;
-    ensure!(
-        labels.iter().map(String::as_str).eq(LABELS),
-        "{}: the generator's labels {labels:?} are not CoMA's twelve in order",
-        opts.model.display()
-    );
+    if !labels.iter().map(String::as_str).eq(LABELS) {
+        return Err(EvalError::Labels {
+            path: opts.model.clone(),
+            labels,
+        });
+    }
     let dec_bytes = crate::io::container::read(&opts.decoder)?;
     let decoder = open_decoder(&opts.decoder, &dec_bytes, &generator, &opts.model)?;
     let set = MotionSet::read(&opts.motions)?;
-    ensure!(
-        3 * set.manifest.landmarks.len() == generator.dims(),
-        "{}: the motions have {} landmarks, the generator {} moves {}",
-        opts.motions.display(),
-        set.manifest.landmarks.len(),
-        opts.model.display(),
-        generator.dims() / 3
-    );
+    if 3 * set.manifest.landmarks.len() != generator.dims() {
+        return Err(EvalError::Landmarks {
+            motions: opts.motions.clone(),
+            landmarks: set.manifest.landmarks.len(),
+            model: opts.model.clone(),
+            moved: generator.dims() / 3,
+        });
+    }
     let (train, test) = (set.split(Split::Train), set.split(Split::Test));
-    ensure!(
-        !train.is_empty() && test.len() >= 2,
-        "{}: {} training and {} test sequences; the evaluation needs some of each (2 tests)",
-        opts.motions.display(),
-        train.len(),
-        test.len()
-    );
+    if train.is_empty() || test.len() < 2 {
+        return Err(EvalError::Split {
+            path: opts.motions.clone(),
+            train: train.len(),
+            test: test.len(),
+        });
+    }
     let own = |s: usize| -> Vec<Vec<f32>> {
         set.landmark_frames(s)
             .into_iter()
@@ -399,8 +543,10 @@ pub fn eval_motion(opts: &EvalMotion) -> Result<EvalReport> {
             .collect()
     };
     let train_seqs: Vec<Vec<Vec<f32>>> = train.iter().map(|&s| own(s)).collect();
-    let train_features =
-        features(&train_seqs, "training").with_context(|| format!("{}", opts.motions.display()))?;
+    let train_features = features(
+        &train_seqs,
+        &format!("{}: training", opts.motions.display()),
+    )?;
     let train_labels: Vec<usize> = train.iter().map(|&s| set.label(s)).collect();
     let test_labels: Vec<usize> = test.iter().map(|&s| set.label(s)).collect();
 
@@ -433,7 +579,7 @@ pub fn eval_motion(opts: &EvalMotion) -> Result<EvalReport> {
     let (train_predicted, train_h) = classifier.predict(&train_features, &device);
     let lstm_motions: Vec<Vec<f32>> = (0..LABELS.len())
         .map(|l| lstm.generate(l, &device))
-        .collect::<Result<_>>()?;
+        .collect::<Result<_, _>>()?;
 
     let base = settings.seed.wrapping_mul(SEED_STRIDE);
     let mut generated_info = Vec::with_capacity(test.len());
@@ -462,23 +608,26 @@ pub fn eval_motion(opts: &EvalMotion) -> Result<EvalReport> {
             diversity_seeds
                 .iter()
                 .map(|&seed| generated(&generator, label, seed, &decoder_neutral))
-                .collect::<Result<_>>()?,
+                .collect::<Result<_, _>>()?,
         );
         // The LSTM takes no seed: one generation per seed all the same.
         diversity[1].push(
             diversity_seeds
                 .iter()
-                .map(|_| {
+                .map(|_| -> Result<_, EvalError> {
                     let m = lstm.generate(label, &device)?;
-                    lstm_on(&m, &decoder_neutral)
+                    Ok(lstm_on(&m, &decoder_neutral)?)
                 })
-                .collect::<Result<_>>()?,
+                .collect::<Result<_, _>>()?,
         );
     }
     let gen_lm = Reading { rows, diversity };
     let det_lm = gen_lm
         .redetected(&redetector)
-        .with_context(|| format!("{}: re-extracting landmarks", opts.decoder.display()))?;
+        .map_err(|source| EvalError::Redetect {
+            path: opts.decoder.clone(),
+            source,
+        })?;
 
     let mut by_label = vec![Vec::new(); LABELS.len()];
     for (k, &l) in test_labels.iter().enumerate() {
@@ -512,13 +661,43 @@ pub fn eval_motion(opts: &EvalMotion) -> Result<EvalReport> {
     Ok(report)
 }
 
-fn lstm_on(motion: &[f32], neutral: &[f32]) -> Result<Vec<Vec<f32>>> {
-    Ok(lstm_baseline::on_neutral(motion, neutral)?)
+fn lstm_on(motion: &[f32], neutral: &[f32]) -> Result<Vec<Vec<f32>>, SrvfError> {
+    lstm_baseline::on_neutral(motion, neutral)
 }
 
-fn write_report(path: &Path, report: &EvalReport) -> Result<()> {
-    Ok(crate::io::atomic::write(
-        path,
-        serde_json::to_string_pretty(report)?.as_bytes(),
-    )?)
+fn write_report(path: &Path, report: &EvalReport) -> Result<(), EvalError> {
+    let json = serde_json::to_string_pretty(report).map_err(|source| EvalError::Encode {
+        path: path.to_owned(),
+        source,
+    })?;
+    Ok(crate::io::atomic::write(path, json.as_bytes())?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_missing_model_and_too_few_diversity_seeds_are_refused_by_variant() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("missing.sinew");
+        let mut opts = EvalMotion {
+            model: missing.clone(),
+            decoder: dir.path().join("decoder.sinew"),
+            motions: dir.path().join("motions"),
+            report: dir.path().join("report.json"),
+            settings: EvalSettings::new(1, 1),
+            backend: Backend::Flex,
+            quiet: true,
+        };
+        let e = eval_motion(&opts).unwrap_err();
+        assert!(
+            matches!(&e, EvalError::Read(ContainerError::Read { path, .. }) if *path == missing),
+            "{e:?}"
+        );
+        opts.settings.diversity_seeds = 1;
+        let e = eval_motion(&opts).unwrap_err();
+        assert!(matches!(e, EvalError::DiversitySeeds), "{e:?}");
+        assert!(!opts.report.exists());
+    }
 }

@@ -9,8 +9,33 @@
 //! set to 0 (covariances are positive semi-definite; with fewer samples than dimensions they are
 //! singular).
 
-use anyhow::{Result, ensure};
 use nalgebra::{DMatrix, DVector};
+
+/// Feature sets that have no Fréchet distance.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum FrechetError {
+    /// Fewer than 2 feature vectors.
+    #[error("a covariance needs at least 2 feature vectors, got {got}")]
+    TooFew {
+        /// The vectors given.
+        got: usize,
+    },
+    /// Empty vectors or vectors of different lengths.
+    #[error("feature vectors of different lengths")]
+    Lengths,
+    /// A value that is NaN or infinite.
+    #[error("a feature is not finite")]
+    NonFinite,
+    /// Two Gaussians of different dimensions.
+    #[error("features of {a} and {b} dimensions")]
+    Dimensions {
+        /// The first's.
+        a: usize,
+        /// The second's.
+        b: usize,
+    },
+}
 
 /// A set of feature vectors as a Gaussian: mean and covariance (unbiased, `1 / (n − 1)`).
 #[derive(Clone, Debug, PartialEq)]
@@ -26,21 +51,19 @@ impl Gaussian {
     ///
     /// # Errors
     /// Fewer than 2 vectors, vectors of different lengths or of none, or non-finite values.
-    pub fn of(features: &[Vec<f32>]) -> Result<Self> {
-        ensure!(
-            features.len() >= 2,
-            "a covariance needs at least 2 feature vectors, got {}",
-            features.len()
-        );
+    pub fn of(features: &[Vec<f32>]) -> Result<Self, FrechetError> {
+        if features.len() < 2 {
+            return Err(FrechetError::TooFew {
+                got: features.len(),
+            });
+        }
         let d = features[0].len();
-        ensure!(
-            d > 0 && features.iter().all(|f| f.len() == d),
-            "feature vectors of different lengths"
-        );
-        ensure!(
-            features.iter().flatten().all(|x| x.is_finite()),
-            "a feature is not finite"
-        );
+        if d == 0 || features.iter().any(|f| f.len() != d) {
+            return Err(FrechetError::Lengths);
+        }
+        if !features.iter().flatten().all(|x| x.is_finite()) {
+            return Err(FrechetError::NonFinite);
+        }
         let n = features.len();
         let x = DMatrix::from_fn(n, d, |i, j| f64::from(features[i][j]));
         let mean = DVector::from_fn(d, |j, _| x.column(j).sum() / n as f64);
@@ -64,13 +87,13 @@ fn sqrt_psd(m: &DMatrix<f64>) -> DMatrix<f64> {
 ///
 /// # Errors
 /// If the dimensions differ.
-pub fn distance(a: &Gaussian, b: &Gaussian) -> Result<f64> {
-    ensure!(
-        a.mean.len() == b.mean.len(),
-        "features of {} and {} dimensions",
-        a.mean.len(),
-        b.mean.len()
-    );
+pub fn distance(a: &Gaussian, b: &Gaussian) -> Result<f64, FrechetError> {
+    if a.mean.len() != b.mean.len() {
+        return Err(FrechetError::Dimensions {
+            a: a.mean.len(),
+            b: b.mean.len(),
+        });
+    }
     let s1h = sqrt_psd(&a.cov);
     let cross = &s1h * &b.cov * &s1h;
     let sym = (&cross + cross.transpose()) * 0.5;
@@ -89,7 +112,7 @@ pub fn distance(a: &Gaussian, b: &Gaussian) -> Result<f64> {
 ///
 /// # Errors
 /// As [`Gaussian::of`] and [`distance`].
-pub fn between(a: &[Vec<f32>], b: &[Vec<f32>]) -> Result<f64> {
+pub fn between(a: &[Vec<f32>], b: &[Vec<f32>]) -> Result<f64, FrechetError> {
     distance(&Gaussian::of(a)?, &Gaussian::of(b)?)
 }
 
@@ -156,10 +179,22 @@ mod tests {
 
     #[test]
     fn bad_sets_are_refused() {
-        assert!(between(&[vec![1.0]], &[vec![1.0], vec![2.0]]).is_err());
-        assert!(between(&[vec![1.0], vec![1.0, 2.0]], &[vec![1.0], vec![2.0]]).is_err());
-        assert!(between(&[vec![1.0], vec![f32::NAN]], &[vec![1.0], vec![2.0]]).is_err());
+        assert_eq!(
+            between(&[vec![1.0]], &[vec![1.0], vec![2.0]]),
+            Err(FrechetError::TooFew { got: 1 })
+        );
+        assert_eq!(
+            between(&[vec![1.0], vec![1.0, 2.0]], &[vec![1.0], vec![2.0]]),
+            Err(FrechetError::Lengths)
+        );
+        assert_eq!(
+            between(&[vec![1.0], vec![f32::NAN]], &[vec![1.0], vec![2.0]]),
+            Err(FrechetError::NonFinite)
+        );
         let a = [vec![1.0, 0.0], vec![0.0, 1.0]];
-        assert!(between(&a, &[vec![1.0], vec![2.0]]).is_err());
+        assert_eq!(
+            between(&a, &[vec![1.0], vec![2.0]]),
+            Err(FrechetError::Dimensions { a: 2, b: 1 })
+        );
     }
 }

@@ -9,15 +9,155 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, bail};
+use sinew_core::error::{BufferError, FormatError};
 use sinew_core::motion::MotionGenerator;
 use sinew_core::s2d::S2dDecoder;
 use sinew_core::sequence::{Sequence, SequenceBuffers};
 use sinew_core::srvf::{FRAMES, decode};
 
-use super::srvf;
+use super::srvf::{self, SrvfError};
 use crate::figures::render::{Image, View, render};
-use crate::io::mesh::Mesh;
+use crate::io::container::ContainerError;
+use crate::io::mesh::{Mesh, MeshError};
+
+/// A generation or interpolation that was refused or failed; each names the file concerned.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MotionGenerateError {
+    /// A model or decoder file that cannot be read as a `.sinew` file (the error names it).
+    #[error(transparent)]
+    Read(#[from] ContainerError),
+    /// A model file that is not a Motion3DGAN generator.
+    #[error("{}: not a Motion3DGAN generator (from `sinew train motion`)", path.display())]
+    NotAGenerator {
+        /// The model file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// A generator that does not list one label per class.
+    #[error("{}: the generator lists {found} labels, {expected} expected", path.display())]
+    LabelCount {
+        /// The model file.
+        path: PathBuf,
+        /// The labels it lists.
+        found: usize,
+        /// The classes.
+        expected: usize,
+    },
+    /// A decoder file that is not an S2D decoder.
+    #[error("{}: not an S2D decoder", path.display())]
+    NotADecoder {
+        /// The decoder file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// A decoder that reads other landmarks than the generator moves.
+    #[error(
+        "{}: the decoder reads {landmarks} landmarks, but the generator {} moves {moved}",
+        decoder.display(),
+        model.display()
+    )]
+    DecoderLandmarks {
+        /// The decoder file.
+        decoder: PathBuf,
+        /// The model file.
+        model: PathBuf,
+        /// The decoder's landmarks.
+        landmarks: usize,
+        /// The generator's.
+        moved: usize,
+    },
+    /// A decoder that the core's sequence refuses with the generator.
+    #[error("{}: does not fit the generator {}", decoder.display(), model.display())]
+    Mismatch {
+        /// The decoder file.
+        decoder: PathBuf,
+        /// The model file.
+        model: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// An intensity that is negative or not finite.
+    #[error(
+        "--intensity {0} must be a finite number of at least 0 (1 is the training motions' mean)"
+    )]
+    Intensity(f32),
+    /// Fewer than 2 interpolation steps.
+    #[error("--steps must be at least 2 (the two ends)")]
+    Steps,
+    /// A neutral or frame mesh that cannot be read or written (the error names the file).
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// A neutral of another vertex count than the decoder's template.
+    #[error(
+        "{}: {found} vertices, the decoder's template has {expected} (the neutral must share \
+         its topology)",
+        path.display()
+    )]
+    NeutralVertices {
+        /// The neutral mesh file.
+        path: PathBuf,
+        /// Its vertices.
+        found: usize,
+        /// The template's.
+        expected: usize,
+    },
+    /// A label the generator does not know.
+    #[error(
+        "{}: unknown label {label:?}; the generator knows {}",
+        path.display(),
+        known.join(", ")
+    )]
+    UnknownLabel {
+        /// The model file.
+        path: PathBuf,
+        /// The label asked for.
+        label: String,
+        /// The labels it knows.
+        known: Vec<String>,
+    },
+    /// The core refused to generate a motion.
+    #[error("generating")]
+    Generating(#[source] BufferError),
+    /// The motion's curve cannot be decoded onto the neutral.
+    #[error("decoding the motion")]
+    DecodeMotion(#[source] BufferError),
+    /// A frame the decoder refused.
+    #[error("decoding frame {frame}")]
+    DecodeFrame {
+        /// The frame.
+        frame: usize,
+        /// What the core said.
+        #[source]
+        source: BufferError,
+    },
+    /// Two motions with no geodesic between them.
+    #[error(transparent)]
+    Srvf(#[from] SrvfError),
+    /// The output folder cannot be created.
+    #[error("{}: cannot create folder", path.display())]
+    CreateFolder {
+        /// The folder.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The strip picture cannot be written.
+    #[error("{}: cannot write the strip", path.display())]
+    Strip {
+        /// The picture's file.
+        path: PathBuf,
+        /// What the picture writer said.
+        #[source]
+        source: crate::figures::render::PngError,
+    },
+}
 
 /// What to generate, and where.
 #[derive(Clone, Debug)]
@@ -52,12 +192,12 @@ struct Loaded<'a> {
 pub(crate) fn open_generator<'a>(
     path: &Path,
     bytes: &'a [u8],
-) -> Result<(MotionGenerator<'a>, Vec<String>)> {
-    let generator = MotionGenerator::from_bytes(bytes).map_err(|e| {
-        anyhow!(
-            "{}: not a Motion3DGAN generator (from `sinew train motion`): {e}",
-            path.display()
-        )
+) -> Result<(MotionGenerator<'a>, Vec<String>), MotionGenerateError> {
+    let generator = MotionGenerator::from_bytes(bytes).map_err(|source| {
+        MotionGenerateError::NotAGenerator {
+            path: path.to_owned(),
+            source,
+        }
     })?;
     let labels: Vec<String> = sinew_core::SinewFile::from_bytes(bytes)
         .ok()
@@ -65,12 +205,11 @@ pub(crate) fn open_generator<'a>(
         .map(|l| l.split(',').map(str::to_owned).collect())
         .unwrap_or_default();
     if labels.len() != sinew_core::motion::LABELS {
-        bail!(
-            "{}: the generator lists {} labels, {} expected",
-            path.display(),
-            labels.len(),
-            sinew_core::motion::LABELS
-        );
+        return Err(MotionGenerateError::LabelCount {
+            path: path.to_owned(),
+            found: labels.len(),
+            expected: sinew_core::motion::LABELS,
+        });
     }
     Ok((generator, labels))
 }
@@ -82,53 +221,54 @@ pub(crate) fn open_decoder<'a>(
     bytes: &'a [u8],
     generator: &MotionGenerator<'_>,
     model: &Path,
-) -> Result<S2dDecoder<'a>> {
-    let decoder = S2dDecoder::from_bytes(bytes)
-        .map_err(|e| anyhow!("{}: not an S2D decoder: {e}", path.display()))?;
+) -> Result<S2dDecoder<'a>, MotionGenerateError> {
+    let decoder =
+        S2dDecoder::from_bytes(bytes).map_err(|source| MotionGenerateError::NotADecoder {
+            path: path.to_owned(),
+            source,
+        })?;
     let k = decoder.landmarks().iter().count();
     if 3 * k != generator.dims() {
-        bail!(
-            "{}: the decoder reads {k} landmarks, but the generator {} moves {}",
-            path.display(),
-            model.display(),
-            generator.dims() / 3
-        );
+        return Err(MotionGenerateError::DecoderLandmarks {
+            decoder: path.to_owned(),
+            model: model.to_owned(),
+            landmarks: k,
+            moved: generator.dims() / 3,
+        });
     }
     Ok(decoder)
 }
 
-fn load<'a>(opts: &Generate, gen_bytes: &'a [u8], dec_bytes: &'a [u8]) -> Result<Loaded<'a>> {
+fn load<'a>(
+    opts: &Generate,
+    gen_bytes: &'a [u8],
+    dec_bytes: &'a [u8],
+) -> Result<Loaded<'a>, MotionGenerateError> {
     if !(opts.intensity.is_finite() && opts.intensity >= 0.0) {
-        bail!(
-            "--intensity {} must be a finite number of at least 0 (1 is the training motions' \
-             mean)",
-            opts.intensity
-        );
+        return Err(MotionGenerateError::Intensity(opts.intensity));
     }
     let (generator, labels) = open_generator(&opts.model, gen_bytes)?;
     let decoder = open_decoder(&opts.decoder, dec_bytes, &generator, &opts.model)?;
     let neutral = Mesh::read(&opts.neutral)?;
     let n = decoder.vertex_count();
     if neutral.positions.len() != n {
-        bail!(
-            "{}: {} vertices, the decoder's template has {n} (the neutral must share its \
-             topology)",
-            opts.neutral.display(),
-            neutral.positions.len()
-        );
+        return Err(MotionGenerateError::NeutralVertices {
+            path: opts.neutral.clone(),
+            found: neutral.positions.len(),
+            expected: n,
+        });
     }
     let neutral_lmk = decoder
         .landmarks()
         .iter()
         .flat_map(|v| neutral.positions[v as usize])
         .collect();
-    let sequence = Sequence::new(generator, decoder).map_err(|e| {
-        anyhow!(
-            "{}: does not fit the generator {}: {e}",
-            opts.decoder.display(),
-            opts.model.display()
-        )
-    })?;
+    let sequence =
+        Sequence::new(generator, decoder).map_err(|source| MotionGenerateError::Mismatch {
+            decoder: opts.decoder.clone(),
+            model: opts.model.clone(),
+            source,
+        })?;
     Ok(Loaded {
         sequence,
         labels,
@@ -138,13 +278,13 @@ fn load<'a>(opts: &Generate, gen_bytes: &'a [u8], dec_bytes: &'a [u8]) -> Result
 }
 
 impl Loaded<'_> {
-    fn label(&self, label: &str, model: &Path) -> Result<usize> {
+    fn label(&self, label: &str, model: &Path) -> Result<usize, MotionGenerateError> {
         self.labels.iter().position(|l| l == label).ok_or_else(|| {
-            anyhow!(
-                "{}: unknown label {label:?}; the generator knows {}",
-                model.display(),
-                self.labels.join(", ")
-            )
+            MotionGenerateError::UnknownLabel {
+                path: model.to_owned(),
+                label: label.to_owned(),
+                known: self.labels.clone(),
+            }
         })
     }
 
@@ -161,19 +301,27 @@ impl Loaded<'_> {
     }
 
     /// The dense face of frame `t` of the curve in `b` ([`Sequence::frame`]).
-    fn mesh(&self, b: &mut Buffers, t: usize) -> Result<Vec<f32>> {
+    fn mesh(&self, b: &mut Buffers, t: usize) -> Result<Vec<f32>, MotionGenerateError> {
         let mut buf = b.view();
         self.sequence
             .frame(t, &mut buf)
-            .map_err(|e| anyhow!("decoding frame {t}: {e}"))?;
+            .map_err(|source| MotionGenerateError::DecodeFrame { frame: t, source })?;
         Ok(buf.vertices.to_vec())
     }
 
     /// Writes `frame_NN.obj` for each mesh (numbered from `first`) and the strip of `strip`
     /// (indices into `meshes`) as `strip.png`.
-    fn write(&self, out: &Path, meshes: &[Vec<f32>], first: usize, strip: &[usize]) -> Result<()> {
-        std::fs::create_dir_all(out)
-            .with_context(|| format!("{}: cannot create folder", out.display()))?;
+    fn write(
+        &self,
+        out: &Path,
+        meshes: &[Vec<f32>],
+        first: usize,
+        strip: &[usize],
+    ) -> Result<(), MotionGenerateError> {
+        std::fs::create_dir_all(out).map_err(|source| MotionGenerateError::CreateFolder {
+            path: out.to_owned(),
+            source,
+        })?;
         for (i, m) in meshes.iter().enumerate() {
             self.neutral
                 .with_positions(crate::io::mesh::points(m.clone()))
@@ -186,13 +334,19 @@ impl Loaded<'_> {
             .filter_map(|&i| meshes.get(i))
             .map(|m| render(&crate::io::mesh::points(m.clone()), &triangles, &[], &view))
             .collect();
-        Image::hstack(&pictures).write_png(&out.join("strip.png"))
+        let path = out.join("strip.png");
+        Image::hstack(&pictures)
+            .save_png(&path)
+            .map_err(|e| MotionGenerateError::Strip {
+                path,
+                source: e.into(),
+            })
     }
 }
 
 /// `sinew generate`: the 30 frames of `label`'s motion from the seed. Returns the landmark curve
 /// (`[(FRAMES + 1) × dims]`, frame 0 the neutral's landmarks).
-pub fn generate(opts: &Generate, label: &str) -> Result<Vec<f32>> {
+pub fn generate(opts: &Generate, label: &str) -> Result<Vec<f32>, MotionGenerateError> {
     let gen_bytes = crate::io::container::read(&opts.model)?;
     let dec_bytes = crate::io::container::read(&opts.decoder)?;
     let l = load(opts, &gen_bytes, &dec_bytes)?;
@@ -200,10 +354,10 @@ pub fn generate(opts: &Generate, label: &str) -> Result<Vec<f32>> {
     let mut b = l.buffers();
     l.sequence
         .curve(label, opts.seed, opts.intensity, &mut b.view())
-        .map_err(|e| anyhow!("generating: {e}"))?;
+        .map_err(MotionGenerateError::Generating)?;
     let meshes = (1..=FRAMES)
         .map(|t| l.mesh(&mut b, t))
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>, _>>()?;
     let strip: Vec<usize> = STRIP.iter().map(|&f| f - 1).collect();
     l.write(&opts.out, &meshes, 1, &strip)?;
     Ok(b.curve)
@@ -213,9 +367,14 @@ pub fn generate(opts: &Generate, label: &str) -> Result<Vec<f32>> {
 /// (S2D §4.4); `steps` points along it, each decoded and shown at its apex (the last frame), as
 /// the paper's interpolation between expression peaks. Writes `frame_NN.obj` (1 to `steps`) and
 /// the strip of all of them. Returns each step's apex landmarks.
-pub fn interpolate(opts: &Generate, from: &str, to: &str, steps: usize) -> Result<Vec<Vec<f32>>> {
+pub fn interpolate(
+    opts: &Generate,
+    from: &str,
+    to: &str,
+    steps: usize,
+) -> Result<Vec<Vec<f32>>, MotionGenerateError> {
     if steps < 2 {
-        bail!("--steps must be at least 2 (the two ends)");
+        return Err(MotionGenerateError::Steps);
     }
     let gen_bytes = crate::io::container::read(&opts.model)?;
     let dec_bytes = crate::io::container::read(&opts.decoder)?;
@@ -228,7 +387,7 @@ pub fn interpolate(opts: &Generate, from: &str, to: &str, steps: usize) -> Resul
     generator
         .motion(a, opts.seed, &mut scratch, &mut q1)
         .and_then(|()| generator.motion(b, opts.seed, &mut scratch, &mut q2))
-        .map_err(|e| anyhow!("generating: {e}"))?;
+        .map_err(MotionGenerateError::Generating)?;
     let d = generator.dims();
     let mut buffers = l.buffers();
     let mut apexes = Vec::with_capacity(steps);
@@ -244,7 +403,7 @@ pub fn interpolate(opts: &Generate, from: &str, to: &str, steps: usize) -> Resul
             opts.intensity * length,
             &mut buffers.curve,
         )
-        .map_err(|e| anyhow!("decoding the motion: {e}"))?;
+        .map_err(MotionGenerateError::DecodeMotion)?;
         meshes.push(l.mesh(&mut buffers, FRAMES)?);
         apexes.push(buffers.curve[FRAMES * d..].to_vec());
     }
@@ -271,5 +430,47 @@ impl Buffers {
             scratch: &mut self.scratch,
             vertices: &mut self.vertices,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn golden(name: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../tests/data")
+            .join(name)
+    }
+
+    #[test]
+    fn a_missing_or_wrong_model_and_bad_settings_are_refused_by_variant() {
+        let dir = tempfile::tempdir().unwrap();
+        let opts = |model: PathBuf, intensity: f32| Generate {
+            model,
+            decoder: golden("s2d-ict.sinew"),
+            neutral: dir.path().join("neutral.obj"),
+            seed: 0,
+            intensity,
+            out: dir.path().join("out"),
+        };
+        let missing = dir.path().join("missing.sinew");
+        let e = generate(&opts(missing.clone(), 1.0), "smile").unwrap_err();
+        assert!(
+            matches!(&e, MotionGenerateError::Read(ContainerError::Read { path, .. }) if *path == missing),
+            "{e:?}"
+        );
+        let e = generate(&opts(golden("s2d-ict.sinew"), 1.0), "smile").unwrap_err();
+        assert!(
+            matches!(&e, MotionGenerateError::NotAGenerator { path, .. } if path.ends_with("s2d-ict.sinew")),
+            "{e:?}"
+        );
+        let e = generate(&opts(golden("motion-ict.sinew"), -1.0), "smile").unwrap_err();
+        assert!(
+            matches!(e, MotionGenerateError::Intensity(i) if i == -1.0),
+            "{e:?}"
+        );
+        let e = interpolate(&opts(golden("motion-ict.sinew"), 1.0), "a", "b", 1).unwrap_err();
+        assert!(matches!(e, MotionGenerateError::Steps), "{e:?}");
     }
 }

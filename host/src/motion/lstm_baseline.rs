@@ -6,16 +6,27 @@
 //! squared error on the training sequences. It has no noise input, so a label always gives the
 //! same motion: its diversity is 0 by construction, and the evaluation computes it anyway.
 
-use anyhow::{Result, ensure};
 use burn::module::Module;
 use burn::nn::{Linear, Lstm, LstmConfig};
 use burn::optim::{AdamConfig, GradientsParams};
 use burn::tensor::{Device, Tensor};
 use sinew_core::srvf::FRAMES;
 
-use super::classifier::{SequenceTraining, batches, check_training_set, stack, unit_scale};
+use super::classifier::{
+    SequenceTraining, TrainingSetError, batches, check_training_set, stack, unit_scale,
+};
 use super::srvf::{SrvfError, normalise_frame};
 use crate::training::nn::{pytorch_linear, tensor, to_vec};
+
+/// A label the generator was not trained on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("label {label} of {classes} classes")]
+pub struct UnknownLabel {
+    /// The label asked for.
+    pub label: usize,
+    /// The classes it knows.
+    pub classes: usize,
+}
 
 /// The LSTM generator.
 #[derive(Module, Debug)]
@@ -75,12 +86,13 @@ impl LstmGenerator {
     ///
     /// # Errors
     /// A label out of range.
-    pub fn generate(&self, label: usize, device: &Device) -> Result<Vec<f32>> {
-        ensure!(
-            label < self.classes,
-            "label {label} of {} classes",
-            self.classes
-        );
+    pub fn generate(&self, label: usize, device: &Device) -> Result<Vec<f32>, UnknownLabel> {
+        if label >= self.classes {
+            return Err(UnknownLabel {
+                label,
+                classes: self.classes,
+            });
+        }
         let y = self.forward(&[label], device).detach();
         let k = 1.0 / self.scale;
         Ok(to_vec(y).into_iter().map(|x| x * k).collect())
@@ -102,7 +114,7 @@ pub fn train(
     config: &SequenceTraining,
     device: &Device,
     on_epoch: &mut dyn FnMut(usize, f32),
-) -> Result<(LstmGenerator, Vec<f32>)> {
+) -> Result<(LstmGenerator, Vec<f32>), TrainingSetError> {
     let len = check_training_set(seqs, labels, classes, config)?;
     device.seed(config.seed);
     let scale = unit_scale(seqs);
@@ -207,7 +219,13 @@ mod tests {
             again.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
         );
         assert_ne!(a, model.generate(1, &device).unwrap());
-        assert!(model.generate(2, &device).is_err());
+        assert_eq!(
+            model.generate(2, &device),
+            Err(UnknownLabel {
+                label: 2,
+                classes: 2
+            })
+        );
         // The same seed trains the same weights.
         let (other, _) = run().unwrap();
         assert_eq!(a, generate(&other, 0).unwrap());

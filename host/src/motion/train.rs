@@ -1,7 +1,6 @@
 //! Training Motion3DGAN: the training sequences as tangent vectors at the reference motion, and
 //! the loop of 4 critic steps per generator step (S2D section 4.2).
 
-use anyhow::{Context, Result, ensure};
 use burn::optim::ModuleOptimizer;
 use burn::tensor::{Device, Tensor};
 use rand_core::{RngCore, SeedableRng};
@@ -14,8 +13,38 @@ use super::gan::{
     Batch, Critic, GanConfig, Generator, StepLosses, critic_step, generator_step, one_hot,
     optimizer,
 };
-use super::srvf;
+use super::srvf::{self, SrvfError};
 use crate::training::nn::tensor;
+
+/// Motions that cannot be brought into the GAN's tangent space.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TangentError {
+    /// A motion set without training sequences.
+    #[error("the motion set has no training sequences")]
+    NoTrainingSequences,
+    /// A sequence that cannot be encoded as an SRVF (it does not move).
+    #[error("encoding sequence {sequence}")]
+    Encode {
+        /// The sequence's index in the set.
+        sequence: usize,
+        /// Why.
+        #[source]
+        source: SrvfError,
+    },
+    /// No motions, or labels not one per motion.
+    #[error("no motions, or labels not one per motion")]
+    NoMotions,
+    /// Motions of different shapes, or of a length that is not a whole number of frames.
+    #[error("motions of different shapes")]
+    Shapes,
+    /// Motions whose mean is zero (no reference motion).
+    #[error("the motions' mean is zero")]
+    ZeroMean,
+    /// A motion that has no log map at the reference (its antipode).
+    #[error("log-mapping a motion at the reference")]
+    LogMap(#[source] SrvfError),
+}
 
 /// The training sequences as the GAN sees them.
 #[derive(Clone, Debug, PartialEq)]
@@ -38,17 +67,19 @@ impl TangentData {
     ///
     /// # Errors
     /// If a sequence cannot be encoded (it does not move), naming it.
-    pub fn from_set(set: &MotionSet) -> Result<Self> {
+    pub fn from_set(set: &MotionSet) -> Result<Self, TangentError> {
         let train = set.split(Split::Train);
-        ensure!(
-            !train.is_empty(),
-            "the motion set has no training sequences"
-        );
+        if train.is_empty() {
+            return Err(TangentError::NoTrainingSequences);
+        }
         let mut qs = Vec::with_capacity(train.len());
         let mut lengths = Vec::with_capacity(train.len());
         for &s in &train {
-            let e = srvf::encode(&set.landmark_frames(s))
-                .with_context(|| format!("encoding sequence {s}"))?;
+            let e =
+                srvf::encode(&set.landmark_frames(s)).map_err(|source| TangentError::Encode {
+                    sequence: s,
+                    source,
+                })?;
             lengths.push(f64::from(e.length));
             qs.push(e.q);
         }
@@ -79,16 +110,14 @@ impl TangentData {
     ///
     /// # Errors
     /// If there are no motions, or they differ in shape, or their mean is zero.
-    pub fn from_motions(qs: &[Vec<f32>], labels: Vec<usize>) -> Result<Self> {
-        ensure!(
-            !qs.is_empty() && qs.len() == labels.len(),
-            "no motions, or labels not one per motion"
-        );
+    pub fn from_motions(qs: &[Vec<f32>], labels: Vec<usize>) -> Result<Self, TangentError> {
+        if qs.is_empty() || qs.len() != labels.len() {
+            return Err(TangentError::NoMotions);
+        }
         let d = qs[0].len();
-        ensure!(
-            d > 0 && d.is_multiple_of(FRAMES) && qs.iter().all(|q| q.len() == d),
-            "motions of different shapes"
-        );
+        if !(d > 0 && d.is_multiple_of(FRAMES) && qs.iter().all(|q| q.len() == d)) {
+            return Err(TangentError::Shapes);
+        }
         let mut mean = vec![0.0f64; d];
         for q in qs {
             for (m, x) in mean.iter_mut().zip(q) {
@@ -96,12 +125,15 @@ impl TangentData {
             }
         }
         let n = (mean.iter().map(|x| x * x).sum::<f64>() / FRAMES as f64).sqrt();
-        ensure!(n > 0.0, "the motions' mean is zero");
+        if n.is_nan() || n <= 0.0 {
+            return Err(TangentError::ZeroMean);
+        }
         let p: Vec<f32> = mean.iter().map(|x| (x / n) as f32).collect();
         let tangents = qs
             .iter()
             .map(|q| srvf::log_map(&p, q))
-            .collect::<Result<_, _>>()?;
+            .collect::<Result<_, _>>()
+            .map_err(TangentError::LogMap)?;
         Ok(Self {
             p,
             tangents,

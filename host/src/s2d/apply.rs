@@ -5,10 +5,94 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, bail};
+use sinew_core::error::{BufferError, FormatError};
 use sinew_core::s2d::S2dDecoder;
 
-use crate::io::mesh::Mesh;
+use crate::io::container::ContainerError;
+use crate::io::mesh::{Mesh, MeshError};
+
+/// A neutralisation or transfer that was refused or failed; each names the file concerned.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ApplyError {
+    /// The model file cannot be read as a `.sinew` file (the error names it).
+    #[error(transparent)]
+    Read(#[from] ContainerError),
+    /// A model file that is not an S2D decoder.
+    #[error("{}: not an S2D decoder", path.display())]
+    NotADecoder {
+        /// The model file.
+        path: PathBuf,
+        /// What the core said.
+        #[source]
+        source: FormatError,
+    },
+    /// A mesh that cannot be read or written (the error names the file).
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// A mesh of another vertex count than the decoder's template.
+    #[error(
+        "{}: {found} vertices, the decoder's template has {expected} (meshes must share its \
+         topology)",
+        path.display()
+    )]
+    VertexCount {
+        /// The mesh file.
+        path: PathBuf,
+        /// Its vertices.
+        found: usize,
+        /// The template's.
+        expected: usize,
+    },
+    /// A mesh whose landmark motion the decoder refuses.
+    #[error("{}", path.display())]
+    Decode {
+        /// The mesh file.
+        path: PathBuf,
+        /// What the core refused.
+        #[source]
+        source: DecodeError,
+    },
+    /// A transfer without source frames.
+    #[error("no source frames")]
+    NoFrames,
+    /// The output folder cannot be created.
+    #[error("{}: cannot create folder", path.display())]
+    CreateFolder {
+        /// The folder.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A folder that cannot be listed.
+    #[error("{}: cannot list", path.display())]
+    List {
+        /// The folder.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A folder without meshes.
+    #[error("{}: no meshes (.obj, .obj.gz, .ply)", path.display())]
+    NoMeshes {
+        /// The folder.
+        path: PathBuf,
+    },
+}
+
+/// The step of decoding that the core refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DecodeError {
+    /// The landmarks cannot be the decoder's input.
+    #[error("landmarks")]
+    Landmarks(#[source] BufferError),
+    /// The input cannot be decoded.
+    #[error("decoding")]
+    Decoding(#[source] BufferError),
+}
 
 /// A loaded decoder with its buffers.
 struct Decoder<'a> {
@@ -17,22 +101,24 @@ struct Decoder<'a> {
 }
 
 impl<'a> Decoder<'a> {
-    fn new(bytes: &'a [u8], path: &Path) -> Result<Self> {
-        let core = S2dDecoder::from_bytes(bytes)
-            .map_err(|e| anyhow!("{}: not an S2D decoder: {e}", path.display()))?;
+    fn new(bytes: &'a [u8], path: &Path) -> Result<Self, ApplyError> {
+        let core = S2dDecoder::from_bytes(bytes).map_err(|source| ApplyError::NotADecoder {
+            path: path.to_owned(),
+            source,
+        })?;
         let scratch = vec![0.0; core.scratch_len()];
         Ok(Self { core, scratch })
     }
 
     /// Checks that `mesh` (read from `path`) has the template's vertex count.
-    fn check(&self, mesh: &Mesh, path: &Path) -> Result<()> {
+    fn check(&self, mesh: &Mesh, path: &Path) -> Result<(), ApplyError> {
         let n = self.core.vertex_count();
         if mesh.positions.len() != n {
-            bail!(
-                "{}: {} vertices, the decoder's template has {n} (meshes must share its topology)",
-                path.display(),
-                mesh.positions.len()
-            );
+            return Err(ApplyError::VertexCount {
+                path: path.to_owned(),
+                found: mesh.positions.len(),
+                expected: n,
+            });
         }
         Ok(())
     }
@@ -51,15 +137,15 @@ impl<'a> Decoder<'a> {
 
     /// `base + decode(input(from, to))` for landmark sets `from`, `to`, the input normalised as
     /// the decoder was trained ([`S2dDecoder::input`]).
-    fn apply(&mut self, base: &[f32], from: &[f32], to: &[f32]) -> Result<Vec<f32>> {
+    fn apply(&mut self, base: &[f32], from: &[f32], to: &[f32]) -> Result<Vec<f32>, DecodeError> {
         let mut input = vec![0.0; from.len()];
         self.core
             .input(from, to, &mut input)
-            .map_err(|e| anyhow!("landmarks: {e}"))?;
+            .map_err(DecodeError::Landmarks)?;
         let mut out = vec![0.0; base.len()];
         self.core
             .decode_onto(base, &input, &mut self.scratch, &mut out)
-            .map_err(|e| anyhow!("decoding: {e}"))?;
+            .map_err(DecodeError::Decoding)?;
         Ok(out)
     }
 }
@@ -71,7 +157,7 @@ fn flat(mesh: &Mesh) -> Vec<f32> {
 /// Expression neutralisation: the decoder is asked for the displacement that takes the
 /// expressive face's landmarks to the template's neutral landmarks, and that displacement is
 /// added to the expressive face. Writes the result with the input's polygons and UVs.
-pub fn neutralize(model: &Path, expressive: &Path, out: &Path) -> Result<()> {
+pub fn neutralize(model: &Path, expressive: &Path, out: &Path) -> Result<(), ApplyError> {
     let bytes = crate::io::container::read(model)?;
     let mut dec = Decoder::new(&bytes, model)?;
     let mesh = Mesh::read(expressive)?;
@@ -80,7 +166,12 @@ pub fn neutralize(model: &Path, expressive: &Path, out: &Path) -> Result<()> {
     let neutral: Vec<f32> = dec.core.neutral().iter().collect();
     let from = dec.landmarks(&positions);
     let to = dec.landmarks(&neutral);
-    let result = dec.apply(&positions, &from, &to)?;
+    let result = dec
+        .apply(&positions, &from, &to)
+        .map_err(|source| ApplyError::Decode {
+            path: expressive.to_owned(),
+            source,
+        })?;
     mesh.with_positions(crate::io::mesh::points(result))
         .write(out)?;
     Ok(())
@@ -95,9 +186,9 @@ pub fn transfer(
     frames: &[PathBuf],
     target: &Path,
     out: &Path,
-) -> Result<usize> {
+) -> Result<usize, ApplyError> {
     if frames.is_empty() {
-        bail!("no source frames");
+        return Err(ApplyError::NoFrames);
     }
     let bytes = crate::io::container::read(model)?;
     let mut dec = Decoder::new(&bytes, model)?;
@@ -107,15 +198,20 @@ pub fn transfer(
     dec.check(&tgt, target)?;
     let from = dec.landmarks(&flat(&src));
     let base = flat(&tgt);
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("{}: cannot create folder", out.display()))?;
+    std::fs::create_dir_all(out).map_err(|source| ApplyError::CreateFolder {
+        path: out.to_owned(),
+        source,
+    })?;
     for (i, path) in frames.iter().enumerate() {
         let frame = Mesh::read(path)?;
         dec.check(&frame, path)?;
         let to = dec.landmarks(&flat(&frame));
         let result = dec
             .apply(&base, &from, &to)
-            .with_context(|| format!("{}", path.display()))?;
+            .map_err(|source| ApplyError::Decode {
+                path: path.clone(),
+                source,
+            })?;
         tgt.with_positions(crate::io::mesh::points(result))
             .write(&out.join(format!("frame_{i:05}.obj")))?;
     }
@@ -123,12 +219,15 @@ pub fn transfer(
 }
 
 /// The meshes (`.obj`, `.obj.gz`, `.ply`) of a folder in name order, or the one file given.
-pub fn mesh_files(path: &Path) -> Result<Vec<PathBuf>> {
+pub fn mesh_files(path: &Path) -> Result<Vec<PathBuf>, ApplyError> {
     if path.is_file() {
         return Ok(vec![path.to_owned()]);
     }
     let mut files: Vec<PathBuf> = std::fs::read_dir(path)
-        .with_context(|| format!("{}: cannot list", path.display()))?
+        .map_err(|source| ApplyError::List {
+            path: path.to_owned(),
+            source,
+        })?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
             let n = p.to_string_lossy();
@@ -137,7 +236,9 @@ pub fn mesh_files(path: &Path) -> Result<Vec<PathBuf>> {
         .collect();
     files.sort();
     if files.is_empty() {
-        bail!("{}: no meshes (.obj, .obj.gz, .ply)", path.display());
+        return Err(ApplyError::NoMeshes {
+            path: path.to_owned(),
+        });
     }
     Ok(files)
 }
@@ -221,9 +322,30 @@ mod tests {
         Mesh::new(mesh.positions[..4].to_vec(), vec![vec![0, 1, 2]])
             .write(&small)
             .unwrap();
-        let e = transfer(&model, &src, &files, &small, &out)
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("small.obj") && e.contains("4 vertices"), "{e}");
+        let e = transfer(&model, &src, &files, &small, &out).unwrap_err();
+        assert!(
+            matches!(&e, ApplyError::VertexCount { path, found: 4, .. } if *path == small),
+            "{e:?}"
+        );
+        // A missing model, an empty folder and a missing one are named.
+        let missing = dir.path().join("missing.sinew");
+        let e = neutralize(&missing, &src, &dir.path().join("n.obj")).unwrap_err();
+        assert!(
+            matches!(&e, ApplyError::Read(ContainerError::Read { path, .. }) if *path == missing),
+            "{e:?}"
+        );
+        let empty = dir.path().join("empty");
+        std::fs::create_dir_all(&empty).unwrap();
+        let e = mesh_files(&empty).unwrap_err();
+        assert!(
+            matches!(&e, ApplyError::NoMeshes { path } if *path == empty),
+            "{e:?}"
+        );
+        let e = mesh_files(&dir.path().join("nowhere")).unwrap_err();
+        assert!(matches!(e, ApplyError::List { .. }), "{e:?}");
+        assert!(matches!(
+            transfer(&model, &src, &[], &tgt, &out),
+            Err(ApplyError::NoFrames)
+        ));
     }
 }

@@ -2,13 +2,48 @@
 //! `sinew_core::s2d::S2dDecoder` reads (tables in `docs/FORMAT.md`, "S2D mesh hierarchy" and
 //! "S2D decoder"): the hierarchy's own sections, then the network's.
 
-use anyhow::{Result, ensure};
-use sinew_core::ArtifactKind;
+use sinew_core::{ArtifactKind, FormatError};
 
 use super::Hierarchy;
-use super::decoder::S2dDecoder;
-use crate::io::container::SinewWriter;
+use super::decoder::{DecoderError, S2dDecoder};
+use crate::io::container::{SinewWriter, WriterError};
 use crate::training::nn::{SpiralConv, to_vec};
+
+/// A decoder that cannot be baked over its hierarchy and landmarks.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum S2dBakeError {
+    /// A configuration that does not fit the hierarchy.
+    #[error(transparent)]
+    Config(#[from] DecoderError),
+    /// A decoder built for other levels than the hierarchy's.
+    #[error(
+        "the decoder was built for levels of {decoder:?} vertices, the hierarchy has {hierarchy:?}"
+    )]
+    Levels {
+        /// The decoder's levels.
+        decoder: Vec<usize>,
+        /// The hierarchy's.
+        hierarchy: Vec<usize>,
+    },
+    /// Not one landmark per three inputs.
+    #[error("{landmarks} landmarks for {inputs} inputs")]
+    Landmarks {
+        /// The landmarks given.
+        landmarks: usize,
+        /// The decoder's inputs.
+        inputs: usize,
+    },
+    /// A landmark vertex past the template's last.
+    #[error("a landmark vertex is outside the template")]
+    LandmarkOutside,
+    /// A section that cannot be laid out.
+    #[error(transparent)]
+    Layout(#[from] WriterError),
+    /// Bytes the core refuses: a bug of the writer, caught before the file is written.
+    #[error("the baked decoder does not validate")]
+    Invalid(#[source] FormatError),
+}
 
 /// Writes `decoder` over `hierarchy`, with the landmark vertex indices of the template (level 0),
 /// as `s2d.` sections of `w`.
@@ -17,25 +52,25 @@ pub fn write(
     hierarchy: &Hierarchy,
     landmarks: &[u32],
     w: &mut SinewWriter,
-) -> Result<()> {
+) -> Result<(), S2dBakeError> {
     let c = &decoder.config;
     c.validate(hierarchy)?;
     let vertices: Vec<usize> = hierarchy.levels.iter().map(|l| l.positions.len()).collect();
-    ensure!(
-        vertices == decoder.vertices,
-        "the decoder was built for levels of {:?} vertices, the hierarchy has {vertices:?}",
-        decoder.vertices
-    );
-    ensure!(
-        landmarks.len() * 3 == c.inputs,
-        "{} landmarks for {} inputs",
-        landmarks.len(),
-        c.inputs
-    );
-    ensure!(
-        landmarks.iter().all(|&i| (i as usize) < vertices[0]),
-        "a landmark vertex is outside the template"
-    );
+    if vertices != decoder.vertices {
+        return Err(S2dBakeError::Levels {
+            decoder: decoder.vertices.clone(),
+            hierarchy: vertices,
+        });
+    }
+    if landmarks.len() * 3 != c.inputs {
+        return Err(S2dBakeError::Landmarks {
+            landmarks: landmarks.len(),
+            inputs: c.inputs,
+        });
+    }
+    if landmarks.iter().any(|&i| i as usize >= vertices[0]) {
+        return Err(S2dBakeError::LandmarkOutside);
+    }
     let levels = vertices.len();
     // The parts of the hierarchy the decoder reads: the template positions, spirals and U.
     super::hierarchy::write_sections(hierarchy, w, "s2d", super::hierarchy::Sections::Playback)?;
@@ -75,7 +110,7 @@ pub fn bake(
     hierarchy: &Hierarchy,
     landmarks: &[u32],
     metadata: &[(String, String)],
-) -> Result<Vec<u8>> {
+) -> Result<Vec<u8>, S2dBakeError> {
     let mut w = SinewWriter::new(ArtifactKind::S2dDecoder);
     for (k, v) in metadata {
         w.meta(k, v);
@@ -83,8 +118,7 @@ pub fn bake(
     write(decoder, hierarchy, landmarks, &mut w)?;
     let bytes = w.to_bytes()?;
     // The core must accept what the host writes.
-    sinew_core::s2d::S2dDecoder::from_bytes(&bytes)
-        .map_err(|e| anyhow::anyhow!("the baked decoder does not validate: {e}"))?;
+    sinew_core::s2d::S2dDecoder::from_bytes(&bytes).map_err(S2dBakeError::Invalid)?;
     Ok(bytes)
 }
 
@@ -95,7 +129,7 @@ fn bias(linear: &burn::nn::Linear, outputs: usize) -> Vec<f32> {
         .map_or_else(|| vec![0.0; outputs], |b| to_vec(b.val()))
 }
 
-fn write_conv(w: &mut SinewWriter, prefix: &str, conv: &SpiralConv) -> Result<()> {
+fn write_conv(w: &mut SinewWriter, prefix: &str, conv: &SpiralConv) -> Result<(), WriterError> {
     let weight = conv.linear.weight.val().transpose();
     let [outputs, inputs] = weight.dims();
     w.f32s(&format!("{prefix}.w"), &[outputs, inputs], &to_vec(weight))?;
@@ -136,9 +170,21 @@ mod tests {
                 .any(|n| n.ends_with(".tri") || n.starts_with("s2d.d") || *n == "s2d.h1.pos"),
             "{names:?}"
         );
-        assert!(bake(&dec, &h, &[3], &meta).is_err());
-        assert!(bake(&dec, &h, &[3, 30], &meta).is_err());
+        assert!(matches!(
+            bake(&dec, &h, &[3], &meta),
+            Err(S2dBakeError::Landmarks {
+                landmarks: 1,
+                inputs: 6
+            })
+        ));
+        assert!(matches!(
+            bake(&dec, &h, &[3, 30], &meta),
+            Err(S2dBakeError::LandmarkOutside)
+        ));
         let other = synthetic::hierarchy(&[31, 12, 5], &[5, 4, 3], 6);
-        assert!(bake(&dec, &other, &[3, 17], &meta).is_err());
+        assert!(matches!(
+            bake(&dec, &other, &[3, 17], &meta),
+            Err(S2dBakeError::Levels { .. })
+        ));
     }
 }

@@ -16,8 +16,10 @@
 //! norm) is not linear in the displacement, so a linear model fitted there would mix a global
 //! rescaling into every coefficient.
 
-use anyhow::{Result, ensure};
 use nalgebra::{DMatrix, DVector};
+
+mod error;
+pub use error::BaselineModelError;
 
 /// Relative size below which a Gram eigenvalue counts as zero: the Gram matrix sums f32 products
 /// in f32 lanes, so its rounding noise reaches about 1e-8 of the largest eigenvalue (measured on
@@ -66,14 +68,15 @@ fn dot(a: &[f32], b: &[f32]) -> f64 {
 
 impl Pca {
     /// Builds the model from `samples` (each `[3V]`): all components with a non-zero variance.
-    pub fn fit(samples: &[&[f32]]) -> Result<Self> {
+    pub fn fit(samples: &[&[f32]]) -> Result<Self, BaselineModelError> {
         let n = samples.len();
-        ensure!(n >= 2, "PCA needs at least 2 samples, got {n}");
+        if n < 2 {
+            return Err(BaselineModelError::TooFewSamples { got: n });
+        }
         let dim = samples[0].len();
-        ensure!(
-            dim > 0 && samples.iter().all(|s| s.len() == dim),
-            "PCA samples must all have the same positive length"
-        );
+        if dim == 0 || samples.iter().any(|s| s.len() != dim) {
+            return Err(BaselineModelError::SampleLengths);
+        }
         let mut mean = vec![0.0f64; dim];
         for s in samples {
             for (m, &v) in mean.iter_mut().zip(*s) {
@@ -140,23 +143,28 @@ impl Pca {
 
     /// A fitter that uses the first `k` components and reads the displacement at the vertices
     /// `landmarks` (each `< V`).
-    pub fn fitter(&self, k: usize, landmarks: &[u32], ridge: f64) -> Result<Fitter<'_>> {
-        ensure!(
-            (1..=self.rank()).contains(&k),
-            "{k} components asked of a PCA of rank {}",
-            self.rank()
-        );
+    pub fn fitter(
+        &self,
+        k: usize,
+        landmarks: &[u32],
+        ridge: f64,
+    ) -> Result<Fitter<'_>, BaselineModelError> {
+        if !(1..=self.rank()).contains(&k) {
+            return Err(BaselineModelError::Components {
+                k,
+                rank: self.rank(),
+            });
+        }
         let b = self.landmark_rows(landmarks)?.columns(0, k).into_owned();
         Fitter::new(self, landmarks, b, &vec![1.0; k], None, ridge)
     }
 
     /// The rows of every component at the vertices `landmarks`, `[3 · landmarks, rank]`.
-    fn landmark_rows(&self, landmarks: &[u32]) -> Result<DMatrix<f64>> {
+    fn landmark_rows(&self, landmarks: &[u32]) -> Result<DMatrix<f64>, BaselineModelError> {
         let v = self.mean.len() / 3;
-        ensure!(
-            landmarks.iter().all(|&l| (l as usize) < v),
-            "a landmark vertex is outside the {v} modelled vertices"
-        );
+        if landmarks.iter().any(|&l| l as usize >= v) {
+            return Err(BaselineModelError::LandmarkOutside { vertices: v });
+        }
         Ok(DMatrix::from_fn(
             3 * landmarks.len(),
             self.rank(),
@@ -167,13 +175,13 @@ impl Pca {
     /// The orthogonal projection of the displacement `sample` (`[3V]`) onto the model's affine
     /// span, `μ + Σ ((x − μ)·e_i) e_i`: the closest displacement any combination of the
     /// components can give.
-    pub fn project(&self, sample: &[f32]) -> Result<Vec<f32>> {
-        ensure!(
-            sample.len() == self.mean.len(),
-            "a displacement of {} values for a model of {}",
-            sample.len(),
-            self.mean.len()
-        );
+    pub fn project(&self, sample: &[f32]) -> Result<Vec<f32>, BaselineModelError> {
+        if sample.len() != self.mean.len() {
+            return Err(BaselineModelError::SampleLength {
+                found: sample.len(),
+                expected: self.mean.len(),
+            });
+        }
         let centred: Vec<f32> = sample.iter().zip(&self.mean).map(|(x, m)| x - m).collect();
         let w: Vec<f64> = self.components.iter().map(|e| dot(&centred, e)).collect();
         Ok(self.expand(&w))
@@ -251,20 +259,19 @@ impl<'a> Fitter<'a> {
         penalty: &[f64],
         to_pca: Option<DMatrix<f64>>,
         ridge: f64,
-    ) -> Result<Self> {
-        ensure!(ridge >= 0.0, "ridge weight {ridge} is negative");
+    ) -> Result<Self, BaselineModelError> {
+        if ridge.is_nan() || ridge < 0.0 {
+            return Err(BaselineModelError::NegativeRidge(ridge));
+        }
         let k = b.ncols();
         let mut normal = b.transpose() * &b;
         let lambda = ridge * normal.trace() / k as f64;
         for (i, p) in penalty.iter().enumerate() {
             normal[(i, i)] += lambda * p;
         }
-        let solve = normal.cholesky().ok_or_else(|| {
-            anyhow::anyhow!(
-                "the landmark rows of the model's {k} components are rank-deficient; use a \
-                 positive ridge"
-            )
-        })?;
+        let solve = normal
+            .cholesky()
+            .ok_or(BaselineModelError::RankDeficient { k })?;
         Ok(Self {
             pca,
             landmarks: landmarks.to_vec(),
@@ -281,13 +288,16 @@ impl<'a> Fitter<'a> {
 
     /// The coefficients `c = argmin |B c − (y − μ_L)|² + λ Σ p_i c_i²` for the landmark
     /// displacements `y` (one per landmark, template units).
-    pub fn coefficients(&self, landmark_displacement: &[[f32; 3]]) -> Result<Vec<f64>> {
-        ensure!(
-            landmark_displacement.len() == self.landmarks.len(),
-            "{} landmark displacements for {} landmarks",
-            landmark_displacement.len(),
-            self.landmarks.len()
-        );
+    pub fn coefficients(
+        &self,
+        landmark_displacement: &[[f32; 3]],
+    ) -> Result<Vec<f64>, BaselineModelError> {
+        if landmark_displacement.len() != self.landmarks.len() {
+            return Err(BaselineModelError::LandmarkCount {
+                found: landmark_displacement.len(),
+                expected: self.landmarks.len(),
+            });
+        }
         let y = DVector::from_fn(self.b.nrows(), |r, _| {
             let l = self.landmarks[r / 3] as usize;
             f64::from(landmark_displacement[r / 3][r % 3]) - f64::from(self.pca.mean[3 * l + r % 3])
@@ -301,7 +311,10 @@ impl<'a> Fitter<'a> {
     }
 
     /// The dense displacement, `[3V]`, fitted to `landmark_displacement`.
-    pub fn predict(&self, landmark_displacement: &[[f32; 3]]) -> Result<Vec<f32>> {
+    pub fn predict(
+        &self,
+        landmark_displacement: &[[f32; 3]],
+    ) -> Result<Vec<f32>, BaselineModelError> {
         let c = self.coefficients(landmark_displacement)?;
         Ok(match &self.to_pca {
             Some(a) => self.pca.expand((a * DVector::from_vec(c)).as_slice()),
@@ -424,16 +437,18 @@ fn sparse_codes(d: &DMatrix<f64>, z: &DMatrix<f64>, lambda: f64, codes: &mut DMa
 
 impl Dictionary {
     /// Learns the dictionary of the training samples behind `pca`.
-    pub fn learn(pca: &Pca, config: &DictionaryConfig) -> Result<Self> {
+    pub fn learn(pca: &Pca, config: &DictionaryConfig) -> Result<Self, BaselineModelError> {
         let n = pca.scores.len();
         let r = pca.rank();
-        ensure!(config.atoms >= 1, "a dictionary needs at least one atom");
-        ensure!(
-            config.sparsity.is_finite() && config.sparsity >= 0.0,
-            "sparsity {} is not a non-negative number",
-            config.sparsity
-        );
-        ensure!(r >= 1, "the PCA has no component to learn a dictionary in");
+        if config.atoms == 0 {
+            return Err(BaselineModelError::NoAtoms);
+        }
+        if !(config.sparsity.is_finite() && config.sparsity >= 0.0) {
+            return Err(BaselineModelError::Sparsity(config.sparsity));
+        }
+        if r == 0 {
+            return Err(BaselineModelError::EmptyPca);
+        }
         let z = DMatrix::from_fn(r, n, |c, i| pca.scores[i][c]);
         let k = config.atoms.min(n);
         let lambda = config.sparsity * (z.norm_squared() / n as f64).sqrt();
@@ -499,17 +514,24 @@ impl Dictionary {
     /// coefficients minimise `|B α − (y − μ_L)|² + λ Σ_j (p̄ / p_j) α_j²`, a ridge whose weight
     /// on atom j is the inverse of its mean squared training code `p_j` (relative to their mean
     /// `p̄`), so an atom the training samples use little is held near zero.
-    pub fn fitter<'a>(&self, pca: &'a Pca, landmarks: &[u32], ridge: f64) -> Result<Fitter<'a>> {
-        ensure!(
-            self.atoms.nrows() == pca.rank(),
-            "the dictionary was learned in {} coordinates, the PCA has {}",
-            self.atoms.nrows(),
-            pca.rank()
-        );
+    pub fn fitter<'a>(
+        &self,
+        pca: &'a Pca,
+        landmarks: &[u32],
+        ridge: f64,
+    ) -> Result<Fitter<'a>, BaselineModelError> {
+        if self.atoms.nrows() != pca.rank() {
+            return Err(BaselineModelError::Coordinates {
+                dictionary: self.atoms.nrows(),
+                pca: pca.rank(),
+            });
+        }
         let used: Vec<usize> = (0..self.code_power.len())
             .filter(|&j| self.code_power[j] > 0.0)
             .collect();
-        ensure!(!used.is_empty(), "no atom of the dictionary is used");
+        if used.is_empty() {
+            return Err(BaselineModelError::NoAtomUsed);
+        }
         let a = DMatrix::from_fn(pca.rank(), used.len(), |row, c| self.atoms[(row, used[c])]);
         let b = pca.landmark_rows(landmarks)? * &a;
         let mean = used.iter().map(|&j| self.code_power[j]).sum::<f64>() / used.len() as f64;
@@ -627,13 +649,28 @@ mod tests {
         for c in &pca.components {
             assert!((dot(&off_in_span, c) - dot(&off, c)).abs() < 1e-5);
         }
-        assert!(pca.project(&target[1..]).is_err());
+        let (n, short) = (target.len(), pca.project(&target[1..]));
+        let expected = BaselineModelError::SampleLength {
+            found: n - 1,
+            expected: n,
+        };
+        assert_eq!(short, Err(expected));
         assert!(pca.components_for(0.5) <= pca.components_for(0.99));
         assert_eq!(pca.components_for(1.0), 3);
-        assert!(pca.fitter(4, &landmarks, 1e-3).is_err());
-        assert!(pca.fitter(2, &[40], 1e-3).is_err());
-        assert!(fit.predict(&y[1..]).is_err());
-        assert!(Pca::fit(&refs[..1]).is_err());
+        assert!(matches!(
+            pca.fitter(4, &landmarks, 1e-3),
+            Err(BaselineModelError::Components { k: 4, rank: 3 })
+        ));
+        assert!(matches!(
+            pca.fitter(2, &[40], 1e-3),
+            Err(BaselineModelError::LandmarkOutside { .. })
+        ));
+        let e = fit.predict(&y[1..]).unwrap_err();
+        assert!(matches!(e, BaselineModelError::LandmarkCount { .. }));
+        assert!(matches!(
+            Pca::fit(&refs[..1]),
+            Err(BaselineModelError::TooFewSamples { got: 1 })
+        ));
     }
 
     /// Samples that each combine one or two of 6 known unit atoms (signed weights of size 0.5
@@ -738,18 +775,24 @@ mod tests {
         // Same samples, same dictionary.
         let again = Dictionary::learn(&pca, &config).unwrap();
         assert_eq!(again.atoms, dict.atoms);
-        assert!(Dictionary::learn(&pca, &DictionaryConfig { atoms: 0, ..config }).is_err());
-        assert!(
+        assert!(matches!(
+            Dictionary::learn(&pca, &DictionaryConfig { atoms: 0, ..config }),
+            Err(BaselineModelError::NoAtoms)
+        ));
+        assert!(matches!(
             Dictionary::learn(
                 &pca,
                 &DictionaryConfig {
                     sparsity: -1.0,
                     ..config
                 }
-            )
-            .is_err()
-        );
+            ),
+            Err(BaselineModelError::Sparsity(s)) if s == -1.0
+        ));
         let other = Pca::fit(&refs[..4]).unwrap();
-        assert!(dict.fitter(&other, &landmarks, 1e-3).is_err());
+        assert!(matches!(
+            dict.fitter(&other, &landmarks, 1e-3),
+            Err(BaselineModelError::Coordinates { .. })
+        ));
     }
 }

@@ -24,17 +24,18 @@
 //! order on load, which keeps a thousand pairs in a few megabytes (tens with transferred deltas,
 //! which are stored per identity).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail, ensure};
 use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 
 use super::decoder::InputNormalisation;
+use super::hierarchy::BuildError;
+use super::objective::LandmarkError;
 use super::symmetry::Mirror;
 use super::train::{Sample, landmark_input};
-use crate::io::dataset::{Entry, ManifestProblem};
-use crate::io::ict::{FACE_REGION, IctFaceKit};
+use crate::io::dataset::{DataSetError, Entry, ManifestProblem};
+use crate::io::ict::{FACE_REGION, IctError, IctFaceKit};
 use crate::io::mesh::Mesh;
 
 /// Number of expression-shape groups (the expression protocol's folds).
@@ -286,39 +287,106 @@ fn draw(
     (identities, groups, pairs)
 }
 
+/// A pair set that could not be generated, decimated or written; each names the file concerned.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PairsError {
+    /// Settings that cannot make a pair set.
+    #[error(transparent)]
+    Config(#[from] InvalidPairsConfig),
+    /// The ICT-FaceKit folder cannot be read (the error names the file).
+    #[error(transparent)]
+    Kit(#[from] IctError),
+    /// A kit with fewer expressions than shape groups.
+    #[error("{}: {found} expressions, at least {SHAPE_GROUPS} needed", path.display())]
+    Expressions {
+        /// The kit's folder.
+        path: PathBuf,
+        /// Its expressions.
+        found: usize,
+    },
+    /// A kit neutral smaller than the face region.
+    #[error(
+        "{}: the neutral has {found} vertices, the face region needs {needed}",
+        path.display()
+    )]
+    NeutralVertices {
+        /// The kit's folder.
+        path: PathBuf,
+        /// The neutral's vertices.
+        found: usize,
+        /// The face region's end.
+        needed: usize,
+    },
+    /// A face region that does not keep the kit's vertex order.
+    #[error("the face region does not keep vertex order")]
+    VertexOrder,
+    /// A kit landmark outside the face region.
+    #[error("{}: landmark vertex {vertex} lies outside the face region", path.display())]
+    LandmarkOutside {
+        /// The kit's folder.
+        path: PathBuf,
+        /// The landmark's vertex.
+        vertex: u32,
+    },
+    /// The expressions cannot be transferred onto an identity.
+    #[error("transferring the expressions onto identity {identity}")]
+    Transfer {
+        /// The identity.
+        identity: usize,
+        /// What the deformation transfer said.
+        #[source]
+        source: crate::geometry::deformation::TransferError,
+    },
+    /// Pairs that break a rule of the manifest.
+    #[error(transparent)]
+    Manifest(#[from] ManifestProblem),
+    /// The face region cannot be decimated.
+    #[error("decimating the face region")]
+    Decimate(#[source] BuildError),
+    /// A decimation that left no coarser level.
+    #[error("decimation by {factor} gave no coarser level")]
+    NoCoarserLevel {
+        /// The factor.
+        factor: usize,
+    },
+    /// The pair set cannot be written (the error names the file).
+    #[error(transparent)]
+    Write(#[from] DataSetError),
+}
+
 /// Generates a data set from the ICT-FaceKit in `kit`.
-pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet> {
+pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet, PairsError> {
     config.validate()?;
     let expressions = kit.expression_names();
-    ensure!(
-        expressions.len() >= SHAPE_GROUPS,
-        "{}: {} expressions, at least {SHAPE_GROUPS} needed",
-        kit.dir().display(),
-        expressions.len()
-    );
+    if expressions.len() < SHAPE_GROUPS {
+        return Err(PairsError::Expressions {
+            path: kit.dir().to_owned(),
+            found: expressions.len(),
+        });
+    }
     let modes = kit.identity_count();
     let (identities, groups, pairs) = draw(config, &expressions, modes);
     let region = FACE_REGION.start as usize..FACE_REGION.end as usize;
     let full = kit.neutral();
-    ensure!(
-        full.positions.len() >= region.end,
-        "{}: the neutral has {} vertices, the face region needs {}",
-        kit.dir().display(),
-        full.positions.len(),
-        region.end
-    );
+    if full.positions.len() < region.end {
+        return Err(PairsError::NeutralVertices {
+            path: kit.dir().to_owned(),
+            found: full.positions.len(),
+            needed: region.end,
+        });
+    }
     let (template, old_index) = full.submesh(|v| FACE_REGION.contains(&v));
     // The face region is a prefix of the topology, so vertex indices are unchanged.
-    ensure!(
-        old_index.iter().enumerate().all(|(i, &o)| i == o as usize),
-        "the face region does not keep vertex order"
-    );
+    if !old_index.iter().enumerate().all(|(i, &o)| i == o as usize) {
+        return Err(PairsError::VertexOrder);
+    }
     let landmarks = kit.landmarks68()?;
     if let Some(&l) = landmarks.iter().find(|&&l| !FACE_REGION.contains(&l)) {
-        bail!(
-            "{}: landmark vertex {l} lies outside the face region",
-            kit.dir().display()
-        );
+        return Err(PairsError::LandmarkOutside {
+            path: kit.dir().to_owned(),
+            vertex: l,
+        });
     }
     let crop = |d: Vec<[f32; 3]>| d[region.clone()].to_vec();
     let deltas: Vec<_> = kit
@@ -389,23 +457,28 @@ fn transferred(
     neutrals: &[Vec<[f32; 3]>],
     triangles: &[[u32; 3]],
     deltas: &[Vec<[f32; 3]>],
-) -> Result<Vec<Vec<[f32; 3]>>> {
+) -> Result<Vec<Vec<[f32; 3]>>, PairsError> {
     use rayon::prelude::*;
     let sources: Vec<&[[f32; 3]]> = deltas.iter().map(Vec::as_slice).collect();
     let per_identity: Vec<Vec<Vec<[f32; 3]>>> = neutrals
         .par_iter()
         .enumerate()
         .map(|(i, n)| {
+            let transfer = |source| PairsError::Transfer {
+                identity: i,
+                source,
+            };
             crate::geometry::deformation::Transfer::new(
                 base,
                 n,
                 triangles,
                 &format!("identity {i}"),
-            )?
+            )
+            .map_err(|e| transfer(e.into()))?
             .apply(&sources)
-            .with_context(|| format!("transferring the expressions onto identity {i}"))
+            .map_err(|e| transfer(e.into()))
         })
-        .collect::<Result<_>>()?;
+        .collect::<Result<_, _>>()?;
     Ok(per_identity.into_iter().flatten().collect())
 }
 
@@ -547,7 +620,11 @@ impl PairSet {
 
     /// Pair `p` as a training sample: the decoder's landmark input, normalised by
     /// `normalisation`, and the dense displacement, flattened.
-    pub fn sample(&self, p: usize, normalisation: InputNormalisation) -> Result<Sample> {
+    pub fn sample(
+        &self,
+        p: usize,
+        normalisation: InputNormalisation,
+    ) -> Result<Sample, LandmarkError> {
         self.sample_of(self.neutral(p), &self.displacement(p), normalisation)
     }
 
@@ -564,7 +641,7 @@ impl PairSet {
         p: usize,
         mirror: &Mirror,
         normalisation: InputNormalisation,
-    ) -> Result<Sample> {
+    ) -> Result<Sample, LandmarkError> {
         self.sample_of(
             &mirror.positions(self.neutral(p)),
             &mirror.vectors(&self.displacement(p)),
@@ -578,7 +655,7 @@ impl PairSet {
         neutral: &[[f32; 3]],
         displacement: &[[f32; 3]],
         normalisation: InputNormalisation,
-    ) -> Result<Sample> {
+    ) -> Result<Sample, LandmarkError> {
         let e: Vec<[f32; 3]> = neutral
             .iter()
             .zip(displacement)
@@ -602,12 +679,11 @@ impl PairSet {
     ///
     /// # Errors
     /// If the template cannot be decimated by `factor` (see `hierarchy::build`).
-    pub fn decimated(&self, factor: usize) -> Result<Self> {
-        let h = super::hierarchy::build(&self.template, &[factor])
-            .context("decimating the face region")?;
+    pub fn decimated(&self, factor: usize) -> Result<Self, PairsError> {
+        let h = super::hierarchy::build(&self.template, &[factor]).map_err(PairsError::Decimate)?;
         let (level, down) = match (h.levels.get(1), h.down.first()) {
             (Some(l), Some(d)) => (l, d),
-            _ => bail!("decimation by {factor} gave no coarser level"),
+            _ => return Err(PairsError::NoCoarserLevel { factor }),
         };
         let n = level.positions.len();
         // Row j of D selects the fine vertex that coarse vertex j is (the last row is the dummy's).
@@ -665,7 +741,7 @@ pub fn generate_to(
     out: &Path,
     config: &PairsConfig,
     decimate: Option<usize>,
-) -> Result<PairSet> {
+) -> Result<PairSet, PairsError> {
     let kit = IctFaceKit::open(data)?;
     let mut set = generate(&kit, config)?;
     if let Some(factor) = decimate {

@@ -10,7 +10,6 @@
 //! `[batch, vertices, features]` tensor takes the N-D path, with a division and a modulo per
 //! element in the backward (see `docs/S2D.md` for the measured difference).
 
-use anyhow::{Result, bail, ensure};
 use burn::module::Module;
 use burn::nn::Linear;
 use burn::tensor::{Device, Int, Tensor, TensorData};
@@ -19,6 +18,101 @@ use sinew_core::nn::Activation;
 
 use super::{Hierarchy, Sampling};
 use crate::training::nn::{SpiralConv, pytorch_linear};
+
+/// A decoder configuration, hierarchy or `s2d.input` code that does not make a decoder.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DecoderError {
+    /// An `s2d.input` code this build does not know.
+    #[error("unknown input normalisation code {0}")]
+    UnknownInputCode(u32),
+    /// A hierarchy without levels.
+    #[error("the hierarchy has no levels")]
+    NoLevels,
+    /// Not one up-sampling per neighbouring pair of levels.
+    #[error("{levels} levels need {} up-samplings, found {found}", levels.saturating_sub(1))]
+    UpSamplings {
+        /// The levels.
+        levels: usize,
+        /// The up-samplings.
+        found: usize,
+    },
+    /// A level whose spiral table has the wrong size.
+    #[error(
+        "level {level}: {indices} spiral indices for {vertices} vertices (+ dummy) of length {len}"
+    )]
+    SpiralCount {
+        /// The level.
+        level: usize,
+        /// The indices in its table.
+        indices: usize,
+        /// Its vertices.
+        vertices: usize,
+        /// Its spiral length.
+        len: usize,
+    },
+    /// A spiral index past the level's dummy vertex.
+    #[error("level {level}: a spiral index exceeds the dummy vertex {vertices}")]
+    SpiralIndex {
+        /// The level.
+        level: usize,
+        /// Its vertices (the dummy vertex's index).
+        vertices: usize,
+    },
+    /// A malformed up-sampling matrix.
+    #[error("up-sampling {index}")]
+    Sampling {
+        /// The up-sampling (from level `index + 1` to `index`).
+        index: usize,
+        /// What is wrong with it.
+        #[source]
+        source: SamplingError,
+    },
+    /// A zero input, fully connected or output width.
+    #[error("decoder widths must be positive")]
+    Widths,
+    /// Not one stage per up-sampling.
+    #[error("the decoder has {stages} stages but the hierarchy {up} up-samplings")]
+    Stages {
+        /// The configuration's stages.
+        stages: usize,
+        /// The hierarchy's up-samplings.
+        up: usize,
+    },
+    /// A stage with no filters.
+    #[error("stage filters must be positive")]
+    Filters,
+}
+
+/// What is wrong with an up-sampling matrix in CSR form.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SamplingError {
+    /// Another shape than its levels need.
+    #[error("is {rows}×{cols}, expected {expected_rows}×{expected_cols}")]
+    Shape {
+        /// Its rows.
+        rows: usize,
+        /// Its columns.
+        cols: usize,
+        /// The rows needed.
+        expected_rows: usize,
+        /// The columns needed.
+        expected_cols: usize,
+    },
+    /// Row pointers that do not start at 0 or have the wrong count.
+    #[error("row pointers do not start at 0 or have the wrong count")]
+    RowStart,
+    /// Row pointers that decrease or do not end at the entry count.
+    #[error("row pointers decrease or do not end at the entry count")]
+    RowOrder,
+    /// A column index past the last column.
+    #[error("a column index is out of range")]
+    Column,
+    /// A NaN or infinite value.
+    #[error("a value is not finite")]
+    NonFinite,
+}
 
 /// Number of landmarks the decoder reads (iBUG-68).
 pub const LANDMARKS: usize = 68;
@@ -66,11 +160,11 @@ impl InputNormalisation {
     }
 
     /// The normalisation of an `s2d.input` code.
-    pub fn from_code(code: u32) -> Result<Self> {
+    pub fn from_code(code: u32) -> Result<Self, DecoderError> {
         match code {
             sinew_core::s2d::INPUT_FROBENIUS => Ok(Self::Frobenius),
             sinew_core::s2d::INPUT_NEUTRAL_SCALE => Ok(Self::NeutralScale),
-            _ => bail!("unknown input normalisation code {code}"),
+            _ => Err(DecoderError::UnknownInputCode(code)),
         }
     }
 }
@@ -120,22 +214,20 @@ impl Default for DecoderConfig {
 impl DecoderConfig {
     /// Checks that this configuration fits `hierarchy` (which must itself be well formed: see
     /// [`check_hierarchy`]).
-    pub fn validate(&self, hierarchy: &Hierarchy) -> Result<()> {
+    pub fn validate(&self, hierarchy: &Hierarchy) -> Result<(), DecoderError> {
         check_hierarchy(hierarchy)?;
-        ensure!(
-            self.inputs > 0 && self.fc_features > 0 && self.outputs > 0,
-            "decoder widths must be positive"
-        );
-        ensure!(
-            self.filters.len() == hierarchy.up.len(),
-            "the decoder has {} stages but the hierarchy {} up-samplings",
-            self.filters.len(),
-            hierarchy.up.len()
-        );
-        ensure!(
-            self.filters.iter().all(|&f| f > 0),
-            "stage filters must be positive"
-        );
+        if self.inputs == 0 || self.fc_features == 0 || self.outputs == 0 {
+            return Err(DecoderError::Widths);
+        }
+        if self.filters.len() != hierarchy.up.len() {
+            return Err(DecoderError::Stages {
+                stages: self.filters.len(),
+                up: hierarchy.up.len(),
+            });
+        }
+        if self.filters.contains(&0) {
+            return Err(DecoderError::Filters);
+        }
         Ok(())
     }
 
@@ -171,62 +263,66 @@ impl DecoderConfig {
 /// Checks the shapes of a hierarchy: at least one level, one up-sampling per neighbouring pair of
 /// levels, spirals of `(n + 1) × len` indices `≤ n`, and each up-sampling a well-formed CSR matrix
 /// of `(n_i + 1) × (n_{i+1} + 1)`.
-pub fn check_hierarchy(h: &Hierarchy) -> Result<()> {
-    ensure!(!h.levels.is_empty(), "the hierarchy has no levels");
-    ensure!(
-        h.up.len() + 1 == h.levels.len(),
-        "{} levels need {} up-samplings, found {}",
-        h.levels.len(),
-        h.levels.len() - 1,
-        h.up.len()
-    );
+pub fn check_hierarchy(h: &Hierarchy) -> Result<(), DecoderError> {
+    if h.levels.is_empty() {
+        return Err(DecoderError::NoLevels);
+    }
+    if h.up.len() + 1 != h.levels.len() {
+        return Err(DecoderError::UpSamplings {
+            levels: h.levels.len(),
+            found: h.up.len(),
+        });
+    }
     for (i, level) in h.levels.iter().enumerate() {
         let n = level.positions.len();
-        ensure!(
-            level.spiral_len > 0 && level.spirals.len() == (n + 1) * level.spiral_len,
-            "level {i}: {} spiral indices for {} vertices (+ dummy) of length {}",
-            level.spirals.len(),
-            n,
-            level.spiral_len
-        );
-        ensure!(
-            level.spirals.iter().all(|&s| s as usize <= n),
-            "level {i}: a spiral index exceeds the dummy vertex {n}"
-        );
+        if level.spiral_len == 0 || level.spirals.len() != (n + 1) * level.spiral_len {
+            return Err(DecoderError::SpiralCount {
+                level: i,
+                indices: level.spirals.len(),
+                vertices: n,
+                len: level.spiral_len,
+            });
+        }
+        if level.spirals.iter().any(|&s| s as usize > n) {
+            return Err(DecoderError::SpiralIndex {
+                level: i,
+                vertices: n,
+            });
+        }
     }
     for (i, up) in h.up.iter().enumerate() {
         let rows = h.levels[i].positions.len() + 1;
         let cols = h.levels[i + 1].positions.len() + 1;
-        check_sampling(up, rows, cols).map_err(|e| anyhow::anyhow!("up-sampling {i}: {e}"))?;
+        check_sampling(up, rows, cols)
+            .map_err(|source| DecoderError::Sampling { index: i, source })?;
     }
     Ok(())
 }
 
-fn check_sampling(s: &Sampling, rows: usize, cols: usize) -> Result<()> {
-    ensure!(
-        s.rows == rows && s.cols == cols,
-        "is {}×{}, expected {rows}×{cols}",
-        s.rows,
-        s.cols
-    );
-    ensure!(
-        s.row_ptr.len() == rows + 1 && s.row_ptr.first() == Some(&0),
-        "row pointers do not start at 0 or have the wrong count"
-    );
-    ensure!(
-        s.row_ptr.windows(2).all(|w| w[0] <= w[1])
-            && s.row_ptr.last().map(|&p| p as usize) == Some(s.values.len())
-            && s.col_idx.len() == s.values.len(),
-        "row pointers decrease or do not end at the entry count"
-    );
-    ensure!(
-        s.col_idx.iter().all(|&c| (c as usize) < cols),
-        "a column index is out of range"
-    );
-    ensure!(
-        s.values.iter().all(|v| v.is_finite()),
-        "a value is not finite"
-    );
+fn check_sampling(s: &Sampling, rows: usize, cols: usize) -> Result<(), SamplingError> {
+    if s.rows != rows || s.cols != cols {
+        return Err(SamplingError::Shape {
+            rows: s.rows,
+            cols: s.cols,
+            expected_rows: rows,
+            expected_cols: cols,
+        });
+    }
+    if !(s.row_ptr.len() == rows + 1 && s.row_ptr.first() == Some(&0)) {
+        return Err(SamplingError::RowStart);
+    }
+    if !(s.row_ptr.windows(2).all(|w| w[0] <= w[1])
+        && s.row_ptr.last().map(|&p| p as usize) == Some(s.values.len())
+        && s.col_idx.len() == s.values.len())
+    {
+        return Err(SamplingError::RowOrder);
+    }
+    if s.col_idx.iter().any(|&c| c as usize >= cols) {
+        return Err(SamplingError::Column);
+    }
+    if !s.values.iter().all(|v| v.is_finite()) {
+        return Err(SamplingError::NonFinite);
+    }
     Ok(())
 }
 
@@ -329,7 +425,11 @@ pub struct S2dDecoder {
 impl S2dDecoder {
     /// A decoder over `hierarchy` with PyTorch's default initialisation of every linear layer
     /// (uniform ±1/√fan-in for weights and biases). Seed the device first for reproducible weights.
-    pub fn new(config: &DecoderConfig, hierarchy: &Hierarchy, device: &Device) -> Result<Self> {
+    pub fn new(
+        config: &DecoderConfig,
+        hierarchy: &Hierarchy,
+        device: &Device,
+    ) -> Result<Self, DecoderError> {
         config.validate(hierarchy)?;
         let levels = hierarchy.levels.len();
         let vertices: Vec<usize> = hierarchy.levels.iter().map(|l| l.positions.len()).collect();
@@ -573,15 +673,36 @@ mod tests {
     fn rejects_a_mismatched_configuration() {
         let h = synthetic::hierarchy(&[30, 12, 5], &[5, 4, 3], 2);
         let config = DecoderConfig::default();
-        assert!(S2dDecoder::new(&config, &h, &device()).is_err());
+        assert!(matches!(
+            S2dDecoder::new(&config, &h, &device()),
+            Err(DecoderError::Stages { stages: 4, up: 2 })
+        ));
         let mut bad = h.clone();
         bad.levels[1].spirals[0] = 99;
-        assert!(check_hierarchy(&bad).is_err());
+        assert_eq!(
+            check_hierarchy(&bad),
+            Err(DecoderError::SpiralIndex {
+                level: 1,
+                vertices: 12
+            })
+        );
         let mut bad = h.clone();
         bad.up[0].col_idx[0] = 13;
-        assert!(check_hierarchy(&bad).is_err());
+        assert_eq!(
+            check_hierarchy(&bad),
+            Err(DecoderError::Sampling {
+                index: 0,
+                source: SamplingError::Column
+            })
+        );
         let mut bad = h;
         bad.up.pop();
-        assert!(check_hierarchy(&bad).is_err());
+        assert_eq!(
+            check_hierarchy(&bad),
+            Err(DecoderError::UpSamplings {
+                levels: 3,
+                found: 1
+            })
+        );
     }
 }

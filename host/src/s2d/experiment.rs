@@ -73,7 +73,8 @@ impl Mirroring {
         self.mirrorable(set, s)
             .into_iter()
             .map(|p| set.mirrored_sample(p, &self.mirror, input))
-            .collect()
+            .collect::<Result<_, _>>()
+            .map_err(Into::into)
     }
 
     /// The mirrored dense displacements of [`Self::mirrorable`] pairs, flattened (what the
@@ -276,7 +277,7 @@ fn finish(
         ("DL-3DMM", dl),
         ("training span (floor)", floor),
     ];
-    cumulative_plot(&methods, &title).write_png(&plot)?;
+    cumulative_plot(&methods, &title).save_png(&plot)?;
     let s2d_stats = ErrorStats::of(s2d, None);
     let r = Report {
         protocol,
@@ -341,7 +342,7 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
             .train
             .iter()
             .map(|&p| set.sample(p, args.decoder.input))
-            .collect::<Result<Vec<_>>>()?;
+            .collect::<Result<Vec<_>, _>>()?;
         if let Some(m) = &mirroring {
             samples.extend(m.training_samples(&set, &s, args.decoder.input)?);
         }

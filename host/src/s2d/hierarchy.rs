@@ -12,7 +12,6 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail, ensure};
 use sinew_core::SinewFile;
 use sinew_core::format::ArtifactKind;
 
@@ -20,8 +19,11 @@ use super::{Hierarchy, Level, Sampling, spirals};
 use crate::geometry::qem::decimate;
 use crate::geometry::topology::{fan, incident_triangles};
 use crate::geometry::vec3::{add, cross, dot, norm2, scale, sub, to64};
-use crate::io::container::SinewWriter;
+use crate::io::container::{SinewWriter, WriterError};
 use crate::io::mesh::Mesh;
+
+mod error;
+pub use error::{BuildError, HierarchyError, SectionError, SurfaceError};
 
 /// The reference's decimation factors: four levels, each a quarter of the one before.
 pub const DEFAULT_FACTORS: [usize; 4] = [4, 4, 4, 4];
@@ -64,7 +66,7 @@ impl Config {
 }
 
 /// [`build_with`] with `factors` and spiral lengths from the statistics.
-pub fn build(mesh: &Mesh, factors: &[usize]) -> Result<Hierarchy> {
+pub fn build(mesh: &Mesh, factors: &[usize]) -> Result<Hierarchy, BuildError> {
     build_with(
         mesh,
         &Config {
@@ -84,29 +86,33 @@ pub fn build(mesh: &Mesh, factors: &[usize]) -> Result<Hierarchy> {
 /// no face, a factor below 2, spiral lengths that are zero or not one per level, or a level that
 /// cannot be decimated that far without breaking the surface. Errors name the face or vertex;
 /// callers add the file name.
-pub fn build_with(mesh: &Mesh, config: &Config) -> Result<Hierarchy> {
+pub fn build_with(mesh: &Mesh, config: &Config) -> Result<Hierarchy, BuildError> {
     let factors = config.factors.as_slice();
-    if let Some(lens) = &config.spiral_lengths {
-        ensure!(
-            lens.len() == factors.len() + 1 && lens.iter().all(|&l| l > 0),
-            "spiral lengths {lens:?}: need {} positive lengths, one per level",
-            factors.len() + 1
-        );
+    if let Some(lens) = &config.spiral_lengths
+        && !(lens.len() == factors.len() + 1 && lens.iter().all(|&l| l > 0))
+    {
+        return Err(BuildError::SpiralLengths {
+            lengths: lens.clone(),
+            levels: factors.len() + 1,
+        });
     }
     let triangles = checked_triangles(mesh)?;
     if let Some(i) = factors.iter().position(|&f| f < 2) {
-        bail!(
-            "decimation factor {i} is {} (at least 2 needed)",
-            factors[i]
-        );
+        return Err(BuildError::Factor {
+            index: i,
+            factor: factors[i],
+        });
     }
     let mut levels_geo: Vec<Geometry> = vec![(mesh.positions.clone(), triangles)];
     let mut kept_per_level: Vec<Vec<u32>> = Vec::with_capacity(factors.len());
     for (i, &factor) in factors.iter().enumerate() {
         let (positions, triangles) = &levels_geo[i];
         let target = positions.len().div_ceil(factor);
-        let (kept, coarse_tris) = decimate(positions, triangles, target)
-            .with_context(|| format!("level {i} → {}", i + 1))?;
+        let (kept, coarse_tris) =
+            decimate(positions, triangles, target).map_err(|e| BuildError::Decimate {
+                level: i,
+                source: e.into(),
+            })?;
         let coarse_pos = kept.iter().map(|&v| positions[v as usize]).collect();
         kept_per_level.push(kept);
         levels_geo.push((coarse_pos, coarse_tris));
@@ -135,7 +141,7 @@ pub fn build_with(mesh: &Mesh, config: &Config) -> Result<Hierarchy> {
             let len = config.spiral_lengths.as_ref().map(|l| l[i]);
             let (spiral_len, spirals) =
                 spirals::build(&positions, &triangles, steps, dilation, len)
-                    .with_context(|| format!("spirals of level {i}"))?;
+                    .map_err(|source| BuildError::Spirals { level: i, source })?;
             Ok(Level {
                 positions,
                 triangles,
@@ -143,41 +149,52 @@ pub fn build_with(mesh: &Mesh, config: &Config) -> Result<Hierarchy> {
                 spirals,
             })
         })
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>, BuildError>>()?;
     Ok(Hierarchy { levels, down, up })
 }
 
 /// Fan-triangulates `mesh` and checks that it is a manifold surface the hierarchy can be built
 /// on (see [`build`] for the conditions).
-pub fn checked_triangles(mesh: &Mesh) -> Result<Vec<[u32; 3]>> {
+pub fn checked_triangles(mesh: &Mesh) -> Result<Vec<[u32; 3]>, SurfaceError> {
     let n = mesh.positions.len();
-    ensure!(n > 0, "the mesh has no vertices");
-    ensure!(!mesh.polygons.is_empty(), "the mesh has no faces");
+    if n == 0 {
+        return Err(SurfaceError::NoVertices);
+    }
+    if mesh.polygons.is_empty() {
+        return Err(SurfaceError::NoFaces);
+    }
     let mut triangles = Vec::new();
     let mut owner = Vec::new();
     for (pi, poly) in mesh.polygons.iter().enumerate() {
-        ensure!(
-            poly.len() >= 3,
-            "face {pi} has {} corners (at least 3 needed)",
-            poly.len()
-        );
+        if poly.len() < 3 {
+            return Err(SurfaceError::Corners {
+                face: pi,
+                corners: poly.len(),
+            });
+        }
         for (k, &v) in poly.iter().enumerate() {
-            ensure!(
-                (v as usize) < n,
-                "face {pi} refers to vertex {v} but the mesh has {n} vertices"
-            );
+            if v as usize >= n {
+                return Err(SurfaceError::VertexIndex {
+                    face: pi,
+                    vertex: v,
+                    vertices: n,
+                });
+            }
             if poly[..k].contains(&v) {
-                bail!("face {pi} uses vertex {v} twice (degenerate face)");
+                return Err(SurfaceError::RepeatedVertex {
+                    face: pi,
+                    vertex: v,
+                });
             }
         }
         for k in 1..poly.len() - 1 {
             let t = [poly[0], poly[k], poly[k + 1]];
             let p = t.map(|v| to64(mesh.positions[v as usize]));
             if norm2(cross(sub(p[1], p[0]), sub(p[2], p[0]))) == 0.0 {
-                bail!(
-                    "face {pi} has zero area (vertices {:?}; degenerate face)",
-                    poly
-                );
+                return Err(SurfaceError::ZeroArea {
+                    face: pi,
+                    polygon: poly.clone(),
+                });
             }
             triangles.push(t);
             owner.push(pi);
@@ -197,18 +214,16 @@ pub fn checked_triangles(mesh: &Mesh) -> Result<Vec<[u32; 3]>> {
         let (a, b) = (group[0].0, group[0].1);
         if group.len() > 2 {
             let faces: Vec<usize> = group.iter().map(|e| owner[e.3]).collect();
-            bail!(
-                "edge ({a}, {b}) is shared by {} faces {faces:?} (non-manifold edge)",
-                group.len()
-            );
+            return Err(SurfaceError::NonManifoldEdge {
+                edge: (a, b),
+                faces,
+            });
         }
         if group.len() == 2 && group[0].2 == group[1].2 {
-            bail!(
-                "faces {} and {} use edge ({a}, {b}) in the same direction (inconsistent \
-                 orientation or a non-manifold fold)",
-                owner[group[0].3],
-                owner[group[1].3]
-            );
+            return Err(SurfaceError::Orientation {
+                faces: (owner[group[0].3], owner[group[1].3]),
+                edge: (a, b),
+            });
         }
     }
     let mut keys: Vec<([u32; 3], usize)> = triangles
@@ -223,24 +238,22 @@ pub fn checked_triangles(mesh: &Mesh) -> Result<Vec<[u32; 3]>> {
     keys.sort_unstable();
     for w in keys.windows(2) {
         if w[0].0 == w[1].0 {
-            bail!(
-                "faces {} and {} use the same vertices {:?} (duplicate face)",
-                owner[w[0].1],
-                owner[w[1].1],
-                w[0].0
-            );
+            return Err(SurfaceError::DuplicateFace {
+                faces: (owner[w[0].1], owner[w[1].1]),
+                vertices: w[0].0,
+            });
         }
     }
     let incident = incident_triangles(n, &triangles);
     for (v, faces) in incident.iter().enumerate() {
         if faces.is_empty() {
-            bail!("vertex {v} belongs to no face");
+            return Err(SurfaceError::IsolatedVertex { vertex: v });
         }
         if fan(v as u32, faces, &triangles).is_none() {
-            bail!(
-                "vertex {v} joins faces that do not form one fan (non-manifold vertex, faces {:?})",
-                faces.iter().map(|&t| owner[t as usize]).collect::<Vec<_>>()
-            );
+            return Err(SurfaceError::NonManifoldVertex {
+                vertex: v,
+                faces: faces.iter().map(|&t| owner[t as usize]).collect(),
+            });
         }
     }
     Ok(triangles)
@@ -428,7 +441,7 @@ pub fn write_sections(
     w: &mut SinewWriter,
     prefix: &str,
     which: Sections,
-) -> Result<()> {
+) -> Result<(), WriterError> {
     let all = which == Sections::All;
     let table: Vec<u32> = h
         .levels
@@ -470,14 +483,19 @@ pub fn write_sections(
 
 /// Reads the sections [`write_sections`] wrote under `prefix`, checking every shape and index
 /// with the core's own validation (`Csr::new`, `Spirals::new`).
-pub fn read_sections(f: &SinewFile<'_>, prefix: &str) -> Result<Hierarchy> {
-    let fmt = |e: sinew_core::FormatError, name: &str| anyhow::anyhow!("section {name}: {e}");
+pub fn read_sections(f: &SinewFile<'_>, prefix: &str) -> Result<Hierarchy, SectionError> {
+    let fmt = |source, name: &str| SectionError::Format {
+        name: name.to_owned(),
+        source,
+    };
     let name = format!("{prefix}.levels");
     let (dims, rank) = f.dims_of(&name).map_err(|e| fmt(e, &name))?;
-    ensure!(
-        rank == 2 && dims[1] == 2 && dims[0] >= 1,
-        "section {name}: shape must be [levels, 2]"
-    );
+    if !(rank == 2 && dims[1] == 2 && dims[0] >= 1) {
+        return Err(SectionError::Shape {
+            name,
+            rule: "shape must be [levels, 2]",
+        });
+    }
     let table: Vec<u32> = f
         .u32_tensor(&name, &dims[..2])
         .map_err(|e| fmt(e, &name))?
@@ -486,9 +504,10 @@ pub fn read_sections(f: &SinewFile<'_>, prefix: &str) -> Result<Hierarchy> {
     let mut levels = Vec::new();
     for (i, row) in table.chunks_exact(2).enumerate() {
         let (n, len) = (row[0], row[1]);
-        let rows = n
-            .checked_add(1)
-            .with_context(|| format!("section {prefix}.levels: level {i} is too large"))?;
+        let rows = n.checked_add(1).ok_or_else(|| SectionError::TooLarge {
+            name: format!("{prefix}.levels"),
+            level: i,
+        })?;
         let name = format!("{prefix}.h{i}.pos");
         let pos = f.f32_tensor(&name, &[n, 3]).map_err(|e| fmt(e, &name))?;
         let positions = pos
@@ -499,15 +518,16 @@ pub fn read_sections(f: &SinewFile<'_>, prefix: &str) -> Result<Hierarchy> {
             .collect();
         let name = format!("{prefix}.h{i}.tri");
         let (dims, rank) = f.dims_of(&name).map_err(|e| fmt(e, &name))?;
-        ensure!(
-            rank == 2 && dims[1] == 3,
-            "section {name}: shape must be [T, 3]"
-        );
+        if !(rank == 2 && dims[1] == 3) {
+            return Err(SectionError::Shape {
+                name,
+                rule: "shape must be [T, 3]",
+            });
+        }
         let tri = f.u32_tensor(&name, &dims[..2]).map_err(|e| fmt(e, &name))?;
-        ensure!(
-            tri.iter().all(|v| v < n),
-            "section {name}: vertex index out of range"
-        );
+        if !tri.iter().all(|v| v < n) {
+            return Err(SectionError::VertexIndex { name });
+        }
         let triangles = tri
             .iter()
             .collect::<Vec<_>>()
@@ -547,11 +567,25 @@ pub fn read_sections(f: &SinewFile<'_>, prefix: &str) -> Result<Hierarchy> {
     Ok(Hierarchy { levels, down, up })
 }
 
-fn read_sampling(f: &SinewFile<'_>, p: &str, rows: usize, cols: usize) -> Result<Sampling> {
-    let fmt = |e: sinew_core::FormatError, name: &str| anyhow::anyhow!("section {name}: {e}");
-    let vec_u32 = |name: &str| -> Result<sinew_core::tensor::U32s<'_>> {
+fn read_sampling(
+    f: &SinewFile<'_>,
+    p: &str,
+    rows: usize,
+    cols: usize,
+) -> Result<Sampling, SectionError> {
+    let fmt = |source, name: &str| SectionError::Format {
+        name: name.to_owned(),
+        source,
+    };
+    let vector = |name: &str| SectionError::Shape {
+        name: name.to_owned(),
+        rule: "must be a vector",
+    };
+    let vec_u32 = |name: &str| -> Result<sinew_core::tensor::U32s<'_>, SectionError> {
         let (dims, rank) = f.dims_of(name).map_err(|e| fmt(e, name))?;
-        ensure!(rank == 1, "section {name}: must be a vector");
+        if rank != 1 {
+            return Err(vector(name));
+        }
         f.u32_tensor(name, &dims[..1]).map_err(|e| fmt(e, name))
     };
     let (ptr_name, col_name, val_name) =
@@ -559,7 +593,9 @@ fn read_sampling(f: &SinewFile<'_>, p: &str, rows: usize, cols: usize) -> Result
     let ptr = vec_u32(&ptr_name)?;
     let col = vec_u32(&col_name)?;
     let (dims, rank) = f.dims_of(&val_name).map_err(|e| fmt(e, &val_name))?;
-    ensure!(rank == 1, "section {val_name}: must be a vector");
+    if rank != 1 {
+        return Err(vector(&val_name));
+    }
     let val = f
         .f32_tensor(&val_name, &dims[..1])
         .map_err(|e| fmt(e, &val_name))?;
@@ -575,7 +611,7 @@ fn read_sampling(f: &SinewFile<'_>, p: &str, rows: usize, cols: usize) -> Result
 
 /// The hierarchy as a stand-alone `.sinew` file (kind S2D decoder, hierarchy sections only,
 /// under prefix `s2d`), with the cache key and factors as metadata.
-pub fn to_bytes(h: &Hierarchy, key: u64, config: &Config) -> Result<Vec<u8>> {
+pub fn to_bytes(h: &Hierarchy, key: u64, config: &Config) -> Result<Vec<u8>, WriterError> {
     let list = |v: &[usize]| v.iter().map(usize::to_string).collect::<Vec<_>>().join(",");
     let mut w = SinewWriter::new(ArtifactKind::S2dDecoder);
     w.meta("tool", concat!("sinew ", env!("CARGO_PKG_VERSION")))
@@ -586,12 +622,12 @@ pub fn to_bytes(h: &Hierarchy, key: u64, config: &Config) -> Result<Vec<u8>> {
         w.meta("spiral_lengths", list(lens));
     }
     write_sections(h, &mut w, "s2d", Sections::All)?;
-    Ok(w.to_bytes()?)
+    w.to_bytes()
 }
 
 /// Reads a hierarchy file written by [`to_bytes`].
-pub fn from_bytes(bytes: &[u8]) -> Result<Hierarchy> {
-    let f = SinewFile::from_bytes(bytes).map_err(|e| anyhow::anyhow!("{e}"))?;
+pub fn from_bytes(bytes: &[u8]) -> Result<Hierarchy, SectionError> {
+    let f = SinewFile::from_bytes(bytes).map_err(SectionError::NotASinewFile)?;
     read_sections(&f, "s2d")
 }
 
@@ -641,7 +677,11 @@ pub fn cache_path(mesh: &Mesh, config: &Config, cache_dir: &Path) -> PathBuf {
 }
 
 /// [`cached_with`] with `factors` and spiral lengths from the statistics.
-pub fn cached(mesh: &Mesh, factors: &[usize], cache_dir: &Path) -> Result<Hierarchy> {
+pub fn cached(
+    mesh: &Mesh,
+    factors: &[usize],
+    cache_dir: &Path,
+) -> Result<Hierarchy, HierarchyError> {
     let config = Config {
         factors: factors.to_vec(),
         spiral_lengths: None,
@@ -653,7 +693,11 @@ pub fn cached(mesh: &Mesh, factors: &[usize], cache_dir: &Path) -> Result<Hierar
 /// exists and matches, else built and written there atomically (so training and playback build
 /// it once). An entry that cannot be read, or whose key or level-0 positions differ, is rebuilt
 /// and replaced.
-pub fn cached_with(mesh: &Mesh, config: &Config, cache_dir: &Path) -> Result<Hierarchy> {
+pub fn cached_with(
+    mesh: &Mesh,
+    config: &Config,
+    cache_dir: &Path,
+) -> Result<Hierarchy, HierarchyError> {
     let key = cache_key(mesh, config);
     let path = cache_path(mesh, config, cache_dir);
     if let Ok(bytes) = std::fs::read(&path)
@@ -677,11 +721,13 @@ pub fn s2d_hierarchy(
     template: &Path,
     out: &Path,
     config: &crate::s2d::hierarchy::Config,
-) -> Result<crate::s2d::Hierarchy> {
+) -> Result<crate::s2d::Hierarchy, HierarchyError> {
     use crate::s2d::hierarchy;
     let mesh = Mesh::read(template)?;
-    let h = hierarchy::build_with(&mesh, config)
-        .with_context(|| format!("{}: cannot build the S2D hierarchy", template.display()))?;
+    let h = hierarchy::build_with(&mesh, config).map_err(|source| HierarchyError::BuildFile {
+        path: template.to_owned(),
+        source,
+    })?;
     let key = hierarchy::cache_key(&mesh, config);
     crate::io::atomic::write(out, &hierarchy::to_bytes(&h, key, config)?)?;
     Ok(h)

@@ -3,7 +3,6 @@
 //! sample. The training loop is [`super::train`]; its checkpoints ([`super::checkpoint`]) record
 //! the configuration.
 
-use anyhow::{Result, ensure};
 use burn::optim::decay::WeightDecayConfig;
 use burn::optim::{AdamConfig, ModuleOptimizer};
 use burn::tensor::Tensor;
@@ -47,19 +46,44 @@ fn centred(points: &[[f32; 3]]) -> Vec<[f64; 3]> {
 
 /// The decoder's input, flattened `x1, y1, z1, x2, …`: with [`InputNormalisation::Frobenius`]
 /// `normalise(expressive) − normalise(neutral)` (S2D §3.2), with
+/// Landmarks that give no decoder input or no vertex weights.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LandmarkError {
+    /// A neutral and an expressive set of different sizes.
+    #[error("{neutral} neutral landmarks but {expressive} expressive ones")]
+    Counts {
+        /// The neutral's landmarks.
+        neutral: usize,
+        /// The expressive face's.
+        expressive: usize,
+    },
+    /// No landmark vertices.
+    #[error("no landmark vertices")]
+    Empty,
+    /// A landmark vertex past the template's last vertex.
+    #[error("landmark vertex {vertex} is outside the template ({vertices} vertices)")]
+    Outside {
+        /// The landmark's vertex.
+        vertex: u32,
+        /// The template's vertices.
+        vertices: usize,
+    },
+}
+
 /// [`InputNormalisation::NeutralScale`] `(centred(expressive) − centred(neutral)) /
 /// ‖centred(neutral)‖`. Computed in f64.
 pub fn landmark_input(
     normalisation: InputNormalisation,
     neutral: &[[f32; 3]],
     expressive: &[[f32; 3]],
-) -> Result<Vec<f32>> {
-    ensure!(
-        neutral.len() == expressive.len(),
-        "{} neutral landmarks but {} expressive ones",
-        neutral.len(),
-        expressive.len()
-    );
+) -> Result<Vec<f32>, LandmarkError> {
+    if neutral.len() != expressive.len() {
+        return Err(LandmarkError::Counts {
+            neutral: neutral.len(),
+            expressive: expressive.len(),
+        });
+    }
     if normalisation == InputNormalisation::NeutralScale {
         let (n, e) = (centred(neutral), centred(expressive));
         let norm = n.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
@@ -81,19 +105,25 @@ pub fn landmark_input(
 }
 
 /// Distance of every template vertex to its nearest landmark vertex.
-pub fn landmark_distances(template: &[[f32; 3]], landmarks: &[u32]) -> Result<Vec<f32>> {
-    ensure!(!landmarks.is_empty(), "no landmark vertices");
+pub fn landmark_distances(
+    template: &[[f32; 3]],
+    landmarks: &[u32],
+) -> Result<Vec<f32>, LandmarkError> {
+    if landmarks.is_empty() {
+        return Err(LandmarkError::Empty);
+    }
     let lm: Vec<[f32; 3]> = landmarks
         .iter()
         .map(|&i| {
-            template.get(i as usize).copied().ok_or_else(|| {
-                anyhow::anyhow!(
-                    "landmark vertex {i} is outside the template ({} vertices)",
-                    template.len()
-                )
-            })
+            template
+                .get(i as usize)
+                .copied()
+                .ok_or(LandmarkError::Outside {
+                    vertex: i,
+                    vertices: template.len(),
+                })
         })
-        .collect::<Result<_>>()?;
+        .collect::<Result<_, _>>()?;
     Ok(template
         .iter()
         .map(|p| {

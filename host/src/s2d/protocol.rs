@@ -2,7 +2,6 @@
 //! never seen in training) and expression-independent (test pairs combine only expression shapes
 //! that no training pair uses), each in [`FOLDS`] folds.
 
-use anyhow::{Result, ensure};
 use serde::{Deserialize, Serialize};
 
 use super::data::{Manifest, SHAPE_GROUPS};
@@ -53,20 +52,57 @@ fn identity_block(identities: usize, fold: usize) -> std::ops::Range<usize> {
     fold * identities / FOLDS..(fold + 1) * identities / FOLDS
 }
 
+/// A fold that the data set cannot give.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SplitError {
+    /// A fold past the last.
+    #[error("fold {fold}: the protocols have {FOLDS} folds")]
+    Fold {
+        /// The fold asked for.
+        fold: usize,
+    },
+    /// Fewer identities than folds.
+    #[error(
+        "the identity protocol needs at least {FOLDS} identities (one per fold); the data set \
+         has {identities}"
+    )]
+    Identities {
+        /// The data set's identities.
+        identities: usize,
+    },
+    /// Not one shape group per fold.
+    #[error("the expression protocol needs {FOLDS} shape groups; the data set has {groups}")]
+    ShapeGroups {
+        /// The data set's shape groups.
+        groups: usize,
+    },
+    /// A fold with no training or no test pairs.
+    #[error("{protocol} fold {fold}: {train} training and {test} test pairs; generate more pairs")]
+    Empty {
+        /// The protocol.
+        protocol: Protocol,
+        /// The fold.
+        fold: usize,
+        /// Its training pairs.
+        train: usize,
+        /// Its test pairs.
+        test: usize,
+    },
+}
+
 /// Fold `fold` of `protocol` on the data set of `m`.
-pub fn split(m: &Manifest, protocol: Protocol, fold: usize) -> Result<Split> {
-    ensure!(
-        fold < FOLDS,
-        "fold {fold}: the protocols have {FOLDS} folds"
-    );
+pub fn split(m: &Manifest, protocol: Protocol, fold: usize) -> Result<Split, SplitError> {
+    if fold >= FOLDS {
+        return Err(SplitError::Fold { fold });
+    }
     let (held_out, is_test): (Vec<String>, Box<dyn Fn(usize) -> bool>) = match protocol {
         Protocol::Identity => {
-            ensure!(
-                m.identities.len() >= FOLDS,
-                "the identity protocol needs at least {FOLDS} identities (one per fold); the \
-                 data set has {}",
-                m.identities.len()
-            );
+            if m.identities.len() < FOLDS {
+                return Err(SplitError::Identities {
+                    identities: m.identities.len(),
+                });
+            }
             let block = identity_block(m.identities.len(), fold);
             (
                 block.clone().map(|i| i.to_string()).collect(),
@@ -74,11 +110,11 @@ pub fn split(m: &Manifest, protocol: Protocol, fold: usize) -> Result<Split> {
             )
         }
         Protocol::Expression => {
-            ensure!(
-                m.shape_groups.len() == FOLDS,
-                "the expression protocol needs {FOLDS} shape groups; the data set has {}",
-                m.shape_groups.len()
-            );
+            if m.shape_groups.len() != FOLDS {
+                return Err(SplitError::ShapeGroups {
+                    groups: m.shape_groups.len(),
+                });
+            }
             (
                 m.shape_groups[fold].clone(),
                 Box::new(move |p| m.pairs[p].group == fold),
@@ -86,12 +122,14 @@ pub fn split(m: &Manifest, protocol: Protocol, fold: usize) -> Result<Split> {
         }
     };
     let (test, train): (Vec<usize>, Vec<usize>) = (0..m.pairs.len()).partition(|&p| is_test(p));
-    ensure!(
-        !train.is_empty() && !test.is_empty(),
-        "{protocol} fold {fold}: {} training and {} test pairs; generate more pairs",
-        train.len(),
-        test.len()
-    );
+    if train.is_empty() || test.is_empty() {
+        return Err(SplitError::Empty {
+            protocol,
+            fold,
+            train: train.len(),
+            test: test.len(),
+        });
+    }
     Ok(Split {
         protocol,
         fold,
@@ -204,18 +242,19 @@ mod tests {
     #[test]
     fn impossible_splits_are_refused() {
         let m = manifest(3, 40);
-        let e = split(&m, Protocol::Identity, 0).unwrap_err().to_string();
-        assert!(e.contains("at least 4 identities"), "{e}");
-        assert!(split(&m, Protocol::Expression, 4).is_err());
+        let e = split(&m, Protocol::Identity, 0).unwrap_err();
+        assert_eq!(e, SplitError::Identities { identities: 3 });
+        assert_eq!(
+            split(&m, Protocol::Expression, 4).unwrap_err(),
+            SplitError::Fold { fold: 4 }
+        );
         // 8 pairs cover only groups 0 and 1: folds 2 and 3 have no test pairs.
         let m = manifest(4, 8);
         assert!(split(&m, Protocol::Expression, 1).is_ok());
-        let e = split(&m, Protocol::Expression, 2).unwrap_err().to_string();
-        assert!(e.contains("0 test pairs"), "{e}");
+        let e = split(&m, Protocol::Expression, 2).unwrap_err();
+        assert!(matches!(e, SplitError::Empty { test: 0, .. }), "{e:?}");
         // 4 pairs are all in group 0: holding it out leaves nothing to train on.
-        let e = split(&manifest(4, 4), Protocol::Expression, 0)
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("0 training"), "{e}");
+        let e = split(&manifest(4, 4), Protocol::Expression, 0).unwrap_err();
+        assert!(matches!(e, SplitError::Empty { train: 0, .. }), "{e:?}");
     }
 }

@@ -24,9 +24,15 @@
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
-use anyhow::{Result, bail};
-
 use crate::geometry::topology::{fan, incident_triangles};
+
+/// A vertex whose triangles do not form one fan (a non-manifold vertex): it has no spiral.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("vertex {vertex}: its triangles do not form one fan (non-manifold vertex)")]
+pub struct NonManifoldVertex {
+    /// The vertex.
+    pub vertex: usize,
+}
 
 /// The spiral lengths of the authors' reference configuration on FLAME, levels 0 to 4
 /// (`shared/notes/s2d-reference.md`). Sinew's statistics give `[15, 13, 9, 9, 7]` on its own
@@ -49,14 +55,14 @@ pub fn natural(
     positions: &[[f32; 3]],
     triangles: &[[u32; 3]],
     steps: usize,
-) -> Result<Vec<Vec<u32>>> {
+) -> Result<Vec<Vec<u32>>, NonManifoldVertex> {
     let n = positions.len();
     let incident = incident_triangles(n, triangles);
     let mut rings = Vec::with_capacity(n);
     for (v, faces) in incident.iter().enumerate() {
         match fan(v as u32, faces, triangles) {
             Some(order) => rings.push(order),
-            None => bail!("vertex {v}: its triangles do not form one fan (non-manifold vertex)"),
+            None => return Err(NonManifoldVertex { vertex: v }),
         }
     }
     let first = first_neighbours(positions, &rings);
@@ -204,7 +210,7 @@ pub fn build(
     steps: usize,
     dilation: usize,
     fixed_len: Option<usize>,
-) -> Result<(usize, Vec<u32>)> {
+) -> Result<(usize, Vec<u32>), NonManifoldVertex> {
     let n = positions.len();
     let spirals: Vec<Vec<u32>> = natural(positions, triangles, steps)?
         .iter()

@@ -15,8 +15,6 @@
 //! is its own inverse. Polygons need not mirror onto polygons: mirroring moves per-vertex data
 //! only, and ICT's triangulated quads split their mirrored twins along the other diagonal.
 
-use anyhow::{Result, bail, ensure};
-
 use crate::geometry::spatial::Grid;
 use crate::io::mesh::Mesh;
 
@@ -30,6 +28,51 @@ pub const TOLERANCE: f64 = 1e-3;
 /// deltas and 5.8 % on those transferred to an identity, and the next-nearest shape lies at least
 /// 30 % away (`tests::ict_face_region_is_symmetric_and_its_sided_shapes_pair_up`).
 pub const PARTNER_RESIDUAL: f64 = 0.25;
+
+/// A template that has no left–right symmetry.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SymmetryError {
+    /// A template without vertices.
+    #[error("the template has no vertices")]
+    Empty,
+    /// A template whose vertices all lie at one point.
+    #[error("the template's vertices all lie at one point")]
+    Point,
+    /// A vertex with no vertex at its mirror image.
+    #[error(
+        "the template is not left-right symmetric about x = {centre}: no vertex lies within \
+         {tolerance:.3e} of vertex {vertex}'s mirror image ({:.4}, {:.4}, {:.4})",
+        image[0],
+        image[1],
+        image[2]
+    )]
+    NoImage {
+        /// The mirror plane's x.
+        centre: f32,
+        /// The distance within which an image must lie.
+        tolerance: f64,
+        /// The vertex.
+        vertex: usize,
+        /// Its mirror image.
+        image: [f64; 3],
+    },
+    /// Two vertices with one image: the map is not an involution.
+    #[error(
+        "the template is not left-right symmetric about x = {centre}: vertex {vertex}'s image \
+         is vertex {image}, whose image is vertex {back}"
+    )]
+    NotInvolution {
+        /// The mirror plane's x.
+        centre: f32,
+        /// The vertex.
+        vertex: usize,
+        /// Its image.
+        image: u32,
+        /// The image's image.
+        back: usize,
+    },
+}
 
 /// The left–right symmetry of a template.
 #[derive(Clone, Debug, PartialEq)]
@@ -46,20 +89,21 @@ impl Mirror {
     /// # Errors
     /// If the template is empty, or not mirror-symmetric (a vertex without a vertex at its
     /// image, or two vertices with one image), naming the first offending vertex.
-    pub fn of(template: &Mesh) -> Result<Self> {
+    pub fn of(template: &Mesh) -> Result<Self, SymmetryError> {
         let points: Vec<[f64; 3]> = template
             .positions
             .iter()
             .map(|p| p.map(f64::from))
             .collect();
-        ensure!(!points.is_empty(), "the template has no vertices");
+        if points.is_empty() {
+            return Err(SymmetryError::Empty);
+        }
         let (lo, hi) = template.bounds();
         let (lo, hi) = (lo.map(f64::from), hi.map(f64::from));
         let diagonal = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
-        ensure!(
-            diagonal > 0.0,
-            "the template's vertices all lie at one point"
-        );
+        if diagonal.is_nan() || diagonal <= 0.0 {
+            return Err(SymmetryError::Point);
+        }
         let centre = (0.5 * (lo[0] + hi[0])) as f32;
         let tolerance = TOLERANCE * diagonal;
         let grid = Grid::new(&points, tolerance);
@@ -69,22 +113,26 @@ impl Mirror {
             let image = [2.0 * c - p[0], p[1], p[2]];
             match grid.nearest_where(&points, image, |_| true) {
                 Some((j, d)) if d <= tolerance => map.push(j as u32),
-                _ => bail!(
-                    "the template is not left-right symmetric about x = {centre}: no vertex lies \
-                     within {tolerance:.3e} of vertex {i}'s mirror image ({:.4}, {:.4}, {:.4})",
-                    image[0],
-                    image[1],
-                    image[2]
-                ),
+                _ => {
+                    return Err(SymmetryError::NoImage {
+                        centre,
+                        tolerance,
+                        vertex: i,
+                        image,
+                    });
+                }
             }
         }
         for (i, &j) in map.iter().enumerate() {
             let back = map[j as usize] as usize;
-            ensure!(
-                back == i,
-                "the template is not left-right symmetric about x = {centre}: vertex {i}'s \
-                 image is vertex {j}, whose image is vertex {back}"
-            );
+            if back != i {
+                return Err(SymmetryError::NotInvolution {
+                    centre,
+                    vertex: i,
+                    image: j,
+                    back,
+                });
+            }
         }
         Ok(Self { map, centre })
     }
@@ -229,22 +277,22 @@ mod tests {
     fn asymmetric_templates_are_refused() {
         let mut bent = strip();
         bent.positions[0][1] += 0.3;
-        let e = Mirror::of(&bent).unwrap_err().to_string();
+        let e = Mirror::of(&bent).unwrap_err();
         assert!(
-            e.contains("not left-right symmetric") && e.contains("vertex 0"),
-            "{e}"
+            matches!(e, SymmetryError::NoImage { vertex: 0, .. }),
+            "{e:?}"
         );
         // Vertex 1 moved onto vertex 0's mirror image: vertices 0 and 1 both map to vertex 2,
         // and vertex 2's image is vertex 0.
         let mut crowded = strip();
         crowded.positions[1] = [2.0, 0.0, 0.1];
-        let e = Mirror::of(&crowded).unwrap_err().to_string();
-        assert!(e.contains("whose image is"), "{e}");
+        let e = Mirror::of(&crowded).unwrap_err();
+        assert!(matches!(e, SymmetryError::NotInvolution { .. }), "{e:?}");
         let empty = Mesh {
             positions: Vec::new(),
             ..strip()
         };
-        assert!(Mirror::of(&empty).is_err());
+        assert_eq!(Mirror::of(&empty), Err(SymmetryError::Empty));
     }
 
     #[test]

@@ -7,7 +7,6 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail, ensure};
 use burn::module::{Module, ModuleMapper, ModuleVisitor, Param};
 use burn::optim::{GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Tensor, TensorData};
@@ -16,6 +15,9 @@ use super::checkpoint::{
     CheckpointState, DataFingerprint, STATE_FILE, load_checkpoint, save_checkpoint,
 };
 use super::decoder::S2dDecoder;
+
+mod error;
+pub use error::TrainError;
 
 pub use super::objective::{
     LossVariant, Sample, TrainConfig, landmark_distances, landmark_input, loss,
@@ -70,13 +72,12 @@ pub struct Halves {
 
 impl Halves {
     /// Two pools of one thread each.
-    pub fn new() -> Result<Self> {
+    pub fn new() -> Result<Self, rayon::ThreadPoolBuildError> {
         let pool = |i: usize| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(1)
                 .thread_name(move |_| format!("s2d-half-{i}"))
                 .build()
-                .context("cannot start a training thread")
         };
         Ok(Self {
             pools: [pool(0)?, pool(1)?],
@@ -238,24 +239,28 @@ pub fn train(
     config: &TrainConfig,
     device: &Device,
     options: &TrainOptions,
-) -> Result<Trained> {
+) -> Result<Trained, TrainError> {
     config.validate()?;
-    ensure!(!set.is_empty(), "no training samples");
+    if set.is_empty() {
+        return Err(TrainError::NoSamples);
+    }
     let v = decoder.output_vertices();
-    ensure!(
-        vertex_weights.len() == v,
-        "{} vertex weights for {v} vertices",
-        vertex_weights.len()
-    );
+    if vertex_weights.len() != v {
+        return Err(TrainError::VertexWeights {
+            found: vertex_weights.len(),
+            vertices: v,
+        });
+    }
     for (i, s) in set.iter().enumerate() {
-        ensure!(
-            s.input.len() == decoder.config.inputs && s.displacement.len() == 3 * v,
-            "sample {i}: input {} (expected {}), displacement {} (expected {})",
-            s.input.len(),
-            decoder.config.inputs,
-            s.displacement.len(),
-            3 * v
-        );
+        if s.input.len() != decoder.config.inputs || s.displacement.len() != 3 * v {
+            return Err(TrainError::Sample {
+                index: i,
+                input: s.input.len(),
+                expected_input: decoder.config.inputs,
+                displacement: s.displacement.len(),
+                expected_displacement: 3 * v,
+            });
+        }
     }
     let batches = set.len().div_ceil(config.batch);
     let mut state = CheckpointState::start(
@@ -271,24 +276,27 @@ pub fn train(
     let dir = options.checkpoint_dir.as_deref();
     if options.resume {
         let Some(dir) = dir else {
-            bail!("resuming needs a checkpoint folder");
+            return Err(TrainError::ResumeWithoutFolder);
         };
         let (d, o, s) = load_checkpoint(dir, decoder, optim, &state)?;
-        let path = dir.join(STATE_FILE);
-        ensure!(
-            s.steps_in_epoch < batches
-                && s.steps_done == s.epochs_done * batches + s.steps_in_epoch,
-            "{}: step {} of epoch {} (step {} in all) does not fit {batches} batches an epoch",
-            path.display(),
-            s.steps_in_epoch,
-            s.epochs_done,
-            s.steps_done
-        );
+        if !(s.steps_in_epoch < batches
+            && s.steps_done == s.epochs_done * batches + s.steps_in_epoch)
+        {
+            return Err(TrainError::Position {
+                path: dir.join(STATE_FILE),
+                step: s.steps_in_epoch,
+                epoch: s.epochs_done,
+                steps_done: s.steps_done,
+                batches,
+            });
+        }
         (decoder, optim, state) = (d, o, s);
         saved = Some(state.steps_done);
     } else if let Some(dir) = dir {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create checkpoint folder", dir.display()))?;
+        std::fs::create_dir_all(dir).map_err(|source| TrainError::CreateFolder {
+            path: dir.to_owned(),
+            source,
+        })?;
     }
     if dir.is_some() {
         crate::training::interrupt::watch_ctrl_c();
@@ -297,7 +305,7 @@ pub fn train(
     let weights = weights_tensor(vertex_weights, device);
     // On the CPU every batch trains as two halves at once (`step_once`).
     let halves = if crate::training::backend::on_flex(&weights) {
-        Some(Halves::new()?)
+        Some(Halves::new().map_err(TrainError::Threads)?)
     } else {
         None
     };
@@ -329,7 +337,7 @@ pub fn train(
             );
             let value = crate::training::nn::to_vec(l)[0];
             if !value.is_finite() {
-                bail!("training diverged in epoch {epoch} (loss {value})");
+                return Err(TrainError::Diverged { epoch, loss: value });
             }
             state.epoch_loss_total += f64::from(value) * chunk.len() as f64;
             state.steps_in_epoch += 1;
@@ -354,16 +362,16 @@ pub fn train(
                     state.epochs_done, state.steps_in_epoch, state.steps_done
                 );
                 let Some(dir) = dir else {
-                    bail!("interrupted at {at}");
+                    return Err(TrainError::Interrupted { at });
                 };
                 if saved != Some(state.steps_done) {
                     state.seconds = seconds_before + start.elapsed().as_secs_f64();
                     save_checkpoint(dir, &decoder, &optim, &mut state)?;
                 }
-                bail!(
-                    "interrupted at {at}; checkpoint saved in {} (continue with --resume)",
-                    dir.display()
-                );
+                return Err(TrainError::InterruptedSaved {
+                    at,
+                    dir: dir.to_owned(),
+                });
             }
         }
     }
@@ -407,7 +415,13 @@ mod tests {
         let d = landmark_input(Frobenius, &neutral, &open).unwrap();
         assert_eq!(d.len(), 9);
         assert!(d.iter().any(|v| v.abs() > 0.05));
-        assert!(landmark_input(Frobenius, &neutral, &open[..2]).is_err());
+        assert_eq!(
+            landmark_input(Frobenius, &neutral, &open[..2]),
+            Err(crate::s2d::objective::LandmarkError::Counts {
+                neutral: 3,
+                expressive: 2
+            })
+        );
     }
 
     #[test]
@@ -463,7 +477,10 @@ mod tests {
             InputNormalisation::from_code(Frobenius.code()).unwrap(),
             Frobenius
         );
-        assert!(InputNormalisation::from_code(0).is_err());
+        assert_eq!(
+            InputNormalisation::from_code(0),
+            Err(crate::s2d::decoder::DecoderError::UnknownInputCode(0))
+        );
     }
 
     #[test]
@@ -483,7 +500,10 @@ mod tests {
         let w = vertex_weights(LossVariant::Paper, &d);
         let expected = [1.0, 1.0, 1.0 / 3.0, 0.0];
         assert!(w.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-6));
-        assert!(landmark_distances(&tpl, &[4]).is_err());
+        assert!(matches!(
+            landmark_distances(&tpl, &[4]),
+            Err(crate::s2d::objective::LandmarkError::Outside { vertex: 4, .. })
+        ));
         assert_eq!(vertex_weights(LossVariant::Code, &[2.0, 2.0]), [1.0, 1.0]);
         assert_eq!(vertex_weights(LossVariant::Paper, &[2.0, 2.0]), [1.0, 1.0]);
     }
@@ -644,6 +664,59 @@ mod tests {
         assert!(
             losses[59] < 0.5 * losses[0],
             "loss did not fall: {losses:?}"
+        );
+    }
+
+    #[test]
+    fn bad_runs_are_refused_by_variant() {
+        let device = crate::training::backend::Backend::Flex
+            .autodiff_device(6)
+            .unwrap();
+        let h = synthetic::hierarchy(&[40, 15, 6], &[6, 5, 4], 3);
+        let decoder = S2dDecoder::new(&synthetic::small_config(), &h, &device).unwrap();
+        let set = vec![Sample {
+            input: vec![0.0; 6],
+            displacement: vec![0.0; 120],
+        }];
+        let weights = vec![1.0; 40];
+        let tc = TrainConfig {
+            epochs: 1,
+            batch: 1,
+            ..TrainConfig::default()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let resume = |dir: Option<PathBuf>| TrainOptions {
+            checkpoint_dir: dir,
+            resume: true,
+            stop_after: None,
+            context: BTreeMap::new(),
+        };
+        // Resuming from an empty folder: its missing state file is named.
+        let e = train(
+            decoder.clone(),
+            &set,
+            &weights,
+            &tc,
+            &device,
+            &resume(Some(dir.path().to_owned())),
+        )
+        .unwrap_err();
+        assert!(
+            matches!(&e, TrainError::Checkpoint(_)) && e.to_string().contains(STATE_FILE),
+            "{e:?}"
+        );
+        let e = train(decoder.clone(), &set, &weights, &tc, &device, &resume(None)).unwrap_err();
+        assert!(matches!(e, TrainError::ResumeWithoutFolder), "{e:?}");
+        let e = train(decoder, &set, &weights[1..], &tc, &device, &resume(None)).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                TrainError::VertexWeights {
+                    found: 39,
+                    vertices: 40
+                }
+            ),
+            "{e:?}"
         );
     }
 }

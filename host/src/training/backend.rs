@@ -1,8 +1,22 @@
 //! Which burn backend trains and evaluates. burn 0.22 picks the backend at run time through the
 //! device; this enum is the command line's choice, with the cargo features that enable each.
 
-use anyhow::{Result, bail};
 use burn::tensor::Device;
+
+/// A backend that cannot run in this build.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum BackendError {
+    /// The backend's cargo feature was not enabled when the binary was built.
+    #[error(
+        "backend {backend:?} is not built in: rebuild with `--features {}`",
+        format!("{backend:?}").to_lowercase()
+    )]
+    NotBuiltIn {
+        /// The backend asked for.
+        backend: Backend,
+    },
+}
 
 /// A burn backend the host can run on.
 #[derive(
@@ -31,7 +45,7 @@ pub enum Backend {
 
 impl Backend {
     /// The device for inference (no autodiff), seeded.
-    pub fn device(self, seed: u64) -> Result<Device> {
+    pub fn device(self, seed: u64) -> Result<Device, BackendError> {
         let device = match self {
             Self::Flex => Device::flex(),
             #[cfg(feature = "ndarray")]
@@ -44,17 +58,14 @@ impl Backend {
             #[cfg(feature = "cuda")]
             Self::Cuda => Device::cuda(0usize),
             #[allow(unreachable_patterns)]
-            other => bail!(
-                "backend {other:?} is not built in: rebuild with `--features {}`",
-                format!("{other:?}").to_lowercase()
-            ),
+            backend => return Err(BackendError::NotBuiltIn { backend }),
         };
         device.seed(seed);
         Ok(device)
     }
 
     /// The device for training (autodiff enabled), seeded.
-    pub fn autodiff_device(self, seed: u64) -> Result<Device> {
+    pub fn autodiff_device(self, seed: u64) -> Result<Device, BackendError> {
         let device = self.device(seed)?.autodiff();
         device.seed(seed);
         Ok(device)
@@ -71,5 +82,28 @@ pub fn on_flex<const D: usize>(x: &burn::tensor::Tensor<D>) -> bool {
         DispatchTensorKind::Autodiff(inner) => matches!(**inner, DispatchTensorKind::Flex(_)),
         #[allow(unreachable_patterns)]
         _ => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flex_is_always_built_in() {
+        assert!(Backend::Flex.device(0).is_ok());
+        assert!(Backend::Flex.autodiff_device(0).is_ok());
+    }
+
+    #[cfg(not(feature = "cuda"))]
+    #[test]
+    fn a_backend_left_out_of_the_build_is_refused_by_name() {
+        let err = Backend::Cuda.autodiff_device(0).unwrap_err();
+        assert!(matches!(
+            err,
+            BackendError::NotBuiltIn {
+                backend: Backend::Cuda
+            }
+        ));
     }
 }

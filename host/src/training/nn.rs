@@ -3,7 +3,6 @@
 //! `sinew_core::network::load_mlp` and `sinew_core::spiral` read, so the host trains and the core
 //! plays back the same weights.
 
-use anyhow::Result;
 use burn::module::{Module, Param};
 use burn::nn::{Linear, LinearConfig};
 use burn::tensor::activation::{elu, gelu, leaky_relu, relu};
@@ -296,7 +295,7 @@ impl SpiralConv {
 
     /// Writes the layer as sections `prefix.idx` (`u32 [vertices, len]`), `prefix.w`
     /// (`f32 [out, len·in]`) and `prefix.b` (`f32 [out]`).
-    pub fn export(&self, w: &mut SinewWriter, prefix: &str) -> Result<()> {
+    pub fn export(&self, w: &mut SinewWriter, prefix: &str) -> Result<(), WriterError> {
         let idx: Vec<u32> = self
             .spirals
             .clone()

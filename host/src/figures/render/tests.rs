@@ -142,7 +142,7 @@ fn sphere_fills_a_disc_and_is_shaded() {
             },
         );
         Image::hstack(&[a, b])
-            .write_png(&dir.join("sphere.png"))
+            .save_png(&dir.join("sphere.png"))
             .unwrap();
     }
 }
@@ -223,7 +223,7 @@ fn png_round_trip() {
     img.fill_rect(2, 1, 3, 2, [9, 99, 199]);
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("a/b.png");
-    img.write_png(&path).unwrap();
+    img.save_png(&path).unwrap();
     let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
     let mut reader = dec.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];

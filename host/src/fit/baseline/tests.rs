@@ -83,9 +83,33 @@ fn a_non_finite_target_is_an_error_naming_the_frame() {
     };
     perf.frames[0][10][1] = f32::NAN;
     let e = fit_performance(&Gbs::new(basis), &perf).unwrap_err();
-    let e = format!("{e:#}");
     assert!(
-        e.contains("frame_00000.obj") && e.contains("non-finite"),
-        "{e}"
+        matches!(&e, BaselineError::Frame { path, source: NoRigidAlignment }
+            if path.ends_with("frame_00000.obj")),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn an_actor_whose_shapes_do_not_start_with_the_neutral_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut w = crate::io::container::SinewWriter::new(sinew_core::format::ArtifactKind::AimActor);
+    w.u32s("tpl.tri", &[1, 3], &[0, 1, 2]).unwrap();
+    w.meta("shapes", "jawOpen,neutral");
+    let path = dir.path().join("actor.sinew");
+    w.write(&path).unwrap();
+    let written = std::fs::read(&path).unwrap();
+    let e = actor_shape_names(&path, &written).unwrap_err();
+    assert!(
+        matches!(&e, BaselineError::ShapesMetadata { path: p, first: Some(first) }
+            if *p == path && first == "jawOpen"),
+        "{e:?}"
+    );
+    let damaged = dir.path().join("damaged.sinew");
+    std::fs::write(&damaged, &written[..written.len() / 2]).unwrap();
+    let e = actor_shape_names(&damaged, &std::fs::read(&damaged).unwrap()).unwrap_err();
+    assert!(
+        matches!(&e, BaselineError::NotASinewFile { path, .. } if *path == damaged),
+        "{e:?}"
     );
 }

@@ -99,6 +99,11 @@ fn the_classifier_learns_two_toy_classes() {
     assert_eq!(features.len(), 10);
     assert!(features.iter().all(|f| f.len() == 8));
     // Bad input is refused.
-    assert!(train(&seqs, &labels[..3], 2, &config, &device, &mut |_, _| {}).is_err());
-    assert!(train(&seqs, &[2; 24], 2, &config, &device, &mut |_, _| {}).is_err());
+    let refused = |labels: &[usize]| {
+        train(&seqs, labels, 2, &config, &device, &mut |_, _| {})
+            .map(|_| ())
+            .unwrap_err()
+    };
+    assert_eq!(refused(&labels[..3]), TrainingSetError::NoSequences);
+    assert_eq!(refused(&[2; 24]), TrainingSetError::LabelOutOfRange);
 }

@@ -227,7 +227,10 @@ fn the_baked_generator_is_a_motion_generator_the_core_reads() {
     }
     assert!((per_label[5] - (sum / 6.0) as f32).abs() < 1e-6);
     assert!((mean - per_label.iter().sum::<f32>() / 12.0).abs() < 1e-5);
-    assert!(crate::motion::diversity::diversity(&core, 1).is_err());
+    assert_eq!(
+        crate::motion::diversity::diversity(&core, 1),
+        Err(crate::motion::diversity::DiversityError::TooFewSeeds)
+    );
 }
 
 #[test]

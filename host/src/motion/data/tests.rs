@@ -207,3 +207,16 @@ fn real_motions_are_consistent_round_trip_and_separate_the_classes() {
     eprintln!("mean geodesic distance within a class {within:.3}, across classes {across:.3}");
     assert!(within < 0.7 * across, "within {within}, across {across}");
 }
+
+#[test]
+fn a_missing_kit_folder_is_refused_by_variant() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = MotionsConfig {
+        identities: 1,
+        per_class: 2,
+        ..MotionsConfig::default()
+    };
+    let e = generate_to(&dir.path().join("no-kit"), &dir.path().join("out"), &config).unwrap_err();
+    assert!(matches!(e, MotionDataError::Kit(_)), "{e:?}");
+    assert!(e.to_string().contains("no-kit"), "{e}");
+}

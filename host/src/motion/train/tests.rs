@@ -157,3 +157,20 @@ fn each_label_keeps_its_training_curves_length() {
         .fold((f32::MAX, 0.0f32), |(lo, hi), &m| (lo.min(m), hi.max(m)));
     assert!(hi > 2.0 * lo, "{means:?}");
 }
+
+#[test]
+fn motions_without_a_tangent_space_are_refused_by_variant() {
+    assert_eq!(
+        TangentData::from_motions(&[], Vec::new()),
+        Err(TangentError::NoMotions)
+    );
+    let q = vec![1.0f32; FRAMES * 3];
+    assert_eq!(
+        TangentData::from_motions(&[q.clone(), q[..FRAMES].to_vec()], vec![0, 1]),
+        Err(TangentError::Shapes)
+    );
+    assert_eq!(
+        TangentData::from_motions(&[vec![0.0; FRAMES * 3]], vec![0]),
+        Err(TangentError::ZeroMean)
+    );
+}

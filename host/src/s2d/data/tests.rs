@@ -247,3 +247,17 @@ fn bad_config_is_refused() {
     };
     assert_eq!(c.validate(), Err(InvalidPairsConfig::MaxShapes));
 }
+
+#[test]
+fn a_missing_kit_folder_is_refused_by_variant() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = generate_to(
+        &dir.path().join("no-kit"),
+        &dir.path().join("out"),
+        &small(),
+        None,
+    )
+    .unwrap_err();
+    assert!(matches!(e, PairsError::Kit(_)), "{e:?}");
+    assert!(e.to_string().contains("no-kit"), "{e}");
+}

@@ -134,16 +134,16 @@ fn flame_hierarchy() {
     let lens: Vec<usize> = hp.levels.iter().map(|l| l.spiral_len).collect();
     assert_eq!(lens, spirals::REFERENCE_FLAME_LENGTHS);
     assert_eq!(hp.up, h.up);
-    assert!(
+    assert!(matches!(
         build_with(
             &mesh,
             &Config {
                 spiral_lengths: Some(vec![9; 4]),
                 ..pinned
             }
-        )
-        .is_err()
-    );
+        ),
+        Err(BuildError::SpiralLengths { levels: 5, .. })
+    ));
 }
 
 /// Spiral lengths Sinew's construction gives on FLAME (reference: `[15, 14, 9, 9, 7]`).
@@ -256,25 +256,42 @@ fn sections_round_trip_and_bad_ones_are_named() {
     let rewrite = |h: &Hierarchy| {
         let mut w = SinewWriter::new(ArtifactKind::S2dDecoder);
         write_sections(h, &mut w, "s2d", Sections::All).unwrap();
-        format!("{:#}", from_bytes(&w.to_bytes().unwrap()).unwrap_err())
+        from_bytes(&w.to_bytes().unwrap()).unwrap_err()
     };
     let mut bad = h.clone();
     bad.levels[1].spirals[0] = 1000;
     let e = rewrite(&bad);
-    assert!(e.contains("s2d.h1.spiral"), "{e}");
+    assert!(
+        matches!(&e, SectionError::Format { name, .. } if name == "s2d.h1.spiral"),
+        "{e:?}"
+    );
     let mut bad = h.clone();
     bad.up[0].col_idx[0] = 1000;
     let e = rewrite(&bad);
-    assert!(e.contains("s2d.u0"), "{e}");
+    assert!(
+        matches!(&e, SectionError::Format { name, .. } if name == "s2d.u0"),
+        "{e:?}"
+    );
     let mut bad = h.clone();
     bad.levels[0].triangles[0][0] = 1000;
     let e = rewrite(&bad);
-    assert!(e.contains("s2d.h0.tri"), "{e}");
+    assert!(
+        matches!(&e, SectionError::VertexIndex { name } if name == "s2d.h0.tri"),
+        "{e:?}"
+    );
+    let damaged = to_bytes(&h, 7, &config).unwrap();
+    assert!(matches!(
+        from_bytes(&damaged[..damaged.len() / 2]),
+        Err(SectionError::NotASinewFile(_))
+    ));
 }
 
 #[test]
 fn rejects_bad_meshes_naming_the_culprit() {
-    let err = |m: &Mesh| format!("{:#}", build(m, &DEFAULT_FACTORS).unwrap_err());
+    let err = |m: &Mesh| match build(m, &DEFAULT_FACTORS) {
+        Err(BuildError::Surface(e)) => e,
+        other => panic!("{other:?}"),
+    };
     let p = vec![
         [0.0, 0.0, 0.0],
         [1.0, 0.0, 0.0],
@@ -282,27 +299,40 @@ fn rejects_bad_meshes_naming_the_culprit() {
         [0.0, -1.0, 0.0],
         [0.0, 0.0, 1.0],
     ];
-    assert!(err(&Mesh::default()).contains("no vertices"));
-    assert!(err(&tri_mesh(p.clone(), &[])).contains("no faces"));
+    assert_eq!(err(&Mesh::default()), SurfaceError::NoVertices);
+    assert_eq!(err(&tri_mesh(p.clone(), &[])), SurfaceError::NoFaces);
     // Three triangles on edge (0, 1).
     let e = err(&tri_mesh(p.clone(), &[&[0, 1, 2], &[1, 0, 3], &[0, 1, 4]]));
     assert!(
-        e.contains("edge (0, 1)") && e.contains("non-manifold"),
-        "{e}"
+        matches!(&e, SurfaceError::NonManifoldEdge { edge: (0, 1), faces } if faces.len() == 3),
+        "{e:?}"
     );
     let e = err(&tri_mesh(p.clone(), &[&[0, 1, 2], &[0, 1, 3]]));
-    assert!(e.contains("same direction"), "{e}");
+    assert_eq!(
+        e,
+        SurfaceError::Orientation {
+            faces: (0, 1),
+            edge: (0, 1)
+        }
+    );
     let e = err(&tri_mesh(p.clone(), &[&[0, 1, 2], &[0, 1, 1]]));
-    assert!(e.contains("face 1") && e.contains("twice"), "{e}");
+    assert_eq!(e, SurfaceError::RepeatedVertex { face: 1, vertex: 1 });
     let e = err(&tri_mesh(p.clone(), &[&[0, 1, 2], &[0, 2, 7]]));
-    assert!(e.contains("face 1") && e.contains("vertex 7"), "{e}");
+    assert_eq!(
+        e,
+        SurfaceError::VertexIndex {
+            face: 1,
+            vertex: 7,
+            vertices: 5
+        }
+    );
     // Vertex 3 lies on the line through 0 and 1.
     let mut q = p.clone();
     q[3] = [2.0, 0.0, 0.0];
     let e = err(&tri_mesh(q, &[&[0, 2, 1], &[0, 1, 3]]));
-    assert!(e.contains("face 1") && e.contains("zero area"), "{e}");
+    assert!(matches!(e, SurfaceError::ZeroArea { face: 1, .. }), "{e:?}");
     let e = err(&tri_mesh(p.clone(), &[&[0, 1, 2], &[1, 0, 3]]));
-    assert!(e.contains("vertex 4") && e.contains("no face"), "{e}");
+    assert_eq!(e, SurfaceError::IsolatedVertex { vertex: 4 });
     // Two fans meeting only at vertex 0 (a bow tie).
     let bow = vec![
         [0.0, 0.0, 0.0],
@@ -313,13 +343,19 @@ fn rejects_bad_meshes_naming_the_culprit() {
     ];
     let e = err(&tri_mesh(bow, &[&[0, 1, 2], &[0, 3, 4]]));
     assert!(
-        e.contains("vertex 0") && e.contains("non-manifold vertex"),
-        "{e}"
+        matches!(e, SurfaceError::NonManifoldVertex { vertex: 0, .. }),
+        "{e:?}"
     );
     // A single triangle cannot lose a vertex.
-    let e = err(&tri_mesh(p[..3].to_vec(), &[&[0, 1, 2]]));
-    assert!(e.contains("cannot decimate"), "{e}");
-    assert!(build(&grid(3), &[1]).is_err());
+    let e = build(&tri_mesh(p[..3].to_vec(), &[&[0, 1, 2]]), &DEFAULT_FACTORS).unwrap_err();
+    assert!(matches!(e, BuildError::Decimate { level: 0, .. }), "{e:?}");
+    assert!(matches!(
+        build(&grid(3), &[1]),
+        Err(BuildError::Factor {
+            index: 0,
+            factor: 1
+        })
+    ));
 }
 
 fn print_statistics(name: &str, mesh: &crate::io::mesh::Mesh) {
@@ -357,4 +393,27 @@ fn spiral_statistics_on_real_meshes() {
     let region = crate::io::ict::FACE_REGION;
     let (face, _) = ict.submesh(|v| region.contains(&v));
     print_statistics("ICT face region", &face);
+}
+
+#[test]
+fn a_missing_or_broken_template_file_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = Config {
+        factors: vec![4],
+        spiral_lengths: None,
+    };
+    let out = dir.path().join("h.sinew");
+    let missing = dir.path().join("missing.obj");
+    let e = s2d_hierarchy(&missing, &out, &config).unwrap_err();
+    assert!(matches!(e, HierarchyError::Mesh(_)), "{e:?}");
+    assert!(e.to_string().contains("missing.obj"), "{e}");
+    // Two triangles on the same three vertices: read, then refused by name.
+    let twice = dir.path().join("twice.obj");
+    std::fs::write(&twice, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 3\n").unwrap();
+    let e = s2d_hierarchy(&twice, &out, &config).unwrap_err();
+    assert!(
+        matches!(&e, HierarchyError::BuildFile { path, source: BuildError::Surface(_) } if *path == twice),
+        "{e:?}"
+    );
+    assert!(!out.exists());
 }
