@@ -91,7 +91,7 @@ pub fn write(
             .save_png(&path)
             .map_err(|e| HeatmapError::Png {
                 path: path.clone(),
-                source: e.into(),
+                source: e,
             })?;
         written.push(path);
     }

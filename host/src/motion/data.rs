@@ -534,9 +534,9 @@ pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet, M
                 &triangles,
                 &format!("identity {i}"),
             )
-            .map_err(|e| transfer(e.into()))?
+            .map_err(&transfer)?
             .apply(&sources)
-            .map_err(|e| transfer(e.into()))
+            .map_err(transfer)
         })
         .collect::<Result<_, _>>()?;
     let deltas: Vec<Vec<[f32; 3]>> = per_identity.into_iter().flatten().collect();

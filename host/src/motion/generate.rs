@@ -337,10 +337,7 @@ impl Loaded<'_> {
         let path = out.join("strip.png");
         Image::hstack(&pictures)
             .save_png(&path)
-            .map_err(|e| MotionGenerateError::Strip {
-                path,
-                source: e.into(),
-            })
+            .map_err(|e| MotionGenerateError::Strip { path, source: e })
     }
 }
 

@@ -474,9 +474,9 @@ fn transferred(
                 triangles,
                 &format!("identity {i}"),
             )
-            .map_err(|e| transfer(e.into()))?
+            .map_err(&transfer)?
             .apply(&sources)
-            .map_err(|e| transfer(e.into()))
+            .map_err(transfer)
         })
         .collect::<Result<_, _>>()?;
     Ok(per_identity.into_iter().flatten().collect())

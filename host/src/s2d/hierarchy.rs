@@ -111,7 +111,7 @@ pub fn build_with(mesh: &Mesh, config: &Config) -> Result<Hierarchy, BuildError>
         let (kept, coarse_tris) =
             decimate(positions, triangles, target).map_err(|e| BuildError::Decimate {
                 level: i,
-                source: e.into(),
+                source: e,
             })?;
         let coarse_pos = kept.iter().map(|&v| positions[v as usize]).collect();
         kept_per_level.push(kept);
