@@ -8,7 +8,11 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail, ensure};
+mod error;
+pub use error::ExperimentError;
+
+/// What the experiment functions return.
+type Result<T> = std::result::Result<T, ExperimentError>;
 
 use super::baseline::{DEFAULT_RIDGE, Dictionary, DictionaryConfig, Pca};
 use super::checkpoint::{STATE_FILE, read_state};
@@ -38,7 +42,7 @@ struct Mirroring {
 
 impl Mirroring {
     fn of(set: &PairSet) -> Result<Self> {
-        let mirror = Mirror::of(&set.template).context("mirroring the pairs' face region")?;
+        let mirror = Mirror::of(&set.template).map_err(ExperimentError::Symmetry)?;
         // On identity 0 (the shapes' images are the same for every identity when shared, and
         // within 6 % of each other when transferred: `symmetry::PARTNER_RESIDUAL`).
         let shapes: Vec<&[[f32; 3]]> = (0..set.manifest.expressions.len())
@@ -73,7 +77,7 @@ impl Mirroring {
         self.mirrorable(set, s)
             .into_iter()
             .map(|p| set.mirrored_sample(p, &self.mirror, input))
-            .collect::<Result<_, _>>()
+            .collect::<std::result::Result<_, _>>()
             .map_err(Into::into)
     }
 
@@ -220,20 +224,21 @@ pub fn baseline_errors(set: &PairSet, s: &Split, extra: &[&[f32]]) -> Result<Bas
 /// Per-vertex errors (mm) of a baked decoder, run through `sinew_core` (the playback path), on
 /// the test pairs of `s`.
 pub fn decoder_errors(model: &[u8], set: &PairSet, s: &Split) -> Result<Vec<f32>> {
-    let dec = sinew_core::s2d::S2dDecoder::from_bytes(model)
-        .map_err(|e| anyhow::anyhow!("not an S2D decoder: {e}"))?;
-    ensure!(
-        dec.vertex_count() == set.vertices(),
-        "the model decodes {} vertices, the pairs have {}",
-        dec.vertex_count(),
-        set.vertices()
-    );
-    ensure!(
-        dec.landmarks()
-            .iter()
-            .eq(set.manifest.landmarks.iter().copied()),
-        "the model's landmark vertices differ from the pairs'"
-    );
+    let dec =
+        sinew_core::s2d::S2dDecoder::from_bytes(model).map_err(ExperimentError::NotADecoder)?;
+    if dec.vertex_count() != set.vertices() {
+        return Err(ExperimentError::VertexCount {
+            model: dec.vertex_count(),
+            pairs: set.vertices(),
+        });
+    }
+    if !dec
+        .landmarks()
+        .iter()
+        .eq(set.manifest.landmarks.iter().copied())
+    {
+        return Err(ExperimentError::Landmarks);
+    }
     let input = InputNormalisation::from_code(dec.input_normalisation())?;
     let mut scratch = vec![0.0f32; dec.scratch_len()];
     let mut out = vec![0.0f32; 3 * set.vertices()];
@@ -241,7 +246,7 @@ pub fn decoder_errors(model: &[u8], set: &PairSet, s: &Split) -> Result<Vec<f32>
     for &p in &s.test {
         let sample = set.sample(p, input)?;
         dec.displacements(&sample.input, &mut scratch, &mut out)
-            .map_err(|e| anyhow::anyhow!("decoding pair {p}: {e:?}"))?;
+            .map_err(|error| ExperimentError::Decode { pair: p, error })?;
         vertex_errors(set, p, &out, &mut errors);
     }
     Ok(errors)
@@ -308,11 +313,9 @@ fn finish(
 /// the test pairs, then writes the pooled report and the cumulative-error plot.
 pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
     let started = Instant::now();
-    ensure!(
-        (1..=FOLDS).contains(&args.folds),
-        "--folds {}: between 1 and {FOLDS}",
-        args.folds
-    );
+    if !(1..=FOLDS).contains(&args.folds) {
+        return Err(ExperimentError::Folds(args.folds));
+    }
     let set = PairSet::read(&args.pairs)?;
     if !quiet
         && args.protocol == Protocol::Identity
@@ -326,7 +329,7 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         );
     }
     let h = hierarchy::cached(&set.template, &args.factors, &args.cache)
-        .context("building the face region's mesh hierarchy")?;
+        .map_err(ExperimentError::Hierarchy)?;
     let distances = landmark_distances(&set.template.positions, &set.manifest.landmarks)?;
     let (loss, weights) = args.objective.loss_and_weights(&distances);
     let config = TrainConfig {
@@ -342,7 +345,7 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
             .train
             .iter()
             .map(|&p| set.sample(p, args.decoder.input))
-            .collect::<Result<Vec<_>, _>>()?;
+            .collect::<std::result::Result<Vec<_>, _>>()?;
         if let Some(m) = &mirroring {
             samples.extend(m.training_samples(&set, &s, args.decoder.input)?);
         }
@@ -365,11 +368,10 @@ pub fn train_s2d(args: &TrainS2d, quiet: bool) -> Result<Report> {
         if args.resume && !resume {
             // Folds run in order, so any earlier run left fold 0's checkpoint.
             if fold == 0 {
-                bail!(
-                    "{}: no checkpoint to resume (no {STATE_FILE}); run without --resume to \
-                     start, or give the --out of the run to continue",
-                    checkpoint.display()
-                );
+                return Err(ExperimentError::NoCheckpoint {
+                    path: checkpoint,
+                    file: STATE_FILE,
+                });
             }
             if !quiet {
                 eprintln!(
@@ -555,30 +557,37 @@ fn trained_split(
     set: &PairSet,
     pairs: &Path,
 ) -> Result<(Protocol, usize, bool)> {
-    let file = sinew_core::SinewFile::from_bytes(bytes)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
+    let file =
+        sinew_core::SinewFile::from_bytes(bytes).map_err(|source| ExperimentError::Format {
+            path: model.to_path_buf(),
+            source,
+        })?;
     let meta = file.metadata();
     let protocol = match meta.get("protocol") {
         Some("identity") => Protocol::Identity,
         Some("expression") => Protocol::Expression,
-        other => anyhow::bail!(
-            "{}: no S2D protocol in the metadata (protocol={other:?}); train it with `sinew \
-             train s2d`",
-            model.display()
-        ),
+        other => {
+            return Err(ExperimentError::NoProtocol {
+                path: model.to_path_buf(),
+                protocol: other.map(str::to_owned),
+            });
+        }
     };
     let fold: usize = meta
         .get("fold")
         .and_then(|f| f.parse().ok())
-        .with_context(|| format!("{}: no fold in the metadata", model.display()))?;
-    if let Some(seed) = meta.get("pairs_seed") {
-        ensure!(
-            seed == set.manifest.config.seed.to_string(),
-            "{}: trained on pairs of seed {seed}, but {} has seed {}",
-            model.display(),
-            pairs.display(),
-            set.manifest.config.seed
-        );
+        .ok_or_else(|| ExperimentError::NoFold {
+            path: model.to_path_buf(),
+        })?;
+    if let Some(seed) = meta.get("pairs_seed")
+        && seed != set.manifest.config.seed.to_string()
+    {
+        return Err(ExperimentError::PairsSeed {
+            path: model.to_path_buf(),
+            model_seed: seed.to_owned(),
+            pairs: pairs.to_path_buf(),
+            pairs_seed: set.manifest.config.seed,
+        });
     }
     Ok((protocol, fold, meta.get("mirror") == Some("true")))
 }
@@ -589,10 +598,9 @@ fn trained_split(
 /// ([`fold_model_path`], as `train s2d --folds K` writes them), each checked to be its fold of the
 /// same protocol, and the report pools them as `train s2d`'s does.
 pub fn eval_s2d(model: &Path, pairs: &Path, folds: usize, report: &Path) -> Result<Report> {
-    ensure!(
-        (1..=FOLDS).contains(&folds),
-        "--folds {folds}: between 1 and {FOLDS}"
-    );
+    if !(1..=FOLDS).contains(&folds) {
+        return Err(ExperimentError::Folds(folds));
+    }
     let started = Instant::now();
     let set = PairSet::read(pairs)?;
     let mut errors: [Vec<f32>; 5] = Default::default();
@@ -603,19 +611,22 @@ pub fn eval_s2d(model: &Path, pairs: &Path, folds: usize, report: &Path) -> Resu
         let path = fold_model_path(model, k);
         let bytes = crate::io::container::read(&path)?;
         let (protocol, fold, mirrored) = trained_split(&path, &bytes, &set, pairs)?;
-        if folds > 1 {
-            ensure!(
-                fold == k,
-                "{}: a model of fold {fold}, where `train s2d --folds {folds}` puts fold {k}",
-                path.display()
-            );
+        if folds > 1 && fold != k {
+            return Err(ExperimentError::WrongFold {
+                path,
+                fold,
+                folds,
+                expected: k,
+            });
         }
-        if let Some(p) = first {
-            ensure!(
-                protocol == p,
-                "{}: trained on the {protocol} split, fold 0 on the {p} split",
-                path.display()
-            );
+        if let Some(p) = first
+            && protocol != p
+        {
+            return Err(ExperimentError::OtherProtocol {
+                path,
+                protocol,
+                first: p,
+            });
         }
         first = Some(protocol);
         let s = split(&set.manifest, protocol, fold)?;
@@ -633,12 +644,17 @@ pub fn eval_s2d(model: &Path, pairs: &Path, folds: usize, report: &Path) -> Resu
         let extra: Vec<&[f32]> = mirrored.iter().map(Vec::as_slice).collect();
         let fr = FoldReport {
             model: path.clone(),
-            ..evaluate_fold(&bytes, &set, &s, &extra, &mut errors)
-                .with_context(|| format!("{}", path.display()))?
+            ..evaluate_fold(&bytes, &set, &s, &extra, &mut errors).map_err(|e| {
+                ExperimentError::InModel {
+                    path: path.clone(),
+                    source: Box::new(e),
+                }
+            })?
         };
         per_fold.push(fr);
     }
-    let protocol = first.context("no fold evaluated")?;
+    // The fold loop ran at least once (folds ≥ 1), so fold 0 set the protocol.
+    let protocol = first.ok_or(ExperimentError::Folds(folds))?;
     finish(per_fold, errors, protocol, None, pairs, report, started)
 }
 

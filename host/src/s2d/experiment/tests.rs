@@ -149,3 +149,48 @@ fn transferred_expressions_make_the_identity_split_a_test() {
     }
     assert!(pca_max[1] > 5.0 * pca_max[0], "{pca_max:?}");
 }
+
+/// `eval s2d` refuses, by variant, a fold count out of range, a model that `train s2d` did not
+/// make, one trained on pairs of another seed, and a fold in another fold's place, each naming
+/// the model.
+#[test]
+fn eval_refuses_models_of_other_runs_by_variant() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = dir.path().join("eval.json");
+    let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/s2d-ict.sinew");
+    assert!(matches!(
+        eval_s2d(&golden, dir.path(), 0, &report),
+        Err(ExperimentError::Folds(0))
+    ));
+    let Some(set) = real_pairs(Expressions::Shared) else {
+        return;
+    };
+    let pairs = dir.path().join("pairs");
+    set.write(&pairs).unwrap();
+
+    // An AIM actor has no S2D protocol in its metadata.
+    let actor = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/aim-ict.sinew");
+    let err = eval_s2d(&actor, &pairs, 1, &report).unwrap_err();
+    assert!(
+        matches!(&err, ExperimentError::NoProtocol { path, protocol: None } if *path == actor),
+        "{err:?}"
+    );
+    // The golden decoder was trained on pairs of seed 1; these have seed 3.
+    let err = eval_s2d(&golden, &pairs, 1, &report).unwrap_err();
+    assert!(
+        matches!(&err, ExperimentError::PairsSeed { path, model_seed, pairs_seed: 3, .. }
+            if *path == golden && model_seed == "1"),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("s2d-ict.sinew"), "{err}");
+    // A damaged file is refused by the container reader, naming it.
+    let damaged = dir.path().join("damaged.sinew");
+    let mut bytes = std::fs::read(&golden).unwrap();
+    bytes.truncate(bytes.len() / 2);
+    std::fs::write(&damaged, &bytes).unwrap();
+    assert!(matches!(
+        eval_s2d(&damaged, &pairs, 1, &report),
+        Err(ExperimentError::Container(_))
+    ));
+    assert!(!report.exists(), "no report is written for a refused run");
+}
