@@ -465,6 +465,65 @@ fn long_files_are_explained() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// The files of the host's library that use `anyhow` outside their tests: only the edge may
+/// (`main.rs`, `cli/`, the `*/commands.rs` glue); `src` is the host's source folder.
+fn anyhow_outside_the_edge(src: &Path) -> Vec<String> {
+    let mut files = Vec::new();
+    rs_files(src, &mut files);
+    let mut out = Vec::new();
+    for f in files {
+        let rel = f.strip_prefix(src).unwrap();
+        let edge = rel.starts_with("cli")
+            || rel
+                .file_name()
+                .is_some_and(|n| n == "main.rs" || n == "commands.rs")
+            || rel.file_name().is_some_and(|n| n == "tests.rs")
+            || rel.components().any(|c| c.as_os_str() == "tests");
+        if edge {
+            continue;
+        }
+        let text = std::fs::read_to_string(&f).unwrap();
+        let library = text.split("#[cfg(test)]").next().unwrap_or_default();
+        if let Some((n, _)) = library
+            .lines()
+            .enumerate()
+            .find(|(_, l)| l.contains("anyhow") && !l.trim_start().starts_with("//"))
+        {
+            out.push(format!(
+                "{}:{}: anyhow in a library module (return a thiserror enum; anyhow belongs to main.rs, cli/ and */commands.rs)",
+                rel.display(),
+                n + 1
+            ));
+        }
+    }
+    out
+}
+
+#[test]
+fn host_library_errors_are_typed() {
+    let failures = anyhow_outside_the_edge(&repo().join("host/src"));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn the_anyhow_check_finds_a_library_use() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path();
+    std::fs::create_dir_all(src.join("aim")).unwrap();
+    std::fs::create_dir_all(src.join("cli")).unwrap();
+    std::fs::write(src.join("aim/train.rs"), "use anyhow::Result;\n").unwrap();
+    std::fs::write(src.join("aim/commands.rs"), "use anyhow::Result;\n").unwrap();
+    std::fs::write(src.join("cli/aim.rs"), "use anyhow::Result;\n").unwrap();
+    std::fs::write(
+        src.join("aim/bake.rs"),
+        "pub fn f() {}\n#[cfg(test)]\nmod tests { fn g() -> anyhow::Result<()> { Ok(()) } }\n",
+    )
+    .unwrap();
+    let found = anyhow_outside_the_edge(src);
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(found[0].starts_with("aim/train.rs:1:"), "{found:?}");
+}
+
 /// The checker itself: a cycle and an upward import in a made-up tree are found.
 #[test]
 fn the_checks_find_what_they_look_for() {
