@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use sinew_host::fit::aim::{Coefficients, Constrain, FitConfig, Mode};
+use sinew_host::fit::aim::{Coefficients, Constrain, FitConfig, Mode, Start};
 use sinew_host::fit::commands::{eval_fit, fit_command, retarget_command};
 use sinew_host::fit::performance::{PerformanceConfig, generate};
 use sinew_host::fit::retarget::SourceFit;
@@ -115,6 +115,27 @@ pub(crate) struct FitOptions {
     /// Hidden width of F_T and F_W.
     #[arg(long, default_value_t = FitConfig::default().hidden)]
     hidden: usize,
+    /// Adam's learning rate (the paper: 1e-3).
+    #[arg(long, default_value_t = FitConfig::default().lr)]
+    lr: f64,
+    /// Adam's learning rate at the last step, decaying exponentially from --lr (default: --lr,
+    /// constant).
+    #[arg(long)]
+    lr_final: Option<f64>,
+    /// ω0 of a sine first layer of a local F_W (0: all GELU, the paper's; default: 30 for 3d
+    /// fits to all vertices or a fraction, 0 for the landmarks and 2d).
+    #[arg(long)]
+    fw_omega0: Option<f32>,
+    /// Where each frame's head starts: rigid (the rigid alignment of the actor's neutral to the
+    /// frame; a 2d fit starts at the identity) or identity.
+    #[arg(long, value_enum, default_value_t = FitConfig::default().start)]
+    start: Start,
+    /// λ_3D of eq. 20, on squared millimetres (the paper gives no value).
+    #[arg(long, default_value_t = FitConfig::default().lambda_3d)]
+    lambda_3d: f64,
+    /// λ_W of eq. 22 (the paper: 0.75).
+    #[arg(long, default_value_t = FitConfig::default().lambda_w)]
+    lambda_w: f64,
     /// Seed of the fit's initial weights and point draws.
     #[arg(long, env = "SINEW_SEED", default_value_t = FitConfig::default().seed)]
     seed: u64,
@@ -130,6 +151,12 @@ impl FitOptions {
             points: self.points,
             code: self.code,
             hidden: self.hidden,
+            lr: self.lr,
+            lr_final: self.lr_final.unwrap_or(self.lr),
+            lambda_3d: self.lambda_3d,
+            fw_omega0: self.fw_omega0,
+            start: self.start,
+            lambda_w: self.lambda_w,
             seed: self.seed,
             coefficients,
             ..FitConfig::default()

@@ -8,7 +8,7 @@ use clap::Args;
 use sinew_host::motion::commands::{TrainMotion, train_motion};
 use sinew_host::motion::data::{MotionsConfig, Split, generate_to};
 use sinew_host::motion::evaluate::{EvalMotion, EvalSettings, eval_motion};
-use sinew_host::motion::gan::GanConfig;
+use sinew_host::motion::gan::{GanConfig, Pairing};
 use sinew_host::motion::generate::Generate;
 use sinew_host::training::backend::Backend;
 
@@ -87,6 +87,10 @@ pub(crate) struct TrainMotionArgs {
     /// Hidden widths of the generator and the critic, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = GanConfig::default().hidden)]
     hidden: Vec<usize>,
+    /// The real motion L_r compares each generated one with: the batch's motion in the same row
+    /// (batch, the reference's) or the batch's motion of the same label nearest to it (nearest).
+    #[arg(long, value_enum, default_value_t = GanConfig::default().pairing)]
+    pairing: Pairing,
     /// Generator steps between checkpoints.
     #[arg(long, default_value_t = 500)]
     checkpoint_every: usize,
@@ -106,6 +110,7 @@ pub(crate) fn train(args: TrainMotionArgs) -> Result<()> {
         batch: args.batch,
         lr: args.lr,
         hidden: args.hidden,
+        pairing: args.pairing,
         ..GanConfig::default()
     };
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);

@@ -26,12 +26,13 @@ use sinew_core::aim::AimActor;
 
 use sinew_core::replay::model_hash;
 
-pub use crate::fit::setup::{Coefficients, Constrain, FitConfig, FitNet, Mode};
+pub use crate::fit::setup::{Coefficients, Constrain, FitConfig, FitNet, Mode, Start};
 
 use crate::fit::baseline::{BaselineError, mean_error_mm, performance_unit};
 use crate::fit::checkpoint::{CHECKPOINT_FORMAT, Checkpointing, EVERY, FitState, target_crc};
 use crate::fit::performance::Performance;
-use crate::fit::setup::gelu_mlp;
+use crate::fit::setup::{fw_mlp, gelu_mlp};
+use crate::geometry::align::fit_rigid;
 use crate::training::backend::{Backend, BackendError};
 use crate::training::checkpoint::CheckpointError;
 use crate::training::nn::{LayerWeights, tensor, to_vec};
@@ -107,6 +108,8 @@ struct Fixed {
     correctives: Tensor<2>,
     normalised: Tensor<2>,
     pivot: Tensor<2>,
+    /// Per frame, the head and jaw that a zero F_T output means, `[J, 18]`.
+    start: Tensor<2>,
     targets: Tensor<3>,
     frames: usize,
     shapes: usize,
@@ -125,7 +128,6 @@ struct Posed {
 fn pose(net: &FitNet, fx: &Fixed, idx: Tensor<1, Int>, coefficients: Coefficients) -> Posed {
     let (j, m) = (fx.frames, fx.shapes);
     let p = idx.dims()[0];
-    let device = fx.rest.device();
     let per_frame = |t: Tensor<2>| {
         let [_, w] = t.dims();
         t.reshape([1, p, w]).repeat_dim(0, j).reshape([j * p, w])
@@ -135,9 +137,8 @@ fn pose(net: &FitNet, fx: &Fixed, idx: Tensor<1, Int>, coefficients: Coefficient
         t.reshape([j, 1, w]).repeat_dim(1, p).reshape([j * p, w])
     };
     let codes = net.codes.val();
-    let identity = tensor(IDENTITY_18.to_vec(), [1, 18], &device);
-    // AIM eq. 18: [T_g, T_b] = F_T(z_j)
-    let t = per_point(net.ft.forward(codes.clone()) + identity);
+    // AIM eq. 18: [T_g, T_b] = F_T(z_j), from the frame's start
+    let t = per_point(net.ft.forward(codes.clone()) + fx.start.clone());
     let (head, jaw) = (t.clone().narrow(1, 0, 9), t.narrow(1, 9, 9));
     let s0 = per_frame(fx.rest.clone().select(0, idx.clone()));
     let k = per_frame(fx.k.clone().select(0, idx.clone()));
@@ -332,7 +333,13 @@ pub fn fit_resumable(
         .flatten()
         .map(|x| x * mm)
         .collect();
+    let subset = constrained_vertices(perf, config, &mut step_rng(config.seed, u64::MAX))?;
+    let starts = match config.start {
+        Start::Rigid => rigid_start(&cache, perf, config.mode, subset.as_deref(), mm),
+        Start::Identity => vec![IDENTITY_18; j],
+    };
     let fx = Fixed {
+        start: tensor(starts.iter().flatten().copied().collect(), [j, 18], &device),
         rest: tensor(cache.rest.clone(), [v, 3], &device),
         k: tensor(cache.k.clone(), [v, 1], &device),
         correctives: tensor(cache.correctives.clone(), [v, 3 * m], &device),
@@ -353,7 +360,7 @@ pub fn fit_resumable(
             &device,
         )),
         ft: gelu_mlp(config.code, config.hidden, 18, &device),
-        fw: gelu_mlp(fw_inputs, config.hidden, m.max(1), &device),
+        fw: fw_mlp(config, fw_inputs, m.max(1), &device),
     };
     let mut optim: ModuleOptimizer = AdamConfig::new().with_epsilon(1e-8).init();
     let mut result = FitResult {
@@ -410,7 +417,6 @@ pub fn fit_resumable(
     let start = Instant::now();
     let bar = crate::training::progress::bar(config.iterations as u64, true);
     bar.set_position(state.steps_done as u64);
-    let subset = constrained_vertices(perf, config, &mut step_rng(config.seed, u64::MAX))?;
     let camera = TwoDTargets::new(perf, config, mm, &device)?;
     for step in state.steps_done..config.iterations {
         // Each step's draw is its own (seed, step), so a resumed fit draws what an unbroken one does.
@@ -456,7 +462,7 @@ pub fn fit_resumable(
             result.loss_history.push((step, f64::from(loss)));
         }
         let grads = GradientsParams::from_grads(total.backward(), &net);
-        net = optim.step(config.lr, net, grads);
+        net = optim.step(config.lr_at(step), net, grads);
         bar.inc(1);
         if step + 1 == config.iterations / 2 && config.iterations >= 2 {
             let (_, errors) = evaluate(&net);
@@ -508,11 +514,10 @@ pub fn fit_resumable(
     result.target_worst_edge_change = worst_edge_change(&perf.polygons, &neutral, &perf.frames);
     result.meshes = meshes;
     let t = to_vec(net.ft.forward(net.codes.val()));
-    for (row, frame) in t.chunks_exact(18).zip(0..j) {
-        let _ = frame;
+    for (row, start) in t.chunks_exact(18).zip(&starts) {
         let add = |o: usize| -> [f32; 9] {
             std::array::from_fn(|i| {
-                let x = row[o + i] + IDENTITY_18[o + i];
+                let x = row[o + i] + start[o + i];
                 // Translations back into the actor's units.
                 if i >= 6 { x / mm } else { x }
             })
@@ -527,6 +532,47 @@ pub fn fit_resumable(
         result.weights = Some(w.chunks_exact(m.max(1)).map(<[f32]>::to_vec).collect());
     }
     Ok(result)
+}
+
+/// Per frame, where F_T starts (its zero output): the head at the rigid motion (Horn) that best
+/// takes the actor's neutral s0 to the frame's constrained vertices, and the jaw at rest; the
+/// identity for both in a 2D fit, or when no rigid motion aligns them.
+fn rigid_start(
+    cache: &ActorCache,
+    perf: &Performance,
+    mode: Mode,
+    subset: Option<&[i64]>,
+    mm: f32,
+) -> Vec<[f32; 18]> {
+    let rest: Vec<[f32; 3]> = cache
+        .rest
+        .chunks_exact(3)
+        .map(|p| [p[0], p[1], p[2]])
+        .collect();
+    let chosen: Vec<usize> = match subset {
+        Some(s) => s.iter().map(|&i| i as usize).collect(),
+        None => (0..rest.len()).collect(),
+    };
+    let from: Vec<[f32; 3]> = chosen.iter().map(|&i| rest[i]).collect();
+    perf.frames
+        .iter()
+        .map(|frame| {
+            let to: Vec<[f32; 3]> = chosen.iter().map(|&i| frame[i].map(|x| x * mm)).collect();
+            match (mode, fit_rigid(&from, &to)) {
+                (Mode::ThreeD, Some(r)) => {
+                    let mut start = IDENTITY_18;
+                    for i in 0..3 {
+                        // 6D: the rotation's first two columns.
+                        start[i] = r.rotation[i][0] as f32;
+                        start[3 + i] = r.rotation[i][1] as f32;
+                        start[6 + i] = r.translation[i] as f32;
+                    }
+                    start
+                }
+                _ => IDENTITY_18,
+            }
+        })
+        .collect()
 }
 
 /// The vertices a 3D fit may draw from (`None`: all of them), or the landmark vertices of a 2D

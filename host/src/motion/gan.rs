@@ -22,7 +22,7 @@
 use burn::module::Module;
 use burn::nn::Linear;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
-use burn::tensor::{Device, Tensor};
+use burn::tensor::{Device, Int, Tensor};
 use serde::{Deserialize, Serialize};
 use sinew_core::nn::Activation;
 use sinew_core::srvf::FRAMES;
@@ -55,6 +55,23 @@ pub struct GanConfig {
     pub hidden: Vec<usize>,
     /// Slope of the leaky ReLUs.
     pub slope: f32,
+    /// Which real motion of its label each generated one is reconstructed against in L_r.
+    #[serde(default)]
+    pub pairing: Pairing,
+}
+
+/// The real motion L_r (eq. 4) compares a generated one with; both are of the same label.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Pairing {
+    /// The batch's real motion in the same row, as the reference pairs them: every generated
+    /// motion is pulled towards all of its label's motions in turn, so towards their centre.
+    #[default]
+    Batch,
+    /// The batch's real motion of the same label nearest to it (tangent-space distance): each
+    /// generated motion is pulled towards the real motion it already resembles, so the noise
+    /// keeps choosing between them.
+    Nearest,
 }
 
 impl Default for GanConfig {
@@ -73,6 +90,7 @@ impl Default for GanConfig {
             noise: 128,
             hidden: vec![512, 512],
             slope: 0.2,
+            pairing: Pairing::Batch,
         }
     }
 }
@@ -274,6 +292,24 @@ pub fn reconstruction(fake: Tensor<2>, real: Tensor<2>, p: &Tensor<2>) -> Tensor
     l1 + geodesic
 }
 
+/// For each row of `fake`, the row of `real` with the same one-hot label (`labels`, shared by
+/// both: the batch's real labels condition its generated motions) at the smallest squared
+/// Euclidean distance; a row's own real motion is always a candidate.
+///
+/// # Shapes
+/// - fake, real: `[n, d]`, labels: `[n, classes]` → `[n]`
+pub fn nearest_of_label(fake: &Tensor<2>, real: &Tensor<2>, labels: &Tensor<2>) -> Tensor<1, Int> {
+    let n = fake.dims()[0];
+    let ff = fake.clone().square().sum_dim(1);
+    let rr = real.clone().square().sum_dim(1).transpose();
+    let cross = fake.clone().matmul(real.clone().transpose());
+    let distance = ff + rr - cross.mul_scalar(2.0);
+    let same = labels.clone().matmul(labels.clone().transpose());
+    // Rows of another label are pushed out of reach.
+    let masked = distance + same.neg().add_scalar(1.0).mul_scalar(1e30);
+    masked.argmin(1).reshape([n])
+}
+
 /// Adam with the reference's β = (0.5, 0.9).
 pub fn optimizer() -> ModuleOptimizer {
     AdamConfig::new().with_beta_1(0.5).with_beta_2(0.9).init()
@@ -378,7 +414,14 @@ pub fn generator_step(
         .forward(Tensor::cat(vec![fake.clone(), batch.labels.clone()], 1))
         .mean()
         .neg();
-    let rec = reconstruction(fake, batch.real.clone(), p);
+    let real = match config.pairing {
+        Pairing::Batch => batch.real.clone(),
+        Pairing::Nearest => {
+            let idx = nearest_of_label(&fake.clone().detach(), &batch.real, &batch.labels);
+            batch.real.clone().select(0, idx)
+        }
+    };
+    let rec = reconstruction(fake, real, p);
     let loss =
         adv.mul_scalar(config.alpha_adv as f64) + rec.clone().mul_scalar(config.alpha_rec as f64);
     let losses = StepLosses {

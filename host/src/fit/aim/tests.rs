@@ -185,11 +185,14 @@ fn a_resumed_fit_ends_where_an_unbroken_one_does() {
         return;
     };
     let actor = AimActor::from_bytes(&bytes).unwrap();
+    // A constant rate: a decaying one follows --iterations, so a raised count changes the
+    // schedule of the steps already taken.
     let config = |iterations| FitConfig {
         iterations,
         hidden: 16,
         code: 8,
         points: 256,
+        lr_final: FitConfig::default().lr,
         ..FitConfig::default()
     };
     let (a_dir, b_dir) = (dir.path().join("a.ckpt"), dir.path().join("b.ckpt"));
@@ -214,4 +217,83 @@ fn a_resumed_fit_ends_where_an_unbroken_one_does() {
             if path.ends_with(STATE_FILE) && differences.len() == 1 && differences[0].starts_with("settings:")),
         "{e:?}"
     );
+}
+
+#[test]
+fn the_head_starts_where_a_rigid_alignment_puts_it() {
+    let Some((_dir, perf, bytes)) = golden_performance(4, 3) else {
+        return;
+    };
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let mm = performance_unit(&perf).unwrap().mm() as f32;
+    let cache = ActorCache::new(&actor, mm);
+    let starts = rigid_start(&cache, &perf, Mode::ThreeD, None, mm);
+    let column = |r6: &[f32], c: usize| -> [f32; 3] { std::array::from_fn(|i| r6[3 * c + i]) };
+    let angle = |a: [f32; 3], b: [f32; 3]| {
+        let dot: f32 = (0..3).map(|i| a[i] * b[i]).sum();
+        let n = |v: [f32; 3]| v.iter().map(|x| x * x).sum::<f32>().sqrt();
+        (dot / (n(a) * n(b))).clamp(-1.0, 1.0).acos()
+    };
+    for (start, truth) in starts.iter().zip(&perf.manifest.parameters) {
+        // The head that posed the frame, up to what the expressions and the jaw tilt (the jaw
+        // opens about x: measured 0.03 rad on the second column; a transposed rotation would be
+        // twice the head's own 0.07 rad off, a start at the identity as far off as that).
+        for c in 0..2 {
+            let off = angle(column(start, c), column(&truth.head, c));
+            let rest = angle(column(&IDENTITY_18, c), column(&truth.head, c));
+            assert!(
+                off < 0.05 && off < rest,
+                "column {c}: {off} rad from the truth"
+            );
+        }
+        let shift: f32 = (0..3)
+            .map(|i| (start[6 + i] - truth.head[6 + i] * mm).powi(2))
+            .sum::<f32>()
+            .sqrt();
+        assert!(shift < 3.0, "translation {shift} mm from the truth");
+        // The jaw starts at rest.
+        assert_eq!(start[9..], IDENTITY_18[9..]);
+    }
+    // A 2D fit has no 3D target to align to and starts at the identity.
+    let flat = rigid_start(&cache, &perf, Mode::TwoD, None, mm);
+    assert!(flat.iter().all(|s| *s == IDENTITY_18));
+}
+
+#[test]
+fn the_sine_layer_is_for_dense_constraints() {
+    let with = |mode, constrain| FitConfig {
+        mode,
+        constrain,
+        ..FitConfig::default()
+    };
+    let dense = FitConfig::DENSE_OMEGA0;
+    assert_eq!(with(Mode::ThreeD, Constrain::All).omega0(), dense);
+    assert_eq!(with(Mode::ThreeD, Constrain::Fraction(0.1)).omega0(), dense);
+    assert_eq!(with(Mode::ThreeD, Constrain::Landmarks).omega0(), 0.0);
+    assert_eq!(with(Mode::TwoD, Constrain::All).omega0(), 0.0);
+    let set = FitConfig {
+        fw_omega0: Some(7.0),
+        mode: Mode::TwoD,
+        ..FitConfig::default()
+    };
+    assert_eq!(set.omega0(), 7.0);
+    // F_W's first activation follows it; a global F_W has no template point and stays GELU.
+    let device = Backend::Flex.device(1).unwrap();
+    let first = |c: &FitConfig| fw_mlp(c, 35, 19, &device).activations[0];
+    use sinew_core::nn::Activation;
+    assert_eq!(
+        first(&FitConfig::default()),
+        Activation::Sine { omega0: dense }
+    );
+    assert_eq!(first(&with(Mode::TwoD, Constrain::All)), Activation::Gelu);
+    let global = FitConfig {
+        coefficients: Coefficients::Global,
+        ..FitConfig::default()
+    };
+    assert_eq!(first(&global), Activation::Gelu);
+    // A checkpoint from before the sine layer reads as all-GELU.
+    let mut old = serde_json::to_value(FitConfig::default()).unwrap();
+    old.as_object_mut().unwrap().remove("fw_omega0");
+    let old: FitConfig = serde_json::from_value(old).unwrap();
+    assert_eq!(old.omega0(), 0.0);
 }

@@ -164,3 +164,21 @@ fn a_fresh_generator_follows_its_label_and_starts_near_p() {
     eprintln!("distance from p {mean_norm}");
     assert!(mean_norm < 0.5, "{mean_norm}");
 }
+
+#[test]
+fn nearest_pairing_picks_the_closest_real_motion_of_the_same_label() {
+    let dev = device(1);
+    // Real rows: label 0 at x = 0 and x = 10, label 1 at x = 1 and x = 9.
+    let real = tensor(vec![0.0, 0.0, 10.0, 0.0, 1.0, 0.0, 9.0, 0.0], [4, 2], &dev);
+    let labels = one_hot(&[0, 0, 1, 1], 2, &dev);
+    // Fakes conditioned on those labels: near 9 (label 0), near 0.5 (label 0), near 10
+    // (label 1), near 2 (label 1).
+    let fake = tensor(vec![9.0, 0.5, 0.5, 0.0, 10.0, 0.0, 2.0, 0.0], [4, 2], &dev);
+    let idx: Vec<i64> = nearest_of_label(&fake, &real, &labels)
+        .into_data()
+        .convert::<i64>()
+        .try_to_vec::<i64>()
+        .unwrap();
+    // Across labels row 0's nearest would be real row 3 (x = 9), row 2's real row 1 (x = 10).
+    assert_eq!(idx, vec![1, 0, 3, 2]);
+}
