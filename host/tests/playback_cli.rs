@@ -262,6 +262,14 @@ fn fit_bakes_a_performance_that_play_reproduces() {
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     assert_eq!(r["frames"], 2);
+    // Every setting not given on the command line is the library's default.
+    let given = sinew_host::fit::setup::FitConfig {
+        iterations: 20,
+        hidden: 16,
+        code: 4,
+        ..Default::default()
+    };
+    assert_eq!(r["fit"]["config"], serde_json::to_value(&given).unwrap());
     let played = dir.path().join("played");
     ok(&[
         "play",

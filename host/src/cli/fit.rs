@@ -118,10 +118,10 @@ pub(crate) struct FitOptions {
     /// Adam's learning rate (the paper: 1e-3).
     #[arg(long, default_value_t = FitConfig::default().lr)]
     lr: f64,
-    /// Adam's learning rate at the last step, decaying exponentially from --lr (default: --lr,
+    /// Adam's learning rate at the last step, decaying exponentially from --lr (equal to --lr:
     /// constant).
-    #[arg(long)]
-    lr_final: Option<f64>,
+    #[arg(long, default_value_t = FitConfig::default().lr_final)]
+    lr_final: f64,
     /// ω0 of a sine first layer of a local F_W (0: all GELU, the paper's; default: 30 for 3d
     /// fits to all vertices or a fraction, 0 for the landmarks and 2d).
     #[arg(long)]
@@ -152,7 +152,7 @@ impl FitOptions {
             code: self.code,
             hidden: self.hidden,
             lr: self.lr,
-            lr_final: self.lr_final.unwrap_or(self.lr),
+            lr_final: self.lr_final,
             lambda_3d: self.lambda_3d,
             fw_omega0: self.fw_omega0,
             start: self.start,
