@@ -251,6 +251,12 @@ pub struct Row {
     pub frechet_motion3dgan: f64,
     /// Fréchet distance of the LSTM's features from the ground truth's.
     pub frechet_lstm: f64,
+    /// The mean term `‖μ − μ_gt‖²` of `frechet_motion3dgan` (the rest is the covariances').
+    #[serde(default)]
+    pub frechet_mean_motion3dgan: f64,
+    /// The mean term of `frechet_lstm`.
+    #[serde(default)]
+    pub frechet_mean_lstm: f64,
     /// Fréchet distance of the training sequences' features from the test ground truth's (a
     /// floor: two samples of the same distribution); Gen-LM only (Det-LM would decode every
     /// training sequence).
@@ -489,6 +495,8 @@ impl Judge<'_> {
             per_label_accuracy: per_label,
             frechet_motion3dgan: frechet::between(&feats[1], &feats[0])?,
             frechet_lstm: frechet::between(&feats[2], &feats[0])?,
+            frechet_mean_motion3dgan: frechet::terms_between(&feats[1], &feats[0])?.mean,
+            frechet_mean_lstm: frechet::terms_between(&feats[2], &feats[0])?.mean,
             frechet_train: if with_train {
                 Some(frechet::between(self.train_features, &feats[0])?)
             } else {

@@ -88,6 +88,26 @@ fn sqrt_psd(m: &DMatrix<f64>) -> DMatrix<f64> {
 /// # Errors
 /// If the dimensions differ.
 pub fn distance(a: &Gaussian, b: &Gaussian) -> Result<f64, FrechetError> {
+    let t = terms(a, b)?;
+    Ok((t.mean + t.covariance).max(0.0))
+}
+
+/// The two terms of the squared Fréchet distance: where the means lie and how the spreads
+/// differ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Terms {
+    /// `‖μ1 − μ2‖²`.
+    pub mean: f64,
+    /// `tr(S1 + S2 − 2 (S1^½ S2 S1^½)^½)`, the Bures distance of the covariances (≥ 0 up to
+    /// rounding).
+    pub covariance: f64,
+}
+
+/// [`Terms`] of the Fréchet distance between two Gaussians; [`distance`] is their sum.
+///
+/// # Errors
+/// If the dimensions differ.
+pub fn terms(a: &Gaussian, b: &Gaussian) -> Result<Terms, FrechetError> {
     if a.mean.len() != b.mean.len() {
         return Err(FrechetError::Dimensions {
             a: a.mean.len(),
@@ -104,8 +124,10 @@ pub fn distance(a: &Gaussian, b: &Gaussian) -> Result<f64, FrechetError> {
         .map(|l| l.max(0.0).sqrt())
         .sum();
     let diff = &a.mean - &b.mean;
-    let d = diff.dot(&diff) + a.cov.trace() + b.cov.trace() - 2.0 * tr_root;
-    Ok(d.max(0.0))
+    Ok(Terms {
+        mean: diff.dot(&diff),
+        covariance: a.cov.trace() + b.cov.trace() - 2.0 * tr_root,
+    })
 }
 
 /// [`distance`] between the Gaussians of two feature sets.
@@ -114,6 +136,14 @@ pub fn distance(a: &Gaussian, b: &Gaussian) -> Result<f64, FrechetError> {
 /// As [`Gaussian::of`] and [`distance`].
 pub fn between(a: &[Vec<f32>], b: &[Vec<f32>]) -> Result<f64, FrechetError> {
     distance(&Gaussian::of(a)?, &Gaussian::of(b)?)
+}
+
+/// [`terms`] between the Gaussians of two feature sets.
+///
+/// # Errors
+/// As [`Gaussian::of`] and [`terms`].
+pub fn terms_between(a: &[Vec<f32>], b: &[Vec<f32>]) -> Result<Terms, FrechetError> {
+    terms(&Gaussian::of(a)?, &Gaussian::of(b)?)
 }
 
 #[cfg(test)]
@@ -172,6 +202,27 @@ mod tests {
             .collect();
         let d = between(&x, &shifted).unwrap();
         assert!((d - 4.0 * 0.25).abs() < 1e-5, "{d}");
+        // … all of it in the mean term; a scaled copy differs in the covariance term alone.
+        let t = terms_between(&x, &shifted).unwrap();
+        assert!(
+            (t.mean - 1.0).abs() < 1e-5 && t.covariance.abs() < 1e-5,
+            "{t:?}"
+        );
+        let scaled: Vec<Vec<f32>> = x
+            .iter()
+            .map(|v| v.iter().map(|a| 2.0 * a).collect())
+            .collect();
+        let centred = |s: &[Vec<f32>]| Gaussian::of(s).unwrap();
+        let (a, b) = (centred(&x), centred(&scaled));
+        let t = terms(&a, &b).unwrap();
+        let mean_gap = (&a.mean - &b.mean).norm_squared();
+        assert!((t.mean - mean_gap).abs() < 1e-9, "{t:?}");
+        // A covariance scaled by 4 (standard deviations by 2): tr(S + 4S − 2·2S) = tr S.
+        assert!(
+            (t.covariance - a.cov.trace()).abs() < 1e-6 * a.cov.trace(),
+            "{t:?}"
+        );
+        assert!((distance(&a, &b).unwrap() - (t.mean + t.covariance)).abs() < 1e-12);
         // Fewer samples than dimensions: a singular covariance still gives a distance.
         let few = &x[..3];
         assert!(between(few, few).unwrap() < 1e-9);
