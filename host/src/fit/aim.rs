@@ -544,6 +544,9 @@ fn rigid_start(
     subset: Option<&[i64]>,
     mm: f32,
 ) -> Vec<[f32; 18]> {
+    if mode == Mode::TwoD {
+        return vec![IDENTITY_18; perf.frames.len()];
+    }
     let rest: Vec<[f32; 3]> = cache
         .rest
         .chunks_exact(3)
@@ -558,8 +561,8 @@ fn rigid_start(
         .iter()
         .map(|frame| {
             let to: Vec<[f32; 3]> = chosen.iter().map(|&i| frame[i].map(|x| x * mm)).collect();
-            match (mode, fit_rigid(&from, &to)) {
-                (Mode::ThreeD, Some(r)) => {
+            match fit_rigid(&from, &to) {
+                Some(r) => {
                     let mut start = IDENTITY_18;
                     for i in 0..3 {
                         // 6D: the rotation's first two columns.
@@ -569,7 +572,7 @@ fn rigid_start(
                     }
                     start
                 }
-                _ => IDENTITY_18,
+                None => IDENTITY_18,
             }
         })
         .collect()

@@ -209,20 +209,24 @@ pub fn fw_mlp(config: &FitConfig, inputs: usize, outputs: usize, device: &Device
     } else {
         Activation::Gelu
     };
-    let acts = [
-        first,
-        Activation::Gelu,
-        Activation::Gelu,
-        Activation::Identity,
-    ];
-    let h = config.hidden;
-    Mlp::new(&[inputs, h, h, h, outputs], &acts, device)
+    four_layers(first, inputs, config.hidden, outputs, device)
 }
 
-/// A 4-layer GELU MLP (F_T and F_W).
+/// A 4-layer GELU MLP (F_T, and F_W without its sine layer).
 pub fn gelu_mlp(inputs: usize, hidden: usize, outputs: usize, device: &Device) -> Mlp {
+    four_layers(Activation::Gelu, inputs, hidden, outputs, device)
+}
+
+/// Four layers: `first`, then two GELU layers of `hidden` units, then a linear output.
+fn four_layers(
+    first: Activation,
+    inputs: usize,
+    hidden: usize,
+    outputs: usize,
+    device: &Device,
+) -> Mlp {
     let acts = [
-        Activation::Gelu,
+        first,
         Activation::Gelu,
         Activation::Gelu,
         Activation::Identity,

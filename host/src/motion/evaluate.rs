@@ -488,15 +488,17 @@ impl Judge<'_> {
         } else {
             None
         };
+        let generated = frechet::terms_between(&feats[1], &feats[0])?;
+        let lstm = frechet::terms_between(&feats[2], &feats[0])?;
         Ok(Row {
             accuracy_gt: accuracy[0],
             accuracy_motion3dgan: accuracy[1],
             accuracy_lstm: accuracy[2],
             per_label_accuracy: per_label,
-            frechet_motion3dgan: frechet::between(&feats[1], &feats[0])?,
-            frechet_lstm: frechet::between(&feats[2], &feats[0])?,
-            frechet_mean_motion3dgan: frechet::terms_between(&feats[1], &feats[0])?.mean,
-            frechet_mean_lstm: frechet::terms_between(&feats[2], &feats[0])?.mean,
+            frechet_motion3dgan: generated.distance(),
+            frechet_lstm: lstm.distance(),
+            frechet_mean_motion3dgan: generated.mean,
+            frechet_mean_lstm: lstm.mean,
             frechet_train: if with_train {
                 Some(frechet::between(self.train_features, &feats[0])?)
             } else {

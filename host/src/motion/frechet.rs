@@ -88,8 +88,7 @@ fn sqrt_psd(m: &DMatrix<f64>) -> DMatrix<f64> {
 /// # Errors
 /// If the dimensions differ.
 pub fn distance(a: &Gaussian, b: &Gaussian) -> Result<f64, FrechetError> {
-    let t = terms(a, b)?;
-    Ok((t.mean + t.covariance).max(0.0))
+    Ok(terms(a, b)?.distance())
 }
 
 /// The two terms of the squared Fréchet distance: where the means lie and how the spreads
@@ -101,6 +100,14 @@ pub struct Terms {
     /// `tr(S1 + S2 − 2 (S1^½ S2 S1^½)^½)`, the Bures distance of the covariances (≥ 0 up to
     /// rounding).
     pub covariance: f64,
+}
+
+impl Terms {
+    /// Their sum, the squared Fréchet distance ([`distance`]); a tiny negative value that
+    /// rounding leaves for equal Gaussians is returned as 0.
+    pub fn distance(&self) -> f64 {
+        (self.mean + self.covariance).max(0.0)
+    }
 }
 
 /// [`Terms`] of the Fréchet distance between two Gaussians; [`distance`] is their sum.
