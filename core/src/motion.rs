@@ -6,9 +6,9 @@
 //! Gaussian noise by Box–Muller through `libm` ([`gaussian_noise`]) → the generator MLP on
 //! `[z ‖ one-hot label]` → its output projected onto the tangent space at the reference motion p
 //! → the exponential map ([`crate::srvf::exp_map`], a unit SRVF) → decoding onto a neutral's
-//! landmarks ([`crate::srvf::decode`]) with an arc length drawn from the label's training
-//! lengths (the next value of the seed's Gaussian stream). No allocation: every buffer is the caller's, sized by
-//! [`MotionGenerator::scratch_len`].
+//! landmarks ([`crate::srvf::decode`]) with a reach (the apex's distance from the neutral) drawn
+//! from the label's training motions by the next value of the seed's Gaussian stream. No
+//! allocation: every buffer is the caller's, sized by [`MotionGenerator::scratch_len`].
 
 use rand_core::{RngCore, SeedableRng};
 
@@ -16,7 +16,7 @@ use crate::error::{BufferError, FormatError};
 use crate::format::{ArtifactKind, SinewFile};
 use crate::network::load_mlp;
 use crate::nn::Mlp;
-use crate::srvf::{FRAMES, decode, exp_map, project_tangent};
+use crate::srvf::{FRAMES, decode, exp_map, length_for_reach, project_tangent};
 use crate::tensor::F32s;
 
 /// The number of labels (CoMA's twelve expression classes), the one-hot code's width.
@@ -46,6 +46,10 @@ pub struct MotionGenerator<'a> {
     /// `motion.length`: one length for every label (`[1]`), or per label its mean and spread
     /// (`[LABELS, 2]`).
     lengths: F32s<'a>,
+    /// `motion.reach`, per label the mean and spread of the training motions' reach
+    /// (`[LABELS, 2]`), in files baked since 2026-11-27; without it a motion is decoded at its
+    /// drawn arc length.
+    reaches: Option<F32s<'a>>,
     noise: usize,
     dims: usize,
 }
@@ -55,7 +59,8 @@ impl<'a> MotionGenerator<'a> {
     /// (inputs = noise + [`LABELS`], outputs = `FRAMES × dims`), the reference motion `motion.p`
     /// `[FRAMES, dims]` with `dims` whole 3D points, and `motion.length`: `[1]`, one positive
     /// length for every label, or `[LABELS, 2]`, per label a positive mean and a non-negative
-    /// spread, all finite.
+    /// spread, all finite; and, if present, `motion.reach` `[LABELS, 2]`, per label a positive
+    /// mean and a non-negative spread, all finite.
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::MotionGenerator)?;
         if file.metadata().get("content") != Some(CONTENT) {
@@ -83,20 +88,21 @@ impl<'a> MotionGenerator<'a> {
             }
             _ => return Err(FormatError::IncompatibleShapes),
         };
-        let mut values = lengths.iter();
-        while let Some(mean) = values.next() {
-            let spread = if rank == 2 { values.next() } else { Some(0.0) };
-            match spread {
-                Some(spread)
-                    if mean.is_finite() && mean > 0.0 && spread.is_finite() && spread >= 0.0 => {}
-                _ => return Err(FormatError::NonFinite),
+        check_spreads(&lengths, rank == 2)?;
+        let reaches = match file.section("motion.reach") {
+            None => None,
+            Some(_) => {
+                let reaches = file.f32_tensor("motion.reach", &[LABELS as u32, 2])?;
+                check_spreads(&reaches, true)?;
+                Some(reaches)
             }
-        }
+        };
         Ok(Self {
             noise: mlp.inputs() - LABELS,
             mlp,
             p,
             lengths,
+            reaches,
             dims,
         })
     }
@@ -132,6 +138,35 @@ impl<'a> MotionGenerator<'a> {
     /// length, or a label not below [`LABELS`]).
     pub fn length_spread(&self, label: usize) -> f32 {
         self.length_of(label).1
+    }
+
+    /// The mean reach of `label`'s training motions (the distance of the apex from the
+    /// neutral, in units of the per-frame normalised landmarks), if the file has reaches; `None`
+    /// otherwise or for a label not below [`LABELS`].
+    pub fn reach(&self, label: usize) -> Option<f32> {
+        self.reach_of(label).map(|(mean, _)| mean)
+    }
+
+    /// The length `q` (a motion of `label`, `[FRAMES × dims]`) decodes with at intensity 1 and
+    /// the label's mean: [`crate::srvf::length_for_reach`] of the mean reach where the file has
+    /// reaches, the mean arc length otherwise.
+    ///
+    /// # Errors
+    /// [`BufferError::Input`] for a label not below [`LABELS`] or a `q` of another length.
+    pub fn mean_length(&self, label: usize, q: &[f32]) -> Result<f32, BufferError> {
+        if label >= LABELS || q.len() != self.motion_len() {
+            return Err(BufferError::Input);
+        }
+        match self.reach_of(label) {
+            Some((reach, _)) => length_for_reach(q, self.dims, reach),
+            None => Ok(self.length(label)),
+        }
+    }
+
+    /// (mean, spread) of `label`'s reach, if the file has reaches.
+    fn reach_of(&self, label: usize) -> Option<(f32, f32)> {
+        let r = self.reaches.as_ref().filter(|_| label < LABELS)?;
+        Some((r.at(2 * label), r.at(2 * label + 1)))
     }
 
     /// (mean, spread) of `label`'s arc length.
@@ -176,11 +211,13 @@ impl<'a> MotionGenerator<'a> {
     }
 
     /// The landmark curve of `label` from `seed` on `neutral` (`[dims]`, the face's landmarks):
-    /// [`MotionGenerator::motion`] decoded with length `intensity × max(0, m + s · g)` into
-    /// `out` (`[(FRAMES + 1) × dims]`, frame 0 the neutral), where `m` and `s` are the label's
-    /// [`MotionGenerator::length`] and [`MotionGenerator::length_spread`] and `g` is the seed's
-    /// standard normal value drawn right after the noise: the SRVF is scale-free, so how far a
-    /// motion goes is drawn from its label's training lengths.
+    /// [`MotionGenerator::motion`] decoded into `out` (`[(FRAMES + 1) × dims]`, frame 0 the
+    /// neutral) so that its apex lies `intensity × max(0, m + s · g)` from the neutral (in
+    /// normalised landmarks; [`crate::srvf::length_for_reach`]), where `m` and `s` are the mean
+    /// and spread of the label's training reaches and `g` is the seed's standard normal value
+    /// drawn right after the noise: the SRVF is scale-free, so how far a motion goes is drawn
+    /// from its label's training motions. A file without reaches draws the arc length instead,
+    /// from [`MotionGenerator::length`] and [`MotionGenerator::length_spread`].
     ///
     /// # Errors
     /// [`BufferError::Input`] for a label not below [`LABELS`] or a neutral of another length;
@@ -203,8 +240,13 @@ impl<'a> MotionGenerator<'a> {
         // The motion itself lives in the first motion-sized part of the scratch.
         let (q, rest) = scratch.split_at_mut(self.motion_len());
         let g = self.motion_into(label, seed, rest, q)?;
-        let (mean, spread) = self.length_of(label);
-        let length = (mean + spread * g).max(0.0);
+        let length = match self.reach_of(label) {
+            Some((mean, spread)) => length_for_reach(q, self.dims, (mean + spread * g).max(0.0))?,
+            None => {
+                let (mean, spread) = self.length_of(label);
+                (mean + spread * g).max(0.0)
+            }
+        };
         decode(q, neutral, intensity * length, out)
     }
 
@@ -242,6 +284,21 @@ impl<'a> MotionGenerator<'a> {
         exp_map(p, s, out)?;
         Ok(g)
     }
+}
+
+/// Checks `values` as (mean, spread) pairs (`pairs`) or single means: each mean positive, each
+/// spread non-negative, all finite.
+fn check_spreads(values: &F32s<'_>, pairs: bool) -> Result<(), FormatError> {
+    let mut values = values.iter();
+    while let Some(mean) = values.next() {
+        let spread = if pairs { values.next() } else { Some(0.0) };
+        match spread {
+            Some(spread)
+                if mean.is_finite() && mean > 0.0 && spread.is_finite() && spread >= 0.0 => {}
+            _ => return Err(FormatError::NonFinite),
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -96,6 +96,49 @@ pub fn landmark_size(points: &[f32]) -> f32 {
     crate::s2d::centre_size(points).1
 }
 
+/// A decoded motion whose ends are closer than this fraction of its length is decoded as if they
+/// were this far apart ([`length_for_reach`]): no training motion comes near it (the least
+/// straight class averages 0.68), and it keeps the length of a motion that returns to where it
+/// started finite.
+pub const MIN_STRAIGHTNESS: f32 = 0.25;
+
+/// The straightness of the motion `q` (`[FRAMES × dims]`, `⟨q, q⟩ = 1`): the distance between the
+/// first and the last frame of its curve decoded at length 1 on a neutral of size 1,
+/// `‖Σ_t ‖q_t‖ q_t‖ / FRAMES` (1 for a motion along a straight line, less for one that turns or
+/// wavers). Summed per coordinate over the frames in order.
+///
+/// # Errors
+/// [`BufferError::Input`] if `q` is not [`FRAMES`] frames of `dims` coordinates.
+pub fn straightness(q: &[f32], dims: usize) -> Result<f32, BufferError> {
+    if dims == 0 || q.len() != FRAMES * dims {
+        return Err(BufferError::Input);
+    }
+    let mut speed = [0.0f32; FRAMES];
+    for (s, qt) in speed.iter_mut().zip(q.chunks_exact(dims)) {
+        *s = libm::sqrtf(dot(qt, qt));
+    }
+    let mut total = 0.0f32;
+    for d in 0..dims {
+        let mut sum = 0.0f32;
+        for (s, x) in speed.iter().zip(q.iter().skip(d).step_by(dims)) {
+            sum += *s * *x;
+        }
+        total += sum * sum;
+    }
+    Ok(libm::sqrtf(total) / FRAMES as f32)
+}
+
+/// The length [`decode`] takes for the motion `q` to end `reach` away from where it starts (in
+/// units of the per-frame normalised landmarks, as a length): `reach / straightness(q)`, the
+/// straightness at least [`MIN_STRAIGHTNESS`]. How far an expression goes is its apex's distance
+/// from the neutral; a motion's arc length also counts how much it wavers on the way.
+///
+/// # Errors
+/// As [`straightness`].
+pub fn length_for_reach(q: &[f32], dims: usize, reach: f32) -> Result<f32, BufferError> {
+    Ok(reach / straightness(q, dims)?.max(MIN_STRAIGHTNESS))
+}
+
 /// Decodes the motion `q` onto the landmarks `neutral` (S2D eq. 5, `α(t) = ∫₀ᵗ ‖q(s)‖ q(s) ds +
 /// α(0)`, as a left Riemann sum over the [`FRAMES`] steps): `out` receives `FRAMES + 1` landmark
 /// frames, frame-major, frame 0 the neutral and
@@ -200,5 +243,61 @@ mod tests {
             Err(BufferError::Output)
         );
         assert_eq!(exp_map(&q, &q, &mut out), Err(BufferError::Output));
+        assert_eq!(straightness(&q, 9), Err(BufferError::Input));
+        assert_eq!(straightness(&q, 0), Err(BufferError::Input));
+    }
+
+    #[test]
+    fn a_motion_decoded_for_a_reach_ends_that_far_from_the_neutral() {
+        // Straight: every sample the same direction, so the ends are the whole length apart.
+        let dims = 6;
+        let mut line = vec![0.0f32; FRAMES * dims];
+        for qt in line.chunks_exact_mut(dims) {
+            qt[0] = 1.0;
+        }
+        assert!((straightness(&line, dims).unwrap() - 1.0).abs() < 1e-6);
+        // Out along one axis for half the frames and along another for the rest: the ends are
+        // √2 / 2 of the length apart.
+        let mut corner = vec![0.0f32; FRAMES * dims];
+        for (t, qt) in corner.chunks_exact_mut(dims).enumerate() {
+            qt[usize::from(t >= FRAMES / 2)] = 1.0;
+        }
+        let s = straightness(&corner, dims).unwrap();
+        assert!((s - 0.5 * libm::sqrtf(2.0)).abs() < 1e-6, "{s}");
+        // Decoded at the length for a reach, the last frame is that reach (times the neutral's
+        // size) from the first.
+        let neutral = [0.0f32, 0.0, 0.0, 2.0, 0.0, 0.0];
+        let size = landmark_size(&neutral);
+        // A quarter circle, sampled per step at the step's middle angle.
+        let mut arc = vec![0.0f32; FRAMES * dims];
+        for (t, qt) in arc.chunks_exact_mut(dims).enumerate() {
+            let a = core::f32::consts::FRAC_PI_2 * (t as f32 + 0.5) / FRAMES as f32;
+            qt[0] = libm::cosf(a);
+            qt[1] = libm::sinf(a);
+        }
+        for q in [&line, &corner, &arc] {
+            let length = length_for_reach(q, dims, 0.3).unwrap();
+            let mut out = vec![0.0f32; (FRAMES + 1) * dims];
+            decode(q, &neutral, length, &mut out).unwrap();
+            let last = &out[FRAMES * dims..];
+            let d = libm::sqrtf(
+                last.iter()
+                    .zip(&neutral)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum(),
+            );
+            assert!((d - 0.3 * size).abs() < 1e-4 * size, "{d}");
+        }
+        // A motion that comes back to its start is decoded at most 1 / MIN_STRAIGHTNESS times
+        // its reach.
+        let mut back = line.clone();
+        for qt in back.chunks_exact_mut(dims).skip(FRAMES / 2) {
+            qt[0] = -1.0;
+        }
+        assert_eq!(straightness(&back, dims).unwrap(), 0.0);
+        assert_eq!(
+            length_for_reach(&back, dims, 0.3).unwrap(),
+            0.3 / MIN_STRAIGHTNESS
+        );
     }
 }

@@ -182,6 +182,22 @@ fn eval_motion(dir: &std::path::Path, motions: &std::path::Path, model: &std::pa
             let f = r[key].as_f64().unwrap();
             assert!(f.is_finite() && f >= 0.0, "{row}.{key} = {f}");
         }
+        // One test motion a label: each label's offset is that motion's squared distance from
+        // the ground truth's in the classifier's features, never negative, and 0 for no label.
+        for key in ["label_mean_offset_motion3dgan", "label_mean_offset_lstm"] {
+            let offsets: Vec<f64> = r[key]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            assert_eq!(offsets.len(), 12, "{row}.{key}");
+            assert!(
+                offsets.iter().all(|o| o.is_finite() && *o >= 0.0)
+                    && offsets.iter().any(|o| *o > 0.0),
+                "{row}.{key} = {offsets:?}"
+            );
+        }
         // Seeds make Motion3DGAN's motions differ; the LSTM's repeat (computed, not assumed: the
         // distance of a motion from itself is 0 up to the rounding of its inner product).
         let (gan, lstm) = (

@@ -257,6 +257,13 @@ pub struct Row {
     /// The mean term of `frechet_lstm`.
     #[serde(default)]
     pub frechet_mean_lstm: f64,
+    /// Per label (in [`LABELS`] order), `‖μ − μ_gt‖²` of that label's features, Motion3DGAN's
+    /// (`frechet::label_mean_offsets`): which label's centre the whole distance misses.
+    #[serde(default)]
+    pub label_mean_offset_motion3dgan: Vec<Option<f64>>,
+    /// … the LSTM's.
+    #[serde(default)]
+    pub label_mean_offset_lstm: Vec<Option<f64>>,
     /// Fréchet distance of the training sequences' features from the test ground truth's (a
     /// floor: two samples of the same distribution); Gen-LM only (Det-LM would decode every
     /// training sequence).
@@ -490,6 +497,9 @@ impl Judge<'_> {
         };
         let generated = frechet::terms_between(&feats[1], &feats[0])?;
         let lstm = frechet::terms_between(&feats[2], &feats[0])?;
+        let offsets = |k: usize| {
+            frechet::label_mean_offsets(&feats[k], &feats[0], self.test_labels, LABELS.len())
+        };
         Ok(Row {
             accuracy_gt: accuracy[0],
             accuracy_motion3dgan: accuracy[1],
@@ -499,6 +509,8 @@ impl Judge<'_> {
             frechet_lstm: lstm.distance(),
             frechet_mean_motion3dgan: generated.mean,
             frechet_mean_lstm: lstm.mean,
+            label_mean_offset_motion3dgan: offsets(1)?,
+            label_mean_offset_lstm: offsets(2)?,
             frechet_train: if with_train {
                 Some(frechet::between(self.train_features, &feats[0])?)
             } else {

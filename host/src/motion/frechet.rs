@@ -153,6 +153,50 @@ pub fn terms_between(a: &[Vec<f32>], b: &[Vec<f32>]) -> Result<Terms, FrechetErr
     terms(&Gaussian::of(a)?, &Gaussian::of(b)?)
 }
 
+/// Per label `0..classes`, the squared distance `‖μ_a − μ_b‖²` between the means of that label's
+/// rows of `a` and of `b` (two feature sets row for row, `labels` the rows' labels); `None` for a
+/// label without rows. Where the Fréchet distance of two whole sets puts the difference between
+/// their labels' centres into the covariance term, this says which label it is.
+///
+/// # Errors
+/// [`FrechetError::Lengths`] if `a`, `b` and `labels` are not row for row or the vectors differ
+/// in length; [`FrechetError::NonFinite`] for a non-finite value.
+pub fn label_mean_offsets(
+    a: &[Vec<f32>],
+    b: &[Vec<f32>],
+    labels: &[usize],
+    classes: usize,
+) -> Result<Vec<Option<f64>>, FrechetError> {
+    let d = a.first().map_or(0, Vec::len);
+    if a.len() != b.len() || a.len() != labels.len() || a.iter().chain(b).any(|v| v.len() != d) {
+        return Err(FrechetError::Lengths);
+    }
+    if a.iter().chain(b).flatten().any(|x| !x.is_finite()) {
+        return Err(FrechetError::NonFinite);
+    }
+    Ok((0..classes)
+        .map(|c| {
+            let rows: Vec<usize> = (0..labels.len()).filter(|&r| labels[r] == c).collect();
+            if rows.is_empty() {
+                return None;
+            }
+            let n = rows.len() as f64;
+            Some(
+                (0..d)
+                    .map(|k| {
+                        let diff: f64 = rows
+                            .iter()
+                            .map(|&r| f64::from(a[r][k]) - f64::from(b[r][k]))
+                            .sum::<f64>()
+                            / n;
+                        diff * diff
+                    })
+                    .sum(),
+            )
+        })
+        .collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -253,6 +297,41 @@ mod tests {
         assert_eq!(
             between(&a, &[vec![1.0], vec![2.0]]),
             Err(FrechetError::Dimensions { a: 2, b: 1 })
+        );
+    }
+
+    #[test]
+    fn label_mean_offsets_find_the_label_that_moved() {
+        let labels = [0usize, 1, 0, 1, 2, 2];
+        let a: Vec<Vec<f32>> = (0..6)
+            .map(|i| vec![i as f32, (i * i) as f32 * 0.1])
+            .collect();
+        // Label 1's rows shifted by (3, 4): its offset is 25, the others' 0.
+        let mut b = a.clone();
+        for r in [1, 3] {
+            b[r][0] += 3.0;
+            b[r][1] += 4.0;
+        }
+        let offsets = label_mean_offsets(&a, &b, &labels, 4).unwrap();
+        assert_eq!(offsets[0], Some(0.0));
+        assert!((offsets[1].unwrap() - 25.0).abs() < 1e-5, "{offsets:?}");
+        assert_eq!(offsets[2], Some(0.0));
+        assert_eq!(offsets[3], None);
+        // Rows within a label may be in any order: only the label's means count.
+        let mut swapped = a.clone();
+        swapped.swap(0, 2);
+        assert_eq!(
+            label_mean_offsets(&a, &swapped, &labels, 3).unwrap()[0],
+            Some(0.0)
+        );
+        assert_eq!(
+            label_mean_offsets(&a, &b[1..], &labels, 3),
+            Err(FrechetError::Lengths)
+        );
+        b[4][0] = f32::NAN;
+        assert_eq!(
+            label_mean_offsets(&a, &b, &labels, 3),
+            Err(FrechetError::NonFinite)
         );
     }
 }

@@ -56,7 +56,8 @@ pub struct GanConfig {
     /// Slope of the leaky ReLUs.
     pub slope: f32,
     /// Which real motion of its label each generated one is reconstructed against in L_r.
-    #[serde(default)]
+    /// Checkpoints written before the setting existed trained with [`Pairing::Batch`].
+    #[serde(default = "Pairing::batch")]
     pub pairing: Pairing,
 }
 
@@ -66,12 +67,25 @@ pub struct GanConfig {
 pub enum Pairing {
     /// The batch's real motion in the same row, as the reference pairs them: every generated
     /// motion is pulled towards all of its label's motions in turn, so towards their centre.
-    #[default]
     Batch,
     /// The batch's real motion of the same label nearest to it (tangent-space distance): each
     /// generated motion is pulled towards the real motion it already resembles, so the noise
     /// keeps choosing between them.
     Nearest,
+    /// Both ways, averaged (a Chamfer distance within each label of the batch): each generated
+    /// motion against the nearest real one of its label, and each real motion against the
+    /// nearest generated one of its label, so that a label's generated motions are pulled to
+    /// cover every kind of its real ones (mouth_side's left and right) rather than their centre
+    /// or only the kind they resemble. The default.
+    #[default]
+    Chamfer,
+}
+
+impl Pairing {
+    /// [`Pairing::Batch`], for serde's default.
+    fn batch() -> Self {
+        Self::Batch
+    }
 }
 
 impl Default for GanConfig {
@@ -90,7 +104,7 @@ impl Default for GanConfig {
             noise: 128,
             hidden: vec![512, 512],
             slope: 0.2,
-            pairing: Pairing::Batch,
+            pairing: Pairing::Chamfer,
         }
     }
 }
@@ -294,7 +308,8 @@ pub fn reconstruction(fake: Tensor<2>, real: Tensor<2>, p: &Tensor<2>) -> Tensor
 
 /// For each row of `fake`, the row of `real` with the same one-hot label (`labels`, shared by
 /// both: the batch's real labels condition its generated motions) at the smallest squared
-/// Euclidean distance; a row's own real motion is always a candidate.
+/// Euclidean distance; a row's own real motion is always a candidate. With the two swapped, for
+/// each real motion the nearest generated one of its label.
 ///
 /// # Shapes
 /// - fake, real: `[n, d]`, labels: `[n, classes]` → `[n]`
@@ -308,6 +323,34 @@ pub fn nearest_of_label(fake: &Tensor<2>, real: &Tensor<2>, labels: &Tensor<2>) 
     // Rows of another label are pushed out of reach.
     let masked = distance + same.neg().add_scalar(1.0).mul_scalar(1e30);
     masked.argmin(1).reshape([n])
+}
+
+/// L_r ([`reconstruction`]) of the generated motions `fake` against the batch's `real` ones,
+/// paired as `pairing` says (both of the batch's one-hot `labels`).
+///
+/// # Shapes
+/// - fake, real: `[n, d]` tangent vectors at p, labels: `[n, classes]` → `[1]`
+pub fn paired_reconstruction(
+    fake: Tensor<2>,
+    real: &Tensor<2>,
+    labels: &Tensor<2>,
+    p: &Tensor<2>,
+    pairing: Pairing,
+) -> Tensor<1> {
+    let nearest_real = || {
+        let idx = nearest_of_label(&fake.clone().detach(), real, labels);
+        real.clone().select(0, idx)
+    };
+    match pairing {
+        Pairing::Batch => reconstruction(fake, real.clone(), p),
+        Pairing::Nearest => reconstruction(fake.clone(), nearest_real(), p),
+        Pairing::Chamfer => {
+            let idx = nearest_of_label(real, &fake.clone().detach(), labels);
+            let to_real = reconstruction(fake.clone(), nearest_real(), p);
+            let to_fake = reconstruction(fake.select(0, idx), real.clone(), p);
+            (to_real + to_fake).mul_scalar(0.5)
+        }
+    }
 }
 
 /// Adam with the reference's β = (0.5, 0.9).
@@ -414,14 +457,7 @@ pub fn generator_step(
         .forward(Tensor::cat(vec![fake.clone(), batch.labels.clone()], 1))
         .mean()
         .neg();
-    let real = match config.pairing {
-        Pairing::Batch => batch.real.clone(),
-        Pairing::Nearest => {
-            let idx = nearest_of_label(&fake.clone().detach(), &batch.real, &batch.labels);
-            batch.real.clone().select(0, idx)
-        }
-    };
-    let rec = reconstruction(fake, real, p);
+    let rec = paired_reconstruction(fake, &batch.real, &batch.labels, p, config.pairing);
     let loss =
         adv.mul_scalar(config.alpha_adv as f64) + rec.clone().mul_scalar(config.alpha_rec as f64);
     let losses = StepLosses {

@@ -392,8 +392,12 @@ pub fn interpolate(
     for k in 0..steps {
         let tau = k as f32 / (steps - 1) as f32;
         let q = srvf::interpolate(&q1, &q2, tau)?;
-        // The length blends the two labels' mean lengths as the motion blends them.
-        let length = (1.0 - tau) * generator.length(a) + tau * generator.length(b);
+        // The length blends the two labels' mean lengths (for this motion) as the motion
+        // blends them.
+        let length = generator
+            .mean_length(a, &q)
+            .and_then(|la| Ok((1.0 - tau) * la + tau * generator.mean_length(b, &q)?))
+            .map_err(MotionGenerateError::DecodeMotion)?;
         decode(
             &q,
             &l.neutral_lmk,

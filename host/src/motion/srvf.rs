@@ -44,6 +44,9 @@ pub struct Encoded {
     pub q: Vec<f32>,
     /// Arc length of the per-frame-normalised landmark curve (the decoding's `length`).
     pub length: f32,
+    /// Distance between its first and last frame (the apex's from the neutral): the reach
+    /// `sinew_core::srvf::length_for_reach` decodes to.
+    pub reach: f32,
 }
 
 /// A landmark frame centred on its mean and scaled to unit Frobenius norm, in f64.
@@ -156,6 +159,12 @@ pub fn normalised_curve(frames: &[&[f32]]) -> Result<(Vec<Vec<f64>>, f64), SrvfE
 pub fn encode(frames: &[&[f32]]) -> Result<Encoded, SrvfError> {
     let (curve, _) = normalised_curve(frames)?;
     let dims = curve[0].len();
+    let reach = curve[0]
+        .iter()
+        .zip(&curve[FRAMES])
+        .map(|(a, b)| (b - a) * (b - a))
+        .sum::<f64>()
+        .sqrt();
     let mut q = Vec::with_capacity(FRAMES * dims);
     for w in curve.windows(2) {
         let v: Vec<f64> = w[0]
@@ -175,6 +184,7 @@ pub fn encode(frames: &[&[f32]]) -> Result<Encoded, SrvfError> {
     Ok(Encoded {
         q: q.into_iter().map(|x| (x * scale) as f32).collect(),
         length: length as f32,
+        reach: reach as f32,
     })
 }
 

@@ -60,6 +60,10 @@ pub struct TangentData {
     /// length a decoded motion of intensity 1 draws from; SRVFs are scale-free). A label without
     /// training curves takes every curve's.
     pub lengths: Vec<[f32; 2]>,
+    /// Per label, the mean and the standard deviation of its training curves' reach (the apex's
+    /// distance from the neutral), as `lengths`; `None` for motions without curves
+    /// ([`TangentData::from_motions`]), which decode at their `lengths`.
+    pub reaches: Option<Vec<[f32; 2]>>,
 }
 
 impl TangentData {
@@ -74,6 +78,7 @@ impl TangentData {
         }
         let mut qs = Vec::with_capacity(train.len());
         let mut lengths = Vec::with_capacity(train.len());
+        let mut reaches = Vec::with_capacity(train.len());
         for &s in &train {
             let e =
                 srvf::encode(&set.landmark_frames(s)).map_err(|source| TangentError::Encode {
@@ -81,27 +86,13 @@ impl TangentData {
                     source,
                 })?;
             lengths.push(f64::from(e.length));
+            reaches.push(f64::from(e.reach));
             qs.push(e.q);
         }
         let labels: Vec<usize> = train.iter().map(|&s| set.label(s)).collect();
-        let all = mean_and_spread(&lengths);
-        let per_label = (0..LABELS.len())
-            .map(|l| {
-                let mine: Vec<f64> = lengths
-                    .iter()
-                    .zip(&labels)
-                    .filter(|&(_, &k)| k == l)
-                    .map(|(x, _)| *x)
-                    .collect();
-                if mine.is_empty() {
-                    all
-                } else {
-                    mean_and_spread(&mine)
-                }
-            })
-            .collect();
         let mut data = Self::from_motions(&qs, labels)?;
-        data.lengths = per_label;
+        data.lengths = per_label(&lengths, &data.labels);
+        data.reaches = Some(per_label(&reaches, &data.labels));
         Ok(data)
     }
 
@@ -139,12 +130,18 @@ impl TangentData {
             tangents,
             labels,
             lengths: vec![[1.0, 0.0]; LABELS.len()],
+            reaches: None,
         })
     }
 
     /// `lengths` flattened, `[LABELS × 2]`, as `motion.length` stores them.
     pub fn lengths_flat(&self) -> Vec<f32> {
         self.lengths.iter().flatten().copied().collect()
+    }
+
+    /// `reaches` flattened, `[LABELS × 2]`, as `motion.reach` stores them.
+    pub fn reaches_flat(&self) -> Option<Vec<f32>> {
+        Some(self.reaches.as_ref()?.iter().flatten().copied().collect())
     }
 
     /// Coordinates of one tangent vector (`FRAMES × dims`).
@@ -324,6 +321,27 @@ pub struct TrainRecord {
 }
 
 /// The mean and the population standard deviation of `xs` (not empty), in f32.
+/// Per label, the mean and spread of the `values` (one per motion, labelled `labels`); a label
+/// without motions takes every motion's.
+fn per_label(values: &[f64], labels: &[usize]) -> Vec<[f32; 2]> {
+    let all = mean_and_spread(values);
+    (0..LABELS.len())
+        .map(|l| {
+            let mine: Vec<f64> = values
+                .iter()
+                .zip(labels)
+                .filter(|&(_, &k)| k == l)
+                .map(|(x, _)| *x)
+                .collect();
+            if mine.is_empty() {
+                all
+            } else {
+                mean_and_spread(&mine)
+            }
+        })
+        .collect()
+}
+
 fn mean_and_spread(xs: &[f64]) -> [f32; 2] {
     let n = xs.len() as f64;
     let mean = xs.iter().sum::<f64>() / n;

@@ -351,3 +351,87 @@ fn the_length_is_drawn_from_the_labels_training_lengths() {
         );
     }
 }
+
+#[test]
+fn the_reach_is_drawn_from_the_labels_training_reaches() {
+    let (mut data, config) = (toy(), config());
+    let mut reaches = vec![[0.3f32, 0.0]; LABELS.len()];
+    reaches[0] = [0.2, 0.05];
+    data.reaches = Some(reaches.clone());
+    let device = Backend::Flex.autodiff_device(config.seed).unwrap();
+    let run = run_to(&data, &config, Run::new(&data, &config, &device), 1);
+    let bytes = bake(&run.generator, &data, &config).unwrap();
+    let core = sinew_core::motion::MotionGenerator::from_bytes(&bytes).unwrap();
+    assert_eq!((core.reach(0), core.reach(1)), (Some(0.2), Some(0.3)));
+
+    let neutral = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0];
+    let size = sinew_core::srvf::landmark_size(&neutral);
+    let mut scratch = vec![0.0f32; core.scratch_len()];
+    let mut q = vec![0.0f32; core.motion_len()];
+    let mut curve = vec![0.0f32; core.curve_len()];
+    let mut apexes = Vec::new();
+    for seed in [3u64, 4, 5] {
+        for (label, intensity) in [(0usize, 1.0f32), (0, 0.5), (1, 1.0)] {
+            core.landmarks(label, seed, intensity, &neutral, &mut scratch, &mut curve)
+                .unwrap();
+            // The apex lies the drawn reach (times the neutral's size) from the neutral, the
+            // draw being the seed's Gaussian value right after the noise.
+            let mut z = vec![0.0f32; config.noise + 1];
+            sinew_core::motion::gaussian_noise(seed, &mut z);
+            let [m, s] = reaches[label];
+            let reach = intensity * (m + s * z[config.noise]).max(0.0);
+            let apex = &curve[FRAMES * 6..];
+            let d = apex
+                .iter()
+                .zip(&neutral)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f32>()
+                .sqrt();
+            assert!(
+                (d - reach * size).abs() < 1e-4,
+                "label {label}, seed {seed}: {d}"
+            );
+            // At the label's mean, the motion decodes at `mean_length`.
+            core.motion(label, seed, &mut scratch, &mut q).unwrap();
+            let at_mean = sinew_core::srvf::length_for_reach(&q, 6, m).unwrap();
+            assert_eq!(core.mean_length(label, &q).unwrap(), at_mean);
+            if label == 0 && intensity == 1.0 {
+                apexes.push(d);
+            }
+        }
+    }
+    // Label 0's reaches differ by seed.
+    assert!(apexes.windows(2).all(|w| w[0] != w[1]), "{apexes:?}");
+
+    // Broken reaches are refused.
+    let with_reaches = |shape: &[usize], values: &[f32]| {
+        let mut w = SinewWriter::new(ArtifactKind::MotionGenerator);
+        w.meta("content", CONTENT);
+        run.generator.mlp.export(&mut w, "motion.g").unwrap();
+        w.f32s("motion.p", &[FRAMES, 6], &data.p).unwrap();
+        w.f32s("motion.length", &[1], &[0.3]).unwrap();
+        w.f32s("motion.reach", shape, values).unwrap();
+        w.to_bytes().unwrap()
+    };
+    let good = data.reaches_flat().unwrap();
+    assert!(
+        sinew_core::motion::MotionGenerator::from_bytes(&with_reaches(&[LABELS.len(), 2], &good))
+            .is_ok()
+    );
+    let mut negative = good.clone();
+    negative[4] = -0.1;
+    let mut zero = good.clone();
+    zero[2] = 0.0;
+    for (shape, values) in [
+        (vec![LABELS.len(), 2], negative),
+        (vec![LABELS.len(), 2], zero),
+        (vec![1], vec![0.3]),
+        (vec![LABELS.len(), 3], vec![0.3; 3 * LABELS.len()]),
+    ] {
+        assert!(
+            sinew_core::motion::MotionGenerator::from_bytes(&with_reaches(&shape, &values))
+                .is_err(),
+            "{shape:?}"
+        );
+    }
+}

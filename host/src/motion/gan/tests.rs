@@ -182,3 +182,82 @@ fn nearest_pairing_picks_the_closest_real_motion_of_the_same_label() {
     // Across labels row 0's nearest would be real row 3 (x = 9), row 2's real row 1 (x = 10).
     assert_eq!(idx, vec![1, 0, 3, 2]);
 }
+
+#[test]
+fn chamfer_pairing_counts_the_real_motions_no_generated_one_covers() {
+    let dev = device(2);
+    let d = FRAMES * 3;
+    let unit = |v: Vec<f32>| {
+        let n = (v.iter().map(|x| x * x).sum::<f32>() / FRAMES as f32).sqrt();
+        v.into_iter().map(|x| x / n).collect::<Vec<_>>()
+    };
+    let p = unit((0..d).map(|i| ((i as f32) * 0.37).sin() + 0.2).collect());
+    let pt = tensor(p.clone(), [1, d], &dev);
+    let tangent = |f: &dyn Fn(usize) -> f32| {
+        let mut v: Vec<f32> = (0..d).map(f).collect();
+        sinew_core::srvf::project_tangent(&p, &mut v).unwrap();
+        v
+    };
+    // One label with two kinds of real motion, a and its opposite (as mouth_side's left and
+    // right), and small offsets to generate near them.
+    let a = tangent(&|i| ((i as f32) * 0.11).cos() * 0.3);
+    let e = tangent(&|i| ((i as f32) * 0.23).sin() * 0.01);
+    let minus_a: Vec<f32> = a.iter().map(|x| -x).collect();
+    let near =
+        |m: &[f32], k: f32| -> Vec<f32> { m.iter().zip(&e).map(|(x, y)| x + k * y).collect() };
+    let real = tensor([a.clone(), minus_a.clone()].concat(), [2, d], &dev);
+    let labels = one_hot(&[0, 0], 1, &dev);
+    let loss = |fakes: Vec<f32>, pairing| {
+        to_vec(paired_reconstruction(
+            tensor(fakes, [2, d], &dev),
+            &real,
+            &labels,
+            &pt,
+            pairing,
+        ))[0]
+    };
+    let rec = |x: &[f32], y: &[f32]| {
+        to_vec(reconstruction(
+            tensor(x.to_vec(), [1, d], &dev),
+            tensor(y.to_vec(), [1, d], &dev),
+            &pt,
+        ))[0]
+    };
+    // Both generated motions near a: each is near a real one (Nearest sees nothing wrong), but
+    // -a has no generated motion near it, and Chamfer adds its distance to the nearer of them.
+    let one_kind = [near(&a, 1.0), near(&a, 2.0)];
+    let nearest = loss(one_kind.concat(), Pairing::Nearest);
+    let expected_nearest = 0.5 * (rec(&one_kind[0], &a) + rec(&one_kind[1], &a));
+    assert!(
+        (nearest - expected_nearest).abs() < 1e-5,
+        "{nearest} {expected_nearest}"
+    );
+    let chamfer = loss(one_kind.concat(), Pairing::Chamfer);
+    let expected =
+        0.5 * (expected_nearest + 0.5 * (rec(&one_kind[0], &a) + rec(&one_kind[0], &minus_a)));
+    assert!((chamfer - expected).abs() < 1e-5, "{chamfer} {expected}");
+    assert!(chamfer > 5.0 * nearest, "{chamfer} {nearest}");
+    // One generated motion near each kind: both pairings see the same small loss.
+    let both_kinds = [near(&minus_a, 1.0), near(&a, 1.0)];
+    let (n, c) = (
+        loss(both_kinds.concat(), Pairing::Nearest),
+        loss(both_kinds.concat(), Pairing::Chamfer),
+    );
+    assert!((n - c).abs() < 1e-5 && c < 0.1, "{n} {c}");
+}
+
+#[test]
+fn settings_saved_before_the_pairing_existed_read_as_the_batch_pairing() {
+    let mut json = serde_json::to_value(GanConfig::default()).unwrap();
+    assert_eq!(json["pairing"], "chamfer");
+    json.as_object_mut().unwrap().remove("pairing");
+    let old: GanConfig = serde_json::from_value(json).unwrap();
+    assert_eq!(old.pairing, Pairing::Batch);
+    assert_eq!(
+        GanConfig {
+            pairing: Pairing::Chamfer,
+            ..old
+        },
+        GanConfig::default()
+    );
+}

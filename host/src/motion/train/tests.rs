@@ -150,6 +150,37 @@ fn each_label_keeps_its_training_curves_length() {
             "label {label}: random apex intensities spread the lengths"
         );
     }
+    // Each label's reach: its training curves' apex distances from the neutral, never more
+    // than their lengths.
+    let reaches = data.reaches.as_ref().unwrap();
+    for (label, &[mean, spread]) in reaches.iter().enumerate() {
+        let mine: Vec<f64> = train
+            .iter()
+            .filter(|&&s| set.label(s) == label)
+            .map(|&s| {
+                let frames = set.landmark_frames(s);
+                let (first, last) = (
+                    srvf::normalise_frame(frames[0], 0).unwrap(),
+                    srvf::normalise_frame(frames[frames.len() - 1], 1).unwrap(),
+                );
+                let d = first
+                    .iter()
+                    .zip(&last)
+                    .map(|(a, b)| (b - a) * (b - a))
+                    .sum::<f64>()
+                    .sqrt();
+                let reach = f64::from(srvf::encode(&frames).unwrap().reach);
+                assert!((reach - d).abs() < 1e-6 * d, "{reach} {d}");
+                d
+            })
+            .collect();
+        let n = mine.len() as f64;
+        let m = mine.iter().sum::<f64>() / n;
+        let sd = (mine.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n).sqrt();
+        assert!((f64::from(mean) - m).abs() < 1e-6 * m, "label {label}");
+        assert!((f64::from(spread) - sd).abs() < 1e-6 * m, "label {label}");
+        assert!(mean < data.lengths[label][0], "label {label}");
+    }
     // The classes move by different amounts (eyebrow little, mouth_extreme much).
     let means: Vec<f32> = data.lengths.iter().map(|l| l[0]).collect();
     let (lo, hi) = means
