@@ -277,6 +277,33 @@ fn a_damaged_optimiser_file_is_named() {
     assert!(e.to_string().contains(&name), "{e}");
 }
 
+/// `intensity × max(0, m + s · g)`: the length or reach `seed` draws from a label's mean and
+/// spread, g being the seed's Gaussian value right after its `noise` values.
+fn drawn(seed: u64, noise: usize, [m, s]: [f32; 2], intensity: f32) -> f32 {
+    let mut z = vec![0.0f32; noise + 1];
+    sinew_core::motion::gaussian_noise(seed, &mut z);
+    intensity * (m + s * z[noise]).max(0.0)
+}
+
+/// A generator file of `run`'s generator and `data`'s reference motion (6 coordinates a frame)
+/// with the given `motion.length` and, if any, `motion.reach` (shape, values), unchecked.
+fn generator_file(
+    run: &Run,
+    data: &TangentData,
+    length: (&[usize], &[f32]),
+    reach: Option<(&[usize], &[f32])>,
+) -> Vec<u8> {
+    let mut w = SinewWriter::new(ArtifactKind::MotionGenerator);
+    w.meta("content", CONTENT);
+    run.generator.mlp.export(&mut w, "motion.g").unwrap();
+    w.f32s("motion.p", &[FRAMES, 6], &data.p).unwrap();
+    w.f32s("motion.length", length.0, length.1).unwrap();
+    if let Some((shape, values)) = reach {
+        w.f32s("motion.reach", shape, values).unwrap();
+    }
+    w.to_bytes().unwrap()
+}
+
 #[test]
 fn the_length_is_drawn_from_the_labels_training_lengths() {
     let (mut data, config) = (toy(), config());
@@ -300,11 +327,7 @@ fn the_length_is_drawn_from_the_labels_training_lengths() {
         for (label, intensity) in [(0usize, 1.0f32), (0, 0.5), (1, 1.0)] {
             core.landmarks(label, seed, intensity, &neutral, &mut scratch, &mut curve)
                 .unwrap();
-            // The draw is the seed's Gaussian value right after the noise.
-            let mut z = vec![0.0f32; config.noise + 1];
-            sinew_core::motion::gaussian_noise(seed, &mut z);
-            let [m, s] = data.lengths[label];
-            let length = intensity * (m + s * z[config.noise]).max(0.0);
+            let length = drawn(seed, config.noise, data.lengths[label], intensity);
             core.motion(label, seed, &mut scratch, &mut q).unwrap();
             sinew_core::srvf::decode(&q, &neutral, length, &mut expected).unwrap();
             assert_eq!(curve, expected, "label {label}, seed {seed}");
@@ -318,14 +341,8 @@ fn the_length_is_drawn_from_the_labels_training_lengths() {
 
     // A file with one length for every label (as generators were first baked) decodes every
     // label at that length, and broken lengths are refused.
-    let with_lengths = |shape: &[usize], values: &[f32]| {
-        let mut w = SinewWriter::new(ArtifactKind::MotionGenerator);
-        w.meta("content", CONTENT);
-        run.generator.mlp.export(&mut w, "motion.g").unwrap();
-        w.f32s("motion.p", &[FRAMES, 6], &data.p).unwrap();
-        w.f32s("motion.length", shape, values).unwrap();
-        w.to_bytes().unwrap()
-    };
+    let with_lengths =
+        |shape: &[usize], values: &[f32]| generator_file(&run, &data, (shape, values), None);
     let one = with_lengths(&[1], &[0.3]);
     let core = sinew_core::motion::MotionGenerator::from_bytes(&one).unwrap();
     for label in [0usize, 7] {
@@ -374,12 +391,9 @@ fn the_reach_is_drawn_from_the_labels_training_reaches() {
         for (label, intensity) in [(0usize, 1.0f32), (0, 0.5), (1, 1.0)] {
             core.landmarks(label, seed, intensity, &neutral, &mut scratch, &mut curve)
                 .unwrap();
-            // The apex lies the drawn reach (times the neutral's size) from the neutral, the
-            // draw being the seed's Gaussian value right after the noise.
-            let mut z = vec![0.0f32; config.noise + 1];
-            sinew_core::motion::gaussian_noise(seed, &mut z);
-            let [m, s] = reaches[label];
-            let reach = intensity * (m + s * z[config.noise]).max(0.0);
+            // The apex lies the drawn reach (times the neutral's size) from the neutral.
+            let reach = drawn(seed, config.noise, reaches[label], intensity);
+            let m = reaches[label][0];
             let apex = &curve[FRAMES * 6..];
             let d = apex
                 .iter()
@@ -405,13 +419,7 @@ fn the_reach_is_drawn_from_the_labels_training_reaches() {
 
     // Broken reaches are refused.
     let with_reaches = |shape: &[usize], values: &[f32]| {
-        let mut w = SinewWriter::new(ArtifactKind::MotionGenerator);
-        w.meta("content", CONTENT);
-        run.generator.mlp.export(&mut w, "motion.g").unwrap();
-        w.f32s("motion.p", &[FRAMES, 6], &data.p).unwrap();
-        w.f32s("motion.length", &[1], &[0.3]).unwrap();
-        w.f32s("motion.reach", shape, values).unwrap();
-        w.to_bytes().unwrap()
+        generator_file(&run, &data, (&[1], &[0.3]), Some((shape, values)))
     };
     let good = data.reaches_flat().unwrap();
     assert!(

@@ -83,16 +83,20 @@ fn generated_vectors_are_tangent_at_p() {
     }
 }
 
+/// A fixed unit motion of `d` coordinates, as a vector and as a `[1, d]` tensor.
+fn reference_point(d: usize, dev: &Device) -> (Vec<f32>, Tensor<2>) {
+    let v: Vec<f32> = (0..d).map(|i| ((i as f32) * 0.37).sin() + 0.2).collect();
+    let n = (v.iter().map(|x| x * x).sum::<f32>() / FRAMES as f32).sqrt();
+    let p: Vec<f32> = v.into_iter().map(|x| x / n).collect();
+    let pt = tensor(p.clone(), [1, d], dev);
+    (p, pt)
+}
+
 #[test]
 fn the_reconstruction_loss_measures_the_geodesic_on_the_sphere() {
     let dev = device(6);
     let d = FRAMES * 3;
-    let unit = |v: Vec<f32>| {
-        let n = (v.iter().map(|x| x * x).sum::<f32>() / FRAMES as f32).sqrt();
-        v.into_iter().map(|x| x / n).collect::<Vec<_>>()
-    };
-    let p = unit((0..d).map(|i| ((i as f32) * 0.37).sin() + 0.2).collect());
-    let pt = tensor(p.clone(), [1, d], &dev);
+    let (p, pt) = reference_point(d, &dev);
     // Two tangent vectors at p of different lengths and directions.
     let mut a: Vec<f32> = (0..d).map(|i| ((i as f32) * 0.11).cos() * 0.09).collect();
     let mut b: Vec<f32> = (0..d).map(|i| ((i as f32) * 0.23).sin() * 0.05).collect();
@@ -187,12 +191,7 @@ fn nearest_pairing_picks_the_closest_real_motion_of_the_same_label() {
 fn chamfer_pairing_counts_the_real_motions_no_generated_one_covers() {
     let dev = device(2);
     let d = FRAMES * 3;
-    let unit = |v: Vec<f32>| {
-        let n = (v.iter().map(|x| x * x).sum::<f32>() / FRAMES as f32).sqrt();
-        v.into_iter().map(|x| x / n).collect::<Vec<_>>()
-    };
-    let p = unit((0..d).map(|i| ((i as f32) * 0.37).sin() + 0.2).collect());
-    let pt = tensor(p.clone(), [1, d], &dev);
+    let (p, pt) = reference_point(d, &dev);
     let tangent = |f: &dyn Fn(usize) -> f32| {
         let mut v: Vec<f32> = (0..d).map(f).collect();
         sinew_core::srvf::project_tangent(&p, &mut v).unwrap();

@@ -119,6 +119,15 @@ fn a_short_run_generates_each_label_nearer_its_own_class() {
     }
 }
 
+/// Asserts that `[mean, spread]` are the mean and the (population) standard deviation of `xs`.
+fn same_mean_and_spread([mean, spread]: [f32; 2], xs: &[f64], label: usize) {
+    let n = xs.len() as f64;
+    let m = xs.iter().sum::<f64>() / n;
+    let sd = (xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n).sqrt();
+    assert!((f64::from(mean) - m).abs() < 1e-6 * m, "label {label}");
+    assert!((f64::from(spread) - sd).abs() < 1e-6 * m, "label {label}");
+}
+
 #[test]
 fn each_label_keeps_its_training_curves_length() {
     let Some(root) = crate::io::data::data_dir() else {
@@ -140,11 +149,7 @@ fn each_label_keeps_its_training_curves_length() {
             .filter(|&&s| set.label(s) == label)
             .map(|&s| f64::from(srvf::encode(&set.landmark_frames(s)).unwrap().length))
             .collect();
-        let n = mine.len() as f64;
-        let m = mine.iter().sum::<f64>() / n;
-        let sd = (mine.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n).sqrt();
-        assert!((f64::from(mean) - m).abs() < 1e-6 * m, "label {label}");
-        assert!((f64::from(spread) - sd).abs() < 1e-6 * m, "label {label}");
+        same_mean_and_spread([mean, spread], &mine, label);
         assert!(
             spread > 0.0,
             "label {label}: random apex intensities spread the lengths"
@@ -174,11 +179,7 @@ fn each_label_keeps_its_training_curves_length() {
                 d
             })
             .collect();
-        let n = mine.len() as f64;
-        let m = mine.iter().sum::<f64>() / n;
-        let sd = (mine.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n).sqrt();
-        assert!((f64::from(mean) - m).abs() < 1e-6 * m, "label {label}");
-        assert!((f64::from(spread) - sd).abs() < 1e-6 * m, "label {label}");
+        same_mean_and_spread([mean, spread], &mine, label);
         assert!(mean < data.lengths[label][0], "label {label}");
     }
     // The classes move by different amounts (eyebrow little, mouth_extreme much).
