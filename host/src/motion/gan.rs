@@ -337,20 +337,21 @@ pub fn paired_reconstruction(
     p: &Tensor<2>,
     pairing: Pairing,
 ) -> Tensor<1> {
-    let nearest_real = || {
-        let idx = nearest_of_label(&fake.clone().detach(), real, labels);
-        real.clone().select(0, idx)
-    };
-    match pairing {
-        Pairing::Batch => reconstruction(fake, real.clone(), p),
-        Pairing::Nearest => reconstruction(fake.clone(), nearest_real(), p),
-        Pairing::Chamfer => {
-            let idx = nearest_of_label(real, &fake.clone().detach(), labels);
-            let to_real = reconstruction(fake.clone(), nearest_real(), p);
-            let to_fake = reconstruction(fake.select(0, idx), real.clone(), p);
-            (to_real + to_fake).mul_scalar(0.5)
-        }
+    if pairing == Pairing::Batch {
+        return reconstruction(fake, real.clone(), p);
     }
+    // Pairs are chosen on the detached motions, not differentiated through.
+    let chosen = fake.clone().detach();
+    let nearest_real = real
+        .clone()
+        .select(0, nearest_of_label(&chosen, real, labels));
+    if pairing == Pairing::Nearest {
+        return reconstruction(fake, nearest_real, p);
+    }
+    let nearest_fake = nearest_of_label(real, &chosen, labels);
+    let to_real = reconstruction(fake.clone(), nearest_real, p);
+    let to_fake = reconstruction(fake.select(0, nearest_fake), real.clone(), p);
+    (to_real + to_fake).mul_scalar(0.5)
 }
 
 /// Adam with the reference's β = (0.5, 0.9).
