@@ -320,7 +320,6 @@ pub struct TrainRecord {
     pub history: Vec<StepLosses>,
 }
 
-/// The mean and the population standard deviation of `xs` (not empty), in f32.
 /// Per label, the mean and spread of the `values` (one per motion, labelled `labels`); a label
 /// without motions takes every motion's.
 fn per_label(values: &[f64], labels: &[usize]) -> Vec<[f32; 2]> {
@@ -342,6 +341,7 @@ fn per_label(values: &[f64], labels: &[usize]) -> Vec<[f32; 2]> {
         .collect()
 }
 
+/// The mean and the population standard deviation of `xs` (not empty), in f32.
 fn mean_and_spread(xs: &[f64]) -> [f32; 2] {
     let n = xs.len() as f64;
     let mean = xs.iter().sum::<f64>() / n;
