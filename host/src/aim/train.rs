@@ -8,7 +8,6 @@ use std::time::Instant;
 use burn::module::Module;
 use burn::optim::{AdamConfig, GradientsParams};
 use burn::tensor::{Device, Int, Tensor, TensorData};
-use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 
 use super::config::{InvalidConfig, JawInit};
@@ -18,6 +17,7 @@ use crate::io::mesh::MeshError;
 use crate::training::backend::Backend;
 use crate::training::checkpoint::{self, CheckpointError, InvalidState, STATE_FILE, WeightFiles};
 use crate::training::nn::to_vec;
+use crate::training::random::Stream;
 
 /// Why AIM training could not start, continue or finish.
 #[derive(Debug, thiserror::Error)]
@@ -166,11 +166,8 @@ struct Draw {
 }
 
 fn draw(set: &TrainingSet, config: &AimConfig, step: usize) -> Draw {
-    let mut rng = rand_pcg::Pcg64::new(
-        u128::from(config.seed) << 64 | step as u128,
-        0xda3e_39cb_94b9_5bdb,
-    );
-    let mut below = |n: usize| ((rng.next_u64() as u128 * n as u128) >> 64) as u32;
+    let mut rng = Stream::new(config.seed, step as u64, 0xda3e_39cb_94b9_5bdb);
+    let mut below = |n: usize| rng.below(n) as u32;
     let v = set.vertices();
     let n = set.shapes.len();
     // One shape per sample keeps its own order of draws (every point, then every shape), so

@@ -20,7 +20,6 @@ use std::time::Instant;
 use burn::module::Param;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Distribution, Int, Tensor, TensorData};
-use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
 
@@ -36,6 +35,7 @@ use crate::geometry::align::fit_rigid;
 use crate::training::backend::{Backend, BackendError};
 use crate::training::checkpoint::CheckpointError;
 use crate::training::nn::{LayerWeights, tensor, to_vec};
+use crate::training::random::Stream;
 use crate::training::rotation::rotate_6d;
 
 /// The identity head and jaw, `[6D, t]` twice.
@@ -422,13 +422,9 @@ pub fn fit_resumable(
         // Each step's draw is its own (seed, step), so a resumed fit draws what an unbroken one does.
         let mut rng = step_rng(config.seed, step as u64);
         let draw: Vec<i64> = match &subset {
-            None => (0..config.points)
-                .map(|_| ((u128::from(rng.next_u64()) * v as u128) >> 64) as i64)
-                .collect(),
+            None => (0..config.points).map(|_| rng.below(v) as i64).collect(),
             Some(s) if s.len() <= config.points || camera.is_some() => s.clone(),
-            Some(s) => (0..config.points)
-                .map(|_| s[((u128::from(rng.next_u64()) * s.len() as u128) >> 64) as usize])
-                .collect(),
+            Some(s) => (0..config.points).map(|_| s[rng.below(s.len())]).collect(),
         };
         let n = draw.len();
         let idx = Tensor::<1, Int>::from_data(TensorData::new(draw, [n]), &device);
@@ -583,7 +579,7 @@ fn rigid_start(
 fn constrained_vertices(
     perf: &Performance,
     config: &FitConfig,
-    rng: &mut rand_pcg::Pcg64,
+    rng: &mut Stream,
 ) -> Result<Option<Vec<i64>>, FitError> {
     let v = perf.frames.first().map_or(0, Vec::len);
     let landmarks = || -> Result<Vec<i64>, FitError> {
@@ -603,7 +599,7 @@ fn constrained_vertices(
             // A seeded partial Fisher–Yates shuffle: the first n of a random permutation.
             let mut all: Vec<i64> = (0..v as i64).collect();
             for i in 0..n {
-                let r = i + ((u128::from(rng.next_u64()) * (v - i) as u128) >> 64) as usize;
+                let r = i + rng.below(v - i);
                 all.swap(i, r);
             }
             all.truncate(n);
@@ -732,11 +728,8 @@ pub fn worst_edge_change(
 }
 
 /// The random stream of one step of a fit (and `u64::MAX`'s, the constrained subset's).
-fn step_rng(seed: u64, step: u64) -> rand_pcg::Pcg64 {
-    rand_pcg::Pcg64::new(
-        u128::from(seed) << 64 | u128::from(step),
-        0x00a0_2bdb_0000_0000_0000_0000_0000_0f17,
-    )
+fn step_rng(seed: u64, step: u64) -> Stream {
+    Stream::new(seed, step, 0x00a0_2bdb_0000_0000_0000_0000_0000_0f17)
 }
 
 fn mean(x: &[f64]) -> f64 {

@@ -17,7 +17,6 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
 use sinew_core::linalg::{Mat3, Vec3};
@@ -27,6 +26,7 @@ use sinew_core::skinning::{BoneTransform, lbs};
 use crate::io::dataset::{self, DataSetError};
 use crate::io::ict::{FACE_REGION, IctFaceKit};
 use crate::io::mesh::{Mesh, MeshError};
+use crate::training::random::Stream;
 
 mod error;
 pub use error::{GenerateError, InvalidPerformanceConfig};
@@ -206,44 +206,30 @@ impl PerformanceConfig {
     }
 }
 
-/// A PCG-64 stream for the trajectories and the noise.
-struct Rng(rand_pcg::Pcg64);
+/// The stream of the trajectories and the mesh noise.
+fn trajectory_stream(seed: u64) -> Stream {
+    Stream::new(
+        seed,
+        0xfa_ce_5e_90,
+        0x00a0_2bdb_0000_0000_0000_0000_0000_0001,
+    )
+}
 
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Self(rand_pcg::Pcg64::new(
-            u128::from(seed) << 64 | 0xfa_ce_5e_90,
-            0x00a0_2bdb_0000_0000_0000_0000_0000_0001,
-        ))
-    }
-
-    /// The landmark pixels' noise: a stream of its own, so that adding it leaves the meshes of
-    /// a seed as they were.
-    fn landmarks(seed: u64) -> Self {
-        Self(rand_pcg::Pcg64::new(
-            u128::from(seed) << 64 | 0x1a_4d_a2_c5,
-            0x00a0_2bdb_0000_0000_0000_0000_0000_0003,
-        ))
-    }
-
-    /// Uniform in [lo, hi) from 53 random bits.
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.0.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-
-    /// Standard normal by Box–Muller (one value per call).
-    fn normal(&mut self) -> f64 {
-        let u1 = 1.0 - self.uniform(0.0, 1.0);
-        let u2 = self.uniform(0.0, 1.0);
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
+/// The landmark pixels' noise: a stream of its own, so that adding it left the meshes of a seed
+/// as they were.
+fn landmark_stream(seed: u64) -> Stream {
+    Stream::new(
+        seed,
+        0x1a_4d_a2_c5,
+        0x00a0_2bdb_0000_0000_0000_0000_0000_0003,
+    )
 }
 
 /// A smooth signal in [−1, 1]: the mean of three sinusoids of 0.1–0.8 Hz with random phases.
 struct Wave([(f64, f64); 3]);
 
 impl Wave {
-    fn new(rng: &mut Rng) -> Self {
+    fn new(rng: &mut Stream) -> Self {
         Self([(); 3].map(|()| {
             (
                 rng.uniform(0.1, 0.8),
@@ -310,7 +296,7 @@ struct Trajectories {
 }
 
 impl Trajectories {
-    fn new(rng: &mut Rng, shapes: usize) -> Self {
+    fn new(rng: &mut Stream, shapes: usize) -> Self {
         let weights = (0..shapes)
             .map(|_| Weight {
                 wave: Wave::new(rng),
@@ -442,10 +428,10 @@ pub fn generate(
     let landmark_vertices = landmark_vertices(&face.landmarks, &face.template, &topology)?;
     let camera = camera_for(&neutral, &landmark_vertices, config);
 
-    let mut rng = Rng::new(config.seed);
+    let mut rng = trajectory_stream(config.seed);
     let trajectories = Trajectories::new(&mut rng, names.len());
     let noise_cm = f64::from(config.noise_mm) / face.units.mm();
-    let mut pixel_rng = Rng::landmarks(config.seed);
+    let mut pixel_rng = landmark_stream(config.seed);
     let mut manifest = Manifest {
         format: FORMAT.into(),
         version: VERSION,

@@ -1,8 +1,10 @@
-//! Geometry the anatomy, S2D, motions and figures share: deformation transfer, `f64` vector
-//! helpers, rigid and similarity alignment, mesh topology. Imports only [`crate::io`] (the mesh type).
+//! Geometry the anatomy, S2D, motions and figures share: deformation transfer, random identities
+//! on the kit's face region, `f64` vector helpers, rigid and similarity alignment, mesh topology.
+//! Imports only [`crate::io`] (the mesh type and the ICT-FaceKit loader).
 
 pub mod align;
 pub mod deformation;
+pub mod identities;
 pub mod qem;
 pub mod spatial;
 pub mod topology;

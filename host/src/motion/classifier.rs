@@ -14,12 +14,13 @@ use burn::nn::{Gru, GruConfig, Linear};
 use burn::optim::{AdamConfig, GradientsParams};
 use burn::tensor::activation::log_softmax;
 use burn::tensor::{Device, Tensor};
-use rand_core::{RngCore, SeedableRng};
+
 use serde::{Deserialize, Serialize};
 use sinew_core::srvf::FRAMES;
 
 use super::srvf::{SrvfError, normalised_curve};
 use crate::training::nn::{pytorch_linear, tensor, to_vec};
+use crate::training::random::Stream;
 
 /// A landmark sequence (frames `[K · 3]`, at least 2, moving) as the classifier and the LSTM
 /// baseline read it: `[FRAMES × K · 3]`, row t − 1 the normalised, arc-length-resampled frame t
@@ -56,14 +57,11 @@ pub struct SequenceTraining {
 /// The order of the sequences in each batch of `epoch`: a Fisher–Yates shuffle of `0..n` by a
 /// PCG-64 seeded by (seed, epoch) alone, cut into batches of `batch`.
 pub fn batches(n: usize, batch: usize, seed: u64, epoch: usize) -> Vec<Vec<usize>> {
-    let mut rng = rand_pcg::Pcg64::seed_from_u64(
+    let mut rng = Stream::seed_from_u64(
         seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (epoch as u64).wrapping_add(0x5ec1),
     );
     let mut order: Vec<usize> = (0..n).collect();
-    for i in (1..n).rev() {
-        let j = ((u128::from(rng.next_u64()) * (i as u128 + 1)) >> 64) as usize;
-        order.swap(i, j);
-    }
+    rng.shuffle(&mut order);
     order.chunks(batch.max(1)).map(<[usize]>::to_vec).collect()
 }
 

@@ -20,13 +20,14 @@
 
 use std::path::{Path, PathBuf};
 
-use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 
 use super::classes::{LABELS, PATTERNS, used_expressions};
+use crate::geometry::identities::{FaceRegion, RegionError};
 use crate::io::dataset::DataSetError;
 use crate::io::ict::{FACE_REGION, IctError, IctFaceKit};
 use crate::io::mesh::Mesh;
+use crate::training::random::Stream;
 
 /// Range of a sequence's apex intensity.
 pub const INTENSITY: (f32, f32) = (0.6, 1.0);
@@ -109,36 +110,10 @@ pub enum MotionDataError {
         /// The expression.
         name: String,
     },
-    /// A kit neutral smaller than the face region.
-    #[error(
-        "{}: the neutral has {found} vertices, the face region needs {needed}",
-        path.display()
-    )]
-    NeutralVertices {
-        /// The kit's folder.
-        path: PathBuf,
-        /// The neutral's vertices.
-        found: usize,
-        /// The face region's end.
-        needed: usize,
-    },
-    /// A kit landmark outside the face region.
-    #[error("{}: landmark vertex {vertex} lies outside the face region", path.display())]
-    LandmarkOutside {
-        /// The kit's folder.
-        path: PathBuf,
-        /// The landmark's vertex.
-        vertex: u32,
-    },
-    /// The expressions cannot be transferred onto an identity.
-    #[error("transferring the expressions onto identity {identity}")]
-    Transfer {
-        /// The identity.
-        identity: usize,
-        /// What the deformation transfer said.
-        #[source]
-        source: crate::geometry::deformation::TransferError,
-    },
+    /// The kit's face region cannot carry identities, or an identity its expressions (the
+    /// error names the kit or the identity).
+    #[error(transparent)]
+    Region(#[from] RegionError),
     /// The motion set cannot be written (the error names the file).
     #[error(transparent)]
     Write(#[from] DataSetError),
@@ -266,39 +241,6 @@ pub struct MotionSet {
     pub landmarks: Vec<Vec<f32>>,
 }
 
-/// A PCG-64 stream (the generator `data s2d-pairs` uses, on its own stream).
-struct Rng(rand_pcg::Pcg64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Self(rand_pcg::Pcg64::new(
-            u128::from(seed) << 64 | 0x4d07_1035,
-            0x00a0_2bdb_0000_0000_0000_0000_0000_0003,
-        ))
-    }
-
-    /// Uniform in [0, 1) with 53 random bits.
-    fn uniform(&mut self) -> f64 {
-        (self.0.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn between(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.uniform() as f32
-    }
-
-    /// Uniform integer in 0..n (n > 0), by multiply-shift.
-    fn below(&mut self, n: usize) -> usize {
-        ((u128::from(self.0.next_u64()) * n as u128) >> 64) as usize
-    }
-
-    /// Standard normal by Box–Muller (one value per call).
-    fn normal(&mut self) -> f64 {
-        let u1 = 1.0 - self.uniform();
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
-}
-
 /// Draws the identities and sequences of `config` over `modes` identity modes, and each
 /// sequence's per-frame weights over `expressions` (the stored deltas, by name). Pure: the same
 /// inputs give the same draw.
@@ -307,7 +249,12 @@ fn draw(
     expressions: &[&str],
     modes: usize,
 ) -> (Vec<Vec<f32>>, Vec<SequenceSpec>, Vec<Vec<f32>>) {
-    let mut rng = Rng::new(config.seed);
+    // PCG-64, as `data s2d-pairs` draws, on a stream of its own.
+    let mut rng = Stream::new(
+        config.seed,
+        0x4d07_1035,
+        0x00a0_2bdb_0000_0000_0000_0000_0000_0003,
+    );
     let identities: Vec<Vec<f32>> = (0..config.identities)
         .map(|_| (0..modes).map(|_| rng.normal() as f32).collect())
         .collect();
@@ -317,14 +264,14 @@ fn draw(
         for (label, variants) in LABELS.iter().zip(PATTERNS) {
             for repetition in 0..config.per_class {
                 let variant = rng.below(variants.len());
-                let intensity = rng.between(INTENSITY.0, INTENSITY.1);
+                let intensity = rng.uniform_f32(INTENSITY.0, INTENSITY.1);
                 let frames = FRAMES_RANGE.0 + rng.below(FRAMES_RANGE.1 - FRAMES_RANGE.0 + 1);
                 let parts: Vec<PartSpec> = variants[variant]
                     .iter()
                     .map(|&(shape, weight)| {
-                        let apex = (weight * intensity * rng.between(0.85, 1.15)).min(1.0);
-                        let onset = rng.between(0.0, 0.35);
-                        let peak = rng.between(0.65, 1.0);
+                        let apex = (weight * intensity * rng.uniform_f32(0.85, 1.15)).min(1.0);
+                        let onset = rng.uniform_f32(0.0, 0.35);
+                        let peak = rng.uniform_f32(0.65, 1.0);
                         let easing = Easing::ALL[rng.below(Easing::ALL.len())];
                         PartSpec {
                             shape: shape.to_owned(),
@@ -463,7 +410,6 @@ pub(crate) fn frame_of(
 
 /// Generates a motion set from the ICT-FaceKit in `kit`.
 pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet, MotionDataError> {
-    use rayon::prelude::*;
     config.validate()?;
     let expressions = used_expressions();
     let available = kit.expression_names();
@@ -478,68 +424,9 @@ pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet, M
     }
     let modes = kit.identity_count();
     let (identities, sequences, weights) = draw(config, &expressions, modes);
-    let region = FACE_REGION.start as usize..FACE_REGION.end as usize;
-    let full = kit.neutral();
-    if full.positions.len() < region.end {
-        return Err(MotionDataError::NeutralVertices {
-            path: kit.dir().to_owned(),
-            found: full.positions.len(),
-            needed: region.end,
-        });
-    }
-    let (template, _) = full.submesh(|v| FACE_REGION.contains(&v));
-    let landmarks = kit.landmarks68()?;
-    if let Some(&l) = landmarks.iter().find(|&&l| !FACE_REGION.contains(&l)) {
-        return Err(MotionDataError::LandmarkOutside {
-            path: kit.dir().to_owned(),
-            vertex: l,
-        });
-    }
-    let crop = |d: Vec<[f32; 3]>| d[region.clone()].to_vec();
-    let kit_deltas: Vec<Vec<[f32; 3]>> = kit
-        .expression_deltas(&expressions)?
-        .into_iter()
-        .map(crop)
-        .collect();
-    let id_deltas: Vec<Vec<[f32; 3]>> = kit.identity_deltas(modes)?.into_iter().map(crop).collect();
-    let base = &template.positions;
-    let neutrals: Vec<Vec<[f32; 3]>> = identities
-        .iter()
-        .map(|w| {
-            let mut p = base.clone();
-            // Mode order, f32: the same sums on every run.
-            for (wm, d) in w.iter().zip(&id_deltas) {
-                for (p, d) in p.iter_mut().zip(d) {
-                    for c in 0..3 {
-                        p[c] += wm * d[c];
-                    }
-                }
-            }
-            p
-        })
-        .collect();
-    let triangles = template.triangles();
-    let sources: Vec<&[[f32; 3]]> = kit_deltas.iter().map(Vec::as_slice).collect();
-    let per_identity: Vec<Vec<Vec<[f32; 3]>>> = neutrals
-        .par_iter()
-        .enumerate()
-        .map(|(i, n)| {
-            let transfer = |source| MotionDataError::Transfer {
-                identity: i,
-                source,
-            };
-            crate::geometry::deformation::Transfer::new(
-                base,
-                n,
-                &triangles,
-                &format!("identity {i}"),
-            )
-            .map_err(&transfer)?
-            .apply(&sources)
-            .map_err(transfer)
-        })
-        .collect::<Result<_, _>>()?;
-    let deltas: Vec<Vec<[f32; 3]>> = per_identity.into_iter().flatten().collect();
+    let face = FaceRegion::of(kit, &expressions, modes)?;
+    let neutrals: Vec<Vec<[f32; 3]>> = identities.iter().map(|w| face.neutral(w)).collect();
+    let deltas = face.transferred(&neutrals)?;
     let e = expressions.len();
     let landmark_seqs: Vec<Vec<f32>> = sequences
         .iter()
@@ -554,7 +441,7 @@ pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet, M
                         w,
                         e,
                         f,
-                        Some(&landmarks),
+                        Some(&face.landmarks),
                     )
                 })
                 .flatten()
@@ -573,20 +460,16 @@ pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet, M
              {}..{}",
             FACE_REGION.start, FACE_REGION.end
         ),
-        vertices: region.len(),
-        landmarks,
+        vertices: face.vertices(),
+        landmarks: face.landmarks,
         labels: LABELS.iter().map(|l| (*l).to_owned()).collect(),
         expressions: expressions.iter().map(|n| (*n).to_owned()).collect(),
         identities,
         sequences,
     };
-    let template = Mesh::new(
-        template.positions.clone(),
-        triangles.iter().map(|t| t.to_vec()).collect(),
-    );
     Ok(MotionSet {
         manifest,
-        template,
+        template: face.template,
         neutrals,
         deltas,
         weights,

@@ -3,7 +3,6 @@
 
 use burn::optim::ModuleOptimizer;
 use burn::tensor::{Device, Tensor};
-use rand_core::{RngCore, SeedableRng};
 use serde::{Deserialize, Serialize};
 use sinew_core::srvf::FRAMES;
 
@@ -15,6 +14,7 @@ use super::gan::{
 };
 use super::srvf::{self, SrvfError};
 use crate::training::nn::tensor;
+use crate::training::random::Stream;
 
 /// Motions that cannot be brought into the GAN's tangent space.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -174,21 +174,12 @@ pub fn draw(
     step: usize,
     k: usize,
 ) -> (Vec<usize>, Vec<f32>, Vec<f32>) {
-    let mut rng = rand_pcg::Pcg64::seed_from_u64(
+    let mut rng = Stream::seed_from_u64(
         seed ^ (step as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ ((k as u64) << 56),
     );
-    let indices = (0..size)
-        .map(|_| ((u128::from(rng.next_u64()) * n as u128) >> 64) as usize)
-        .collect();
-    let mut uniform = || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-    let z = (0..size * noise)
-        .map(|_| {
-            let u1 = 1.0 - uniform();
-            let u2 = uniform();
-            ((-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()) as f32
-        })
-        .collect();
-    let tau = (0..size).map(|_| uniform() as f32).collect();
+    let indices = (0..size).map(|_| rng.below(n)).collect();
+    let z = (0..size * noise).map(|_| rng.normal() as f32).collect();
+    let tau = (0..size).map(|_| rng.unit() as f32).collect();
     (indices, z, tau)
 }
 

@@ -26,7 +26,6 @@
 
 use std::path::{Path, PathBuf};
 
-use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 
 use super::decoder::InputNormalisation;
@@ -34,9 +33,11 @@ use super::hierarchy::BuildError;
 use super::objective::LandmarkError;
 use super::symmetry::Mirror;
 use super::train::{Sample, landmark_input};
+use crate::geometry::identities::{FaceRegion, RegionError};
 use crate::io::dataset::{DataSetError, Entry, ManifestProblem};
 use crate::io::ict::{FACE_REGION, IctError, IctFaceKit};
 use crate::io::mesh::Mesh;
+use crate::training::random::Stream;
 
 /// Number of expression-shape groups (the expression protocol's folds).
 pub const SHAPE_GROUPS: usize = 4;
@@ -200,43 +201,6 @@ pub struct PairSet {
     pub combinations: Vec<Vec<(usize, f32)>>,
 }
 
-/// A PCG-64 stream for generation (the same generator the trainer shuffles with).
-struct Rng(rand_pcg::Pcg64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Self(rand_pcg::Pcg64::new(
-            u128::from(seed) << 64 | 0x5d2d_da7a,
-            0x00a0_2bdb_0000_0000_0000_0000_0000_0001,
-        ))
-    }
-
-    /// Uniform in [0, 1) with 53 random bits.
-    fn uniform(&mut self) -> f64 {
-        (self.0.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// Uniform integer in 0..n (n > 0), by multiply-shift.
-    fn below(&mut self, n: usize) -> usize {
-        ((u128::from(self.0.next_u64()) * n as u128) >> 64) as usize
-    }
-
-    /// Standard normal by Box–Muller (one value per call; the second is dropped so that the
-    /// stream position does not depend on call parity).
-    fn normal(&mut self) -> f64 {
-        let u1 = 1.0 - self.uniform(); // (0, 1]: ln is finite
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
-
-    fn shuffle<T>(&mut self, v: &mut [T]) {
-        for i in (1..v.len()).rev() {
-            let j = self.below(i + 1);
-            v.swap(i, j);
-        }
-    }
-}
-
 /// Draws the identities, shape groups and pair combinations of `config` over `expressions`
 /// (names, sorted) and `modes` identity modes. Pure: the same inputs give the same manifest.
 fn draw(
@@ -244,7 +208,11 @@ fn draw(
     expressions: &[String],
     modes: usize,
 ) -> (Vec<Vec<f32>>, Vec<Vec<usize>>, Vec<PairSpec>) {
-    let mut rng = Rng::new(config.seed);
+    let mut rng = Stream::new(
+        config.seed,
+        0x5d2d_da7a,
+        0x00a0_2bdb_0000_0000_0000_0000_0000_0001,
+    );
     let identities: Vec<Vec<f32>> = (0..config.identities)
         .map(|_| (0..modes).map(|_| rng.normal() as f32).collect())
         .collect();
@@ -271,7 +239,7 @@ fn draw(
             for _ in 0..k {
                 let e = pool.remove(rng.below(pool.len()));
                 // (0, 1]: a zero weight would make the shape's presence a fiction.
-                let weight = (1.0 - rng.uniform()) as f32;
+                let weight = (1.0 - rng.unit()) as f32;
                 shapes.push(Component {
                     shape: expressions[e].clone(),
                     weight,
@@ -305,39 +273,10 @@ pub enum PairsError {
         /// Its expressions.
         found: usize,
     },
-    /// A kit neutral smaller than the face region.
-    #[error(
-        "{}: the neutral has {found} vertices, the face region needs {needed}",
-        path.display()
-    )]
-    NeutralVertices {
-        /// The kit's folder.
-        path: PathBuf,
-        /// The neutral's vertices.
-        found: usize,
-        /// The face region's end.
-        needed: usize,
-    },
-    /// A face region that does not keep the kit's vertex order.
-    #[error("the face region does not keep vertex order")]
-    VertexOrder,
-    /// A kit landmark outside the face region.
-    #[error("{}: landmark vertex {vertex} lies outside the face region", path.display())]
-    LandmarkOutside {
-        /// The kit's folder.
-        path: PathBuf,
-        /// The landmark's vertex.
-        vertex: u32,
-    },
-    /// The expressions cannot be transferred onto an identity.
-    #[error("transferring the expressions onto identity {identity}")]
-    Transfer {
-        /// The identity.
-        identity: usize,
-        /// What the deformation transfer said.
-        #[source]
-        source: crate::geometry::deformation::TransferError,
-    },
+    /// The kit's face region cannot carry identities, or an identity its expressions (the
+    /// error names the kit or the identity).
+    #[error(transparent)]
+    Region(#[from] RegionError),
     /// Pairs that break a rule of the manifest.
     #[error(transparent)]
     Manifest(#[from] ManifestProblem),
@@ -367,59 +306,12 @@ pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet, Pairs
     }
     let modes = kit.identity_count();
     let (identities, groups, pairs) = draw(config, &expressions, modes);
-    let region = FACE_REGION.start as usize..FACE_REGION.end as usize;
-    let full = kit.neutral();
-    if full.positions.len() < region.end {
-        return Err(PairsError::NeutralVertices {
-            path: kit.dir().to_owned(),
-            found: full.positions.len(),
-            needed: region.end,
-        });
-    }
-    let (template, old_index) = full.submesh(|v| FACE_REGION.contains(&v));
-    // The face region is a prefix of the topology, so vertex indices are unchanged.
-    if !old_index.iter().enumerate().all(|(i, &o)| i == o as usize) {
-        return Err(PairsError::VertexOrder);
-    }
-    let landmarks = kit.landmarks68()?;
-    if let Some(&l) = landmarks.iter().find(|&&l| !FACE_REGION.contains(&l)) {
-        return Err(PairsError::LandmarkOutside {
-            path: kit.dir().to_owned(),
-            vertex: l,
-        });
-    }
-    let crop = |d: Vec<[f32; 3]>| d[region.clone()].to_vec();
-    let deltas: Vec<_> = kit
-        .expression_deltas(&expressions)?
-        .into_iter()
-        .map(crop)
-        .collect();
-    let id_deltas: Vec<_> = kit.identity_deltas(modes)?.into_iter().map(crop).collect();
-    let base = &template.positions;
-    let neutrals: Vec<Vec<[f32; 3]>> = identities
-        .iter()
-        .map(|w| {
-            let mut p = base.clone();
-            // Mode order, f32: the same sums on every run.
-            for (wm, d) in w.iter().zip(&id_deltas) {
-                for (p, d) in p.iter_mut().zip(d) {
-                    for c in 0..3 {
-                        p[c] += wm * d[c];
-                    }
-                }
-            }
-            p
-        })
-        .collect();
-    let triangles = template.triangles();
+    let face = FaceRegion::of(kit, &expressions, modes)?;
+    let neutrals: Vec<Vec<[f32; 3]>> = identities.iter().map(|w| face.neutral(w)).collect();
     let deltas = match config.expressions {
-        Expressions::Shared => deltas,
-        Expressions::Transferred => transferred(base, &neutrals, &triangles, &deltas)?,
+        Expressions::Shared => face.deltas.clone(),
+        Expressions::Transferred => face.transferred(&neutrals)?,
     };
-    let template = Mesh::new(
-        template.positions.clone(),
-        triangles.iter().map(|t| t.to_vec()).collect(),
-    );
     let manifest = Manifest {
         format: MANIFEST_FORMAT.to_owned(),
         version: MANIFEST_VERSION,
@@ -430,8 +322,8 @@ pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet, Pairs
              Institute for Creative Technologies, MIT licence; face region {}..{}",
             FACE_REGION.start, FACE_REGION.end
         ),
-        vertices: region.len(),
-        landmarks,
+        vertices: face.vertices(),
+        landmarks: face.landmarks,
         shape_groups: groups
             .iter()
             .map(|g| g.iter().map(|&e| expressions[e].clone()).collect())
@@ -443,43 +335,11 @@ pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet, Pairs
     let combinations = combinations_of(&manifest)?;
     Ok(PairSet {
         manifest,
-        template,
+        template: face.template,
         neutrals,
         deltas,
         combinations,
     })
-}
-
-/// Every delta of `deltas` (on the generic neutral `base`) transferred onto every neutral of
-/// `neutrals`, identity-major; one factorisation per identity, identities in parallel.
-fn transferred(
-    base: &[[f32; 3]],
-    neutrals: &[Vec<[f32; 3]>],
-    triangles: &[[u32; 3]],
-    deltas: &[Vec<[f32; 3]>],
-) -> Result<Vec<Vec<[f32; 3]>>, PairsError> {
-    use rayon::prelude::*;
-    let sources: Vec<&[[f32; 3]]> = deltas.iter().map(Vec::as_slice).collect();
-    let per_identity: Vec<Vec<Vec<[f32; 3]>>> = neutrals
-        .par_iter()
-        .enumerate()
-        .map(|(i, n)| {
-            let transfer = |source| PairsError::Transfer {
-                identity: i,
-                source,
-            };
-            crate::geometry::deformation::Transfer::new(
-                base,
-                n,
-                triangles,
-                &format!("identity {i}"),
-            )
-            .map_err(&transfer)?
-            .apply(&sources)
-            .map_err(transfer)
-        })
-        .collect::<Result<_, _>>()?;
-    Ok(per_identity.into_iter().flatten().collect())
 }
 
 /// Each pair's shapes as (expression index, weight), checking names, weights and groups.

@@ -15,6 +15,7 @@ use super::checkpoint::{
     CheckpointState, DataFingerprint, STATE_FILE, load_checkpoint, save_checkpoint,
 };
 use super::decoder::S2dDecoder;
+use crate::training::random::Stream;
 
 mod error;
 pub use error::TrainError;
@@ -173,16 +174,13 @@ pub fn step_once(
 /// The order of the samples in `epoch`: a Fisher–Yates shuffle from a generator seeded by
 /// (seed, epoch) alone, so any epoch can be reproduced on its own.
 pub fn epoch_order(n: usize, seed: u64, epoch: usize) -> Vec<usize> {
-    use rand_core::RngCore;
-    let mut rng = rand_pcg::Pcg64::new(
-        u128::from(seed) << 64 | epoch as u128,
-        0x5d2d_ec00_0000_0000_0000_0000_0000_0001,
-    );
     let mut order: Vec<usize> = (0..n).collect();
-    for i in (1..n).rev() {
-        let j = ((u128::from(rng.next_u64()) * (i as u128 + 1)) >> 64) as usize;
-        order.swap(i, j);
-    }
+    Stream::new(
+        seed,
+        epoch as u64,
+        0x5d2d_ec00_0000_0000_0000_0000_0000_0001,
+    )
+    .shuffle(&mut order);
     order
 }
 

@@ -1,6 +1,7 @@
-//! What AIM and S2D training share on burn: the backend choice, layers with export to the core's
+//! What the trainers share on burn: the backend choice, layers with export to the core's
 //! sections, SIREN's sine, checkpoints, progress bars, the Ctrl-C handler, the allocator tunables,
-//! and the one table of core-versus-burn tolerances.
+//! the one table of core-versus-burn tolerances; and the seeded random streams that every data
+//! generator and trainer draws from.
 
 pub mod backend;
 pub mod checkpoint;
@@ -8,6 +9,7 @@ pub mod interrupt;
 pub mod malloc;
 pub mod nn;
 pub mod progress;
+pub mod random;
 pub mod rotation;
 pub mod sine;
 pub mod tensor;

@@ -1,3 +1,5 @@
+use rand_core::{RngCore, SeedableRng};
+
 use super::*;
 use crate::training::backend::Backend;
 use crate::training::nn::to_vec;
