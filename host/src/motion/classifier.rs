@@ -14,7 +14,6 @@ use burn::nn::{Gru, GruConfig, Linear};
 use burn::optim::{AdamConfig, GradientsParams};
 use burn::tensor::activation::log_softmax;
 use burn::tensor::{Device, Tensor};
-
 use serde::{Deserialize, Serialize};
 use sinew_core::srvf::FRAMES;
 

@@ -306,10 +306,11 @@ pub fn generate(kit: &IctFaceKit, config: &PairsConfig) -> Result<PairSet, Pairs
     }
     let modes = kit.identity_count();
     let (identities, groups, pairs) = draw(config, &expressions, modes);
-    let face = FaceRegion::of(kit, &expressions, modes)?;
+    let mut face = FaceRegion::of(kit, &expressions, modes)?;
     let neutrals: Vec<Vec<[f32; 3]>> = identities.iter().map(|w| face.neutral(w)).collect();
     let deltas = match config.expressions {
-        Expressions::Shared => face.deltas.clone(),
+        // The region's deltas are not needed again: moved, not copied.
+        Expressions::Shared => std::mem::take(&mut face.deltas),
         Expressions::Transferred => face.transferred(&neutrals)?,
     };
     let manifest = Manifest {

@@ -1,7 +1,8 @@
 //! Seeded PCG-64 streams and the draws made from them: uniform floats, integers below a bound,
 //! standard normals, shuffles. One implementation for the data generators (`data s2d-pairs`,
-//! `data motions`, `data performance`) and the trainers' epoch orders, so that a seed means the
-//! same numbers on every platform and every run. Each caller keeps its own stream constants, so
+//! `data motions`, `data performance`) and the trainers' and fit's draws (epoch orders, batches,
+//! sampled points, the GAN's noise), so that a seed means the same numbers on every platform and
+//! every run. Each caller keeps its own stream constants, so
 //! the streams of different draws never overlap.
 
 use rand_core::{RngCore, SeedableRng};
