@@ -15,6 +15,7 @@ pub mod geometry;
 pub mod io;
 pub mod motion;
 pub mod replay;
+pub mod rig;
 pub mod s2d;
 pub mod training;
 pub mod view;

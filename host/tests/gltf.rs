@@ -297,7 +297,7 @@ fn exported_rig_poses_as_the_core_plays() {
     let actor = AimActor::from_bytes(&bytes).unwrap();
     let frames = frames(&actor);
     let (file, summary) = glb(&actor, &frames, 30.0, false).unwrap();
-    let (text, bin) = sinew_host::export::glb::read(&file).unwrap();
+    let (text, bin) = sinew_host::io::glb::read(&file).unwrap();
     let g = Gltf {
         root: serde_json::from_slice(text).unwrap(),
         bin: bin.to_vec(),
@@ -386,7 +386,7 @@ fn rest_export_has_the_rig_without_animation() {
     let bytes = golden();
     let actor = AimActor::from_bytes(&bytes).unwrap();
     let (file, summary) = glb(&actor, &[], 30.0, true).unwrap();
-    let (text, _) = sinew_host::export::glb::read(&file).unwrap();
+    let (text, _) = sinew_host::io::glb::read(&file).unwrap();
     let root: json::Root = serde_json::from_slice(text).unwrap();
     assert!(root.animations.is_empty());
     assert_eq!(root.meshes.len(), 2, "face and bones");

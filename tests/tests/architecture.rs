@@ -19,7 +19,7 @@ const HOST_LAYERS: &[&[&str]] = &[
     &["io"],
     &["geometry"],
     &["figures"],
-    &["anatomy", "training"],
+    &["anatomy", "training", "rig"],
     &["aim", "s2d", "fit", "motion"],
     &["replay", "export"],
     &["view"],

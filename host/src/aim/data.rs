@@ -2,67 +2,13 @@
 //! set: sparse bone constraints (Wu et al.), the forehead region of eq. 15, the symmetry plane of
 //! eq. 14 and the jaw pivot.
 
-use super::{Plane, TrainingSet};
+use super::TrainingSet;
 use crate::anatomy::constraints::anchors;
 use crate::geometry::align::RigidFit;
 use crate::io::ict::Actor;
 use crate::io::mesh::Mesh;
 
-/// Symmetric iBUG-68 landmark pairs (left, right) used to estimate the plane of symmetry.
-const IBUG_PAIRS: [(usize, usize); 17] = [
-    (0, 16),
-    (1, 15),
-    (2, 14),
-    (3, 13),
-    (4, 12),
-    (5, 11),
-    (6, 10),
-    (7, 9),
-    (17, 26),
-    (18, 25),
-    (19, 24),
-    (20, 23),
-    (21, 22),
-    (36, 45),
-    (39, 42),
-    (31, 35),
-    (48, 54),
-];
-
-/// The plane of symmetry: from mirrored landmark pairs when the actor has them (normal along the
-/// mean left − right direction, through the mean midpoint), else the bounding box's mid-plane
-/// across x.
-pub fn symmetry_plane(positions: &[[f32; 3]], landmarks: &[Option<u32>]) -> Plane {
-    let mut dir = [0.0f32; 3];
-    let mut mid = [0.0f32; 3];
-    let mut n = 0;
-    for &(l, r) in &IBUG_PAIRS {
-        if let (Some(Some(a)), Some(Some(b))) = (landmarks.get(l), landmarks.get(r)) {
-            let (a, b) = (positions[*a as usize], positions[*b as usize]);
-            for i in 0..3 {
-                dir[i] += a[i] - b[i];
-                mid[i] += 0.5 * (a[i] + b[i]);
-            }
-            n += 1;
-        }
-    }
-    let len = dir.iter().map(|v| v * v).sum::<f32>().sqrt();
-    if n >= 3 && len > 0.0 {
-        return Plane {
-            normal: dir.map(|v| v / len),
-            origin: mid.map(|v| v / n as f32),
-        };
-    }
-    let (lo, hi) = bounds(positions);
-    Plane {
-        normal: [1.0, 0.0, 0.0],
-        origin: [
-            0.5 * (lo[0] + hi[0]),
-            0.5 * (lo[1] + hi[1]),
-            0.5 * (lo[2] + hi[2]),
-        ],
-    }
-}
+pub use crate::geometry::symmetry::symmetry_plane;
 
 fn bounds(p: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
     let mut lo = [f32::INFINITY; 3];

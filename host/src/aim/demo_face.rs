@@ -57,6 +57,15 @@ pub enum DemoFaceError {
     /// The file could not be written.
     #[error(transparent)]
     Write(#[from] AtomicWriteError),
+    /// A kit landmark outside the face region (the face template needs all 68).
+    #[error("the kit's landmark {landmark} is not on the face region")]
+    Landmark {
+        /// The landmark (iBUG order).
+        landmark: usize,
+    },
+    /// The face template could not be encoded.
+    #[error(transparent)]
+    Template(#[from] crate::rig::template::TemplateError),
     /// The bytes are not gzip.
     #[error("{name}: not a gzip file")]
     NotGzip {

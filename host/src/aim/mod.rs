@@ -11,6 +11,7 @@ pub mod demo;
 pub mod demo_face;
 pub mod edit;
 pub mod eval;
+pub mod face_template;
 pub mod model;
 pub mod play;
 pub mod procedural;
@@ -67,33 +68,7 @@ pub enum InvalidTrainingSet {
     ForeheadIndex,
 }
 
-/// A plane of symmetry: points x with (x − origin)·normal = 0.
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct Plane {
-    /// Unit normal.
-    pub normal: [f32; 3],
-    /// A point on the plane.
-    pub origin: [f32; 3],
-}
-
-impl Plane {
-    /// Reflects `x` across the plane.
-    pub fn reflect(&self, x: [f32; 3]) -> [f32; 3] {
-        let d = (0..3)
-            .map(|i| (x[i] - self.origin[i]) * self.normal[i])
-            .sum::<f32>();
-        [0, 1, 2].map(|i| x[i] - 2.0 * d * self.normal[i])
-    }
-
-    /// The reflection as `x ↦ M x + t` (M = I − 2 n nᵀ, t = 2 (o·n) n).
-    pub fn affine(&self) -> ([[f32; 3]; 3], [f32; 3]) {
-        let n = self.normal;
-        let on = (0..3).map(|i| self.origin[i] * n[i]).sum::<f32>();
-        let m =
-            [0, 1, 2].map(|r| [0, 1, 2].map(|c| f32::from(u8::from(r == c)) - 2.0 * n[r] * n[c]));
-        (m, n.map(|v| 2.0 * on * v))
-    }
-}
+pub use crate::geometry::symmetry::Plane;
 
 /// Everything AIM learns from: template points, the actor's shapes and the anatomy priors.
 #[derive(Clone, Debug)]

@@ -8,6 +8,7 @@ mod export;
 mod fit;
 mod motion;
 mod replay;
+mod rig;
 mod s2d;
 mod view;
 
@@ -58,6 +59,9 @@ enum Command {
     /// Bones under the skin.
     #[command(subcommand)]
     Bones(bones::Bones),
+    /// A studio's blendshape rig (glTF or OBJ folder): what Sinew understands of it.
+    #[command(subcommand)]
+    Rig(rig::RigCommand),
     /// Record and verify bit-exact playback replays.
     #[command(subcommand)]
     Replay(replay::Replay),
@@ -133,6 +137,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Bake(args) => aim::bake(args),
         Command::Play(args) => aim::play(args),
         Command::Export(cmd) => export::run(cmd),
+        Command::Rig(cmd) => rig::run(cmd),
         Command::Inspect { file, json } => {
             let report = sinew_host::io::inspect::inspect(&file)?;
             if json {

@@ -68,6 +68,23 @@ pub(crate) enum Data {
         #[arg(long)]
         out: PathBuf,
     },
+    /// The face template that finds a rig's landmarks (`sinew rig inspect`): the ICT-FaceKit
+    /// face region decimated to 2,500 vertices with its 68 landmarks and the fitted jaw hinge,
+    /// as gzipped JSON (the repository's copy is host/data/face-template.json.gz).
+    FaceTemplate {
+        /// ICT-FaceKit folder.
+        #[arg(long)]
+        data: PathBuf,
+        #[command(flatten)]
+        templates: super::bones::TemplatesArg,
+        /// Output file.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// A sample blendshape rig from ICT-FaceKit to try `--rig` with: the face region re-meshed,
+    /// with all 53 expression shapes, a UV seam, as .glb (metres) or an OBJ folder, and its
+    /// landmarks' true places beside it.
+    Rig(super::rig::SampleRigArgs),
     /// Synthetic labelled landmark motions for Motion3DGAN: CoMA's 12 expression classes played
     /// from neutral to apex on ICT-FaceKit identities (identity-specific deltas), with random
     /// intensity, timing, easing and noise; the first sequence of each identity and class is the
@@ -326,6 +343,20 @@ pub(crate) fn data(cmd: Data) -> Result<()> {
                 100.0 * set.constrained_fraction()
             );
         }
+        Data::FaceTemplate {
+            data,
+            templates,
+            out,
+        } => {
+            let t = sinew_host::aim::face_template::write(&data, &templates.path, &out)?;
+            println!(
+                "{}: {} vertices, {} triangles, 68 landmarks",
+                out.display(),
+                t.positions.len(),
+                t.triangles.len()
+            );
+        }
+        Data::Rig(args) => super::rig::sample_rig(args)?,
         Data::Motions(args) => super::motion::motions(args)?,
     }
     Ok(())

@@ -21,18 +21,18 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use gltf_json as json;
-use json::validation::{Checked::Valid, USize64};
+use json::validation::Checked::Valid;
 use serde::Serialize;
 use sinew_core::FormatError;
 use sinew_core::aim::AimActor;
 use sinew_core::linalg::Mat3;
 use sinew_core::replay::ReplayError;
 
-use super::glb::GlbError;
 use crate::aim::arkit::ArkitError;
 use crate::aim::play::{Frame, PoseFile, PoseFileError, corrective_names};
 use crate::io::atomic::AtomicWriteError;
 use crate::io::container::ContainerError;
+use crate::io::glb::{Builder, GlbError};
 use crate::io::units::UnknownUnit;
 
 /// Why `sinew export gltf` failed; every variant names the file.
@@ -136,6 +136,15 @@ pub enum GltfError {
     /// The container could not be laid out.
     #[error(transparent)]
     Glb(#[from] GlbError),
+}
+
+impl From<crate::io::glb::BuildError> for GltfError {
+    fn from(e: crate::io::glb::BuildError) -> Self {
+        match e {
+            crate::io::glb::BuildError::Json(e) => Self::Json(e),
+            crate::io::glb::BuildError::Glb(e) => Self::Glb(e),
+        }
+    }
 }
 
 /// Where the animation's frames come from.
@@ -306,95 +315,6 @@ pub fn quaternion(m: &Mat3) -> [f32; 4] {
     q.map(|v| (v / n) as f32)
 }
 
-/// The document under construction and its binary buffer.
-struct Builder {
-    root: json::Root,
-    bin: Vec<u8>,
-}
-
-impl Builder {
-    fn view(
-        &mut self,
-        bytes: &[u8],
-        target: Option<json::buffer::Target>,
-    ) -> json::Index<json::buffer::View> {
-        while !self.bin.len().is_multiple_of(4) {
-            self.bin.push(0);
-        }
-        let offset = self.bin.len();
-        self.bin.extend_from_slice(bytes);
-        self.root.push(json::buffer::View {
-            buffer: json::Index::new(0),
-            byte_length: USize64::from(bytes.len()),
-            byte_offset: Some(USize64::from(offset)),
-            byte_stride: None,
-            name: None,
-            target: target.map(Valid),
-            extensions: None,
-            extras: None,
-        })
-    }
-
-    /// An accessor over `values` of `kind` (VEC3, SCALAR, …), with min and max when `bounds`.
-    fn floats(
-        &mut self,
-        values: &[f32],
-        kind: json::accessor::Type,
-        bounds: bool,
-        target: Option<json::buffer::Target>,
-    ) -> json::Index<json::Accessor> {
-        let width = kind.multiplicity();
-        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-        let view = self.view(&bytes, target);
-        let (min, max) = if bounds {
-            let mut lo = vec![f32::INFINITY; width];
-            let mut hi = vec![f32::NEG_INFINITY; width];
-            for row in values.chunks_exact(width) {
-                for (i, v) in row.iter().enumerate() {
-                    lo[i] = lo[i].min(*v);
-                    hi[i] = hi[i].max(*v);
-                }
-            }
-            (Some(serde_json::json!(lo)), Some(serde_json::json!(hi)))
-        } else {
-            (None, None)
-        };
-        self.accessor(
-            view,
-            values.len() / width,
-            json::accessor::ComponentType::F32,
-            kind,
-            min,
-            max,
-        )
-    }
-
-    fn accessor(
-        &mut self,
-        view: json::Index<json::buffer::View>,
-        count: usize,
-        component: json::accessor::ComponentType,
-        kind: json::accessor::Type,
-        min: Option<serde_json::Value>,
-        max: Option<serde_json::Value>,
-    ) -> json::Index<json::Accessor> {
-        self.root.push(json::Accessor {
-            buffer_view: Some(view),
-            byte_offset: None,
-            count: USize64::from(count),
-            component_type: Valid(json::accessor::GenericComponentType(component)),
-            extensions: None,
-            extras: None,
-            type_: Valid(kind),
-            min,
-            max,
-            name: None,
-            normalized: false,
-            sparse: None,
-        })
-    }
-}
-
 fn node(name: &str) -> json::Node {
     json::Node {
         name: Some(name.to_string()),
@@ -441,20 +361,7 @@ pub fn glb(
     let (v32, m32) = (v as u32, m as u32);
     let correctives = section("cache.e", &[v32, m32, 3])?;
     let rest: Vec<f32> = actor.rest().iter().collect();
-    let mut b = Builder {
-        root: json::Root {
-            asset: json::Asset {
-                version: "2.0".into(),
-                generator: Some(format!("sinew {}", env!("CARGO_PKG_VERSION"))),
-                copyright: None,
-                extensions: None,
-                extras: None,
-                min_version: None,
-            },
-            ..Default::default()
-        },
-        bin: Vec::new(),
-    };
+    let mut b = Builder::new();
 
     // Base mesh.
     let normals = unit_normals(actor, &rest);
@@ -621,18 +528,7 @@ pub fn glb(
         nodes: scene_nodes,
     });
     b.root.scene = Some(scene);
-    while !b.bin.len().is_multiple_of(4) {
-        b.bin.push(0);
-    }
-    b.root.push(json::Buffer {
-        byte_length: USize64::from(b.bin.len()),
-        name: None,
-        uri: None,
-        extensions: None,
-        extras: None,
-    });
-    let text = json::serialize::to_vec(&b.root)?;
-    let glb = super::glb::write(&text, &b.bin)?;
+    let glb = b.finish()?;
     let summary = Summary {
         vertices: v,
         morph_targets: m,

@@ -2,5 +2,4 @@
 //! targets, the jaw as a skin joint and poses as an animation (docs/ENGINES.md). Above the models,
 //! whose actors and pose frames it reads; below the command line.
 
-pub mod glb;
 pub mod gltf;

@@ -5,7 +5,11 @@
 pub mod align;
 pub mod deformation;
 pub mod identities;
+pub(crate) mod nicp;
 pub mod qem;
 pub mod spatial;
+pub mod surface;
+pub mod symmetry;
 pub mod topology;
 pub mod vec3;
+pub mod weld;

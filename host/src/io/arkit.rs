@@ -8,6 +8,9 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+mod names;
+pub use names::{ARKIT_SHAPES, arkit_bindings, arkit_shapes, comparable};
+
 /// A capture: channel names in column order and one row of values per frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Capture {

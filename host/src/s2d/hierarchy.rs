@@ -17,8 +17,9 @@ use sinew_core::format::ArtifactKind;
 
 use super::{Hierarchy, Level, Sampling, spirals};
 use crate::geometry::qem::decimate;
+use crate::geometry::surface::closest_point_on_triangle;
 use crate::geometry::topology::{fan, incident_triangles};
-use crate::geometry::vec3::{add, cross, dot, norm2, scale, sub, to64};
+use crate::geometry::vec3::{cross, norm2, sub, to64};
 use crate::io::container::{SinewWriter, WriterError};
 use crate::io::mesh::Mesh;
 
@@ -373,52 +374,6 @@ fn barycentric_upsampling(
         col_idx,
         values,
     }
-}
-
-/// The closest point of triangle `t` to `p` and its barycentric weights, clamped to the
-/// triangle (Ericson, "Real-Time Collision Detection", 5.1.5: Voronoi regions of the corners,
-/// edges and face).
-fn closest_point_on_triangle(p: [f64; 3], t: &[[f64; 3]; 3]) -> ([f64; 3], [f64; 3]) {
-    let [a, b, c] = *t;
-    let ab = sub(b, a);
-    let ac = sub(c, a);
-    let ap = sub(p, a);
-    let d1 = dot(ab, ap);
-    let d2 = dot(ac, ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return (a, [1.0, 0.0, 0.0]);
-    }
-    let bp = sub(p, b);
-    let d3 = dot(ab, bp);
-    let d4 = dot(ac, bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return (b, [0.0, 1.0, 0.0]);
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let s = d1 / (d1 - d3);
-        return (add(a, scale(ab, s)), [1.0 - s, s, 0.0]);
-    }
-    let cp = sub(p, c);
-    let d5 = dot(ab, cp);
-    let d6 = dot(ac, cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return (c, [0.0, 0.0, 1.0]);
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let s = d2 / (d2 - d6);
-        return (add(a, scale(ac, s)), [1.0 - s, 0.0, s]);
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let s = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return (add(b, scale(sub(c, b), s)), [0.0, 1.0 - s, s]);
-    }
-    let denom = 1.0 / (va + vb + vc);
-    let v = vb * denom;
-    let w = vc * denom;
-    (add(a, add(scale(ab, v), scale(ac, w))), [1.0 - v - w, v, w])
 }
 
 /// Which of a hierarchy's sections to write.

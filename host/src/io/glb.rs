@@ -2,6 +2,156 @@
 //! (`glTF`, version 2, total length), a JSON chunk padded with spaces and a BIN chunk padded with
 //! zeros, every chunk 4-byte aligned and all integers little-endian.
 
+use gltf_json as json;
+use json::validation::{Checked::Valid, USize64};
+
+/// The document under construction and its binary buffer.
+#[derive(Debug)]
+pub struct Builder {
+    /// The document.
+    pub root: json::Root,
+    /// The binary chunk.
+    pub bin: Vec<u8>,
+}
+
+impl Builder {
+    /// An empty document whose asset names Sinew as its generator.
+    pub fn new() -> Self {
+        Self {
+            root: json::Root {
+                asset: json::Asset {
+                    version: "2.0".into(),
+                    generator: Some(format!("sinew {}", env!("CARGO_PKG_VERSION"))),
+                    copyright: None,
+                    extensions: None,
+                    extras: None,
+                    min_version: None,
+                },
+                ..Default::default()
+            },
+            bin: Vec::new(),
+        }
+    }
+
+    /// A buffer view over `bytes`, appended to the binary chunk at a 4-byte boundary.
+    pub fn view(
+        &mut self,
+        bytes: &[u8],
+        target: Option<json::buffer::Target>,
+    ) -> json::Index<json::buffer::View> {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        let offset = self.bin.len();
+        self.bin.extend_from_slice(bytes);
+        self.root.push(json::buffer::View {
+            buffer: json::Index::new(0),
+            byte_length: USize64::from(bytes.len()),
+            byte_offset: Some(USize64::from(offset)),
+            byte_stride: None,
+            name: None,
+            target: target.map(Valid),
+            extensions: None,
+            extras: None,
+        })
+    }
+
+    /// An accessor over `values` of `kind` (VEC3, SCALAR, …), with min and max when `bounds`.
+    pub fn floats(
+        &mut self,
+        values: &[f32],
+        kind: json::accessor::Type,
+        bounds: bool,
+        target: Option<json::buffer::Target>,
+    ) -> json::Index<json::Accessor> {
+        let width = kind.multiplicity();
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.view(&bytes, target);
+        let (min, max) = if bounds {
+            let mut lo = vec![f32::INFINITY; width];
+            let mut hi = vec![f32::NEG_INFINITY; width];
+            for row in values.chunks_exact(width) {
+                for (i, v) in row.iter().enumerate() {
+                    lo[i] = lo[i].min(*v);
+                    hi[i] = hi[i].max(*v);
+                }
+            }
+            (Some(serde_json::json!(lo)), Some(serde_json::json!(hi)))
+        } else {
+            (None, None)
+        };
+        self.accessor(
+            view,
+            values.len() / width,
+            json::accessor::ComponentType::F32,
+            kind,
+            min,
+            max,
+        )
+    }
+
+    /// An accessor of `count` elements over `view`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn accessor(
+        &mut self,
+        view: json::Index<json::buffer::View>,
+        count: usize,
+        component: json::accessor::ComponentType,
+        kind: json::accessor::Type,
+        min: Option<serde_json::Value>,
+        max: Option<serde_json::Value>,
+    ) -> json::Index<json::Accessor> {
+        self.root.push(json::Accessor {
+            buffer_view: Some(view),
+            byte_offset: None,
+            count: USize64::from(count),
+            component_type: Valid(json::accessor::GenericComponentType(component)),
+            extensions: None,
+            extras: None,
+            type_: Valid(kind),
+            min,
+            max,
+            name: None,
+            normalized: false,
+            sparse: None,
+        })
+    }
+
+    /// The `.glb` bytes: the one buffer declared, the JSON serialised, both chunks laid out.
+    pub fn finish(mut self) -> Result<Vec<u8>, BuildError> {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        self.root.push(json::Buffer {
+            byte_length: USize64::from(self.bin.len()),
+            name: None,
+            uri: None,
+            extensions: None,
+            extras: None,
+        });
+        let text = json::serialize::to_vec(&self.root)?;
+        Ok(write(&text, &self.bin)?)
+    }
+}
+
+impl Default for Builder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Why a [`Builder`] could not finish its file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum BuildError {
+    /// The glTF document could not be serialised.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    /// The container could not be laid out.
+    #[error(transparent)]
+    Glb(#[from] GlbError),
+}
+
 /// Why bytes could not be laid out as, or read as, a binary glTF.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]

@@ -1,0 +1,445 @@
+//! Rigs in: glTF and OBJ-folder rigs built by the tests in other topologies than the kit's, in
+//! a scene's frame and units, resolved by `sinew_host::rig` and `sinew rig inspect`; and bad
+//! rigs refused by name.
+
+mod common;
+
+use std::path::Path;
+
+use common::{err, ok, s};
+use sinew_host::io::rig::{RigFile, RigReadError};
+use sinew_host::io::units::Unit;
+use sinew_host::rig::sample::{Placement, Sample, sample};
+use sinew_host::rig::template::FaceTemplate;
+use sinew_host::rig::{Axis, Rig, RigError, RigOptions};
+
+/// The built-in face template as a rig: re-meshed to `vertices`, with a jaw that opens (the
+/// part below the mouth turned 15° about a hinge), a smile on one side and a blink, under
+/// names in four spellings.
+fn template_rig(vertices: usize, placement: &Placement) -> Sample {
+    let t = FaceTemplate::builtin().unwrap();
+    let points: Vec<[f32; 3]> = t.points().iter().map(|p| p.map(|v| v as f32)).collect();
+    let surface_point = |(tri, w): (u32, [f64; 3])| -> [f64; 3] {
+        let c = t.triangles[tri as usize].map(|i| t.points()[i as usize]);
+        [0, 1, 2].map(|k| c[0][k] * w[0] + c[1][k] * w[1] + c[2][k] * w[2])
+    };
+    let landmarks: Vec<[f64; 3]> = t.landmarks.iter().map(|&l| surface_point(l)).collect();
+    let mouth = landmarks[62];
+    let pivot = t.jaw_pivot_cm();
+    let (sn, cs) = 15f64.to_radians().sin_cos();
+    let jaw: Vec<[f32; 3]> = points
+        .iter()
+        .map(|&p| {
+            if f64::from(p[1]) >= mouth[1] {
+                return p;
+            }
+            let (y, z) = (f64::from(p[1]) - pivot[1], f64::from(p[2]) - pivot[2]);
+            [
+                p[0],
+                (cs * y - sn * z + pivot[1]) as f32,
+                (sn * y + cs * z + pivot[2]) as f32,
+            ]
+        })
+        .collect();
+    let bump = |centre: [f64; 3], lift: [f32; 3]| -> Vec<[f32; 3]> {
+        points
+            .iter()
+            .map(|&p| {
+                let d2: f64 = (0..3).map(|k| (f64::from(p[k]) - centre[k]).powi(2)).sum();
+                let w = (-d2 / 2.0).exp() as f32;
+                [p[0] + w * lift[0], p[1] + w * lift[1], p[2] + w * lift[2]]
+            })
+            .collect()
+    };
+    let shapes = vec![
+        ("jawOpen".to_owned(), jaw),
+        (
+            "mouthSmile.L".to_owned(),
+            bump(landmarks[54], [0.4, 0.5, 0.0]),
+        ),
+        (
+            "MouthSmileRight".to_owned(),
+            bump(landmarks[48], [-0.4, 0.5, 0.0]),
+        ),
+        (
+            "eyeBlink_L".to_owned(),
+            bump(landmarks[44], [0.0, -0.3, 0.0]),
+        ),
+    ];
+    sample(
+        &points,
+        &t.triangles,
+        &shapes,
+        &landmarks,
+        vertices,
+        placement,
+    )
+    .unwrap()
+}
+
+fn options(up: Axis, forward: Axis) -> RigOptions {
+    RigOptions {
+        up,
+        forward,
+        ..RigOptions::default()
+    }
+}
+
+/// Mean distance (mm) of the rig's landmarks from the sample's.
+fn landmark_error(rig: &Rig, truth: &[[f64; 3]]) -> f64 {
+    sinew_host::rig::inspect::landmark_error(rig, truth).mean
+}
+
+#[test]
+fn a_glb_head_in_metres_turned_off_the_origin_lands_in_the_face_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = template_rig(1_800, &Placement::scene(30.0, [0.25, 1.6, -0.4]));
+    let path = dir.path().join("head.glb");
+    sample.file.write_glb(&path).unwrap();
+    let rig = Rig::open(&path, &RigOptions::default()).unwrap();
+    assert_eq!(rig.conventions.units, Unit::Metre);
+    assert!(!rig.conventions.units_guessed);
+    assert_eq!(rig.file.vertex_count(), sample.file.vertex_count());
+    // The seam's vertices are split in the file and welded for learning.
+    assert_eq!(rig.weld.len(), 1_800);
+    assert!(rig.file.vertex_count() > 1_800 + 20);
+    assert!(rig.face.positions.len() == 1_800);
+    let e = landmark_error(&rig, &sample.landmarks);
+    assert!(e < 1.0, "landmark error {e} mm");
+    // The face frame is the kit's: the head stands up and looks along +z there, whatever the
+    // scene's node transform, and each shape's offsets come along in centimetres.
+    let up = rig.landmarks.landmarks[27].face[1] - rig.landmarks.landmarks[8].face[1];
+    assert!(up > 8.0, "nose bridge above the chin by {up} cm");
+    let nose_ahead = rig.landmarks.landmarks[30].face[2] - rig.landmarks.landmarks[0].face[2];
+    assert!(
+        nose_ahead > 5.0,
+        "nose ahead of the jaw line by {nose_ahead} cm"
+    );
+    let jaw = rig.names().iter().position(|n| n == "jawOpen").unwrap();
+    let chin = rig.landmarks.landmarks[8].welded_vertex as usize;
+    let drop = -rig.deltas[jaw][chin][1];
+    assert!(drop > 1.0, "the chin drops {drop} cm with jawOpen");
+    // Every spelling binds to ARKit; the rest is listed as missing.
+    let bound = |a: &str| {
+        rig.arkit
+            .iter()
+            .find(|(n, _)| n == a)
+            .map(|(_, s)| {
+                s.iter()
+                    .map(|&i| rig.names()[i].clone())
+                    .collect::<Vec<_>>()
+            })
+            .unwrap()
+    };
+    assert_eq!(bound("jawOpen"), ["jawOpen"]);
+    assert_eq!(bound("mouthSmileLeft"), ["mouthSmile.L"]);
+    assert_eq!(bound("mouthSmileRight"), ["MouthSmileRight"]);
+    assert_eq!(bound("eyeBlinkLeft"), ["eyeBlink_L"]);
+    assert_eq!(rig.arkit_missing().len(), 48);
+    // Back in the rig's own frame, the landmarks are where the sample put them.
+    for (l, t) in rig.landmarks.landmarks.iter().zip(&sample.landmarks) {
+        let d: f64 = (0..3)
+            .map(|k| (l.position[k] - t[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(d < 0.005, "{d} m");
+    }
+}
+
+#[test]
+fn an_obj_folder_in_millimetres_z_up_needs_its_axes_and_guesses_its_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let placement = Placement {
+        units: Unit::Millimetre,
+        up: Axis::PosZ,
+        forward: Axis::NegY,
+        seam: true,
+        ..Placement::kit()
+    };
+    let sample = template_rig(1_400, &placement);
+    let folder = dir.path().join("head");
+    sample.file.write_obj_folder(&folder).unwrap();
+    let wrong = Rig::open(&folder, &RigOptions::default()).unwrap_err();
+    let message = wrong.to_string();
+    assert!(
+        message.contains("--up +z --forward -y"),
+        "the error names the axes: {message}"
+    );
+    let rig = Rig::open(&folder, &options(Axis::PosZ, Axis::NegY)).unwrap();
+    assert_eq!(rig.conventions.units, Unit::Millimetre);
+    assert!(rig.conventions.units_guessed);
+    let e = landmark_error(&rig, &sample.landmarks);
+    assert!(e < 1.0, "landmark error {e} mm");
+    // Told the unit, the rig is read in it.
+    let cm = Rig::open(
+        &folder,
+        &RigOptions {
+            units: Some(Unit::Centimetre),
+            ..options(Axis::PosZ, Axis::NegY)
+        },
+    );
+    assert!(cm.is_err() || cm.unwrap().conventions.units == Unit::Centimetre);
+}
+
+#[test]
+fn rig_inspect_writes_the_report_and_the_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = template_rig(1_600, &Placement::scene(-60.0, [0.0, 1.7, 0.3]));
+    let glb = dir.path().join("head.glb");
+    sample.file.write_glb(&glb).unwrap();
+    let truth = dir.path().join("truth.json");
+    std::fs::write(&truth, serde_json::to_vec(&sample.landmarks).unwrap()).unwrap();
+    let report = dir.path().join("rig.json");
+    let pictures = dir.path().join("pictures");
+    let out = ok(&[
+        "rig",
+        "inspect",
+        s(&glb),
+        "--report",
+        s(&report),
+        "--pictures",
+        s(&pictures),
+        "--truth",
+        s(&truth),
+    ]);
+    assert!(out.contains("landmark error"), "{out}");
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(r["units"], "m");
+    assert_eq!(r["up"], "+y");
+    assert_eq!(r["vertex_count"], sample.file.vertex_count());
+    assert_eq!(r["welded_vertex_count"], 1_600);
+    assert_eq!(r["shapes"].as_array().unwrap().len(), 4);
+    assert_eq!(r["arkit"]["bound"]["jawOpen"][0], "jawOpen");
+    assert_eq!(r["arkit"]["missing"].as_array().unwrap().len(), 48);
+    let landmarks = r["landmarks"].as_array().unwrap();
+    assert_eq!(landmarks.len(), 68);
+    assert_eq!(landmarks[0]["position"].as_array().unwrap().len(), 3);
+    assert!(landmarks[0]["vertex"].as_u64().unwrap() < sample.file.vertex_count() as u64);
+    assert!(r["landmark_error_mm"]["mean"].as_f64().unwrap() < 1.0);
+    // The symmetry plane's normal is the head's left-right axis in the mesh's own frame.
+    let normal = r["symmetry_plane"]["normal"][0].as_f64().unwrap();
+    assert!(normal.abs() > 0.98, "{}", r["symmetry_plane"]);
+    assert_eq!(r["jaw_pivot"].as_array().unwrap().len(), 3);
+    let png = std::fs::read(pictures.join("landmarks.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG"));
+}
+
+/// A rig file's glTF JSON and binary chunk, changed by `edit`, written to `path`.
+fn edited_glb(file: &RigFile, path: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
+    let bytes = file.glb().unwrap();
+    let (json, bin) = sinew_host::io::glb::read(&bytes).unwrap();
+    let mut v: serde_json::Value = serde_json::from_slice(json).unwrap();
+    edit(&mut v);
+    let text = serde_json::to_vec(&v).unwrap();
+    std::fs::write(path, sinew_host::io::glb::write(&text, bin).unwrap()).unwrap();
+}
+
+#[test]
+fn bad_rigs_are_refused_naming_the_file_and_the_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sample = template_rig(900, &Placement::kit());
+    let read = |p: &Path| RigFile::read(p, None).unwrap_err();
+
+    let p = d.join("compressed.glb");
+    edited_glb(&sample.file, &p, |v| {
+        v["extensionsUsed"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+        v["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+    });
+    let e = read(&p);
+    assert!(
+        matches!(&e, RigReadError::Compressed { extension, .. } if extension == "KHR_draco_mesh_compression")
+    );
+    assert!(e.to_string().contains("compressed.glb"), "{e}");
+
+    let p = d.join("targetless.glb");
+    edited_glb(&sample.file, &p, |v| {
+        v["meshes"][0]["primitives"][0]
+            .as_object_mut()
+            .unwrap()
+            .remove("targets");
+        v["meshes"][0].as_object_mut().unwrap().remove("weights");
+    });
+    assert!(matches!(
+        read(&p),
+        RigReadError::NoMorphTargets { meshes: 1, .. }
+    ));
+
+    let p = d.join("short-target.glb");
+    edited_glb(&sample.file, &p, |v| {
+        let a = v["meshes"][0]["primitives"][0]["targets"][1]["POSITION"]
+            .as_u64()
+            .unwrap();
+        v["accessors"][a as usize]["count"] = serde_json::json!(10);
+    });
+    let e = read(&p);
+    assert!(
+        matches!(&e, RigReadError::Attribute { what, .. } if what.contains("morph target 1")),
+        "{e}"
+    );
+
+    let bytes = sample.file.glb().unwrap();
+    let p = d.join("truncated.glb");
+    std::fs::write(&p, &bytes[..bytes.len() / 2]).unwrap();
+    let e = read(&p);
+    assert!(matches!(&e, RigReadError::Gltf { .. }), "{e}");
+    assert!(e.to_string().contains("truncated.glb"));
+
+    let p = d.join("named.glb");
+    sample.file.write_glb(&p).unwrap();
+    let e = RigFile::read(&p, Some("eyes")).unwrap_err();
+    assert!(matches!(&e, RigReadError::NoSuchMesh { names, .. } if names == &["head"]));
+
+    // An OBJ folder whose shape has another vertex count, or a NaN.
+    let folder = d.join("obj");
+    sample.file.write_obj_folder(&folder).unwrap();
+    let shape = folder.join("shapes/jawOpen.obj");
+    let text = std::fs::read_to_string(&shape).unwrap();
+    let first_v = text.find("\nv ").unwrap();
+    let cut: String =
+        text[..first_v].to_owned() + &text[text[first_v + 1..].find('\n').unwrap() + first_v + 1..];
+    std::fs::write(&shape, &cut).unwrap();
+    let e = read(&folder);
+    assert!(
+        matches!(&e, RigReadError::VertexCount { path, .. } if path == &shape)
+            || matches!(&e, RigReadError::Mesh(_)),
+        "{e}"
+    );
+    std::fs::write(
+        &shape,
+        text.replacen("\nv ", "\nv NaN ", 1).replacen("NaN ", "", 0),
+    )
+    .unwrap();
+    let nan = text.replacen("\nv ", "\nv nan 0 0 #", 1);
+    std::fs::write(&shape, nan).unwrap();
+    let e = read(&folder);
+    assert!(e.to_string().contains("jawOpen.obj"), "{e}");
+
+    // No shapes at all.
+    let bare = d.join("bare");
+    std::fs::create_dir_all(&bare).unwrap();
+    std::fs::copy(folder.join("neutral.obj"), bare.join("neutral.obj")).unwrap();
+    assert!(matches!(read(&bare), RigReadError::NoShapes { .. }));
+}
+
+#[test]
+fn what_is_no_face_or_no_surface_is_refused_before_any_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sample = template_rig(900, &Placement::kit());
+    // Every vertex at one point: nothing to register onto.
+    let mut flat = sample.file.clone();
+    for p in &mut flat.neutral.positions {
+        *p = [1.0, 2.0, 3.0];
+    }
+    let p = d.join("point.glb");
+    flat.write_glb(&p).unwrap();
+    let e = Rig::open(&p, &RigOptions::default()).unwrap_err();
+    assert!(matches!(e, RigError::Registration { .. }), "{e}");
+    // A landmarks file whose points lie off the mesh, or that is too short.
+    let p = d.join("head.glb");
+    sample.file.write_glb(&p).unwrap();
+    let off = d.join("off.json");
+    let far: Vec<[f64; 3]> = sample
+        .landmarks
+        .iter()
+        .map(|l| [l[0], l[1], l[2] + 0.05])
+        .collect();
+    std::fs::write(&off, serde_json::to_vec(&far).unwrap()).unwrap();
+    let e = Rig::open(
+        &p,
+        &RigOptions {
+            landmarks: Some(off.clone()),
+            ..RigOptions::default()
+        },
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("off the rig's surface"), "{e}");
+    assert!(e.to_string().contains("off.json"), "{e}");
+    // Given on the mesh, by vertex, they are taken as they are.
+    let by_vertex = d.join("vertices.json");
+    let vertices: Vec<u32> = (0..68).map(|k| k * 5).collect();
+    std::fs::write(&by_vertex, serde_json::to_vec(&vertices).unwrap()).unwrap();
+    let rig = Rig::open(
+        &p,
+        &RigOptions {
+            landmarks: Some(by_vertex),
+            ..RigOptions::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(rig.landmarks.landmarks[3].vertex, 15);
+    // The command line writes no report for a refused rig.
+    let report = d.join("rig.json");
+    let stderr = err(&[
+        "rig",
+        "inspect",
+        s(&d.join("point.glb")),
+        "--report",
+        s(&report),
+    ]);
+    assert!(stderr.contains("point.glb"), "{stderr}");
+    assert!(!report.exists());
+    let stderr = err(&[
+        "rig",
+        "inspect",
+        s(&d.join("nothing.fbx")),
+        "--report",
+        s(&report),
+    ]);
+    assert!(stderr.contains("not a rig"), "{stderr}");
+}
+
+/// ICT-FaceKit identities that are not the template's, re-meshed and placed as a scene's and a
+/// studio's OBJs would be: their landmarks are found within the documented error.
+#[test]
+fn kit_identities_in_other_topologies_find_their_landmarks() {
+    let Some(root) = sinew_host::io::data::data_dir() else {
+        return;
+    };
+    let kit = root.join("ict-facekit");
+    let cases = [
+        (
+            vec![1.5, -1.0, 0.8, 1.0, -1.2],
+            6_000,
+            Placement::scene(30.0, [0.25, 1.6, -0.4]),
+            RigOptions::default(),
+        ),
+        (
+            vec![-2.0, 1.5, 0.0, -1.0, 2.0, 1.0],
+            4_000,
+            Placement {
+                units: Unit::Millimetre,
+                up: Axis::PosZ,
+                forward: Axis::NegY,
+                seam: true,
+                ..Placement::kit()
+            },
+            options(Axis::PosZ, Axis::NegY),
+        ),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for (k, (identity, vertices, placement, opts)) in cases.into_iter().enumerate() {
+        let sample =
+            sinew_host::rig::sample::from_kit(&kit, &identity, vertices, &placement).unwrap();
+        let path = if placement.units == Unit::Metre {
+            let path = dir.path().join(format!("rig{k}.glb"));
+            sample.file.write_glb(&path).unwrap();
+            path
+        } else {
+            let path = dir.path().join(format!("rig{k}"));
+            sample.file.write_obj_folder(&path).unwrap();
+            path
+        };
+        let rig = Rig::open(&path, &opts).unwrap();
+        assert_eq!(rig.names().len(), 53);
+        assert_eq!(rig.arkit_missing(), ["tongueOut"]);
+        let e = sinew_host::rig::inspect::landmark_error(&rig, &sample.landmarks);
+        assert!(
+            e.mean < 1.5 && e.max < 5.0,
+            "rig {k}: mean {} mm, max {} mm",
+            e.mean,
+            e.max
+        );
+    }
+}
