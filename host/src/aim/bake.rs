@@ -167,7 +167,7 @@ pub fn metadata(
     set: &TrainingSet,
     config: &AimConfig,
 ) -> Result<Vec<(String, String)>, serde_json::Error> {
-    Ok(vec![
+    let mut recorded = vec![
         ("units".into(), set.units.name().into()),
         ("axes".into(), "x-left-of-actor,y-up,z-forward".into()),
         (
@@ -178,7 +178,9 @@ pub fn metadata(
         ("seed".into(), config.seed.to_string()),
         ("shapes".into(), set.names.join(",")),
         ("config".into(), serde_json::to_string(config)?),
-    ])
+    ];
+    recorded.extend(set.provenance.iter().cloned());
+    Ok(recorded)
 }
 
 #[cfg(test)]

@@ -12,6 +12,7 @@ use crate::aim::{AimConfig, TrainingSet};
 use crate::anatomy::fit::{bone_templates, fit_bones};
 use crate::io::ict::{DEFAULT_SHAPES, FACE_REGION, IctFaceKit};
 use crate::io::mesh::Mesh;
+use crate::rig::Rig;
 use crate::training::backend::Backend;
 use crate::training::checkpoint::checkpoint_dir_for;
 
@@ -83,6 +84,29 @@ pub fn eval_aim(
     bones: Option<&Path>,
     templates: &Path,
 ) -> Result<Report> {
+    evaluate_model(model, |config, _| {
+        ict_training_set(data, identity, bones, templates, config)
+    })
+}
+
+/// `sinew eval aim --rig`: the baked actor against the rig's shapes it was trained on.
+pub fn eval_aim_rig(
+    model: &Path,
+    rig: &Rig,
+    bones: Option<&Path>,
+    templates: &Path,
+) -> Result<Report> {
+    evaluate_model(model, |config, trained| {
+        rig_training_set(rig, trained, bones, templates, config)
+    })
+}
+
+/// A baked actor against the training set `set_for` builds from its configuration and the
+/// shape names it records (neutral left out).
+fn evaluate_model(
+    model: &Path,
+    set_for: impl FnOnce(&AimConfig, &[String]) -> Result<(TrainingSet, String)>,
+) -> Result<Report> {
     let bytes = crate::io::container::read(model)?;
     let file = sinew_core::SinewFile::from_bytes(&bytes)
         .map_err(|e| anyhow::anyhow!("{}: {e}", model.display()))?;
@@ -92,16 +116,19 @@ pub fn eval_aim(
             .with_context(|| format!("{}: invalid config metadata", model.display()))?,
         None => AimConfig::default(),
     };
-    let (set, said) = ict_training_set(data, identity, bones, templates, &config)?;
+    let trained: Vec<String> = file
+        .metadata()
+        .get("shapes")
+        .map(|names| names.split(',').skip(1).map(str::to_owned).collect())
+        .unwrap_or_default();
+    let (set, said) = set_for(&config, &trained)?;
     eprintln!("{said}");
-    if let Some(names) = file.metadata().get("shapes") {
-        let names: Vec<&str> = names.split(',').collect();
-        if names != set.names.iter().map(String::as_str).collect::<Vec<_>>() {
-            bail!(
-                "{}: trained on shapes {names:?}, not the default ICT protocol's",
-                model.display()
-            );
-        }
+    if !trained.is_empty() && trained[..] != set.names[1..] {
+        bail!(
+            "{}: trained on shapes {trained:?}, not the data's {:?}",
+            model.display(),
+            &set.names[1..]
+        );
     }
     Ok(crate::aim::run::evaluate(
         &bytes,
@@ -142,4 +169,155 @@ pub fn bake(
         bytes = crate::aim::bake::with_q16_cache(&bytes)?;
     }
     Ok(crate::io::atomic::write(out, &bytes)?)
+}
+
+/// The actor of a resolved rig: its welded neutral in Sinew's face frame with the shapes
+/// `shapes` names (every shape of the rig when empty), with bones from `bones_dir` (`skull.obj`,
+/// `jaw.obj` in the face frame, as `sinew bones fit --rig` writes them) or fitted now by its
+/// landmarks. The baked actor records the rig's conventions and welding (`rig`) and its ARKit
+/// binding (`arkit`).
+pub fn rig_training_set(
+    rig: &Rig,
+    shapes: &[String],
+    bones_dir: Option<&Path>,
+    templates: &Path,
+    config: &AimConfig,
+) -> Result<(TrainingSet, String)> {
+    let names = rig.names();
+    let picked: Vec<usize> = if shapes.is_empty() {
+        (0..names.len()).collect()
+    } else {
+        shapes
+            .iter()
+            .map(|s| {
+                names.iter().position(|n| n == s).ok_or_else(|| {
+                    anyhow::anyhow!(
+                        "{}: no shape {s:?}; the rig's shapes: {}",
+                        rig.path().display(),
+                        names.join(", ")
+                    )
+                })
+            })
+            .collect::<Result<_>>()?
+    };
+    if let Some(&k) = picked.iter().find(|&&k| names[k].contains(',')) {
+        bail!(
+            "{}: shape {:?} has a comma in its name, which the baked actor's shape list cannot \
+             hold; rename it or leave it out with --shapes",
+            rig.path().display(),
+            names[k]
+        );
+    }
+    let neutral = rig.face.positions.clone();
+    let mut all = vec![neutral.clone()];
+    all.extend(picked.iter().map(|&k| {
+        neutral
+            .iter()
+            .zip(&rig.deltas[k])
+            .map(|(p, d)| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
+            .collect()
+    }));
+    let mut shape_names = vec!["neutral".to_owned()];
+    shape_names.extend(picked.iter().map(|&k| names[k].clone()));
+    let landmarks = rig.landmarks.welded_vertices();
+    let actor = crate::io::ict::Actor {
+        template: rig.face.clone(),
+        shapes: all,
+        names: shape_names,
+        landmarks: landmarks.iter().map(|&l| Some(l)).collect(),
+        units: crate::io::units::Unit::Centimetre,
+        source: format!(
+            "rig {} (mesh {:?})",
+            rig.path().file_name().map_or_else(
+                || rig.path().display().to_string(),
+                |n| n.to_string_lossy().into_owned()
+            ),
+            rig.file.mesh_name
+        ),
+    };
+    let (skull, jaw, said) = match bones_dir {
+        Some(dir) => (
+            Mesh::read(&dir.join("skull.obj"))?,
+            Mesh::read(&dir.join("jaw.obj"))?,
+            format!("bones from {}", dir.display()),
+        ),
+        None => {
+            let templates_dir = bone_templates(templates)?;
+            let fitted = fit_bones(&rig.face, &landmarks, &templates_dir)?;
+            (
+                fitted.skull,
+                fitted.jaw,
+                format!(
+                    "bones fitted now to the rig's landmarks from the templates in {}",
+                    templates_dir.display()
+                ),
+            )
+        }
+    };
+    let mut set = training_set(&actor, &skull, &jaw, None, config.max_constraint_depth)?;
+    set.provenance = vec![
+        ("rig".into(), serde_json::to_string(&RigRecord::of(rig))?),
+        (
+            "arkit".into(),
+            serde_json::to_string(&rig_arkit(rig, &picked))?,
+        ),
+    ];
+    Ok((set, said))
+}
+
+/// What a baked actor records of its rig, to go back to the rig's frame, units and vertices.
+#[derive(Debug, serde::Serialize)]
+struct RigRecord<'a> {
+    format: &'static str,
+    mesh: &'a str,
+    #[serde(flatten)]
+    conventions: &'a crate::rig::Conventions,
+    vertex_count: usize,
+    /// Per rig vertex, the actor's vertex (seam copies share one).
+    welded: &'a [u32],
+}
+
+impl<'a> RigRecord<'a> {
+    fn of(rig: &'a Rig) -> Self {
+        Self {
+            format: rig.file.format.name(),
+            mesh: &rig.file.mesh_name,
+            conventions: &rig.conventions,
+            vertex_count: rig.file.vertex_count(),
+            welded: &rig.weld.welded,
+        }
+    }
+}
+
+/// ARKit name → the trained shapes that play it.
+fn rig_arkit(rig: &Rig, picked: &[usize]) -> std::collections::BTreeMap<String, Vec<String>> {
+    rig.arkit
+        .iter()
+        .map(|(a, s)| {
+            let kept: Vec<String> = s
+                .iter()
+                .filter(|k| picked.contains(k))
+                .map(|&k| rig.names()[k].clone())
+                .collect();
+            (a.clone(), kept)
+        })
+        .filter(|(_, s)| !s.is_empty())
+        .collect()
+}
+
+/// `sinew bones fit --rig`: the template bones fitted to a rig by its landmarks, written in
+/// Sinew's face frame (as `train aim --rig --bones` reads them).
+pub fn bones_fit_rig(
+    rig: &Rig,
+    templates: &Path,
+    out: &Path,
+) -> Result<crate::anatomy::bones::FitReport> {
+    let templates = bone_templates(templates)?;
+    Ok(crate::anatomy::fit::bones_fit_on(
+        &rig.face,
+        &rig.landmarks.welded_vertices(),
+        &rig.face,
+        &templates,
+        out,
+    )?)
 }

@@ -129,6 +129,7 @@ pub fn training_set(
         units: actor.units,
         mm_per_unit,
         source: actor.source.clone(),
+        provenance: Vec::new(),
     };
     set.validate()?;
     Ok(set)

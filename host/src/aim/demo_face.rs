@@ -383,6 +383,7 @@ pub fn load(bytes: &[u8], name: &str) -> Result<TrainingSet, DemoFaceError> {
         units: crate::io::units::Unit::Centimetre,
         mm_per_unit: 10.0,
         source: s.source,
+        provenance: Vec::new(),
     };
     set.validate().map_err(|source| DemoFaceError::Set {
         name: name.to_owned(),

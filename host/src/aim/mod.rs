@@ -93,6 +93,8 @@ pub struct TrainingSet {
     pub mm_per_unit: f32,
     /// Where the data came from, with its licence.
     pub source: String,
+    /// More metadata the baked actor records (a rig's conventions, `rig`), as (key, value).
+    pub provenance: Vec<(String, String)>,
 }
 
 impl TrainingSet {

@@ -98,6 +98,9 @@ pub struct Report {
     pub max_error_mm: f64,
     /// Per-shape errors, mm.
     pub per_shape: Vec<(String, ErrorStats)>,
+    /// Per shape, the angle of the jaw rotation learned for it, in degrees (the jaw's part of
+    /// the shape: on ICT-FaceKit, jawOpen turns the jaw by well over 10°).
+    pub jaw_degrees: Vec<(String, f64)>,
     /// Fraction of template vertices with a bone constraint.
     pub constrained_fraction: f64,
     /// Template vertices whose learned thickness is negative.
@@ -208,6 +211,13 @@ pub fn run(
     Ok(report)
 }
 
+/// The angle of a 9D jaw transform's rotation, in degrees.
+fn jaw_degrees(pose: &[f32; 9]) -> f64 {
+    let r = sinew_core::rotation::from_6d(&[pose[0], pose[1], pose[2], pose[3], pose[4], pose[5]]);
+    let trace = f64::from(r.cols[0].x) + f64::from(r.cols[1].y) + f64::from(r.cols[2].z);
+    ((trace - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees()
+}
+
 /// Measures a baked actor on its training set.
 pub fn evaluate(
     bytes: &[u8],
@@ -223,6 +233,12 @@ pub fn evaluate(
         source,
     })?;
     let errors = shape_errors(&actor, &set.names, &set.shapes, set.mm_per_unit)?;
+    let jaw_degrees = crate::aim::eval::training_poses(&actor)?
+        .iter()
+        .zip(&set.names)
+        .skip(1)
+        .map(|(pose, name)| (name.clone(), jaw_degrees(pose)))
+        .collect();
     let thickness = actor.thickness();
     Ok(Report {
         shapes: set.shapes.len(),
@@ -235,6 +251,7 @@ pub fn evaluate(
         p95_error_mm: errors.overall.p95,
         max_error_mm: errors.overall.max,
         per_shape: errors.per_shape,
+        jaw_degrees,
         constrained_fraction: set.constrained_fraction(),
         negative_thickness_count: thickness.iter().filter(|&d| d < 0.0).count(),
         thickness_deviation_mm: thickness_deviation(&actor, &set.anchors, set.mm_per_unit),

@@ -84,7 +84,21 @@ pub fn bones_fit(
 ) -> Result<crate::anatomy::bones::FitReport, BonesFitError> {
     let kit = IctFaceKit::open(data)?;
     let neutral = kit.neutral_of(identity)?;
-    let fitted = fit_bones(&neutral, &kit.landmarks68()?, templates)?;
+    let (face, _) = neutral.submesh(|v| FACE_REGION.contains(&v));
+    bones_fit_on(&neutral, &kit.landmarks68()?, &face, templates, out)
+}
+
+/// `sinew bones fit` on any neutral: fits the template bones in `templates` to `neutral` by its
+/// 68 iBUG landmark vertices and writes what [`bones_fit`] writes, the picture showing `face`
+/// (the part of the neutral that is the face, in its coordinates).
+pub fn bones_fit_on(
+    neutral: &Mesh,
+    landmarks: &[u32],
+    face: &Mesh,
+    templates: &Path,
+    out: &Path,
+) -> Result<crate::anatomy::bones::FitReport, BonesFitError> {
+    let fitted = fit_bones(neutral, landmarks, templates)?;
     std::fs::create_dir_all(out).map_err(|source| BonesFitError::CreateFolder {
         path: out.to_path_buf(),
         source,
@@ -98,9 +112,8 @@ pub fn bones_fit(
             source,
         })?;
     crate::io::atomic::write(&report, json.as_bytes())?;
-    let (face, _) = neutral.submesh(|v| FACE_REGION.contains(&v));
     let anchors = crate::anatomy::constraints::anchors(
-        &face,
+        face,
         &fitted.skull,
         &fitted.jaw,
         crate::anatomy::constraints::DEFAULT_MAX_DEPTH,

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 use sinew_host::aim::AimConfig;
 use sinew_host::aim::config::{JawInit, Schedule};
@@ -77,8 +77,14 @@ pub(crate) struct EvalAim {
     #[arg(long)]
     model: PathBuf,
     /// ICT-FaceKit folder.
+    #[arg(long, required_unless_present = "rig", conflicts_with = "rig")]
+    data: Option<PathBuf>,
+    /// A blendshape rig instead of the kit (.glb/.gltf, or a folder with neutral.obj and
+    /// shapes/NAME.obj), as the actor was trained on it.
     #[arg(long)]
-    data: PathBuf,
+    rig: Option<PathBuf>,
+    #[command(flatten)]
+    rig_read: super::rig::RigReadArgs,
     /// Output JSON report.
     #[arg(long)]
     report: PathBuf,
@@ -94,8 +100,18 @@ pub(crate) struct EvalAim {
 #[derive(Debug, Args)]
 pub(crate) struct TrainAim {
     /// ICT-FaceKit folder.
+    #[arg(long, required_unless_present = "rig", conflicts_with = "rig")]
+    data: Option<PathBuf>,
+    /// A blendshape rig instead of the kit: a .glb/.gltf head with morph targets, or a folder
+    /// with neutral.obj and shapes/NAME.obj (see docs/RIGS.md). Learns every shape it has
+    /// unless --shapes picks.
     #[arg(long)]
-    data: PathBuf,
+    rig: Option<PathBuf>,
+    #[command(flatten)]
+    rig_read: super::rig::RigReadArgs,
+    /// With --rig: the shapes to learn, comma separated (default: all of the rig's).
+    #[arg(long, value_delimiter = ',', requires = "rig")]
+    shapes: Vec<String>,
     /// Output baked model (.sinew); its checkpoints go to MODEL.ckpt/.
     #[arg(long)]
     out: PathBuf,
@@ -238,13 +254,26 @@ pub(crate) fn demo(args: DemoArgs) -> Result<()> {
 pub(crate) fn train(args: TrainAim) -> Result<()> {
     let config = config_for(&args)?;
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
-    let (set, said) = sinew_host::aim::commands::ict_training_set(
-        &args.data,
-        &args.identity.weights,
-        args.bones.as_deref(),
-        &args.templates.path,
-        &config,
-    )?;
+    let (set, said) = match (&args.rig, &args.data) {
+        (Some(path), _) => {
+            let rig = args.rig_read.open(path)?;
+            sinew_host::aim::commands::rig_training_set(
+                &rig,
+                &args.shapes,
+                args.bones.as_deref(),
+                &args.templates.path,
+                &config,
+            )?
+        }
+        (None, Some(data)) => sinew_host::aim::commands::ict_training_set(
+            data,
+            &args.identity.weights,
+            args.bones.as_deref(),
+            &args.templates.path,
+            &config,
+        )?,
+        (None, None) => bail!("give --data or --rig"),
+    };
     eprintln!(
         "{said}; {:.1}% of {} vertices constrained",
         100.0 * set.constrained_fraction(),
@@ -280,18 +309,29 @@ pub(crate) fn eval(args: EvalAim) -> Result<()> {
     let EvalAim {
         model,
         data,
+        rig,
+        rig_read,
         report,
         bones,
         templates,
         identity,
     } = args;
-    let r = sinew_host::aim::commands::eval_aim(
-        &model,
-        &data,
-        &identity.weights,
-        bones.as_deref(),
-        &templates.path,
-    )?;
+    let r = match (&rig, &data) {
+        (Some(path), _) => sinew_host::aim::commands::eval_aim_rig(
+            &model,
+            &rig_read.open(path)?,
+            bones.as_deref(),
+            &templates.path,
+        )?,
+        (None, Some(data)) => sinew_host::aim::commands::eval_aim(
+            &model,
+            data,
+            &identity.weights,
+            bones.as_deref(),
+            &templates.path,
+        )?,
+        (None, None) => bail!("give --data or --rig"),
+    };
     sinew_host::io::atomic::write(&report, serde_json::to_string_pretty(&r)?.as_bytes())?;
     println!(
         "{}: mean {:.3} mm, median {:.3} mm, p95 {:.3} mm, max {:.3} mm",

@@ -34,12 +34,18 @@ pub(crate) struct IdentityArg {
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum Bones {
-    /// Register the template skull and jaw to an ICT-FaceKit neutral (similarity from landmarks
+    /// Register the template skull and jaw to an ICT-FaceKit neutral or a rig's (similarity from landmarks
     /// offset by soft-tissue thickness, then ICP); writes skull.obj, jaw.obj, fit.json, bones.png.
     Fit {
         /// ICT-FaceKit folder.
+        #[arg(long, required_unless_present = "rig", conflicts_with = "rig")]
+        data: Option<PathBuf>,
+        /// A blendshape rig instead of the kit (.glb/.gltf, or an OBJ folder): the bones are
+        /// placed by its landmarks and written in Sinew's face frame.
         #[arg(long)]
-        data: PathBuf,
+        rig: Option<PathBuf>,
+        #[command(flatten)]
+        rig_read: super::rig::RigReadArgs,
         #[command(flatten)]
         templates: TemplatesArg,
         #[command(flatten)]
@@ -55,13 +61,24 @@ pub(crate) fn run(cmd: Bones) -> Result<()> {
     match cmd {
         Bones::Fit {
             data,
+            rig,
+            rig_read,
             templates,
             identity,
             out,
         } => {
-            let templates = sinew_host::anatomy::fit::bone_templates(&templates.path)?;
-            let report =
-                sinew_host::anatomy::fit::bones_fit(&data, &identity.weights, &templates, &out)?;
+            let report = match (&rig, &data) {
+                (Some(path), _) => sinew_host::aim::commands::bones_fit_rig(
+                    &rig_read.open(path)?,
+                    &templates.path,
+                    &out,
+                )?,
+                (None, Some(data)) => {
+                    let templates = sinew_host::anatomy::fit::bone_templates(&templates.path)?;
+                    sinew_host::anatomy::fit::bones_fit(data, &identity.weights, &templates, &out)?
+                }
+                (None, None) => anyhow::bail!("give --data or --rig"),
+            };
             println!("{}", serde_json::to_string_pretty(&report)?);
             eprintln!("bones written to {}", out.display());
         }
