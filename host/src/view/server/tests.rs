@@ -186,13 +186,14 @@ fn open_fds() -> usize {
 }
 
 /// Waits (within `PROMPTLY`) for the process's descriptors to come back to about `before`;
-/// other tests of this binary open files meanwhile, hence the slack.
+/// other tests of this binary open files meanwhile, hence the slack (a leak here is one or two
+/// descriptors a connection, for tens or hundreds of connections).
 #[cfg(target_os = "linux")]
 fn fds_come_back_to(before: usize, what: &str) {
     let deadline = Instant::now() + PROMPTLY;
     loop {
         let now = open_fds();
-        if now <= before + 8 {
+        if now <= before + 16 {
             return;
         }
         assert!(
@@ -398,7 +399,7 @@ fn idle_connections_beyond_the_limit_are_closed_at_once() {
     {
         let now = open_fds();
         assert!(
-            now <= before + idle.len() + limits.connections + 8,
+            now <= before + idle.len() + limits.connections + 16,
             "{before} descriptors before, {now} with {} idle connections",
             idle.len()
         );
