@@ -176,14 +176,11 @@ pub enum ViewError {
     Listen {
         /// The port.
         port: u16,
-        /// What the server said.
+        /// What the system said.
         #[source]
-        source: Box<dyn std::error::Error + Send + Sync>,
+        source: std::io::Error,
     },
-    /// The server's socket is not an IP socket.
-    #[error("the server is not on an IP socket")]
-    NotIp,
-    /// Waiting for a request failed.
-    #[error(transparent)]
-    Receive(std::io::Error),
+    /// The server's runtime (its event loop and timers) could not start.
+    #[error("cannot start the server")]
+    Runtime(#[source] std::io::Error),
 }

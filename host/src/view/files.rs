@@ -5,6 +5,7 @@
 
 use std::path::Path;
 
+use bytes::Bytes;
 use serde::Serialize;
 use sinew_core::aim::AimActor;
 use sinew_core::performance::Performance;
@@ -29,8 +30,8 @@ pub struct Entry {
     pub path: &'static str,
     /// Its `Content-Type`.
     pub content_type: &'static str,
-    /// Its bytes.
-    pub body: Vec<u8>,
+    /// Its bytes, shared by every answer that sends them.
+    pub body: Bytes,
 }
 
 /// The files the server answers with, by exact URL path.
@@ -201,21 +202,21 @@ impl Site {
             entries.push(Entry {
                 path: "/replay.sinew",
                 content_type: "application/octet-stream",
-                body: bytes,
+                body: bytes.into(),
             });
         }
         if let Some((_, _, json)) = poses {
             entries.push(Entry {
                 path: "/poses.json",
                 content_type: "application/json",
-                body: json,
+                body: json.into(),
             });
         }
         if let Some((_, bytes)) = performance {
             entries.push(Entry {
                 path: "/performance.sinew",
                 content_type: "application/octet-stream",
-                body: bytes,
+                body: bytes.into(),
             });
         }
         Self::new(entries)
@@ -275,6 +276,6 @@ fn entry(path: &'static str, content_type: &'static str, body: &[u8]) -> Entry {
     Entry {
         path,
         content_type,
-        body: body.to_vec(),
+        body: Bytes::copy_from_slice(body),
     }
 }

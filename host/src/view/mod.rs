@@ -67,7 +67,7 @@ mod tests {
     use std::sync::Arc;
     use std::sync::atomic::{AtomicBool, Ordering};
 
-    use tiny_http::Method;
+    use hyper::Method;
 
     use super::server::respond;
     use super::*;
@@ -95,8 +95,8 @@ mod tests {
         50000,
     ));
 
-    fn get<'a>(site: &'a Site, url: &str) -> server::Reply<'a> {
-        respond(site, &Method::Get, url, LOCAL, Some("127.0.0.1:8000"), 8000)
+    fn get(site: &Site, url: &str) -> server::Reply {
+        respond(site, &Method::GET, url, LOCAL, Some("127.0.0.1:8000"), 8000)
     }
 
     #[test]
@@ -116,7 +116,7 @@ mod tests {
             "application/wasm"
         );
         let config: serde_json::Value =
-            serde_json::from_slice(get(&site, "/config.json").body).unwrap();
+            serde_json::from_slice(&get(&site, "/config.json").body).unwrap();
         assert_eq!(config["replay"]["frames"], 16);
         assert_eq!(config["replay"]["mode"], "f32");
         assert!(config["poses"].is_null());
@@ -149,15 +149,15 @@ mod tests {
             "0.0.0.0:1",
         ] {
             let peer: SocketAddr = peer.parse().unwrap();
-            let reply = respond(&site, &Method::Get, "/", Some(peer), host, 8000);
+            let reply = respond(&site, &Method::GET, "/", Some(peer), host, 8000);
             assert_eq!(reply.status, 403, "{peer}");
         }
         assert_eq!(
-            respond(&site, &Method::Get, "/", None, host, 8000).status,
+            respond(&site, &Method::GET, "/", None, host, 8000).status,
             403
         );
         let ipv6_loopback: SocketAddr = "[::1]:5000".parse().unwrap();
-        let reply = respond(&site, &Method::Get, "/", Some(ipv6_loopback), host, 8000);
+        let reply = respond(&site, &Method::GET, "/", Some(ipv6_loopback), host, 8000);
         assert_eq!(reply.status, 200);
         for host in [
             None,
@@ -166,14 +166,14 @@ mod tests {
             Some("127.0.0.1"),
         ] {
             assert_eq!(
-                respond(&site, &Method::Get, "/", LOCAL, host, 8000).status,
+                respond(&site, &Method::GET, "/", LOCAL, host, 8000).status,
                 421
             );
         }
         assert_eq!(
             respond(
                 &site,
-                &Method::Get,
+                &Method::GET,
                 "/",
                 LOCAL,
                 Some("LOCALHOST:8000"),
@@ -182,11 +182,11 @@ mod tests {
             .status,
             200
         );
-        for method in [Method::Post, Method::Put, Method::Delete, Method::Options] {
+        for method in [Method::POST, Method::PUT, Method::DELETE, Method::OPTIONS] {
             assert_eq!(respond(&site, &method, "/", LOCAL, host, 8000).status, 405);
         }
         assert_eq!(
-            respond(&site, &Method::Head, "/", LOCAL, host, 8000).status,
+            respond(&site, &Method::HEAD, "/", LOCAL, host, 8000).status,
             200
         );
     }
@@ -210,13 +210,13 @@ mod tests {
         })
         .unwrap();
         let config: serde_json::Value =
-            serde_json::from_slice(get(&site, "/config.json").body).unwrap();
+            serde_json::from_slice(&get(&site, "/config.json").body).unwrap();
         assert_eq!(config["poses"]["name"], "smile.json");
         assert_eq!(config["poses"]["frames"], 2);
         assert!(config["replay"].is_null());
         assert_eq!(get(&site, "/replay.sinew").status, 404);
         let served: serde_json::Value =
-            serde_json::from_slice(get(&site, "/poses.json").body).unwrap();
+            serde_json::from_slice(&get(&site, "/poses.json").body).unwrap();
         // Absent head and jaw are served as the identity, so the page need not know the default.
         assert_eq!(served["frames"][0]["head"][0], 1.0);
         assert_eq!(served["frames"][0]["weights"][5], 1.0);
@@ -333,7 +333,7 @@ mod tests {
         })
         .unwrap();
         let config: serde_json::Value =
-            serde_json::from_slice(get(&site, "/config.json").body).unwrap();
+            serde_json::from_slice(&get(&site, "/config.json").body).unwrap();
         assert_eq!(config["performance"]["name"], "fit-ict.sinew");
         assert_eq!(config["performance"]["frames"], 4);
         assert_eq!(config["performance"]["hashes"], true);
@@ -429,8 +429,8 @@ mod tests {
         assert!(status.contains(" 405 "), "{status}");
         stop.store(true, Ordering::SeqCst);
         thread.join().unwrap().unwrap();
-        // Stopped: the port stops answering. tiny_http closes its listener on a thread of its
-        // own after the server is dropped, so this waits for it, within a bound.
+        // Stopped, and then dropped: the port stops answering (within a bound, should the
+        // system take a moment to close the listener).
         drop(viewer);
         let deadline = Instant::now() + Duration::from_secs(10);
         while TcpStream::connect(("127.0.0.1", port)).is_ok() {

@@ -135,14 +135,14 @@ pub(super) fn load(inputs: Inputs<'_>, model: Vec<u8>) -> Result<Site, ViewError
         entries.push(Entry {
             path: "/track.sinew",
             content_type: "application/octet-stream",
-            body: bytes,
+            body: bytes.into(),
         });
     }
     if let Some((_, _, _, json)) = neutral {
         entries.push(Entry {
             path: "/neutral.json",
             content_type: "application/json",
-            body: json,
+            body: json.into(),
         });
     }
     Site::new(entries)
