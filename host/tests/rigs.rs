@@ -443,3 +443,132 @@ fn kit_identities_in_other_topologies_find_their_landmarks() {
         );
     }
 }
+
+/// A rig learned, measured, played from an ARKit capture and given back in its own frame:
+/// `bones fit --rig`, `train aim --rig` (a short run on a few shapes), `eval aim --rig`, and
+/// `play --arkit` writing the rig's own vertices (seams split), units and texture coordinates.
+#[test]
+fn a_rig_is_learned_and_played_back_in_its_own_frame() {
+    let Some(root) = sinew_host::io::data::data_dir() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sample = sinew_host::rig::sample::from_kit(
+        &root.join("ict-facekit"),
+        &[0.8, -1.0],
+        2_500,
+        &Placement::scene(-20.0, [0.1, 1.5, 0.2]),
+    )
+    .unwrap();
+    let rig = d.join("head.glb");
+    sample.file.write_glb(&rig).unwrap();
+    let templates = s(&root);
+    let bones = d.join("bones");
+    ok(&[
+        "bones",
+        "fit",
+        "--rig",
+        s(&rig),
+        "--templates",
+        templates,
+        "--out",
+        s(&bones),
+    ]);
+    for f in ["skull.obj", "jaw.obj", "fit.json", "bones.png"] {
+        assert!(bones.join(f).exists(), "{f}");
+    }
+    let model = d.join("actor.sinew");
+    let report = d.join("report.json");
+    ok(&[
+        "train",
+        "aim",
+        "--rig",
+        s(&rig),
+        "--shapes",
+        "jawOpen,mouthSmile_L,eyeBlink_R,browInnerUp_L",
+        "--bones",
+        s(&bones),
+        "--out",
+        s(&model),
+        "--report",
+        s(&report),
+        "--iterations",
+        "150",
+        "--quiet",
+    ]);
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(r["shapes"], 5);
+    let jaw = r["jaw_degrees"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p[0] == "jawOpen")
+        .unwrap()[1]
+        .as_f64()
+        .unwrap();
+    assert!(jaw > 10.0, "jawOpen turns the jaw by {jaw}°");
+    let eval = d.join("eval.json");
+    ok(&[
+        "eval",
+        "aim",
+        "--model",
+        s(&model),
+        "--rig",
+        s(&rig),
+        "--bones",
+        s(&bones),
+        "--report",
+        s(&eval),
+    ]);
+    let e: serde_json::Value = serde_json::from_slice(&std::fs::read(&eval).unwrap()).unwrap();
+    assert_eq!(e["mean_error_mm"], r["mean_error_mm"]);
+    // Shapes the rig lacks are refused by name.
+    let stderr = err(&[
+        "train",
+        "aim",
+        "--rig",
+        s(&rig),
+        "--shapes",
+        "smile",
+        "--bones",
+        s(&bones),
+        "--out",
+        s(&d.join("x.sinew")),
+        "--report",
+        s(&d.join("x.json")),
+    ]);
+    assert!(stderr.contains("no shape \"smile\""), "{stderr}");
+
+    // Played from a capture, each frame is the rig's own mesh: its vertex count (seams split),
+    // its texture coordinates, its unit and place in the scene's node.
+    let frames = d.join("frames");
+    let capture = common::repo("tests/data/arkit-sample.csv");
+    ok(&[
+        "play",
+        "--model",
+        s(&model),
+        "--arkit",
+        &capture,
+        "--out",
+        s(&frames),
+    ]);
+    let first = sinew_host::io::mesh::Mesh::read(&frames.join("frame_00000.obj")).unwrap();
+    assert_eq!(first.positions.len(), sample.file.vertex_count());
+    assert_eq!(first.uvs.len(), sample.file.neutral.uvs.len());
+    assert_eq!(first.polygons.len(), sample.file.neutral.polygons.len());
+    // At rest the actor gives back the rig's neutral (metres, the mesh's own coordinates), as
+    // closely as a short training learned it.
+    let d: Vec<f32> = first
+        .positions
+        .iter()
+        .zip(&sample.file.neutral.positions)
+        .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f32>().sqrt())
+        .collect();
+    let mean = d.iter().sum::<f32>() / d.len() as f32;
+    let worst = d.iter().copied().fold(0.0f32, f32::max);
+    assert!(mean < 0.0015 && worst < 0.01, "rest frame {mean} m (max {worst}) from the neutral");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(frames.join("arkit.json")).unwrap()).unwrap();
+    assert_eq!(summary["mapping"]["head"][0], "HeadYaw");
+}

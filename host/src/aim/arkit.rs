@@ -3,15 +3,19 @@
 //!
 //! ICT-FaceKit names its shapes after ARKit's blendshapes in camelCase and splits the sided ones
 //! with `_L`/`_R` (`mouthSmile_L`), where a Live Link Face capture writes PascalCase with a
-//! `Left`/`Right` suffix (`MouthSmileLeft`). A channel plays
-//! 1. the shape of the same name, ignoring ASCII case (`JawOpen` → `jawOpen`); otherwise, only
-//!    when the actor names sided shapes with `_L`/`_R`,
-//! 2. the sided shape: `MouthSmileLeft` → `mouthSmile_L`;
-//! 3. both sides of a shape ARKit does not split: `BrowInnerUp` → `browInnerUp_L` and
+//! `Left`/`Right` suffix (`MouthSmileLeft`), and a studio's rig may write `mouthSmile.L` or
+//! `blendShape1.mouthSmileLeft`. Names are compared as `io::arkit::comparable` reduces them
+//! (case, punctuation, namespaces and side spellings set aside). A channel plays
+//! 1. the shape whose name compares equal (`JawOpen` → `jawOpen`, `MouthSmileLeft` →
+//!    `mouthSmile_L`); otherwise
+//! 2. both sides of a shape ARKit does not split: `BrowInnerUp` → `browInnerUp_L` and
 //!    `browInnerUp_R` (ICT-FaceKit splits `browInnerUp` and `cheekPuff`).
 //!
-//! A channel that plays none of the actor's shapes (the head and eye rotations, and every shape
-//! the actor was not trained on) is reported, never silently dropped. The jaw channels
+//! `HeadYaw`, `HeadPitch` and `HeadRoll` (radians) turn the head about the jaw's hinge centre
+//! (between the ears): `R = R_y(yaw) · R_x(pitch) · R_z(roll)` in the actor's face frame (+x to
+//! the actor's left, +y up, +z forward). A channel that plays none of the actor's shapes (the
+//! eye rotations, and every shape the actor was not trained on) is reported, never silently
+//! dropped. The jaw channels
 //! (`jawOpen`, `jawLeft`, `jawRight`, `jawForward`) also move the jaw: each blends the jaw
 //! transform learned for its shape (`train.jaw`) in from the identity by its weight, as
 //! `sinew demo` opens the jaw.
@@ -23,7 +27,7 @@ use sinew_core::aim::AimActor;
 
 use crate::aim::model::IDENTITY_9D;
 use crate::aim::play::{Frame, PlayError};
-use crate::io::arkit::{Capture, CaptureError, CaptureFrame, LIVE_LINK_FACE_CHANNELS};
+use crate::io::arkit::{Capture, CaptureError, CaptureFrame, LIVE_LINK_FACE_CHANNELS, comparable};
 use crate::io::atomic::AtomicWriteError;
 
 /// Why a Live Link Face capture could not be played on an actor.
@@ -77,6 +81,11 @@ pub struct Mapping {
     /// Shapes whose learned jaw transform the capture blends in (the jaw channels the actor has
     /// and carries a training pose for).
     pub jaw_shapes: Vec<String>,
+    /// The head rotation channels the capture has (`HeadYaw`, `HeadPitch`, `HeadRoll`), which
+    /// turn the head.
+    pub head: Vec<String>,
+    #[serde(skip)]
+    head_routes: [Option<usize>; 3],
     #[serde(skip)]
     routes: Vec<(usize, usize)>,
 }
@@ -85,33 +94,33 @@ impl Mapping {
     /// Maps capture `channels` onto the actor's corrective `shapes` (neutral excluded); `path`
     /// names the capture in the error when no channel plays any shape.
     pub fn new(path: &Path, channels: &[String], shapes: &[String]) -> Result<Self, ArkitError> {
-        let find = |name: &str| shapes.iter().position(|s| s.eq_ignore_ascii_case(name));
-        let sided = shapes
-            .iter()
-            .any(|s| s.ends_with("_L") || s.ends_with("_R"));
+        let keys: Vec<String> = shapes.iter().map(|s| comparable(s)).collect();
+        let mut head_routes = [None; 3];
         let mut routes = Vec::new();
         let mut unplayable = Vec::new();
         for (c, name) in channels.iter().enumerate() {
+            if let Some(h) = HEAD_CHANNELS
+                .iter()
+                .position(|h| h.eq_ignore_ascii_case(name))
+            {
+                head_routes[h] = Some(c);
+                continue;
+            }
             let before = routes.len();
-            if let Some(s) = find(name) {
-                routes.push((c, s));
-            } else if sided {
-                let side =
-                    [("Left", "_L"), ("Right", "_R")]
-                        .into_iter()
-                        .find_map(|(suffix, kit)| {
-                            let cut = name.len().checked_sub(suffix.len())?;
-                            let (stem, end) = (name.get(..cut)?, name.get(cut..)?);
-                            (!stem.is_empty() && end.eq_ignore_ascii_case(suffix))
-                                .then(|| format!("{stem}{kit}"))
-                        });
-                match side {
-                    Some(kit_name) => routes.extend(find(&kit_name).map(|s| (c, s))),
-                    None => {
-                        for kit in ["_L", "_R"] {
-                            routes.extend(find(&format!("{name}{kit}")).map(|s| (c, s)));
-                        }
-                    }
+            let key = comparable(name);
+            routes.extend(
+                (0..shapes.len())
+                    .filter(|&s| keys[s] == key)
+                    .map(|s| (c, s)),
+            );
+            if routes.len() == before && !key.ends_with("left") && !key.ends_with("right") {
+                for side in ["left", "right"] {
+                    let sided = format!("{key}{side}");
+                    routes.extend(
+                        (0..shapes.len())
+                            .filter(|&s| keys[s] == sided)
+                            .map(|s| (c, s)),
+                    );
                 }
             }
             if routes.len() == before {
@@ -137,8 +146,44 @@ impl Mapping {
             unplayable,
             at_rest,
             jaw_shapes: Vec::new(),
+            head: head_routes
+                .iter()
+                .flatten()
+                .map(|&c| channels[c].clone())
+                .collect(),
+            head_routes,
             routes,
         })
+    }
+
+    /// One frame's head transform (9D) from a capture row: the rotation of its `HeadYaw`,
+    /// `HeadPitch` and `HeadRoll` (radians) about `pivot`.
+    pub fn head(&self, row: &CaptureFrame, pivot: [f32; 3]) -> [f32; 9] {
+        let angle = |k: usize| self.head_routes[k].map_or(0.0, |c| f64::from(row.values[c]));
+        let (yaw, pitch, roll) = (angle(0), angle(1), angle(2));
+        if yaw == 0.0 && pitch == 0.0 && roll == 0.0 {
+            return IDENTITY_9D;
+        }
+        let (sy, cy) = yaw.sin_cos();
+        let (sp, cp) = pitch.sin_cos();
+        let (sr, cr) = roll.sin_cos();
+        let ry = [[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]];
+        let rx = [[1.0, 0.0, 0.0], [0.0, cp, -sp], [0.0, sp, cp]];
+        let rz = [[cr, -sr, 0.0], [sr, cr, 0.0], [0.0, 0.0, 1.0]];
+        let mul = |a: [[f64; 3]; 3], b: [[f64; 3]; 3]| -> [[f64; 3]; 3] {
+            std::array::from_fn(|i| {
+                std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum())
+            })
+        };
+        let r = mul(mul(ry, rx), rz);
+        let p = pivot.map(f64::from);
+        // x ↦ R x + (p − R p): the rotation about the pivot.
+        let t: [f64; 3] =
+            std::array::from_fn(|i| p[i] - (0..3).map(|k| r[i][k] * p[k]).sum::<f64>());
+        [
+            r[0][0], r[1][0], r[2][0], r[0][1], r[1][1], r[2][1], t[0], t[1], t[2],
+        ]
+        .map(|v| v as f32)
     }
 
     /// One frame's coefficients (`[M]`) from a capture row.
@@ -156,10 +201,12 @@ impl Mapping {
 pub struct Playback {
     /// The mapping from capture channels to shapes.
     pub mapping: Mapping,
-    /// One pose frame per capture row (head at rest: the capture's head rotation is reported
-    /// as unplayable).
+    /// One pose frame per capture row.
     pub frames: Vec<Frame>,
 }
+
+/// The head rotation channels, in the order yaw, pitch, roll.
+const HEAD_CHANNELS: [&str; 3] = ["HeadYaw", "HeadPitch", "HeadRoll"];
 
 /// Shapes whose learned jaw transform moves the jaw when they play.
 const JAW_SHAPES: [&str; 4] = ["jawOpen", "jawLeft", "jawRight", "jawForward"];
@@ -183,7 +230,7 @@ pub fn playback_of(
     let jaw: Vec<(usize, [f32; 9])> = match &poses {
         Some(p) => JAW_SHAPES
             .iter()
-            .filter_map(|n| shapes.iter().position(|s| s == n))
+            .filter_map(|n| shapes.iter().position(|s| comparable(s) == comparable(n)))
             .filter(|s| mapping.routes.iter().any(|r| r.1 == *s))
             .map(|s| (s, p[s + 1]))
             .collect(),
@@ -201,8 +248,9 @@ pub fn playback_of(
                     *v += weights[*s] * (learned[j] - IDENTITY_9D[j]);
                 }
             }
+            let pivot = actor.jaw_pivot();
             Frame {
-                head: IDENTITY_9D,
+                head: mapping.head(row, [pivot.x, pivot.y, pivot.z]),
                 jaw: jaw9,
                 weights,
             }
@@ -323,19 +371,14 @@ mod tests {
         // drives each of them.
         assert_eq!(p.mapping.played.len(), 19);
         assert!(p.mapping.at_rest.is_empty(), "{:?}", p.mapping.at_rest);
-        for lost in [
-            "MouthClose",
-            "HeadYaw",
-            "EyeBlinkLeft",
-            "TongueOut",
-            "RightEyeRoll",
-        ] {
+        assert_eq!(p.mapping.head, ["HeadYaw", "HeadPitch", "HeadRoll"]);
+        for lost in ["MouthClose", "EyeBlinkLeft", "TongueOut", "RightEyeRoll"] {
             assert!(
                 p.mapping.unplayable.iter().any(|c| c == lost),
                 "{lost} should be unplayable"
             );
         }
-        assert_eq!(p.mapping.unplayable.len(), 61 - 19);
+        assert_eq!(p.mapping.unplayable.len(), 61 - 19 - 3);
         assert_eq!(
             p.mapping.jaw_shapes,
             ["jawOpen", "jawLeft", "jawRight", "jawForward"]
@@ -375,7 +418,21 @@ mod tests {
                 row.values[c("EyeBlinkRight")]
             );
             assert_eq!(frame.weights[s("noseSneer_R")], 0.0);
-            assert_eq!(frame.head, IDENTITY_9D);
+            // The head turns by the capture's yaw about the jaw's hinge, which stays put.
+            let yaw = f64::from(row.values[c("HeadYaw")]);
+            let angle = f64::from(frame.head[0]).clamp(-1.0, 1.0).acos();
+            assert!(
+                (angle - yaw.abs()).abs() < 1e-5,
+                "frame {f}: {angle} against {yaw}"
+            );
+            assert!(
+                (f64::from(frame.head[2]) + yaw.sin()).abs() < 1e-6,
+                "frame {f}"
+            );
+            let pivot = actor.jaw_pivot();
+            let r = sinew_core::rotation::rigid_from_9d(&frame.head);
+            let moved = r.apply(pivot);
+            assert!((moved - pivot).norm() < 1e-4, "frame {f}: the hinge moved");
             let open = row.values[c("JawOpen")];
             for j in 0..9 {
                 let want = IDENTITY_9D[j] + open * (learned[j] - IDENTITY_9D[j]);

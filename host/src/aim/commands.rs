@@ -256,37 +256,16 @@ pub fn rig_training_set(
     };
     let mut set = training_set(&actor, &skull, &jaw, None, config.max_constraint_depth)?;
     set.provenance = vec![
-        ("rig".into(), serde_json::to_string(&RigRecord::of(rig))?),
+        (
+            crate::rig::record::KEY.into(),
+            serde_json::to_string(&crate::rig::record::Record::of(rig))?,
+        ),
         (
             "arkit".into(),
             serde_json::to_string(&rig_arkit(rig, &picked))?,
         ),
     ];
     Ok((set, said))
-}
-
-/// What a baked actor records of its rig, to go back to the rig's frame, units and vertices.
-#[derive(Debug, serde::Serialize)]
-struct RigRecord<'a> {
-    format: &'static str,
-    mesh: &'a str,
-    #[serde(flatten)]
-    conventions: &'a crate::rig::Conventions,
-    vertex_count: usize,
-    /// Per rig vertex, the actor's vertex (seam copies share one).
-    welded: &'a [u32],
-}
-
-impl<'a> RigRecord<'a> {
-    fn of(rig: &'a Rig) -> Self {
-        Self {
-            format: rig.file.format.name(),
-            mesh: &rig.file.mesh_name,
-            conventions: &rig.conventions,
-            vertex_count: rig.file.vertex_count(),
-            welded: &rig.weld.welded,
-        }
-    }
 }
 
 /// ARKit name → the trained shapes that play it.

@@ -100,6 +100,21 @@ pub enum PlayError {
     /// A frame's OBJ could not be written.
     #[error(transparent)]
     Mesh(#[from] MeshError),
+    /// The actor's record of its rig is broken.
+    #[error(transparent)]
+    Rig(#[from] crate::rig::record::RecordError),
+}
+
+/// The rig an actor was learned from, when it records one.
+pub fn rig_record(
+    actor: &AimActor<'_>,
+) -> Result<Option<crate::rig::record::Record>, crate::rig::record::RecordError> {
+    actor
+        .file()
+        .metadata()
+        .get(crate::rig::record::KEY)
+        .map(|value| crate::rig::record::Record::parse(value, actor.vertex_count()))
+        .transpose()
 }
 
 /// Parses an AIM actor from `bytes`, naming `path` when they are not one.
@@ -192,7 +207,9 @@ pub fn play(
     play_frames(&actor, &file.frames, out, template)
 }
 
-/// Poses `frames` through the core and writes `frame_NNNNN.obj` into `out`.
+/// Poses `frames` through the core and writes `frame_NNNNN.obj` into `out`: on `template`'s
+/// polygons when given; else, for an actor learned from a rig, as the rig's mesh (its own frame,
+/// units, vertices, polygons and texture coordinates); else on the actor's triangles.
 pub fn play_frames(
     actor: &AimActor<'_>,
     frames: &[Frame],
@@ -202,6 +219,10 @@ pub fn play_frames(
     let mesh = match template {
         Some(t) => t.clone(),
         None => Mesh::of_actor(actor),
+    };
+    let rig = match template {
+        Some(_) => None,
+        None => rig_record(actor)?,
     };
     std::fs::create_dir_all(out).map_err(|source| PlayError::CreateFolder {
         path: out.to_path_buf(),
@@ -216,8 +237,11 @@ pub fn play_frames(
             .pose(&pose, &f.weights, &mut buf)
             .map_err(|source| PlayError::Pose { frame: i, source })?;
         let positions = crate::io::mesh::points(buf.iter().copied());
-        mesh.with_positions(positions)
-            .write(&out.join(format!("frame_{i:05}.obj")))?;
+        let frame = match &rig {
+            Some(r) => r.mesh(&positions),
+            None => mesh.with_positions(positions),
+        };
+        frame.write(&out.join(format!("frame_{i:05}.obj")))?;
     }
     Ok(frames.len())
 }

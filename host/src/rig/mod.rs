@@ -16,6 +16,7 @@ use crate::io::units::Unit;
 
 pub mod inspect;
 pub mod landmarks;
+pub mod record;
 pub mod sample;
 pub mod template;
 
