@@ -567,7 +567,10 @@ fn a_rig_is_learned_and_played_back_in_its_own_frame() {
         .collect();
     let mean = d.iter().sum::<f32>() / d.len() as f32;
     let worst = d.iter().copied().fold(0.0f32, f32::max);
-    assert!(mean < 0.0015 && worst < 0.01, "rest frame {mean} m (max {worst}) from the neutral");
+    assert!(
+        mean < 0.0015 && worst < 0.01,
+        "rest frame {mean} m (max {worst}) from the neutral"
+    );
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(frames.join("arkit.json")).unwrap()).unwrap();
     assert_eq!(summary["mapping"]["head"][0], "HeadYaw");

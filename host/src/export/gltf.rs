@@ -345,7 +345,7 @@ pub fn glb(
     bones: bool,
 ) -> Result<(Vec<u8>, Summary), GltfError> {
     use json::accessor::{ComponentType, Type};
-    use json::buffer::Target::{ArrayBuffer, ElementArrayBuffer};
+    use json::buffer::Target::ArrayBuffer;
     let v = actor.vertex_count();
     let m = actor.shape_count();
     let scale = metres_per_unit(actor)?;
@@ -368,21 +368,8 @@ pub fn glb(
     let positions: Vec<f32> = rest.iter().map(|x| metres(*x)).collect();
     let pos = b.floats(&positions, Type::Vec3, true, Some(ArrayBuffer));
     let nrm = b.floats(&normals, Type::Vec3, false, Some(ArrayBuffer));
-    let tri: Vec<u8> = actor
-        .triangles()
-        .indices()
-        .iter()
-        .flat_map(|i| i.to_le_bytes())
-        .collect();
-    let tri_view = b.view(&tri, Some(ElementArrayBuffer));
-    let indices = b.accessor(
-        tri_view,
-        tri.len() / 4,
-        ComponentType::U32,
-        Type::Scalar,
-        None,
-        None,
-    );
+    let tri: Vec<u32> = actor.triangles().indices().iter().collect();
+    let indices = b.indices(&tri);
 
     // Skin weights: k on the jaw (joint 1), 1 − k on the head (joint 0). A vertex wholly on one
     // joint names only that joint, since glTF's validator warns of joints used with zero weight.

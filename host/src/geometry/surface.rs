@@ -54,6 +54,17 @@ pub(crate) fn closest_point_on_triangle(p: [f64; 3], t: &[[f64; 3]; 3]) -> ([f64
     (add(a, add(scale(ab, v), scale(ac, w))), [1.0 - v - w, v, w])
 }
 
+/// Points in an R*-tree, each carrying its index.
+pub(crate) fn point_tree(points: &[V3]) -> RTree<GeomWithData<V3, usize>> {
+    RTree::bulk_load(
+        points
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| GeomWithData::new(p, i))
+            .collect(),
+    )
+}
+
 /// A point on a surface: its triangle, barycentric weights and position.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct SurfacePoint {
@@ -76,13 +87,7 @@ pub(crate) struct Surface {
 impl Surface {
     pub(crate) fn new(points: Vec<V3>, triangles: Vec<[u32; 3]>) -> Self {
         let incident = incident_triangles(points.len(), &triangles);
-        let tree = RTree::bulk_load(
-            points
-                .iter()
-                .enumerate()
-                .map(|(i, &p)| GeomWithData::new(p, i))
-                .collect(),
-        );
+        let tree = point_tree(&points);
         Self {
             points,
             triangles,

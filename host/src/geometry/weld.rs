@@ -2,9 +2,6 @@
 //! joined into one, so that learning sees one surface; the map back keeps every split copy for
 //! what is written out.
 
-use rstar::RTree;
-use rstar::primitives::GeomWithData;
-
 use crate::geometry::vec3::{norm, sub, to64};
 
 /// Which welded vertex each original vertex became.
@@ -57,13 +54,7 @@ impl Weld {
 /// only touch at rest (closed lips) stay apart.
 pub fn weld(neutral: &[[f32; 3]], shapes: &[Vec<[f32; 3]>], tolerance: f64) -> Weld {
     let points: Vec<[f64; 3]> = neutral.iter().map(|&p| to64(p)).collect();
-    let tree = RTree::bulk_load(
-        points
-            .iter()
-            .enumerate()
-            .map(|(i, &p)| GeomWithData::new(p, i))
-            .collect(),
-    );
+    let tree = crate::geometry::surface::point_tree(&points);
     let mut welded = vec![0u32; points.len()];
     let mut first: Vec<u32> = Vec::new();
     let mut kept = vec![false; points.len()];

@@ -117,6 +117,20 @@ impl Builder {
         })
     }
 
+    /// An accessor over triangle (or any) vertex indices, as unsigned 32-bit integers.
+    pub fn indices(&mut self, indices: &[u32]) -> json::Index<json::Accessor> {
+        let bytes: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+        let view = self.view(&bytes, Some(json::buffer::Target::ElementArrayBuffer));
+        self.accessor(
+            view,
+            indices.len(),
+            json::accessor::ComponentType::U32,
+            json::accessor::Type::Scalar,
+            None,
+            None,
+        )
+    }
+
     /// The `.glb` bytes: the one buffer declared, the JSON serialised, both chunks laid out.
     pub fn finish(mut self) -> Result<Vec<u8>, BuildError> {
         while !self.bin.len().is_multiple_of(4) {

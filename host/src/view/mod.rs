@@ -72,13 +72,14 @@ mod tests {
     use super::server::respond;
     use super::*;
 
-    fn data(name: &str) -> PathBuf {
+    pub(crate) fn data(name: &str) -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../tests/data")
             .join(name)
     }
 
-    fn site() -> Site {
+    /// The procedural golden actor and its replay, served.
+    pub(crate) fn site() -> Site {
         Site::load(Inputs {
             model: &data("aim-procedural.sinew"),
             replay: Some(&data("aim-procedural.f32.replay.sinew")),

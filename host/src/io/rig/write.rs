@@ -37,8 +37,8 @@ pub enum RigWriteError {
 impl RigFile {
     /// The rig as `.glb` bytes.
     pub fn glb(&self) -> Result<Vec<u8>, BuildError> {
-        use json::accessor::{ComponentType, Type};
-        use json::buffer::Target::{ArrayBuffer, ElementArrayBuffer};
+        use json::accessor::Type;
+        use json::buffer::Target::ArrayBuffer;
         let mut b = Builder::new();
         let flat = |v: &[[f32; 3]]| -> Vec<f32> { v.iter().flatten().copied().collect() };
         let position = b.floats(
@@ -53,22 +53,8 @@ impl RigFile {
             let uv = b.floats(&uv, Type::Vec2, false, Some(ArrayBuffer));
             attributes.insert(Valid(json::mesh::Semantic::TexCoords(0)), uv);
         }
-        let indices: Vec<u8> = self
-            .neutral
-            .triangles()
-            .iter()
-            .flatten()
-            .flat_map(|i| i.to_le_bytes())
-            .collect();
-        let view = b.view(&indices, Some(ElementArrayBuffer));
-        let indices = b.accessor(
-            view,
-            indices.len() / 4,
-            ComponentType::U32,
-            Type::Scalar,
-            None,
-            None,
-        );
+        let triangles: Vec<u32> = self.neutral.triangles().into_iter().flatten().collect();
+        let indices = b.indices(&triangles);
         let targets = self
             .deltas
             .iter()

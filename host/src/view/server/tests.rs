@@ -8,13 +8,13 @@
 
 use std::io::{ErrorKind, Read, Write};
 use std::net::{Ipv4Addr, SocketAddr, TcpStream};
-use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, mpsc};
 use std::time::{Duration, Instant};
 
 use super::{Limits, Viewer, refusal_line};
-use crate::view::{Inputs, Site, ViewError};
+use crate::view::ViewError;
+use crate::view::tests::{data, site};
 
 /// What "promptly" means here: far more than the server needs, on a loaded two-core machine.
 const PROMPTLY: Duration = Duration::from_secs(5);
@@ -25,24 +25,6 @@ static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
 
 fn one_at_a_time() -> MutexGuard<'static, ()> {
     ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data")
-        .join(name)
-}
-
-fn site() -> Site {
-    Site::load(Inputs {
-        model: &data("aim-procedural.sinew"),
-        replay: Some(&data("aim-procedural.f32.replay.sinew")),
-        poses: None,
-        performance: None,
-        track: None,
-        neutral: None,
-    })
-    .unwrap()
 }
 
 /// Short limits, so that a test of a timeout ends in a second or two.
