@@ -342,7 +342,7 @@ fn writing_the_parts_names_a_missing_fit_and_an_output_that_cannot_be_a_folder()
     std::fs::write(&file, b"not a folder").unwrap();
     let e = create_output(&file.join("out")).unwrap_err();
     assert!(
-        matches!(&e, RetargetError::CreateFolder { path, .. } if path.ends_with("a-file/out")),
+        matches!(&e, RetargetError::CreateFolder(c) if c.path.ends_with("a-file/out")),
         "{e:?}"
     );
     let e = read_actor(&golden("fit-ict.sinew")).unwrap_err();

@@ -31,14 +31,8 @@ pub enum DemoError {
     #[error(transparent)]
     Face(#[from] DemoFaceError),
     /// The output folder could not be created.
-    #[error("{}: cannot create folder", path.display())]
-    CreateFolder {
-        /// The folder.
-        path: PathBuf,
-        /// What the operating system said.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    CreateFolder(#[from] crate::io::atomic::CreateFolderError),
     /// Training, baking or measuring failed.
     #[error(transparent)]
     Run(#[from] RunError),
@@ -86,10 +80,7 @@ const STRIP_FRAMES: [usize; 4] = [0, 8, 16, 20];
 pub fn demo(out: &Path, config: &AimConfig, quiet: bool) -> Result<Report, DemoError> {
     config.validate()?;
     let set = crate::aim::demo_face::builtin()?;
-    std::fs::create_dir_all(out).map_err(|source| DemoError::CreateFolder {
-        path: out.to_path_buf(),
-        source,
-    })?;
+    crate::io::atomic::create_folder(out, "folder")?;
     let model = out.join("actor.sinew");
     let outputs = Outputs {
         model: model.clone(),
@@ -190,7 +181,7 @@ mod tests {
         let out = file.join("demo");
         let err = demo(&out, &AimConfig::demo(), true).unwrap_err();
         assert!(
-            matches!(&err, DemoError::CreateFolder { path, .. } if *path == out),
+            matches!(&err, DemoError::CreateFolder(e) if e.path == out),
             "{err}"
         );
     }

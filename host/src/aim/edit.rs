@@ -86,14 +86,8 @@ pub enum EditError {
     #[error(transparent)]
     Edit(BufferError),
     /// The output folder could not be created.
-    #[error("{}: cannot create folder", path.display())]
-    CreateFolder {
-        /// The folder.
-        path: PathBuf,
-        /// What the operating system said.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    CreateFolder(#[from] crate::io::atomic::CreateFolderError),
     /// The edited neutral could not be written.
     #[error(transparent)]
     Mesh(#[from] MeshError),
@@ -175,10 +169,7 @@ pub fn edit_thickness(
     let mesh = Mesh::of_actor(&actor);
     let before: Vec<[f32; 3]> = crate::io::mesh::points(actor.rest().iter());
     let after: Vec<[f32; 3]> = crate::io::mesh::points(edited.iter().copied());
-    std::fs::create_dir_all(out).map_err(|source| EditError::CreateFolder {
-        path: out.to_path_buf(),
-        source,
-    })?;
+    crate::io::atomic::create_folder(out, "folder")?;
     mesh.with_positions(after.clone())
         .write(&out.join("edited_neutral.obj"))?;
     let tri = mesh.triangles();

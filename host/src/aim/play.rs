@@ -80,14 +80,8 @@ pub enum PlayError {
     #[error(transparent)]
     Poses(#[from] PoseFileError),
     /// The output folder could not be created.
-    #[error("{}: cannot create folder", path.display())]
-    CreateFolder {
-        /// The folder.
-        path: PathBuf,
-        /// What the operating system said.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    CreateFolder(#[from] crate::io::atomic::CreateFolderError),
     /// The core refused to pose a frame.
     #[error("frame {frame}")]
     Pose {
@@ -224,10 +218,7 @@ pub fn play_frames(
         Some(_) => None,
         None => rig_record(actor)?,
     };
-    std::fs::create_dir_all(out).map_err(|source| PlayError::CreateFolder {
-        path: out.to_path_buf(),
-        source,
-    })?;
+    crate::io::atomic::create_folder(out, "folder")?;
     let mut buf = vec![0.0; 3 * actor.vertex_count()];
     // The core's f32 posing, as `sinew_core::replay::pose_frame` does it in f32 mode, without
     // the normals an OBJ does not carry.

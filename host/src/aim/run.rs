@@ -59,14 +59,8 @@ pub enum RunError {
     #[error(transparent)]
     Eval(#[from] EvalError),
     /// The pictures' folder could not be created.
-    #[error("{}: cannot create folder", path.display())]
-    CreateFolder {
-        /// The folder.
-        path: PathBuf,
-        /// What the operating system said.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    CreateFolder(#[from] crate::io::atomic::CreateFolderError),
     /// A picture could not be written.
     #[error(transparent)]
     Png(#[from] PngError),
@@ -276,10 +270,7 @@ pub const VIEWS: [(f32, &str); 2] = [(0.0, "front"), (-35.0, "three-quarter")];
 /// anatomy surface.
 pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<(), RunError> {
     let actor = AimActor::from_bytes(bytes).map_err(RunError::Model)?;
-    std::fs::create_dir_all(dir).map_err(|source| RunError::CreateFolder {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    crate::io::atomic::create_folder(dir, "folder")?;
     let errors = shape_errors(&actor, &set.names, &set.shapes, set.mm_per_unit)?;
     let tri = set.template.triangles();
     let skin: Vec<[f32; 3]> = crate::io::mesh::points(actor.rest().iter());
@@ -476,7 +467,7 @@ mod tests {
         let file = dir.path().join("a-file");
         std::fs::write(&file, b"").unwrap();
         let err = pictures(&golden, &set, &file.join("pictures")).unwrap_err();
-        assert!(matches!(err, RunError::CreateFolder { .. }), "{err}");
+        assert!(matches!(err, RunError::CreateFolder(_)), "{err}");
         let err = evaluate(
             &golden[..64],
             &set,

@@ -33,14 +33,8 @@ pub enum TrainError {
     #[error(transparent)]
     Backend(Box<dyn std::error::Error + Send + Sync>),
     /// The checkpoint folder could not be created.
-    #[error("{}: cannot create checkpoint folder", path.display())]
-    CreateFolder {
-        /// The folder.
-        path: PathBuf,
-        /// What the operating system said.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    CreateFolder(#[from] crate::io::atomic::CreateFolderError),
     /// The configuration could not be recorded as JSON metadata.
     #[error(transparent)]
     Metadata(serde_json::Error),
@@ -469,10 +463,7 @@ pub fn train(
         .autodiff_device(config.seed)
         .map_err(TrainError::backend)?;
     let dir = &options.checkpoint_dir;
-    std::fs::create_dir_all(dir).map_err(|source| TrainError::CreateFolder {
-        path: dir.clone(),
-        source,
-    })?;
+    crate::io::atomic::create_folder(dir, "checkpoint folder")?;
     let norm = normalisation(&set.template.positions);
     // A resumed run replaces the initial jaw transforms with its checkpoint's.
     let jaw = if options.resume {

@@ -31,14 +31,8 @@ pub enum BonesFitError {
     #[error(transparent)]
     Bones(#[from] BonesError),
     /// The output folder could not be created.
-    #[error("{}: cannot create folder", path.display())]
-    CreateFolder {
-        /// The folder.
-        path: PathBuf,
-        /// What the operating system said.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    CreateFolder(#[from] crate::io::atomic::CreateFolderError),
     /// A fitted bone could not be written.
     #[error(transparent)]
     Mesh(#[from] MeshError),
@@ -99,10 +93,7 @@ pub fn bones_fit_on(
     out: &Path,
 ) -> Result<crate::anatomy::bones::FitReport, BonesFitError> {
     let fitted = fit_bones(neutral, landmarks, templates)?;
-    std::fs::create_dir_all(out).map_err(|source| BonesFitError::CreateFolder {
-        path: out.to_path_buf(),
-        source,
-    })?;
+    crate::io::atomic::create_folder(out, "folder")?;
     fitted.skull.write(&out.join("skull.obj"))?;
     fitted.jaw.write(&out.join("jaw.obj"))?;
     let report = out.join("fit.json");

@@ -461,10 +461,7 @@ pub fn generate(
             pixels: Vec::new(),
         },
     };
-    std::fs::create_dir_all(out).map_err(|source| GenerateError::CreateFolder {
-        path: out.to_owned(),
-        source,
-    })?;
+    crate::io::atomic::create_folder(out, "output folder")?;
     for f in 0..config.frames {
         let params = trajectories.at(f as f64 / f64::from(config.fps), topology.jaw.is_some());
         let mut positions = pose(&neutral, &deltas, topology.jaw.as_ref(), &params);

@@ -194,14 +194,8 @@ pub enum RetargetError {
     #[error(transparent)]
     Read(#[from] ContainerError),
     /// The output folder cannot be created.
-    #[error("{}: cannot create the output folder", path.display())]
-    CreateFolder {
-        /// The folder.
-        path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    CreateFolder(#[from] crate::io::atomic::CreateFolderError),
     /// A retargeted performance that cannot be written (the error names the file).
     #[error(transparent)]
     Write(#[from] AtomicWriteError),
@@ -428,10 +422,7 @@ pub fn read_actor(path: &Path) -> Result<Vec<u8>, RetargetError> {
 /// # Errors
 /// [`RetargetError::CreateFolder`], naming the folder.
 pub fn create_output(out: &Path) -> Result<(), RetargetError> {
-    std::fs::create_dir_all(out).map_err(|source| RetargetError::CreateFolder {
-        path: out.to_owned(),
-        source,
-    })
+    Ok(crate::io::atomic::create_folder(out, "output folder")?)
 }
 
 /// The fit at `fit_path` (a performance of `source`) retargeted onto `target` in each of the

@@ -45,6 +45,28 @@ pub struct AtomicWriteError {
     pub source: std::io::Error,
 }
 
+/// A folder that could not be created, with what it was for.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: cannot create {what}", path.display())]
+pub struct CreateFolderError {
+    /// The folder.
+    pub path: PathBuf,
+    /// What it was for (`folder`, `checkpoint folder`, `output folder`).
+    pub what: &'static str,
+    /// The operating system's error.
+    #[source]
+    pub source: std::io::Error,
+}
+
+/// Creates the folder `path` and its parents; `what` says in the error what it was for.
+pub fn create_folder(path: &Path, what: &'static str) -> Result<(), CreateFolderError> {
+    std::fs::create_dir_all(path).map_err(|source| CreateFolderError {
+        path: path.to_path_buf(),
+        what,
+        source,
+    })
+}
+
 /// Maps an I/O error of `step` on `at` to an [`AtomicWriteError`].
 fn fail(at: &Path, step: WriteStep) -> impl FnOnce(std::io::Error) -> AtomicWriteError + '_ {
     move |source| AtomicWriteError {

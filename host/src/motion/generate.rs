@@ -140,14 +140,8 @@ pub enum MotionGenerateError {
     #[error(transparent)]
     Srvf(#[from] SrvfError),
     /// The output folder cannot be created.
-    #[error("{}: cannot create folder", path.display())]
-    CreateFolder {
-        /// The folder.
-        path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    CreateFolder(#[from] crate::io::atomic::CreateFolderError),
     /// The strip picture cannot be written.
     #[error("{}: cannot write the strip", path.display())]
     Strip {
@@ -318,10 +312,7 @@ impl Loaded<'_> {
         first: usize,
         strip: &[usize],
     ) -> Result<(), MotionGenerateError> {
-        std::fs::create_dir_all(out).map_err(|source| MotionGenerateError::CreateFolder {
-            path: out.to_owned(),
-            source,
-        })?;
+        crate::io::atomic::create_folder(out, "folder")?;
         for (i, m) in meshes.iter().enumerate() {
             self.neutral
                 .with_positions(crate::io::mesh::points(m.clone()))

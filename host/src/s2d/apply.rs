@@ -57,14 +57,8 @@ pub enum ApplyError {
     #[error("no source frames")]
     NoFrames,
     /// The output folder cannot be created.
-    #[error("{}: cannot create folder", path.display())]
-    CreateFolder {
-        /// The folder.
-        path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    CreateFolder(#[from] crate::io::atomic::CreateFolderError),
     /// A folder that cannot be listed.
     #[error("{}: cannot list", path.display())]
     List {
@@ -198,10 +192,7 @@ pub fn transfer(
     dec.check(&tgt, target)?;
     let from = dec.landmarks(&flat(&src));
     let base = flat(&tgt);
-    std::fs::create_dir_all(out).map_err(|source| ApplyError::CreateFolder {
-        path: out.to_owned(),
-        source,
-    })?;
+    crate::io::atomic::create_folder(out, "folder")?;
     for (i, path) in frames.iter().enumerate() {
         let frame = Mesh::read(path)?;
         dec.check(&frame, path)?;

@@ -291,10 +291,7 @@ pub fn train(
         (decoder, optim, state) = (d, o, s);
         saved = Some(state.steps_done);
     } else if let Some(dir) = dir {
-        std::fs::create_dir_all(dir).map_err(|source| TrainError::CreateFolder {
-            path: dir.to_owned(),
-            source,
-        })?;
+        crate::io::atomic::create_folder(dir, "checkpoint folder")?;
     }
     if dir.is_some() {
         crate::training::interrupt::watch_ctrl_c();

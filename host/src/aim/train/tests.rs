@@ -294,7 +294,7 @@ fn an_unusable_checkpoint_folder_is_refused_by_name() {
     let options = crate::aim::testing::aim_train_options(&blocked, false, None);
     let err = train(&set, &config, &options).unwrap_err();
     assert!(
-        matches!(&err, TrainError::CreateFolder { path, .. } if *path == blocked),
+        matches!(&err, TrainError::CreateFolder(e) if e.path == blocked),
         "{err}"
     );
     // Resuming from a folder without a checkpoint names its missing state file.

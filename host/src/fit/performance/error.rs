@@ -98,14 +98,8 @@ pub enum GenerateError {
         camera: [f32; 3],
     },
     /// The output folder cannot be created.
-    #[error("{}: cannot create the output folder", path.display())]
-    CreateFolder {
-        /// The folder.
-        path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    CreateFolder(#[from] crate::io::atomic::CreateFolderError),
     /// A mesh that cannot be written (the error names the file).
     #[error(transparent)]
     Mesh(#[from] MeshError),

@@ -65,14 +65,8 @@ pub enum TrainError {
         batches: usize,
     },
     /// The checkpoint folder cannot be created.
-    #[error("{}: cannot create checkpoint folder", path.display())]
-    CreateFolder {
-        /// The folder.
-        path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    CreateFolder(#[from] crate::io::atomic::CreateFolderError),
     /// The training threads cannot be started.
     #[error("cannot start a training thread")]
     Threads(#[source] rayon::ThreadPoolBuildError),
