@@ -203,6 +203,13 @@ try {
     );
   await page.click("#reset");
   const neutral = await page.evaluate(() => window.sinewTest.positionsChecksum());
+  const names = await page.evaluate(() =>
+    [0, 18].map((i) => document.getElementById(`shape-${i}`).parentElement.firstChild.textContent),
+  );
+  check(
+    names[0] === "jawOpen" && names[1] === "noseSneer_R",
+    `the sliders carry the actor's shape names (${names.join(", ")})`,
+  );
   const smiled = await setSlider("shape-0", 1);
   check(smiled !== neutral, "corrective 1 at 1 changes the positions");
   check((await setSlider("shape-0", 0)) === neutral, "corrective 1 back at 0 restores them exactly");

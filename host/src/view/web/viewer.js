@@ -126,7 +126,7 @@ async function main() {
   };
   toggle.addEventListener("change", showThickness);
   showThickness();
-  const rig = new Rig(model.shapeCount, () => show(() => posed(rig.pose()), null));
+  const rig = new Rig(model.shapeCount, shapeNames(model), () => show(() => posed(rig.pose()), null));
   const times = [];
   /** Hashes of the frames played, by source and frame index. */
   const played = sources.map(() => new Map());
@@ -375,9 +375,20 @@ class Player {
   }
 }
 
-/** The sliders: head yaw and pitch, jaw opening, one per corrective coefficient. */
+/**
+ * The actor's corrective shapes' names, from its metadata `shapes` (neutral first, then one per
+ * corrective); `corrective N` where the actor records none or too few.
+ */
+function shapeNames(model) {
+  const recorded = (model.metadata.shapes ?? "").split(",").slice(1);
+  return Array.from({ length: model.shapeCount }, (_, i) =>
+    recorded.length === model.shapeCount && recorded[i] ? recorded[i] : `corrective ${i + 1}`,
+  );
+}
+
+/** The sliders: head yaw and pitch, jaw opening, one per corrective coefficient, named. */
 class Rig {
-  constructor(shapeCount, onInput) {
+  constructor(shapeCount, names, onInput) {
     this.onInput = onInput;
     this.head = { yaw: 0, pitch: 0 };
     this.jaw = 0;
@@ -388,7 +399,7 @@ class Rig {
     this.slider(rig, "jaw", "jaw open", -2, 20, 0.5, "°", (v) => (this.jaw = v));
     this.shapeInputs = [];
     for (let i = 0; i < shapeCount; i++) {
-      const input = this.slider($("shapes"), `shape-${i}`, `corrective ${i + 1}`, 0, 1, 0.01, "", (v) => {
+      const input = this.slider($("shapes"), `shape-${i}`, names[i], 0, 1, 0.01, "", (v) => {
         this.coefficients[i] = v;
       });
       this.shapeInputs.push(input);
