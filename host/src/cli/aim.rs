@@ -84,7 +84,7 @@ pub(crate) struct EvalAim {
     #[arg(long)]
     rig: Option<PathBuf>,
     #[command(flatten)]
-    rig_read: super::rig::RigReadArgs,
+    rig_read: super::args::RigReadArgs,
     /// Output JSON report.
     #[arg(long)]
     report: PathBuf,
@@ -92,9 +92,9 @@ pub(crate) struct EvalAim {
     #[arg(long)]
     bones: Option<PathBuf>,
     #[command(flatten)]
-    templates: super::bones::TemplatesArg,
+    templates: super::args::TemplatesArg,
     #[command(flatten)]
-    identity: super::bones::IdentityArg,
+    identity: super::args::IdentityArg,
 }
 
 #[derive(Debug, Args)]
@@ -108,7 +108,7 @@ pub(crate) struct TrainAim {
     #[arg(long)]
     rig: Option<PathBuf>,
     #[command(flatten)]
-    rig_read: super::rig::RigReadArgs,
+    rig_read: super::args::RigReadArgs,
     /// With --rig: the shapes to learn, comma separated (default: all of the rig's).
     #[arg(long, value_delimiter = ',', requires = "rig")]
     shapes: Vec<String>,
@@ -132,9 +132,9 @@ pub(crate) struct TrainAim {
     #[arg(long)]
     bones: Option<PathBuf>,
     #[command(flatten)]
-    templates: super::bones::TemplatesArg,
+    templates: super::args::TemplatesArg,
     #[command(flatten)]
-    identity: super::bones::IdentityArg,
+    identity: super::args::IdentityArg,
     /// burn backend.
     #[arg(long, value_enum, default_value_t = Backend::Flex)]
     backend: Backend,

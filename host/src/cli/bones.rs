@@ -3,34 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use clap::{Args, Subcommand};
-
-/// Where the template bones are (a folder holding `artisynth-jaw/` and `skull-odedstein/`): the
-/// real-data folder.
-#[derive(Debug, Args)]
-pub(crate) struct TemplatesArg {
-    /// Folder with the template bones (artisynth-jaw/, skull-odedstein/).
-    #[arg(
-        long = "templates",
-        env = "SINEW_DATA",
-        default_value = "../shared/data"
-    )]
-    pub(crate) path: PathBuf,
-}
-
-/// Which ICT-FaceKit identity an actor is: the generic neutral plus these multiples of the
-/// kit's identity modes.
-#[derive(Debug, Args)]
-pub(crate) struct IdentityArg {
-    /// Identity weights in standard deviations of the kit's first identity modes, comma
-    /// separated (e.g. `1.5,-1,0.8`); none: the generic neutral.
-    #[arg(
-        long = "identity",
-        value_delimiter = ',',
-        allow_negative_numbers = true
-    )]
-    pub(crate) weights: Vec<f32>,
-}
+use clap::Subcommand;
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum Bones {
@@ -45,11 +18,11 @@ pub(crate) enum Bones {
         #[arg(long)]
         rig: Option<PathBuf>,
         #[command(flatten)]
-        rig_read: super::rig::RigReadArgs,
+        rig_read: super::args::RigReadArgs,
         #[command(flatten)]
-        templates: TemplatesArg,
+        templates: super::args::TemplatesArg,
         #[command(flatten)]
-        identity: IdentityArg,
+        identity: super::args::IdentityArg,
         /// Output folder.
         #[arg(long)]
         out: PathBuf,

@@ -73,7 +73,7 @@ pub(crate) struct NeutralArgs {
     #[arg(long)]
     data: PathBuf,
     #[command(flatten)]
-    identity: super::bones::IdentityArg,
+    identity: super::args::IdentityArg,
     /// A baked AIM actor made on the kit's generic neutral (e.g. tests/data/aim-ict.sinew): the
     /// face takes its vertices and triangles. Without it: the whole face region.
     #[arg(long)]

@@ -3,6 +3,7 @@
 //! default: clap's `env`), then the work is handed to the library; nothing here computes.
 
 mod aim;
+mod args;
 mod bones;
 mod export;
 mod fit;

@@ -5,53 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 use sinew_host::io::units::Unit;
-use sinew_host::rig::{Axis, Rig, RigOptions};
-
-/// How to read a rig (glTF or OBJ folder).
-#[derive(Debug, Args)]
-pub(crate) struct RigReadArgs {
-    /// glTF only: the skin mesh's name (default: the mesh with the most morph targets).
-    #[arg(long)]
-    pub(crate) mesh: Option<String>,
-    /// The rig's length unit, mm, cm or m (glTF: metres by the spec; OBJ: guessed from the
-    /// head's size, and the guess printed).
-    #[arg(long)]
-    pub(crate) units: Option<Unit>,
-    /// The rig's up axis (+x, -x, +y, -y, +z, -z).
-    #[arg(long, default_value = "+y", allow_hyphen_values = true)]
-    pub(crate) up: Axis,
-    /// The axis the face looks along.
-    #[arg(long, default_value = "+z", allow_hyphen_values = true)]
-    pub(crate) forward: Axis,
-    /// The 68 iBUG landmarks as a JSON list of vertex indices or [x, y, z] positions in the
-    /// rig's own frame (default: found by registering the built-in face template).
-    #[arg(long)]
-    pub(crate) landmarks: Option<PathBuf>,
-}
-
-impl RigReadArgs {
-    /// Opens the rig and says how its unit was chosen when it was guessed.
-    pub(crate) fn open(&self, path: &std::path::Path) -> Result<Rig> {
-        let rig = Rig::open(
-            path,
-            &RigOptions {
-                mesh: self.mesh.clone(),
-                units: self.units,
-                up: self.up,
-                forward: self.forward,
-                landmarks: self.landmarks.clone(),
-            },
-        )?;
-        if rig.conventions.units_guessed {
-            eprintln!(
-                "{}: units guessed from the head's size: {} (pass --units to set them)",
-                path.display(),
-                rig.conventions.units
-            );
-        }
-        Ok(rig)
-    }
-}
+use sinew_host::rig::Axis;
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum RigCommand {
@@ -63,7 +17,7 @@ pub(crate) enum RigCommand {
         /// The rig: a .glb/.gltf file or a folder with neutral.obj and shapes/NAME.obj.
         rig: PathBuf,
         #[command(flatten)]
-        read: RigReadArgs,
+        read: super::args::RigReadArgs,
         /// The report (JSON).
         #[arg(long)]
         report: PathBuf,
@@ -144,7 +98,7 @@ pub(crate) struct SampleRigArgs {
     #[arg(long, default_value_t = 6000)]
     vertices: usize,
     #[command(flatten)]
-    identity: super::bones::IdentityArg,
+    identity: super::args::IdentityArg,
     /// glTF: place the head in a scene (turned 30 degrees, standing 1.6 m up, off the origin)
     /// by its node transform.
     #[arg(long)]

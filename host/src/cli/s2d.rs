@@ -63,7 +63,7 @@ pub(crate) enum Data {
         #[arg(long)]
         data: PathBuf,
         #[command(flatten)]
-        templates: super::bones::TemplatesArg,
+        templates: super::args::TemplatesArg,
         /// Output file.
         #[arg(long)]
         out: PathBuf,
@@ -76,7 +76,7 @@ pub(crate) enum Data {
         #[arg(long)]
         data: PathBuf,
         #[command(flatten)]
-        templates: super::bones::TemplatesArg,
+        templates: super::args::TemplatesArg,
         /// Output file.
         #[arg(long)]
         out: PathBuf,
