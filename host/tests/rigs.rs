@@ -559,14 +559,14 @@ fn a_rig_is_learned_and_played_back_in_its_own_frame() {
     assert_eq!(first.polygons.len(), sample.file.neutral.polygons.len());
     // At rest the actor gives back the rig's neutral (metres, the mesh's own coordinates), as
     // closely as a short training learned it.
-    let d: Vec<f32> = first
+    let dist: Vec<f32> = first
         .positions
         .iter()
         .zip(&sample.file.neutral.positions)
         .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f32>().sqrt())
         .collect();
-    let mean = d.iter().sum::<f32>() / d.len() as f32;
-    let worst = d.iter().copied().fold(0.0f32, f32::max);
+    let mean = dist.iter().sum::<f32>() / dist.len() as f32;
+    let worst = dist.iter().copied().fold(0.0f32, f32::max);
     assert!(
         mean < 0.0015 && worst < 0.01,
         "rest frame {mean} m (max {worst}) from the neutral"
@@ -574,4 +574,65 @@ fn a_rig_is_learned_and_played_back_in_its_own_frame() {
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(frames.join("arkit.json")).unwrap()).unwrap();
     assert_eq!(summary["mapping"]["head"][0], "HeadYaw");
+
+    // Exported, the rig comes back as a glTF of its own vertices, texture coordinates and shape
+    // names, in its own frame under its node transform; Sinew reads it as a rig again.
+    let glb = d.join("actor.glb");
+    ok(&[
+        "export",
+        "gltf",
+        "--model",
+        s(&model),
+        "--arkit",
+        &capture,
+        "--out",
+        s(&glb),
+    ]);
+    let back = RigFile::read(&glb, Some("face")).unwrap();
+    assert_eq!(back.vertex_count(), sample.file.vertex_count());
+    assert_eq!(back.neutral.uvs, sample.file.neutral.uvs);
+    assert_eq!(
+        back.shape_names,
+        ["jawOpen", "mouthSmile_L", "eyeBlink_R", "browInnerUp_L"]
+    );
+    let mean = back
+        .neutral
+        .positions
+        .iter()
+        .zip(&sample.file.neutral.positions)
+        .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f32>().sqrt())
+        .sum::<f32>()
+        / back.vertex_count() as f32;
+    assert!(
+        mean < 0.0015,
+        "the exported rest is {mean} m from the rig's neutral"
+    );
+    let bytes = std::fs::read(&glb).unwrap();
+    let (json, _) = sinew_host::io::glb::read(&bytes).unwrap();
+    let doc: serde_json::Value = serde_json::from_slice(json).unwrap();
+    let root = doc["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["name"] == "rig")
+        .unwrap();
+    let matrix: Vec<f64> = root["matrix"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let want: Vec<f64> = sample
+        .file
+        .node_transform
+        .iter()
+        .flatten()
+        .copied()
+        .collect();
+    for (m, w) in matrix.iter().zip(&want) {
+        assert!(
+            (m - w).abs() < 1e-6,
+            "node transform {matrix:?} against {want:?}"
+        );
+    }
 }

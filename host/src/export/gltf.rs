@@ -28,6 +28,7 @@ use sinew_core::aim::AimActor;
 use sinew_core::linalg::Mat3;
 use sinew_core::replay::ReplayError;
 
+use super::place::Place;
 use crate::aim::arkit::ArkitError;
 use crate::aim::play::{Frame, PoseFile, PoseFileError, corrective_names};
 use crate::io::atomic::AtomicWriteError;
@@ -136,6 +137,9 @@ pub enum GltfError {
     /// The container could not be laid out.
     #[error(transparent)]
     Glb(#[from] GlbError),
+    /// The actor's record of its rig is broken.
+    #[error(transparent)]
+    Rig(#[from] crate::rig::record::RecordError),
 }
 
 impl From<crate::io::glb::BuildError> for GltfError {
@@ -349,7 +353,8 @@ pub fn glb(
     let v = actor.vertex_count();
     let m = actor.shape_count();
     let scale = metres_per_unit(actor)?;
-    let metres = |x: f32| x * scale;
+    let place = Place::of(actor, scale)?;
+    let v_out = place.vertices(v);
     let file = actor.file();
     let section = |name: &str, shape: &[u32]| {
         file.f32_tensor(name, shape)
@@ -365,11 +370,14 @@ pub fn glb(
 
     // Base mesh.
     let normals = unit_normals(actor, &rest);
-    let positions: Vec<f32> = rest.iter().map(|x| metres(*x)).collect();
+    let positions = place.points(&place.spread(&rest, 3));
+    let normals_out = place.normals(&place.spread(&normals, 3));
     let pos = b.floats(&positions, Type::Vec3, true, Some(ArrayBuffer));
-    let nrm = b.floats(&normals, Type::Vec3, false, Some(ArrayBuffer));
-    let tri: Vec<u32> = actor.triangles().indices().iter().collect();
-    let indices = b.indices(&tri);
+    let nrm = b.floats(&normals_out, Type::Vec3, false, Some(ArrayBuffer));
+    let indices = b.indices(&place.triangles(actor));
+    let uvs = place
+        .uvs()
+        .map(|uv| b.floats(&uv, Type::Vec2, false, Some(ArrayBuffer)));
 
     // Skin weights: k on the jaw (joint 1), 1 − k on the head (joint 0). A vertex wholly on one
     // joint names only that joint, since glTF's validator warns of joints used with zero weight.
@@ -392,9 +400,21 @@ pub fn glb(
         joint_ids.extend_from_slice(&j);
         weights.extend_from_slice(&ws);
     }
-    let joints_view = b.view(&joint_ids, Some(ArrayBuffer));
-    let joints = b.accessor(joints_view, v, ComponentType::U8, Type::Vec4, None, None);
-    let skin_weights = b.floats(&weights, Type::Vec4, false, Some(ArrayBuffer));
+    let joints_view = b.view(&place.spread(&joint_ids, 4), Some(ArrayBuffer));
+    let joints = b.accessor(
+        joints_view,
+        v_out,
+        ComponentType::U8,
+        Type::Vec4,
+        None,
+        None,
+    );
+    let skin_weights = b.floats(
+        &place.spread(&weights, 4),
+        Type::Vec4,
+        false,
+        Some(ArrayBuffer),
+    );
 
     // Morph targets: each corrective's displacement and the normal change it makes.
     let mut targets = Vec::with_capacity(m);
@@ -407,9 +427,9 @@ pub fn glb(
         for ((s, r), d) in shaped.iter_mut().zip(&rest).zip(&delta) {
             *s = r + d;
         }
-        let moved = unit_normals(actor, &shaped);
-        let dn: Vec<f32> = moved.iter().zip(&normals).map(|(a, b)| a - b).collect();
-        let dp: Vec<f32> = delta.iter().map(|x| metres(*x)).collect();
+        let moved = place.normals(&place.spread(&unit_normals(actor, &shaped), 3));
+        let dn: Vec<f32> = moved.iter().zip(&normals_out).map(|(a, b)| a - b).collect();
+        let dp = place.offsets(&place.spread(&delta, 3));
         targets.push(json::mesh::MorphTarget {
             positions: Some(b.floats(&dp, Type::Vec3, true, Some(ArrayBuffer))),
             normals: Some(b.floats(&dn, Type::Vec3, false, Some(ArrayBuffer))),
@@ -434,19 +454,24 @@ pub fn glb(
             (Valid(json::mesh::Semantic::Weights(0)), skin_weights),
         ])
     };
+    let mut face_attributes = skinned(pos, nrm);
+    if let Some(uv) = uvs {
+        face_attributes.insert(Valid(json::mesh::Semantic::TexCoords(0)), uv);
+    }
     let face = b.root.push(json::Mesh {
         extensions: None,
         extras: Some(serde_json::value::to_raw_value(
             &serde_json::json!({ "targetNames": names }),
         )?),
         name: Some("face".into()),
-        primitives: vec![primitive(skinned(pos, nrm), Some(targets))],
+        primitives: vec![primitive(face_attributes, Some(targets))],
         weights: Some(vec![0.0; m]),
     });
 
     // Joints: head (root) and jaw at the pivot.
     let pivot = actor.jaw_pivot();
-    let pivot_m = [pivot.x, pivot.y, pivot.z].map(metres);
+    let pivot_out = place.points(&[pivot.x, pivot.y, pivot.z]);
+    let pivot_m = [pivot_out[0], pivot_out[1], pivot_out[2]];
     let jaw = b.root.push(json::Node {
         translation: Some(pivot_m),
         ..node("jaw")
@@ -475,12 +500,22 @@ pub fn glb(
         skin: Some(skin),
         ..node("face")
     });
-    let mut scene_nodes = vec![head, face_node];
+    // A rig's node transform sits above the skeleton, so that the face stands where the rig
+    // stood in its scene.
+    let root = match place.node_transform() {
+        Some(matrix) => b.root.push(json::Node {
+            children: Some(vec![head]),
+            matrix: Some(matrix),
+            ..node("rig")
+        }),
+        None => head,
+    };
+    let mut scene_nodes = vec![root, face_node];
 
     if bones {
         let bone: Vec<f32> = section("cache.b0", &[v32, 3])?.iter().collect();
-        let bn = unit_normals(actor, &bone);
-        let bp: Vec<f32> = bone.iter().map(|x| metres(*x)).collect();
+        let bn = place.normals(&place.spread(&unit_normals(actor, &bone), 3));
+        let bp = place.points(&place.spread(&bone, 3));
         let bpos = b.floats(&bp, Type::Vec3, true, Some(ArrayBuffer));
         let bnrm = b.floats(&bn, Type::Vec3, false, Some(ArrayBuffer));
         let mesh = b.root.push(json::Mesh {
@@ -503,7 +538,7 @@ pub fn glb(
             actor,
             frames,
             fps,
-            scale,
+            &place,
             pivot_m,
             [face_node, jaw, head],
         );
@@ -517,7 +552,7 @@ pub fn glb(
     b.root.scene = Some(scene);
     let glb = b.finish()?;
     let summary = Summary {
-        vertices: v,
+        vertices: v_out,
         morph_targets: m,
         frames: frames.len(),
         clamped_weights: clamped,
@@ -536,7 +571,7 @@ fn animate(
     actor: &AimActor<'_>,
     frames: &[Frame],
     fps: f32,
-    scale: f32,
+    place: &Place,
     pivot_m: [f32; 3],
     [face, jaw, head]: [json::Index<json::Node>; 3],
 ) {
@@ -551,15 +586,16 @@ fn animate(
         let pose = actor.pose_from_9d(&f.jaw, &f.head);
         let t = pose.jaw.rigid.trans;
         jt.extend(
-            [t.x, t.y, t.z]
+            place
+                .offsets(&[t.x, t.y, t.z])
                 .iter()
                 .zip(pivot_m)
-                .map(|(t, p)| p + t * scale),
+                .map(|(t, p)| p + t),
         );
-        jr.extend(quaternion(&pose.jaw.rigid.rot));
-        let t = pose.head.trans;
-        ht.extend([t.x, t.y, t.z].map(|x| x * scale));
-        hr.extend(quaternion(&pose.head.rot));
+        jr.extend(quaternion(&place.rotation(&pose.jaw.rigid.rot)));
+        let head_rot = place.rotation(&pose.head.rot);
+        ht.extend(place.head_translation(&head_rot, pose.head.trans));
+        hr.extend(quaternion(&head_rot));
     }
     let outputs = [
         (

@@ -3,3 +3,4 @@
 //! whose actors and pose frames it reads; below the command line.
 
 pub mod gltf;
+mod place;
