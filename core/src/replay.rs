@@ -21,9 +21,10 @@
 use core::fmt;
 
 use crate::aim::{AimActor, MAX_SHAPES};
-use crate::error::{BufferError, FormatError};
+use crate::error::{Argument, BufferError, EvalError, FormatError, InputError};
 use crate::format::{ArtifactKind, SinewFile};
 use crate::hash::FrameHasher;
+use crate::input::check_values;
 use crate::q16::{PoseQ16, Q16, q16_slice};
 use crate::s2d::S2dDecoder;
 use crate::tensor::{F32s, U32s};
@@ -245,6 +246,8 @@ pub enum ReplayError {
     },
     /// A caller buffer has the wrong length.
     Buffer(BufferError),
+    /// A frame's input is refused: NaN, infinite, out of range or a degenerate rotation.
+    Input(InputError),
 }
 
 impl fmt::Display for ReplayError {
@@ -273,11 +276,27 @@ impl fmt::Display for ReplayError {
                  {actor} vertices"
             ),
             Self::Buffer(e) => write!(f, "{e}"),
+            Self::Input(e) => write!(f, "{e}"),
         }
     }
 }
 
 impl core::error::Error for ReplayError {}
+
+impl From<InputError> for ReplayError {
+    fn from(e: InputError) -> Self {
+        Self::Input(e)
+    }
+}
+
+impl From<EvalError> for ReplayError {
+    fn from(e: EvalError) -> Self {
+        match e {
+            EvalError::Buffer(e) => Self::Buffer(e),
+            EvalError::Input(e) => Self::Input(e),
+        }
+    }
+}
 
 impl From<BufferError> for ReplayError {
     fn from(e: BufferError) -> Self {
@@ -291,7 +310,9 @@ impl From<BufferError> for ReplayError {
 ///
 /// # Errors
 /// [`ReplayError::NoQ16Cache`] in Q16 mode without the cache; [`ReplayError::Buffer`] if a
-/// buffer has the wrong length.
+/// buffer has the wrong length; [`ReplayError::Input`] if the head, the jaw or a coefficient is
+/// refused ([`AimActor::pose_from_9d`], [`AimActor::pose`]), in every mode alike. Nothing is
+/// written then.
 pub fn pose_frame(
     actor: &AimActor<'_>,
     mode: Mode,
@@ -299,7 +320,7 @@ pub fn pose_frame(
     jaw: &[f32; 9],
     buf: &mut FrameBuffers<'_>,
 ) -> Result<(), ReplayError> {
-    let pose = actor.pose_from_9d(jaw, head);
+    let pose = actor.pose_from_9d(jaw, head)?;
     match mode {
         Mode::F32 => {
             actor.pose(&pose, buf.weights, buf.positions)?;
@@ -311,6 +332,12 @@ pub fn pose_frame(
         }
         Mode::Q16 => {
             let cache = actor.q16().ok_or(ReplayError::NoQ16Cache)?;
+            if buf.weights.len() != actor.shape_count() {
+                return Err(ReplayError::Buffer(BufferError::Input));
+            }
+            // The f32 path checks the coefficients in `AimActor::pose`; this one converts them
+            // first, and Q16.16 would saturate what it refuses.
+            check_values(Argument::Weights, buf.weights)?;
             q16_slice(buf.weights, buf.weights_q16)?;
             cache.pose(
                 &PoseQ16::from_pose(&pose),

@@ -69,6 +69,34 @@ impl<'a> Csr<'a> {
         })
     }
 
+    /// The worst-case magnitude of [`Self::mul_dense`]'s outputs for inputs of magnitude at most
+    /// `x`: per row `Σ |v| · x` in `f64`, widened by the rounding of the `f32` sum.
+    ///
+    /// # Errors
+    /// The first row whose bound passes ±[`crate::layout::MAX_NETWORK_VALUE`].
+    pub fn bound(&self, x: f64) -> Result<f64, usize> {
+        let limit = f64::from(crate::layout::MAX_NETWORK_VALUE);
+        let mut ptrs = self.row_ptr.iter();
+        let mut start = ptrs.next().unwrap_or(0) as usize;
+        let mut out = 0.0f64;
+        for (row, end) in ptrs.enumerate() {
+            let end = end as usize;
+            let len = end.saturating_sub(start);
+            let mut sum = 0.0f64;
+            for v in self.values.slice(start, len).iter() {
+                sum += f64::from(libm::fabsf(v));
+            }
+            let rounding = libm::pow(1.0 + crate::nn::UNIT_ROUNDOFF, len as f64 + 1.0);
+            let y = sum * x * rounding;
+            if y.is_nan() || y > limit {
+                return Err(row);
+            }
+            out = out.max(y);
+            start = end;
+        }
+        Ok(out)
+    }
+
     /// Number of rows.
     pub fn rows(&self) -> usize {
         self.rows

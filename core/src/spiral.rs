@@ -124,6 +124,17 @@ impl<'a> SpiralConv<'a> {
         })
     }
 
+    /// The worst-case magnitude of the outputs for inputs of magnitude at most `x`: each output
+    /// is a [`crate::nn::Dense`] row over the gathered spiral, bounded the same way
+    /// ([`crate::nn::Dense::bound`]).
+    ///
+    /// # Errors
+    /// The first output feature whose bound passes ±[`crate::layout::MAX_NETWORK_VALUE`].
+    pub fn bound(&self, x: f64) -> Result<f64, usize> {
+        let width = self.spirals.len * self.in_f;
+        crate::nn::layer_bound(self.weight, self.bias, width, self.activation, x)
+    }
+
     /// The spirals.
     pub fn spirals(&self) -> Spirals<'a> {
         self.spirals

@@ -1,6 +1,7 @@
 //! The core's S2D decoder on hand-written artefacts: a tiny network whose output is computed by
 //! hand, and the validation of every section's shape and bounds.
 
+use sinew_core::error::{Bound, SectionName};
 use sinew_core::s2d::S2dDecoder;
 use sinew_core::{ArtifactKind, BufferError, FormatError};
 use sinew_host::SinewWriter;
@@ -168,19 +169,19 @@ fn tiny_decoder_hand_computed() {
 
     assert_eq!(
         dec.decode(&[1.0, 2.0], &mut scratch, &mut out),
-        Err(BufferError::Input)
+        Err(BufferError::Input.into())
     );
     assert_eq!(
         dec.decode(&[1.0, 2.0, 3.0], &mut scratch, &mut out[..5]),
-        Err(BufferError::Output)
+        Err(BufferError::Output.into())
     );
     assert_eq!(
         dec.decode(&[1.0, 2.0, 3.0], &mut scratch[..25], &mut out),
-        Err(BufferError::Scratch)
+        Err(BufferError::Scratch.into())
     );
     assert_eq!(
         dec.decode_onto(&[0.0; 3], &[1.0, 2.0, 3.0], &mut scratch, &mut out),
-        Err(BufferError::Input)
+        Err(BufferError::Input.into())
     );
 }
 
@@ -295,7 +296,10 @@ fn every_shape_and_bound_is_validated() {
         (
             "non-finite stage activation parameter",
             Box::new(|t| t.act = Some((vec![5], vec![f32::NAN]))),
-            FormatError::NonFinite,
+            FormatError::NonFiniteValue {
+                section: SectionName::new("s2d.par"),
+                index: 0,
+            },
         ),
         (
             "stage activation without its parameter",
@@ -310,12 +314,18 @@ fn every_shape_and_bound_is_validated() {
         (
             "non-finite neutral",
             Box::new(|t| t.neutral[4] = f32::NAN),
-            FormatError::NonFinite,
+            FormatError::NonFiniteValue {
+                section: SectionName::new("s2d.h0.pos"),
+                index: 4,
+            },
         ),
         (
             "non-finite FC weight",
             Box::new(|t| t.fc_w[1] = f32::INFINITY),
-            FormatError::NonFinite,
+            FormatError::NonFiniteValue {
+                section: SectionName::new("s2d.fc.w"),
+                index: 1,
+            },
         ),
         (
             "FC of the wrong width",
@@ -363,7 +373,10 @@ fn every_shape_and_bound_is_validated() {
         (
             "non-finite CSR value",
             Box::new(|t| t.up_val[0] = f32::NAN),
-            FormatError::NonFinite,
+            FormatError::NonFiniteValue {
+                section: SectionName::new("s2d.u0.val"),
+                index: 0,
+            },
         ),
         (
             "stage convolution reads the wrong width",
@@ -383,7 +396,55 @@ fn every_shape_and_bound_is_validated() {
         (
             "non-finite output bias",
             Box::new(|t| t.out_b[2] = f32::NEG_INFINITY),
-            FormatError::NonFinite,
+            FormatError::NonFiniteValue {
+                section: SectionName::new("s2d.out.b"),
+                index: 2,
+            },
+        ),
+        (
+            "neutral beyond the coordinate limit",
+            Box::new(|t| t.neutral[4] = 2e5),
+            FormatError::ValueOutOfRange {
+                section: SectionName::new("s2d.h0.pos"),
+                index: 4,
+                bound: Bound::Coordinate,
+            },
+        ),
+        (
+            "up-sampling weight beyond the factor limit",
+            Box::new(|t| t.up_val[0] = -2e3),
+            FormatError::ValueOutOfRange {
+                section: SectionName::new("s2d.u0.val"),
+                index: 0,
+                bound: Bound::Factor,
+            },
+        ),
+        (
+            "stage activation parameter beyond the factor limit",
+            Box::new(|t| t.act = Some((vec![5], vec![1e4]))),
+            FormatError::ValueOutOfRange {
+                section: SectionName::new("s2d.par"),
+                index: 0,
+                bound: Bound::Factor,
+            },
+        ),
+        (
+            // Finite, but inputs within ±1e3 times 1e30 would overflow f32.
+            "FC weight that can overflow",
+            Box::new(|t| t.fc_w[4] = 1e30),
+            FormatError::Unbounded {
+                section: SectionName::new("s2d.fc.w"),
+                row: 1,
+            },
+        ),
+        (
+            // FC outputs up to 1,001 times 1e19: beyond 1e20.
+            "stage convolution weight that can overflow",
+            Box::new(|t| t.conv_w[0] = 1e19),
+            FormatError::Unbounded {
+                section: SectionName::new("s2d.conv.0.w"),
+                row: 0,
+            },
         ),
     ];
     for (what, edit, expected) in cases {

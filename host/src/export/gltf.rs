@@ -130,6 +130,15 @@ pub enum GltfError {
         #[source]
         source: FormatError,
     },
+    /// The core refused a frame's head or jaw (a degenerate or out-of-range transform).
+    #[error("frame {frame}")]
+    Frame {
+        /// The frame.
+        frame: usize,
+        /// What the core said.
+        #[source]
+        source: sinew_core::InputError,
+    },
     /// The glTF document could not be serialised.
     #[error(transparent)]
     Json(#[from] serde_json::Error),
@@ -519,7 +528,7 @@ pub fn glb(
             scale,
             pivot_m,
             [face_node, jaw, head],
-        );
+        )?;
     }
     let scene = b.root.push(json::Scene {
         extensions: None,
@@ -552,16 +561,18 @@ fn animate(
     scale: f32,
     pivot_m: [f32; 3],
     [face, jaw, head]: [json::Index<json::Node>; 3],
-) {
+) -> Result<(), GltfError> {
     use json::accessor::Type;
     use json::animation::Property;
     let times: Vec<f32> = (0..frames.len()).map(|i| i as f32 / fps).collect();
     let input = b.floats(&times, Type::Scalar, true, None);
     let mut weights = Vec::new();
     let (mut jt, mut jr, mut ht, mut hr) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for f in frames {
+    for (frame, f) in frames.iter().enumerate() {
         weights.extend_from_slice(&f.weights);
-        let pose = actor.pose_from_9d(&f.jaw, &f.head);
+        let pose = actor
+            .pose_from_9d(&f.jaw, &f.head)
+            .map_err(|source| GltfError::Frame { frame, source })?;
         let t = pose.jaw.rigid.trans;
         jt.extend(
             [t.x, t.y, t.z]
@@ -630,6 +641,7 @@ fn animate(
         name: Some("performance".into()),
         samplers,
     });
+    Ok(())
 }
 
 #[cfg(test)]
