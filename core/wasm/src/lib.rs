@@ -34,22 +34,43 @@ pub const POSE_9D: usize = 9;
 /// `InputError` or `ReplayError` as displayed, a refused input named as the JavaScript API names
 /// the argument) or this crate's own about a caller's input.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Error(String);
+pub struct Error {
+    message: String,
+    input: Option<Refused>,
+}
+
+/// Which input the core refused, named as the JavaScript call names the argument: what the
+/// JavaScript `InputError` carries besides the message.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Refused {
+    /// The argument's name in the JavaScript API (`head`, `coefficients`, `neutralLandmarks`).
+    pub argument: &'static str,
+    /// The value's index in it (for a degenerate 6D rotation, its column's first index).
+    pub index: usize,
+}
 
 impl Error {
     fn new(message: impl Into<String>) -> Self {
-        Self(message.into())
+        Self {
+            message: message.into(),
+            input: None,
+        }
     }
 
     /// The message.
     pub fn message(&self) -> &str {
-        &self.0
+        &self.message
+    }
+
+    /// The refused input, when the core refused one of the call's values.
+    pub fn refused(&self) -> Option<Refused> {
+        self.input
     }
 }
 
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
+        f.write_str(&self.message)
     }
 }
 
@@ -57,13 +78,13 @@ impl std::error::Error for Error {}
 
 impl From<sinew_core::FormatError> for Error {
     fn from(e: sinew_core::FormatError) -> Self {
-        Self(e.to_string())
+        Self::new(e.to_string())
     }
 }
 
 impl From<sinew_core::BufferError> for Error {
     fn from(e: sinew_core::BufferError) -> Self {
-        Self(e.to_string())
+        Self::new(e.to_string())
     }
 }
 
@@ -71,7 +92,7 @@ impl From<replay::ReplayError> for Error {
     fn from(e: replay::ReplayError) -> Self {
         match e {
             replay::ReplayError::Input(e) => e.into(),
-            e => Self(e.to_string()),
+            e => Self::new(e.to_string()),
         }
     }
 }
@@ -86,7 +107,7 @@ impl From<EvalError> for Error {
     fn from(e: EvalError) -> Self {
         match e {
             EvalError::Input(e) => e.into(),
-            e => Self(e.to_string()),
+            e => Self::new(e.to_string()),
         }
     }
 }
@@ -94,7 +115,7 @@ impl From<EvalError> for Error {
 impl Error {
     /// The core's message about a refused input, with the argument named as the JavaScript call
     /// names it: `coefficients` for the core's `weights`, and the names in `rename`.
-    fn input(e: InputError, rename: &[(Argument, &str)]) -> Self {
+    fn input(e: InputError, rename: &[(Argument, &'static str)]) -> Self {
         let core = e.argument.name();
         let js = rename
             .iter()
@@ -105,14 +126,20 @@ impl Error {
                 _ => core,
             });
         let message = e.to_string();
-        Self(match message.strip_prefix(core) {
-            Some(rest) => format!("{js}{rest}"),
-            None => message,
-        })
+        Self {
+            message: match message.strip_prefix(core) {
+                Some(rest) => format!("{js}{rest}"),
+                None => message,
+            },
+            input: Some(Refused {
+                argument: js,
+                index: e.index,
+            }),
+        }
     }
 
     /// [`Self::input`] for an input refusal, the message as it is otherwise.
-    fn eval(e: EvalError, rename: &[(Argument, &str)]) -> Self {
+    fn eval(e: EvalError, rename: &[(Argument, &'static str)]) -> Self {
         match e {
             EvalError::Input(e) => Self::input(e, rename),
             e => e.into(),
