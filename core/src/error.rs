@@ -22,8 +22,8 @@ impl SectionName {
     pub fn new(name: &str) -> Self {
         let mut bytes = [0u8; NAME_LEN];
         let len = name.len().min(NAME_LEN);
-        for (d, s) in bytes.iter_mut().zip(name.as_bytes().iter().take(len)) {
-            *d = *s;
+        if let (Some(d), Some(s)) = (bytes.get_mut(..len), name.as_bytes().get(..len)) {
+            d.copy_from_slice(s);
         }
         Self {
             bytes,
@@ -117,36 +117,39 @@ impl fmt::Display for Bound {
             Self::UnitMotion => write!(
                 f,
                 "part of a motion that is not of unit norm (⟨p, p⟩ must lie within 1 ± {})",
-                crate::layout::UNIT_TOLERANCE
+                Magnitude(crate::layout::UNIT_TOLERANCE)
             ),
         }
     }
 }
 
-/// Writes a limit the way the documents do: `1e5` for a power of ten of 1,000 and more, the
-/// plain number otherwise.
+/// Writes a limit the way the documents do: `1e5`, `1e-6`, and `0` or `1` plainly. Every limit
+/// of [`crate::layout`] is a power of ten (or zero), so only the exponent is printed, with
+/// integer formatting: formatting an `f32` would add the float printer's tens of kilobytes to a
+/// firmware image or WebAssembly module.
 struct Magnitude(f32);
 
 impl fmt::Display for Magnitude {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let mut v = f64::from(self.0);
-        let mut exponent = 0;
-        while v >= 10.0 {
-            v /= 10.0;
+        let v = f64::from(self.0);
+        if v == 0.0 {
+            return f.write_str("0");
+        }
+        let sign = if v < 0.0 { "-" } else { "" };
+        // The exponent of the power of ten nearest to |v| (f32's 1e-6 is 9.99999997e-7).
+        let (mut m, mut exponent) = (if v < 0.0 { -v } else { v }, 0i32);
+        while m >= 9.5 {
+            m /= 10.0;
             exponent += 1;
         }
-        if exponent >= 3 && (v - 1.0) < 1e-6 {
-            write!(f, "1e{exponent}")
-        } else if self.0 < 1e-3 && self.0 > 0.0 {
-            let mut v = f64::from(self.0);
-            let mut exponent = 0;
-            while v < 0.999_999 {
-                v *= 10.0;
-                exponent += 1;
-            }
-            write!(f, "1e-{exponent}")
-        } else {
-            write!(f, "{}", self.0)
+        while m < 0.95 {
+            m *= 10.0;
+            exponent -= 1;
+        }
+        match exponent {
+            0 => write!(f, "{sign}1"),
+            1..=2 => write!(f, "{sign}{}", 10i32.pow(exponent.unsigned_abs())),
+            _ => write!(f, "{sign}1e{exponent}"),
         }
     }
 }
@@ -516,7 +519,12 @@ impl fmt::Display for InputError {
                 (lo, hi) if lo == -hi => {
                     write!(f, "{argument}[{index}] is outside ±{}", Magnitude(hi))
                 }
-                (lo, hi) => write!(f, "{argument}[{index}] is outside [{lo}, {hi}]"),
+                (lo, hi) => write!(
+                    f,
+                    "{argument}[{index}] is outside [{}, {}]",
+                    Magnitude(lo),
+                    Magnitude(hi)
+                ),
             },
             InputErrorKind::Degenerate if argument.is_9d() && index < 3 => write!(
                 f,

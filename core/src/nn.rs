@@ -240,6 +240,21 @@ impl<'a> Dense<'a> {
 /// exact one.
 pub(crate) const UNIT_ROUNDOFF: f64 = 5.960_464_477_539_063e-8;
 
+/// `(1 + 2⁻²⁴)^operations`, how far the roundings of that many `f32` additions and products in a
+/// row can take a sum beyond its exact value, by squaring in `f64` (whose own rounding, 2⁻⁵³
+/// per step, is far below the 2⁻²⁴ being raised).
+pub(crate) fn rounding_growth(operations: usize) -> f64 {
+    let (mut base, mut k, mut out) = (1.0 + UNIT_ROUNDOFF, operations, 1.0f64);
+    while k > 0 {
+        if k & 1 == 1 {
+            out *= base;
+        }
+        base *= base;
+        k >>= 1;
+    }
+    out
+}
+
 /// The worst-case magnitude of a layer's outputs `act(W x + b)` for inputs of magnitude at most
 /// `x` (`weight`: `[outputs, inputs]` row-major), computed in `f64`: per row `Σ |w| · x + |b|`,
 /// widened by the rounding a sum of `inputs + 1` terms in `f32` can add, `(1 + 2⁻²⁴)^(inputs + 2)`,
@@ -270,7 +285,7 @@ pub(crate) fn layer_bound_within(
 ) -> Result<f64, usize> {
     let limit = f64::from(MAX_NETWORK_VALUE);
     let output_limit = f64::from(output_limit);
-    let rounding = libm::pow(1.0 + UNIT_ROUNDOFF, inputs as f64 + 2.0);
+    let rounding = rounding_growth(inputs + 2);
     let param = f64::from(libm::fabsf(activation.param()));
     let mut out = 0.0f64;
     for (row, b) in bias.iter().enumerate() {

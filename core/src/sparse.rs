@@ -86,7 +86,7 @@ impl<'a> Csr<'a> {
             for v in self.values.slice(start, len).iter() {
                 sum += f64::from(libm::fabsf(v));
             }
-            let rounding = libm::pow(1.0 + crate::nn::UNIT_ROUNDOFF, len as f64 + 1.0);
+            let rounding = crate::nn::rounding_growth(len + 1);
             let y = sum * x * rounding;
             if y.is_nan() || y > limit {
                 return Err(row);
