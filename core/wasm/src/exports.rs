@@ -21,7 +21,7 @@
 
 use std::cell::{Cell, RefCell};
 
-use crate::{Error, FrameInputs, Model, Performance, Replay, Refused};
+use crate::{Error, FrameInputs, Model, Performance, Refused, Replay};
 
 #[derive(Debug)]
 enum Object {
