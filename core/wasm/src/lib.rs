@@ -270,9 +270,8 @@ impl Model {
             }
             other => {
                 return Err(Error::new(format!(
-                    "{} (a {} artefact; a model is an AIM actor or an S2D decoder)",
+                    "{} ({other}; a model is an AIM actor or an S2D decoder)",
                     sinew_core::FormatError::WrongKind,
-                    other.name()
                 )));
             }
         };
@@ -525,9 +524,9 @@ impl Replay {
         let file = SinewFile::from_bytes(&bytes)?;
         if file.kind != ArtifactKind::Replay {
             return Err(Error::new(format!(
-                "{} (a {} artefact, not a replay)",
+                "{} ({}, not a replay)",
                 sinew_core::FormatError::WrongKind,
-                file.kind.name()
+                file.kind
             )));
         }
         let s2d = file.section(S2D_INPUTS).is_some();
