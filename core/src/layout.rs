@@ -279,6 +279,44 @@ mod tests {
         assert!(errors.is_empty(), "docs/FORMAT.md:\n{}", errors.join("\n"));
     }
 
+    /// The value limits, by the name of their constant, as `docs/FORMAT.md` ("Value bounds")
+    /// must state them.
+    const VALUE_LIMITS: [(&str, f32); 6] = [
+        ("MAX_COORDINATE", MAX_COORDINATE),
+        ("MAX_FACTOR", MAX_FACTOR),
+        ("MAX_ROTATION_ENTRY", MAX_ROTATION_ENTRY),
+        ("MIN_ROTATION_COLUMN", MIN_ROTATION_COLUMN),
+        ("MAX_NETWORK_VALUE", MAX_NETWORK_VALUE),
+        ("UNIT_TOLERANCE", UNIT_TOLERANCE),
+    ];
+
+    #[test]
+    fn format_md_value_limits_match_the_constants() {
+        let mut lines = FORMAT_MD
+            .lines()
+            .skip_while(|l| !l.starts_with("### Value bounds"))
+            .skip_while(|l| !l.starts_with('|'))
+            .take_while(|l| l.starts_with('|'));
+        let mut seen = Vec::new();
+        for line in lines.by_ref().skip(2) {
+            let cells: Vec<&str> = line.trim_matches('|').split('|').map(str::trim).collect();
+            let (Some(name), Some(value)) = (cells.first(), cells.get(1)) else {
+                continue;
+            };
+            let name = name.trim_matches('`');
+            if let Some((_, limit)) = VALUE_LIMITS.iter().find(|(n, _)| *n == name) {
+                assert_eq!(value.parse::<f32>(), Ok(*limit), "docs/FORMAT.md, {name}");
+                seen.push(name);
+            }
+        }
+        for (name, _) in VALUE_LIMITS {
+            assert!(
+                seen.contains(&name),
+                "docs/FORMAT.md's value bounds lack {name}"
+            );
+        }
+    }
+
     #[test]
     fn a_wrong_row_in_format_md_is_named() {
         let doc = FORMAT_MD.replace("| 10 | 2 | minor |", "| 11 | 2 | minor |");
