@@ -273,7 +273,10 @@ fn performance(bytes: &[u8], rng: &mut Rng) {
     if perf.shape_count() != actor.shape_count() {
         return;
     }
-    if perf.point_count().is_some_and(|p| p != actor.vertex_count()) {
+    if perf
+        .point_count()
+        .is_some_and(|p| p != actor.vertex_count())
+    {
         return;
     }
     let f = (rng.next() % perf.frames() as u64) as usize;
