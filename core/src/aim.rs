@@ -126,7 +126,7 @@ impl<'a> AimActor<'a> {
             return Err(FormatError::IncompatibleShapes);
         }
         let tri = file.u32_tensor("tpl.tri", &[tri_shape[0], 3])?;
-        let triangles = Triangles::new(tri, v as usize)?;
+        let triangles = Triangles::new(tri, v as usize).map_err(|e| e.in_section("tpl.tri"))?;
         let pivot = file.f32_tensor_within("jaw.pivot", &[3], Bound::Coordinate)?;
         let networks = if file.flags & FLAG_PLAYBACK_ONLY != 0 {
             None

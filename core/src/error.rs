@@ -239,9 +239,15 @@ pub enum FormatError {
         section: u16,
     },
     /// A section the artefact kind requires is absent.
-    MissingSection,
+    MissingSection {
+        /// The section's name.
+        section: SectionName,
+    },
     /// A section has a different data type than its role requires.
-    WrongDtype,
+    WrongDtype {
+        /// The section's name.
+        section: SectionName,
+    },
     /// Tensor shapes do not fit together (e.g. a layer's inputs and the previous layer's outputs).
     IncompatibleShapes,
     /// A weight given to a kernel's constructor is NaN or infinite. Files never get here: the
@@ -272,8 +278,16 @@ pub enum FormatError {
         /// The layer's output (the weight row) whose bound is passed.
         row: u32,
     },
-    /// An index points outside the array it indexes.
-    IndexOutOfRange,
+    /// An index points outside the array it indexes (or, in a sparse matrix's row pointers,
+    /// does not rise from 0 to the entry count). A kernel's constructor, which sees no file,
+    /// names its argument (`indices`, `row_ptr`, `col_idx`); a loader names the section
+    /// ([`FormatError::in_section`]).
+    IndexOutOfRange {
+        /// The section (or the kernel's argument) holding the index.
+        section: SectionName,
+        /// The index's position in it.
+        index: u32,
+    },
     /// A count exceeds a limit of this build (layers, widths, vertices).
     LimitExceeded,
     /// A code (activation, artefact kind) has a value this version does not know.
@@ -332,8 +346,10 @@ impl fmt::Display for FormatError {
                     "section {section} length does not match its shape and data type"
                 )
             }
-            Self::MissingSection => write!(f, "a required section is missing"),
-            Self::WrongDtype => write!(f, "a section has the wrong data type for its role"),
+            Self::MissingSection { section } => write!(f, "required section {section} is missing"),
+            Self::WrongDtype { section } => {
+                write!(f, "section {section} has the wrong data type for its role")
+            }
             Self::IncompatibleShapes => write!(f, "tensor shapes do not fit together"),
             Self::NonFinite => write!(f, "a weight is NaN or infinite"),
             Self::NonFiniteValue { section, index } => {
@@ -350,7 +366,12 @@ impl fmt::Display for FormatError {
                  bounds",
                 Magnitude(MAX_NETWORK_VALUE)
             ),
-            Self::IndexOutOfRange => write!(f, "an index is out of range"),
+            Self::IndexOutOfRange { section, index } => {
+                write!(
+                    f,
+                    "section {section}: value {index} is an index out of range"
+                )
+            }
             Self::LimitExceeded => write!(f, "a count exceeds this build's limits"),
             Self::UnknownCode => write!(f, "an enumeration code is unknown"),
             Self::BadMetadata => write!(f, "metadata is not UTF-8 key=value lines"),
@@ -360,6 +381,31 @@ impl fmt::Display for FormatError {
 }
 
 impl core::error::Error for FormatError {}
+
+impl FormatError {
+    /// An [`FormatError::IndexOutOfRange`] at position `index` of the section or argument
+    /// `section`.
+    pub fn index_out_of_range(section: &str, index: usize) -> Self {
+        Self::IndexOutOfRange {
+            section: SectionName::new(section),
+            index: u32::try_from(index).unwrap_or(u32::MAX),
+        }
+    }
+
+    /// The error with the file's section name `section` in place of a kernel's argument name
+    /// (of an [`FormatError::IndexOutOfRange`] from a constructor such as
+    /// `Triangles::new`); other errors are returned as they are.
+    #[must_use]
+    pub fn in_section(self, section: &str) -> Self {
+        match self {
+            Self::IndexOutOfRange { index, .. } => Self::IndexOutOfRange {
+                section: SectionName::new(section),
+                index,
+            },
+            e => e,
+        }
+    }
+}
 
 /// A caller-provided buffer has the wrong length for the model it is used with.
 ///

@@ -565,8 +565,8 @@ impl<'a> SinewFile<'a> {
 
     /// The `f32` tensor called `name` with exactly the dimensions `dims`.
     pub fn f32_tensor(&self, name: &str, dims: &[u32]) -> Result<F32s<'a>, FormatError> {
-        let s = self.section(name).ok_or(FormatError::MissingSection)?;
-        let v = s.f32s().ok_or(FormatError::WrongDtype)?;
+        let s = self.section(name).ok_or_else(|| missing(name))?;
+        let v = s.f32s().ok_or_else(|| wrong_dtype(name))?;
         if s.dims() == dims {
             Ok(v)
         } else {
@@ -592,8 +592,8 @@ impl<'a> SinewFile<'a> {
 
     /// The `u32` tensor called `name` with exactly the dimensions `dims`.
     pub fn u32_tensor(&self, name: &str, dims: &[u32]) -> Result<U32s<'a>, FormatError> {
-        let s = self.section(name).ok_or(FormatError::MissingSection)?;
-        let v = s.u32s().ok_or(FormatError::WrongDtype)?;
+        let s = self.section(name).ok_or_else(|| missing(name))?;
+        let v = s.u32s().ok_or_else(|| wrong_dtype(name))?;
         if s.dims() == dims {
             Ok(v)
         } else {
@@ -603,8 +603,8 @@ impl<'a> SinewFile<'a> {
 
     /// The Q16.16 tensor called `name` with exactly the dimensions `dims`.
     pub fn q16_tensor(&self, name: &str, dims: &[u32]) -> Result<I32s<'a>, FormatError> {
-        let s = self.section(name).ok_or(FormatError::MissingSection)?;
-        let v = s.q16s().ok_or(FormatError::WrongDtype)?;
+        let s = self.section(name).ok_or_else(|| missing(name))?;
+        let v = s.q16s().ok_or_else(|| wrong_dtype(name))?;
         if s.dims() == dims {
             Ok(v)
         } else {
@@ -614,8 +614,22 @@ impl<'a> SinewFile<'a> {
 
     /// The dimensions of the tensor called `name`.
     pub fn dims_of(&self, name: &str) -> Result<([u32; MAX_RANK], u8), FormatError> {
-        let s = self.section(name).ok_or(FormatError::MissingSection)?;
+        let s = self.section(name).ok_or_else(|| missing(name))?;
         Ok((s.shape, s.rank))
+    }
+}
+
+/// [`FormatError::MissingSection`] naming the section `name`.
+pub fn missing(name: &str) -> FormatError {
+    FormatError::MissingSection {
+        section: SectionName::new(name),
+    }
+}
+
+/// [`FormatError::WrongDtype`] naming the section `name`.
+pub fn wrong_dtype(name: &str) -> FormatError {
+    FormatError::WrongDtype {
+        section: SectionName::new(name),
     }
 }
 

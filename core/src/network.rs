@@ -54,10 +54,13 @@ pub fn load_mlp<'a>(file: &SinewFile<'a>, prefix: &str) -> Result<Mlp<'a>, Forma
     if prefix.len() > MAX_PREFIX_LEN {
         return Err(FormatError::LimitExceeded);
     }
+    let acts_name = simple_name(prefix, ".act")?;
     let acts_section = file
-        .section(&simple_name(prefix, ".act")?)
-        .ok_or(FormatError::MissingSection)?;
-    let acts = acts_section.u32s().ok_or(FormatError::WrongDtype)?;
+        .section(&acts_name)
+        .ok_or_else(|| crate::format::missing(&acts_name))?;
+    let acts = acts_section
+        .u32s()
+        .ok_or_else(|| crate::format::wrong_dtype(&acts_name))?;
     let layers = acts.len();
     if layers == 0 || layers > MAX_LAYERS || acts_section.dims().len() != 1 {
         return Err(FormatError::LimitExceeded);

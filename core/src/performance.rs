@@ -127,7 +127,9 @@ impl<'a> Performance<'a> {
                 (Coefficients::Global(weights), shapes)
             }
             (None, Some(_)) => local(&file, frames)?,
-            _ => return Err(FormatError::MissingSection),
+            // Exactly one form: neither is a missing section, both do not fit together.
+            (None, None) => return Err(crate::format::missing(WEIGHTS)),
+            (Some(_), Some(_)) => return Err(FormatError::IncompatibleShapes),
         };
         if file.section(POINTS).is_some() && !matches!(coefficients, Coefficients::Local { .. }) {
             // A global fit has no per-point coefficients to evaluate anywhere.

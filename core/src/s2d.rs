@@ -142,7 +142,8 @@ impl<'a> S2dDecoder<'a> {
             }
             let sp = name(format_args!("s2d.h{k}.spiral"))?;
             let idx = file.u32_tensor(&sp, &[rows, len])?;
-            let s = Spirals::new(idx, rows as usize, len as usize, rows as usize)?;
+            let s = Spirals::new(idx, rows as usize, len as usize, rows as usize)
+                .map_err(|e| e.in_section(&sp))?;
             vertices
                 .push(n as usize)
                 .map_err(|_| FormatError::LimitExceeded)?;
@@ -154,8 +155,8 @@ impl<'a> S2dDecoder<'a> {
 
         let neutral = file.f32_tensor_within("s2d.h0.pos", &[to_u32(n0)?, 3], Bound::Coordinate)?;
         let landmarks = file.u32_tensor("s2d.lmk", &[to_u32(inputs / 3)?])?;
-        if landmarks.iter().any(|i| i as usize >= n0) {
-            return Err(FormatError::IndexOutOfRange);
+        if let Some(i) = landmarks.iter().position(|i| i as usize >= n0) {
+            return Err(FormatError::index_out_of_range("s2d.lmk", i));
         }
 
         let fc_out = coarsest
@@ -223,7 +224,13 @@ impl<'a> S2dDecoder<'a> {
             let col = file.u32_tensor(&col_name, &[nnz])?;
             let val_name = name(format_args!("s2d.u{k}.val"))?;
             let val = file.f32_tensor_within(&val_name, &[nnz], Bound::Factor)?;
-            let up = Csr::new(rows, cols, ptr, col, val)?;
+            let ptr_name = name(format_args!("s2d.u{k}.ptr"))?;
+            let up = Csr::new(rows, cols, ptr, col, val).map_err(|e| match e {
+                FormatError::IndexOutOfRange { section, .. } if section.as_str() == "col_idx" => {
+                    e.in_section(&col_name)
+                }
+                e => e.in_section(&ptr_name),
+            })?;
             bound = up.bound(bound).map_err(|row| unbounded(&val_name, row))?;
             ups.push(up).map_err(|_| FormatError::LimitExceeded)?;
             half = grow(half, rows, width)?;

@@ -221,13 +221,14 @@ impl<'a> Triangles<'a> {
     ///
     /// # Errors
     /// [`FormatError::IncompatibleShapes`] if the number of indices is not a multiple of 3;
-    /// [`FormatError::IndexOutOfRange`] if an index is `>= n_vertices`.
+    /// [`FormatError::IndexOutOfRange`] (argument `indices`, the index's position) if an index
+    /// is `>= n_vertices`.
     pub fn new(indices: U32s<'a>, n_vertices: usize) -> Result<Self, FormatError> {
         if !indices.len().is_multiple_of(3) {
             return Err(FormatError::IncompatibleShapes);
         }
-        if indices.iter().any(|i| i as usize >= n_vertices) {
-            return Err(FormatError::IndexOutOfRange);
+        if let Some(at) = indices.iter().position(|i| i as usize >= n_vertices) {
+            return Err(FormatError::index_out_of_range("indices", at));
         }
         Ok(Self {
             indices,
@@ -460,7 +461,10 @@ mod tests {
         let b = u32_bytes(&[0, 1, 2, 2, 1, 3]);
         let idx = U32s::new(&b).unwrap();
         assert!(Triangles::new(idx, 4).is_ok());
-        assert_eq!(Triangles::new(idx, 3), Err(FormatError::IndexOutOfRange));
+        assert_eq!(
+            Triangles::new(idx, 3),
+            Err(FormatError::index_out_of_range("indices", 5))
+        );
         assert_eq!(
             Triangles::new(idx.slice(0, 4), 4),
             Err(FormatError::IncompatibleShapes)

@@ -292,6 +292,14 @@ fn a_file_with_valid_crcs_whose_cache_holds_3_4e38_is_refused_at_load() {
         err.to_string(),
         "section cache.s0: value 5 is NaN or infinite"
     );
+    // An index is named the same way (written as the bits of 1,000 in the u32 section).
+    let err =
+        AimActor::from_bytes(&with_f32(ACTOR, "tpl.tri", 4, f32::from_bits(1000))).unwrap_err();
+    assert_eq!(err, FormatError::index_out_of_range("tpl.tri", 4));
+    assert_eq!(
+        err.to_string(),
+        "section tpl.tri: value 4 is an index out of range"
+    );
 }
 
 /// At the limits, a valid file with accepted inputs poses to finite numbers in every mode: the

@@ -266,7 +266,9 @@ fn every_shape_and_bound_is_validated() {
         (
             "a third level without its sections",
             Box::new(|t| t.levels = vec![2, 2, 1, 1, 1, 1]),
-            FormatError::MissingSection,
+            FormatError::MissingSection {
+                section: SectionName::new("s2d.h2.spiral"),
+            },
         ),
         (
             "empty level",
@@ -281,7 +283,7 @@ fn every_shape_and_bound_is_validated() {
         (
             "coarse spiral past the dummy",
             Box::new(|t| t.sp1[0] = 2),
-            FormatError::IndexOutOfRange,
+            FormatError::index_out_of_range("s2d.h1.spiral", 0),
         ),
         (
             "unknown input normalisation",
@@ -309,7 +311,7 @@ fn every_shape_and_bound_is_validated() {
         (
             "landmark outside the mesh",
             Box::new(|t| t.lmk[0] = 2),
-            FormatError::IndexOutOfRange,
+            FormatError::index_out_of_range("s2d.lmk", 0),
         ),
         (
             "non-finite neutral",
@@ -338,7 +340,7 @@ fn every_shape_and_bound_is_validated() {
         (
             "spiral past the dummy",
             Box::new(|t| t.sp0[1] = 3),
-            FormatError::IndexOutOfRange,
+            FormatError::index_out_of_range("s2d.h0.spiral", 1),
         ),
         (
             "spirals of the wrong count",
@@ -348,17 +350,17 @@ fn every_shape_and_bound_is_validated() {
         (
             "CSR column past the coarse dummy",
             Box::new(|t| t.up_col[3] = 2),
-            FormatError::IndexOutOfRange,
+            FormatError::index_out_of_range("s2d.u0.col", 3),
         ),
         (
             "CSR row pointers decrease",
             Box::new(|t| t.up_ptr[1] = 4),
-            FormatError::IndexOutOfRange,
+            FormatError::index_out_of_range("s2d.u0.ptr", 2),
         ),
         (
             "CSR row pointers end early",
             Box::new(|t| t.up_ptr[3] = 3),
-            FormatError::IndexOutOfRange,
+            FormatError::index_out_of_range("s2d.u0.ptr", 3),
         ),
         (
             "CSR with a row too few",
@@ -477,7 +479,9 @@ fn missing_sections_and_wrong_kind() {
         let name = file.section_at(skip).unwrap().name().to_owned();
         assert_eq!(
             S2dDecoder::from_bytes(&w.to_bytes().unwrap()).map(|_| ()),
-            Err(FormatError::MissingSection),
+            Err(FormatError::MissingSection {
+                section: SectionName::new(&name)
+            }),
             "without {name}"
         );
     }
