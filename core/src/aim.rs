@@ -20,10 +20,12 @@
 //! The networks see ĉ and predict: b0 = c + B(ĉ) (a residual, so the network's outputs stay of
 //! order one), d0 = D(ĉ), n0 = normalise(N(ĉ)), k = K(ĉ), B_e = E(ĉ).
 
-use crate::error::{BufferError, FormatError};
-use crate::format::{ArtifactKind, FLAG_PLAYBACK_ONLY, SinewFile};
+use crate::error::{Argument, Bound, BufferError, EvalError, FormatError, InputError};
+use crate::format::{ArtifactKind, FLAG_PLAYBACK_ONLY, SinewFile, out_of_range};
+use crate::input::{check_finite, check_values};
+use crate::layout::MAX_COORDINATE;
 use crate::linalg::Vec3;
-use crate::network::load_mlp;
+use crate::network::{check_bound, load_mlp};
 use crate::nn::Mlp;
 use crate::q16::AimQ16;
 use crate::skinning::{Pose, Triangles, skin_vertex, vertex_normals};
@@ -104,7 +106,10 @@ fn vec3(v: F32s<'_>, i: usize) -> Vec3 {
 }
 
 impl<'a> AimActor<'a> {
-    /// Validates `bytes` as an AIM actor (container checks, then every role and shape).
+    /// Validates `bytes` as an AIM actor (container checks, then every role and shape, and every
+    /// value the evaluation reads within its bound: lengths within ±[`MAX_COORDINATE`], the jaw
+    /// weights and bone normals within ±[`crate::layout::MAX_FACTOR`], and the networks bounded
+    /// for every template point within ±[`MAX_COORDINATE`]; docs/FORMAT.md, "Value bounds").
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::AimActor)?;
         let (shape, rank) = file.dims_of("cache.e")?;
@@ -115,22 +120,29 @@ impl<'a> AimActor<'a> {
         if m as usize > MAX_SHAPES {
             return Err(FormatError::LimitExceeded);
         }
-        let template = file.f32_tensor("tpl.pos", &[v, 3])?;
+        let template = file.f32_tensor_within("tpl.pos", &[v, 3], Bound::Coordinate)?;
         let (tri_shape, tri_rank) = file.dims_of("tpl.tri")?;
         if tri_rank != 2 {
             return Err(FormatError::IncompatibleShapes);
         }
         let tri = file.u32_tensor("tpl.tri", &[tri_shape[0], 3])?;
-        let triangles = Triangles::new(tri, v as usize)?;
-        let pivot = file.f32_tensor("jaw.pivot", &[3])?;
+        let triangles = Triangles::new(tri, v as usize).map_err(|e| e.in_section("tpl.tri"))?;
+        let pivot = file.f32_tensor_within("jaw.pivot", &[3], Bound::Coordinate)?;
         let networks = if file.flags & FLAG_PLAYBACK_ONLY != 0 {
             None
         } else {
             let norm = file.f32_tensor("aim.norm", &[4])?;
-            let scale = norm.at(3);
-            if scale <= 0.0 {
-                return Err(FormatError::IncompatibleShapes);
+            for (i, x) in norm.iter().enumerate() {
+                let bound = if i < 3 {
+                    Bound::Coordinate
+                } else {
+                    Bound::PositiveCoordinate
+                };
+                if !bound.contains(x) {
+                    return Err(out_of_range("aim.norm", i, bound));
+                }
             }
+            let scale = norm.at(3);
             let nets = AimNetworks {
                 b: load_mlp(&file, "net.b")?,
                 d: load_mlp(&file, "net.d")?,
@@ -160,6 +172,20 @@ impl<'a> AimActor<'a> {
             {
                 return Err(FormatError::IncompatibleShapes);
             }
+            // The networks see ĉ = (c − centre) / scale for template points c within ±MAX_COORDINATE.
+            let centre = nets.centre.to_array().map(libm::fabsf);
+            let reach = centre.into_iter().fold(0.0f32, f32::max) + MAX_COORDINATE;
+            let input = f64::from(reach) / f64::from(scale);
+            let named = [
+                (&nets.b, "net.b"),
+                (&nets.d, "net.d"),
+                (&nets.n, "net.n"),
+                (&nets.k, "net.k"),
+                (&nets.e, "net.e"),
+            ];
+            for (mlp, prefix) in named {
+                check_bound(mlp, prefix, input)?;
+            }
             Some(nets)
         };
         Ok(Self {
@@ -167,12 +193,12 @@ impl<'a> AimActor<'a> {
             shapes: m as usize,
             template,
             triangles,
-            rest: file.f32_tensor("cache.s0", &[v, 3])?,
-            k: file.f32_tensor("cache.k", &[v])?,
-            correctives: file.f32_tensor("cache.e", &[v, m, 3])?,
-            bone: file.f32_tensor("cache.b0", &[v, 3])?,
-            thickness: file.f32_tensor("cache.d0", &[v])?,
-            normal: file.f32_tensor("cache.n0", &[v, 3])?,
+            rest: file.f32_tensor_within("cache.s0", &[v, 3], Bound::Coordinate)?,
+            k: file.f32_tensor_within("cache.k", &[v], Bound::Factor)?,
+            correctives: file.f32_tensor_within("cache.e", &[v, m, 3], Bound::Coordinate)?,
+            bone: file.f32_tensor_within("cache.b0", &[v, 3], Bound::Coordinate)?,
+            thickness: file.f32_tensor_within("cache.d0", &[v], Bound::Coordinate)?,
+            normal: file.f32_tensor_within("cache.n0", &[v, 3], Bound::Factor)?,
             pivot: vec3(pivot, 0),
             networks,
             q16: AimQ16::from_file(&file, v, m)?,
@@ -247,25 +273,38 @@ impl<'a> AimActor<'a> {
     /// # Shapes
     /// - `weights`: `[M]`
     /// - `out`: `[V, 3]`
-    pub fn pose(&self, pose: &Pose, weights: &[f32], out: &mut [f32]) -> Result<(), BufferError> {
+    ///
+    /// # Errors
+    /// [`EvalError::Buffer`] for a wrong length; [`EvalError::Input`] for a coefficient that is
+    /// not finite or outside ±[`crate::layout::MAX_FACTOR`], or a pose that [`Pose::check`]
+    /// refuses. Nothing is written then; accepted inputs always give finite positions.
+    pub fn pose(&self, pose: &Pose, weights: &[f32], out: &mut [f32]) -> Result<(), EvalError> {
         self.pose_rest(None, pose, weights, out)
     }
 
     /// Like [`Self::pose`], but from another neutral skin `rest` (`[V, 3]`), e.g. the result of
-    /// [`Self::edit_thickness`].
+    /// [`Self::edit_thickness`], whose values must be finite and within ±[`MAX_COORDINATE`].
+    ///
+    /// # Errors
+    /// As [`Self::pose`], and [`EvalError::Input`] naming `rest`'s value.
     pub fn pose_rest(
         &self,
         rest: Option<&[f32]>,
         pose: &Pose,
         weights: &[f32],
         out: &mut [f32],
-    ) -> Result<(), BufferError> {
+    ) -> Result<(), EvalError> {
         if weights.len() != self.shapes || rest.is_some_and(|r| r.len() != 3 * self.vertices) {
-            return Err(BufferError::Input);
+            return Err(BufferError::Input.into());
         }
         if out.len() != 3 * self.vertices {
-            return Err(BufferError::Output);
+            return Err(BufferError::Output.into());
         }
+        check_values(Argument::Weights, weights)?;
+        if let Some(r) = rest {
+            check_values(Argument::Rest, r)?;
+        }
+        pose.check()?;
         let per_vertex = 3 * self.shapes;
         for (i, o) in out.chunks_exact_mut(3).enumerate() {
             let s0 = match rest {
@@ -285,16 +324,30 @@ impl<'a> AimActor<'a> {
 
     /// A pose from AIM's parameters: jaw `[6D rotation, translation]` about the actor's pivot,
     /// head `[6D rotation, translation]`.
-    pub fn pose_from_9d(&self, jaw: &[f32; 9], head: &[f32; 9]) -> Pose {
-        Pose {
-            jaw: crate::skinning::BoneTransform::from_9d(jaw, self.pivot),
-            head: crate::rotation::rigid_from_9d(head),
-        }
+    ///
+    /// # Errors
+    /// [`InputError`] naming [`Argument::Head`] or [`Argument::Jaw`] and the value: every value
+    /// must be finite, the rotation's within ±[`crate::layout::MAX_ROTATION_ENTRY`] with columns
+    /// at least [`crate::layout::MIN_ROTATION_COLUMN`] long and not parallel
+    /// ([`crate::rotation::try_from_6d`]), the translation's within ±[`MAX_COORDINATE`]. The
+    /// core refuses such a rotation instead of guessing one.
+    pub fn pose_from_9d(&self, jaw: &[f32; 9], head: &[f32; 9]) -> Result<Pose, InputError> {
+        Ok(Pose {
+            head: crate::rotation::try_rigid_from_9d(head, Argument::Head)?,
+            jaw: crate::skinning::BoneTransform::try_from_9d(jaw, self.pivot, Argument::Jaw)?,
+        })
     }
 
     /// Area-weighted vertex normals of posed positions (`[V, 3]` in and out).
-    pub fn normals(&self, positions: &[f32], out: &mut [f32]) -> Result<(), BufferError> {
-        vertex_normals(&self.triangles, positions, out)
+    ///
+    /// # Errors
+    /// [`EvalError::Buffer`] for a wrong length; [`EvalError::Input`] for a position that is NaN
+    /// or infinite (finite positions always give finite normals).
+    pub fn normals(&self, positions: &[f32], out: &mut [f32]) -> Result<(), EvalError> {
+        if positions.len() == 3 * self.vertices {
+            check_finite(Argument::Positions, positions)?;
+        }
+        Ok(vertex_normals(&self.triangles, positions, out)?)
     }
 
     /// Anatomy editing (AIM Fig. 5): scales the soft-tissue thickness by `1 + (scale − 1)·m_v`
@@ -304,18 +357,24 @@ impl<'a> AimActor<'a> {
     /// # Shapes
     /// - `mask`: `[V]`
     /// - `out`: `[V, 3]`
+    ///
+    /// # Errors
+    /// [`EvalError::Buffer`] for a wrong length; [`EvalError::Input`] for a mask value outside
+    /// `[0, 1]` or a scale outside ±[`crate::layout::MAX_FACTOR`] (or either not finite).
     pub fn edit_thickness(
         &self,
         mask: &[f32],
         scale: f32,
         out: &mut [f32],
-    ) -> Result<(), BufferError> {
+    ) -> Result<(), EvalError> {
         if mask.len() != self.vertices {
-            return Err(BufferError::Input);
+            return Err(BufferError::Input.into());
         }
         if out.len() != 3 * self.vertices {
-            return Err(BufferError::Output);
+            return Err(BufferError::Output.into());
         }
+        check_values(Argument::Mask, mask)?;
+        check_values(Argument::Scale, &[scale])?;
         for (i, (o, m)) in out.chunks_exact_mut(3).zip(mask).enumerate() {
             // AIM eq. 6 with an edited thickness.
             let d = self.thickness.at(i) * (1.0 + (scale - 1.0) * *m);
@@ -341,18 +400,24 @@ impl AimNetworks<'_> {
 
     /// Evaluates the networks at template point `c` (AIM eqs. 3–8): the anatomy, and the
     /// corrective basis into `correctives` (`[M, 3]`).
+    ///
+    /// # Errors
+    /// [`EvalError::Buffer`] for a wrong length; [`EvalError::Input`] for a coordinate of `c`
+    /// that is not finite or outside ±[`MAX_COORDINATE`] (the range the networks were bounded
+    /// for at load).
     pub fn eval(
         &self,
         c: Vec3,
         correctives: &mut [f32],
         scratch: &mut [f32],
-    ) -> Result<PointAnatomy, BufferError> {
+    ) -> Result<PointAnatomy, EvalError> {
         if correctives.len() != self.e.outputs() {
-            return Err(BufferError::Output);
+            return Err(BufferError::Output.into());
         }
         if scratch.len() < self.scratch_len() {
-            return Err(BufferError::Scratch);
+            return Err(BufferError::Scratch.into());
         }
+        check_values(Argument::Point, &c.to_array())?;
         let x = ((c - self.centre) * (1.0 / self.scale)).to_array();
         let (mut b, mut d, mut n, mut k) = ([0.0f32; 3], [0.0f32; 1], [0.0f32; 3], [0.0f32; 1]);
         self.b.eval(&x, &mut b, scratch)?;

@@ -1,6 +1,173 @@
-//! The errors of loading a baked model. Evaluation of a validated model cannot fail.
+//! The errors of loading a baked model ([`FormatError`]) and of evaluating one: a caller's buffer
+//! of the wrong length ([`BufferError`]) or a caller's number the core refuses ([`InputError`]),
+//! together [`EvalError`]. Evaluation of a validated model never fails on the model's own data.
 
 use core::fmt;
+
+use crate::layout::{
+    MAX_COORDINATE, MAX_FACTOR, MAX_NETWORK_VALUE, MAX_ROTATION_ENTRY, MIN_ROTATION_COLUMN,
+    NAME_LEN,
+};
+
+/// A section's name carried by an error: up to [`NAME_LEN`] ASCII bytes, `Copy` and without a
+/// lifetime, so that [`FormatError`] stays a small value that outlives the bytes it describes.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct SectionName {
+    bytes: [u8; NAME_LEN],
+    len: u8,
+}
+
+impl SectionName {
+    /// The name `name`, cut to [`NAME_LEN`] bytes (a valid section name is never longer).
+    pub fn new(name: &str) -> Self {
+        let mut bytes = [0u8; NAME_LEN];
+        let len = name.len().min(NAME_LEN);
+        if let (Some(d), Some(s)) = (bytes.get_mut(..len), name.as_bytes().get(..len)) {
+            d.copy_from_slice(s);
+        }
+        Self {
+            bytes,
+            len: len as u8,
+        }
+    }
+
+    /// The name as text.
+    pub fn as_str(&self) -> &str {
+        let bytes = self.bytes.get(..usize::from(self.len)).unwrap_or(&[]);
+        core::str::from_utf8(bytes).unwrap_or("?")
+    }
+}
+
+impl fmt::Display for SectionName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl fmt::Debug for SectionName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{:?}", self.as_str())
+    }
+}
+
+/// The rule a value of a file broke ([`FormatError::ValueOutOfRange`]); each names its limit, a
+/// `pub const` of [`crate::layout`] (docs/FORMAT.md, "Value bounds").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Bound {
+    /// A length in the model's unit: within ±[`MAX_COORDINATE`].
+    Coordinate,
+    /// A positive length: above 0, at most [`MAX_COORDINATE`].
+    PositiveCoordinate,
+    /// A dimensionless factor: within ±[`MAX_FACTOR`].
+    Factor,
+    /// A positive factor: above 0, at most [`MAX_FACTOR`].
+    PositiveFactor,
+    /// A spread: at least 0, at most [`MAX_FACTOR`].
+    NonNegativeFactor,
+    /// A motion that must be a unit SRVF: `⟨p, p⟩` within 1 ± [`crate::layout::UNIT_TOLERANCE`]
+    /// (the index is 0: the rule is about the whole motion).
+    UnitMotion,
+    /// The first value of a 6D rotation that is not usable: the six values within
+    /// ±[`MAX_ROTATION_ENTRY`], each column at least [`MIN_ROTATION_COLUMN`] long, the columns
+    /// not parallel (as a caller's rotation, [`InputError`]).
+    Rotation,
+}
+
+impl Bound {
+    /// Whether `v` keeps the rule (always true for [`Bound::Rotation`] and [`Bound::UnitMotion`],
+    /// which are about values together: see [`crate::rotation::try_from_6d`]). NaN keeps none.
+    pub fn contains(self, v: f32) -> bool {
+        match self {
+            Self::Coordinate => (-MAX_COORDINATE..=MAX_COORDINATE).contains(&v),
+            Self::PositiveCoordinate => v > 0.0 && v <= MAX_COORDINATE,
+            Self::Factor => (-MAX_FACTOR..=MAX_FACTOR).contains(&v),
+            Self::PositiveFactor => v > 0.0 && v <= MAX_FACTOR,
+            Self::NonNegativeFactor => (0.0..=MAX_FACTOR).contains(&v),
+            Self::Rotation | Self::UnitMotion => true,
+        }
+    }
+}
+
+impl fmt::Display for Bound {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Coordinate => write!(
+                f,
+                "outside ±{}, the limit of a length",
+                Magnitude(MAX_COORDINATE)
+            ),
+            Self::PositiveCoordinate => write!(
+                f,
+                "not a positive length of at most {}",
+                Magnitude(MAX_COORDINATE)
+            ),
+            Self::Factor => write!(
+                f,
+                "outside ±{}, the limit of a factor",
+                Magnitude(MAX_FACTOR)
+            ),
+            Self::PositiveFactor => {
+                write!(f, "not positive and at most {}", Magnitude(MAX_FACTOR))
+            }
+            Self::NonNegativeFactor => {
+                write!(f, "negative or above {}", Magnitude(MAX_FACTOR))
+            }
+            Self::Rotation => write!(f, "{}", RotationRule),
+            Self::UnitMotion => write!(
+                f,
+                "part of a motion that is not of unit norm (⟨p, p⟩ must lie within 1 ± {})",
+                Magnitude(crate::layout::UNIT_TOLERANCE)
+            ),
+        }
+    }
+}
+
+/// Writes a limit the way the documents do: `1e5`, `1e-6`, and `0` or `1` plainly. Every limit
+/// of [`crate::layout`] is a power of ten (or zero), so only the exponent is printed, with
+/// integer formatting: formatting an `f32` would add the float printer's tens of kilobytes to a
+/// firmware image or WebAssembly module.
+struct Magnitude(f32);
+
+impl fmt::Display for Magnitude {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = f64::from(self.0);
+        if v == 0.0 {
+            return f.write_str("0");
+        }
+        let sign = if v < 0.0 { "-" } else { "" };
+        // The exponent of the power of ten nearest to |v| (f32's 1e-6 is 9.99999997e-7).
+        let (mut m, mut exponent) = (if v < 0.0 { -v } else { v }, 0i32);
+        while m >= 9.5 {
+            m /= 10.0;
+            exponent += 1;
+        }
+        while m < 0.95 {
+            m *= 10.0;
+            exponent -= 1;
+        }
+        match exponent {
+            0 => write!(f, "{sign}1"),
+            1..=2 => write!(f, "{sign}{}", 10i32.pow(exponent.unsigned_abs())),
+            _ => write!(f, "{sign}1e{exponent}"),
+        }
+    }
+}
+
+/// The rule of a usable 6D rotation, in words.
+struct RotationRule;
+
+impl fmt::Display for RotationRule {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "not a usable 6D rotation (six values within ±{}, each column at least {} long, the \
+             columns not parallel)",
+            Magnitude(MAX_ROTATION_ENTRY),
+            Magnitude(MIN_ROTATION_COLUMN)
+        )
+    }
+}
 
 /// Why a byte slice is not a valid `.sinew` artefact.
 ///
@@ -72,15 +239,55 @@ pub enum FormatError {
         section: u16,
     },
     /// A section the artefact kind requires is absent.
-    MissingSection,
+    MissingSection {
+        /// The section's name.
+        section: SectionName,
+    },
     /// A section has a different data type than its role requires.
-    WrongDtype,
+    WrongDtype {
+        /// The section's name.
+        section: SectionName,
+    },
     /// Tensor shapes do not fit together (e.g. a layer's inputs and the previous layer's outputs).
     IncompatibleShapes,
-    /// A weight is NaN or infinite.
+    /// A weight given to a kernel's constructor is NaN or infinite. Files never get here: the
+    /// container reports [`FormatError::NonFiniteValue`] first.
     NonFinite,
-    /// An index points outside the array it indexes.
-    IndexOutOfRange,
+    /// A value of an `f32` section is NaN or infinite.
+    NonFiniteValue {
+        /// The section's name.
+        section: SectionName,
+        /// The value's index in the section (row-major).
+        index: u32,
+    },
+    /// A value of a section breaks the bound its role has (docs/FORMAT.md, "Value bounds"), so
+    /// that evaluation could leave the finite numbers.
+    ValueOutOfRange {
+        /// The section's name.
+        section: SectionName,
+        /// The value's index in the section (row-major).
+        index: u32,
+        /// The rule it breaks.
+        bound: Bound,
+    },
+    /// A network's weights let it reach beyond ±[`MAX_NETWORK_VALUE`] for inputs within their
+    /// bounds (docs/FORMAT.md, "Value bounds"): evaluating it could overflow `f32`.
+    Unbounded {
+        /// The weight section of the layer where the bound is passed.
+        section: SectionName,
+        /// The layer's output (the weight row) whose bound is passed.
+        row: u32,
+    },
+    /// An index points outside the array it indexes (or, in a sparse matrix's row pointers,
+    /// does not rise from 0 to the entry count). A kernel's constructor, which sees no file,
+    /// names its argument (`indices`, `row_ptr`, `col_idx`); a loader names the section
+    /// ([`FormatError::in_section`]).
+    IndexOutOfRange {
+        /// The section (or the kernel's argument) holding the index.
+        section: SectionName,
+        /// The index's position in it.
+        index: u32,
+    },
     /// A count exceeds a limit of this build (layers, widths, vertices).
     LimitExceeded,
     /// A code (activation, artefact kind) has a value this version does not know.
@@ -139,11 +346,32 @@ impl fmt::Display for FormatError {
                     "section {section} length does not match its shape and data type"
                 )
             }
-            Self::MissingSection => write!(f, "a required section is missing"),
-            Self::WrongDtype => write!(f, "a section has the wrong data type for its role"),
+            Self::MissingSection { section } => write!(f, "required section {section} is missing"),
+            Self::WrongDtype { section } => {
+                write!(f, "section {section} has the wrong data type for its role")
+            }
             Self::IncompatibleShapes => write!(f, "tensor shapes do not fit together"),
             Self::NonFinite => write!(f, "a weight is NaN or infinite"),
-            Self::IndexOutOfRange => write!(f, "an index is out of range"),
+            Self::NonFiniteValue { section, index } => {
+                write!(f, "section {section}: value {index} is NaN or infinite")
+            }
+            Self::ValueOutOfRange {
+                section,
+                index,
+                bound,
+            } => write!(f, "section {section}: value {index} is {bound}"),
+            Self::Unbounded { section, row } => write!(
+                f,
+                "section {section}: row {row} lets the network exceed ±{} for inputs within their \
+                 bounds",
+                Magnitude(MAX_NETWORK_VALUE)
+            ),
+            Self::IndexOutOfRange { section, index } => {
+                write!(
+                    f,
+                    "section {section}: value {index} is an index out of range"
+                )
+            }
             Self::LimitExceeded => write!(f, "a count exceeds this build's limits"),
             Self::UnknownCode => write!(f, "an enumeration code is unknown"),
             Self::BadMetadata => write!(f, "metadata is not UTF-8 key=value lines"),
@@ -153,6 +381,31 @@ impl fmt::Display for FormatError {
 }
 
 impl core::error::Error for FormatError {}
+
+impl FormatError {
+    /// An [`FormatError::IndexOutOfRange`] at position `index` of the section or argument
+    /// `section`.
+    pub fn index_out_of_range(section: &str, index: usize) -> Self {
+        Self::IndexOutOfRange {
+            section: SectionName::new(section),
+            index: u32::try_from(index).unwrap_or(u32::MAX),
+        }
+    }
+
+    /// The error with the file's section name `section` in place of a kernel's argument name
+    /// (of an [`FormatError::IndexOutOfRange`] from a constructor such as
+    /// `Triangles::new`); other errors are returned as they are.
+    #[must_use]
+    pub fn in_section(self, section: &str) -> Self {
+        match self {
+            Self::IndexOutOfRange { index, .. } => Self::IndexOutOfRange {
+                section: SectionName::new(section),
+                index,
+            },
+            e => e,
+        }
+    }
+}
 
 /// A caller-provided buffer has the wrong length for the model it is used with.
 ///
@@ -180,3 +433,203 @@ impl fmt::Display for BufferError {
 }
 
 impl core::error::Error for BufferError {}
+
+/// The caller's argument an [`InputError`] is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Argument {
+    /// The head transform's 9 values: 6D rotation (0..6), then translation (6..9).
+    Head,
+    /// The jaw transform's 9 values, as [`Argument::Head`].
+    Jaw,
+    /// A built pose's head transform: its rotation matrix by columns (0..9), then its
+    /// translation (9..12).
+    PoseHead,
+    /// A built pose's jaw transform: rotation by columns (0..9), translation (9..12), pivot
+    /// (12..15).
+    PoseJaw,
+    /// The corrective coefficients, `[M]`.
+    Weights,
+    /// Another neutral skin to pose from, `[V, 3]`.
+    Rest,
+    /// Posed positions to compute normals of, `[V, 3]`.
+    Positions,
+    /// A per-vertex editing mask, `[V]`, each value in `[0, 1]`.
+    Mask,
+    /// A thickness scale.
+    Scale,
+    /// A template point to evaluate the networks at, `[3]`.
+    Point,
+    /// An S2D decoder's input, `[3 K]`.
+    Input,
+    /// A neutral: a face to decode onto (`[V, 3]`) or a landmark set (`[K, 3]`).
+    Neutral,
+    /// An expressive landmark set, `[K, 3]`.
+    Expressive,
+    /// A motion's intensity.
+    Intensity,
+}
+
+impl Argument {
+    /// The argument's name, as the core's functions call it.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Head => "head",
+            Self::Jaw => "jaw",
+            Self::PoseHead => "pose.head",
+            Self::PoseJaw => "pose.jaw",
+            Self::Weights => "weights",
+            Self::Rest => "rest",
+            Self::Positions => "positions",
+            Self::Mask => "mask",
+            Self::Scale => "scale",
+            Self::Point => "point",
+            Self::Input => "input",
+            Self::Neutral => "neutral",
+            Self::Expressive => "expressive",
+            Self::Intensity => "intensity",
+        }
+    }
+
+    /// Whether the argument is a 9-value transform (`[6D rotation, translation]`).
+    const fn is_9d(self) -> bool {
+        matches!(self, Self::Head | Self::Jaw)
+    }
+
+    /// The range value `index` of this argument must lie in (inclusive).
+    pub const fn range(self, index: usize) -> (f32, f32) {
+        let limit = match self {
+            Self::Head | Self::Jaw if index < 6 => MAX_ROTATION_ENTRY,
+            Self::PoseHead | Self::PoseJaw if index < 9 => MAX_FACTOR,
+            Self::Mask => return (0.0, 1.0),
+            Self::Weights | Self::Scale | Self::Input | Self::Intensity => MAX_FACTOR,
+            _ => MAX_COORDINATE,
+        };
+        (-limit, limit)
+    }
+}
+
+impl fmt::Display for Argument {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// What is wrong with a caller's number ([`InputError`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum InputErrorKind {
+    /// NaN or infinite.
+    NonFinite,
+    /// Finite, but outside the argument's range ([`Argument::range`]).
+    OutOfRange,
+    /// Finite and in range, but without a meaning to compute with: a 6D rotation's column too
+    /// short or parallel to the other, a landmark set whose points all coincide.
+    Degenerate,
+}
+
+/// A number the caller gave that the core refuses instead of guessing: NaN or infinite, out of
+/// its documented range, or degenerate. Which argument and which value.
+///
+/// Every evaluation entry that takes the caller's numbers checks them before computing anything
+/// (nothing is written then), so a valid model with accepted inputs always gives finite outputs.
+/// The checks only compare; the outputs of accepted inputs are the same bits as without them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct InputError {
+    /// The argument.
+    pub argument: Argument,
+    /// The value's index in it (for a degenerate 6D rotation, the first index of its column; for
+    /// a degenerate landmark set, 0).
+    pub index: usize,
+    /// What is wrong with it.
+    pub kind: InputErrorKind,
+}
+
+impl InputError {
+    /// An error about value `index` of `argument`.
+    pub const fn new(argument: Argument, index: usize, kind: InputErrorKind) -> Self {
+        Self {
+            argument,
+            index,
+            kind,
+        }
+    }
+}
+
+impl fmt::Display for InputError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let (argument, index) = (self.argument, self.index);
+        match self.kind {
+            InputErrorKind::NonFinite => write!(f, "{argument}[{index}] is NaN or infinite"),
+            InputErrorKind::OutOfRange => match argument.range(index) {
+                (lo, hi) if lo == -hi => {
+                    write!(f, "{argument}[{index}] is outside ±{}", Magnitude(hi))
+                }
+                (lo, hi) => write!(
+                    f,
+                    "{argument}[{index}] is outside [{}, {}]",
+                    Magnitude(lo),
+                    Magnitude(hi)
+                ),
+            },
+            InputErrorKind::Degenerate if argument.is_9d() && index < 3 => write!(
+                f,
+                "{argument}[0..3], the 6D rotation's first column, is shorter than {}",
+                Magnitude(MIN_ROTATION_COLUMN)
+            ),
+            InputErrorKind::Degenerate if argument.is_9d() => write!(
+                f,
+                "{argument}[3..6], the 6D rotation's second column, is shorter than {} or \
+                 parallel to the first",
+                Magnitude(MIN_ROTATION_COLUMN)
+            ),
+            InputErrorKind::Degenerate => write!(
+                f,
+                "{argument}: the landmarks all coincide (the set has no size to normalise by)"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for InputError {}
+
+/// Why an evaluation refused to run: a caller's buffer has the wrong length, or a caller's
+/// number is refused. Never because of the model's data, which validation checked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum EvalError {
+    /// A buffer has the wrong length.
+    Buffer(BufferError),
+    /// A number is NaN, infinite, out of range or degenerate.
+    Input(InputError),
+}
+
+impl fmt::Display for EvalError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Buffer(e) => write!(f, "{e}"),
+            Self::Input(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl core::error::Error for EvalError {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            Self::Buffer(e) => Some(e),
+            Self::Input(e) => Some(e),
+        }
+    }
+}
+
+impl From<BufferError> for EvalError {
+    fn from(e: BufferError) -> Self {
+        Self::Buffer(e)
+    }
+}
+
+impl From<InputError> for EvalError {
+    fn from(e: InputError) -> Self {
+        Self::Input(e)
+    }
+}

@@ -14,11 +14,13 @@ use crate::linalg::Vec3;
 use crate::skinning::{Triangles, vertex_normals_with};
 
 /// `v / |v|` with micromath's inverse square root and one Newton–Raphson step,
-/// `y ← y · (1.5 − 0.5 · x · y²)`; zero for a zero vector (never NaN).
+/// `y ← y · (1.5 − 0.5 · x · y²)`; zero, never NaN, when the squared length is not a positive
+/// finite number (a zero vector, one whose squared length overflows, one with a NaN component),
+/// as [`Vec3::normalize`].
 #[inline]
 pub fn normalize(v: Vec3) -> Vec3 {
     let x = F32(v.dot(v));
-    if x.0 == 0.0 {
+    if !(x.0 > 0.0 && x.0.is_finite()) {
         return Vec3::ZERO;
     }
     let y = x.invsqrt();
@@ -63,5 +65,13 @@ mod tests {
     #[test]
     fn zero_vector_stays_zero() {
         assert_eq!(normalize(Vec3::ZERO), Vec3::ZERO);
+    }
+
+    #[test]
+    fn overflowing_and_nan_vectors_give_zero() {
+        // (1e20)² overflows: the inverse square root of infinity would give NaN.
+        assert_eq!(normalize(Vec3::new(1e20, 0.0, 0.0)), Vec3::ZERO);
+        assert_eq!(normalize(Vec3::new(f32::NAN, 1.0, 0.0)), Vec3::ZERO);
+        assert_eq!(normalize(Vec3::new(f32::INFINITY, 0.0, 0.0)), Vec3::ZERO);
     }
 }

@@ -6,7 +6,7 @@
 //! layout, checksums, shapes and finiteness of every `f32` tensor. Typed loaders (an MLP, an actor)
 //! then only check roles and index ranges, and evaluation cannot fail on model data.
 
-use crate::error::FormatError;
+use crate::error::{Bound, FormatError, SectionName};
 pub use crate::layout::*;
 use crate::tensor::{F32s, I32s, U32s};
 
@@ -70,6 +70,22 @@ impl ArtifactKind {
             Self::Performance => "performance",
             Self::Replay => "replay",
             Self::Other(_) => "unknown",
+        }
+    }
+}
+
+impl core::fmt::Display for ArtifactKind {
+    /// The kind in words with its article, for messages: "an AIM actor", "a replay", "an
+    /// artefact of unknown kind 7".
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Network => f.write_str("a network"),
+            Self::AimActor => f.write_str("an AIM actor"),
+            Self::S2dDecoder => f.write_str("an S2D decoder"),
+            Self::MotionGenerator => f.write_str("a motion generator"),
+            Self::Performance => f.write_str("a fitted performance"),
+            Self::Replay => f.write_str("a replay"),
+            Self::Other(code) => write!(f, "an artefact of unknown kind {code}"),
         }
     }
 }
@@ -456,8 +472,11 @@ impl<'a> SinewFile<'a> {
                 }
                 SectionKind::Tensor if dtype == Dtype::F32 => {
                     let values = F32s::new(data).ok_or(FormatError::ShapeMismatch { section })?;
-                    if values.iter().any(|v| !v.is_finite()) {
-                        return Err(FormatError::NonFinite);
+                    if let Some(index) = values.iter().position(|v| !v.is_finite()) {
+                        return Err(FormatError::NonFiniteValue {
+                            section: SectionName::new(core::str::from_utf8(e.name).unwrap_or("")),
+                            index: index as u32,
+                        });
                     }
                 }
                 _ => {}
@@ -546,8 +565,8 @@ impl<'a> SinewFile<'a> {
 
     /// The `f32` tensor called `name` with exactly the dimensions `dims`.
     pub fn f32_tensor(&self, name: &str, dims: &[u32]) -> Result<F32s<'a>, FormatError> {
-        let s = self.section(name).ok_or(FormatError::MissingSection)?;
-        let v = s.f32s().ok_or(FormatError::WrongDtype)?;
+        let s = self.section(name).ok_or_else(|| missing(name))?;
+        let v = s.f32s().ok_or_else(|| wrong_dtype(name))?;
         if s.dims() == dims {
             Ok(v)
         } else {
@@ -555,10 +574,26 @@ impl<'a> SinewFile<'a> {
         }
     }
 
+    /// The `f32` tensor called `name` with exactly the dimensions `dims`, every value within
+    /// `bound` (docs/FORMAT.md, "Value bounds").
+    ///
+    /// # Errors
+    /// As [`Self::f32_tensor`]; [`FormatError::ValueOutOfRange`] naming the first value outside.
+    pub fn f32_tensor_within(
+        &self,
+        name: &str,
+        dims: &[u32],
+        bound: Bound,
+    ) -> Result<F32s<'a>, FormatError> {
+        let v = self.f32_tensor(name, dims)?;
+        check_within(name, v, bound)?;
+        Ok(v)
+    }
+
     /// The `u32` tensor called `name` with exactly the dimensions `dims`.
     pub fn u32_tensor(&self, name: &str, dims: &[u32]) -> Result<U32s<'a>, FormatError> {
-        let s = self.section(name).ok_or(FormatError::MissingSection)?;
-        let v = s.u32s().ok_or(FormatError::WrongDtype)?;
+        let s = self.section(name).ok_or_else(|| missing(name))?;
+        let v = s.u32s().ok_or_else(|| wrong_dtype(name))?;
         if s.dims() == dims {
             Ok(v)
         } else {
@@ -568,8 +603,8 @@ impl<'a> SinewFile<'a> {
 
     /// The Q16.16 tensor called `name` with exactly the dimensions `dims`.
     pub fn q16_tensor(&self, name: &str, dims: &[u32]) -> Result<I32s<'a>, FormatError> {
-        let s = self.section(name).ok_or(FormatError::MissingSection)?;
-        let v = s.q16s().ok_or(FormatError::WrongDtype)?;
+        let s = self.section(name).ok_or_else(|| missing(name))?;
+        let v = s.q16s().ok_or_else(|| wrong_dtype(name))?;
         if s.dims() == dims {
             Ok(v)
         } else {
@@ -579,8 +614,42 @@ impl<'a> SinewFile<'a> {
 
     /// The dimensions of the tensor called `name`.
     pub fn dims_of(&self, name: &str) -> Result<([u32; MAX_RANK], u8), FormatError> {
-        let s = self.section(name).ok_or(FormatError::MissingSection)?;
+        let s = self.section(name).ok_or_else(|| missing(name))?;
         Ok((s.shape, s.rank))
+    }
+}
+
+/// [`FormatError::MissingSection`] naming the section `name`.
+pub fn missing(name: &str) -> FormatError {
+    FormatError::MissingSection {
+        section: SectionName::new(name),
+    }
+}
+
+/// [`FormatError::WrongDtype`] naming the section `name`.
+pub fn wrong_dtype(name: &str) -> FormatError {
+    FormatError::WrongDtype {
+        section: SectionName::new(name),
+    }
+}
+
+/// Checks that every value of section `name`'s `values` keeps `bound`.
+///
+/// # Errors
+/// [`FormatError::ValueOutOfRange`] naming the first value that does not.
+pub fn check_within(name: &str, values: F32s<'_>, bound: Bound) -> Result<(), FormatError> {
+    match values.iter().position(|v| !bound.contains(v)) {
+        Some(index) => Err(out_of_range(name, index, bound)),
+        None => Ok(()),
+    }
+}
+
+/// [`FormatError::ValueOutOfRange`] for value `index` of section `name`.
+pub fn out_of_range(name: &str, index: usize, bound: Bound) -> FormatError {
+    FormatError::ValueOutOfRange {
+        section: SectionName::new(name),
+        index: u32::try_from(index).unwrap_or(u32::MAX),
+        bound,
     }
 }
 

@@ -30,6 +30,29 @@ pub const HEADER_CRC_OFFSET: usize = 28;
 /// Header flag: the artefact omits what only training or re-baking needs (e.g. an actor's networks).
 pub const FLAG_PLAYBACK_ONLY: u32 = 1;
 
+/// The largest magnitude of a length, per component, in the model's unit: every position,
+/// displacement, thickness, pivot and translation a file holds or a caller gives (1e5 is a
+/// kilometre in centimetres; a face is tens of units). With [`MAX_FACTOR`] it keeps the
+/// worst-case pose of a valid actor below 1e11 in `f32`, far from overflow (docs/FORMAT.md,
+/// "Value bounds").
+pub const MAX_COORDINATE: f32 = 1e5;
+/// The largest magnitude of a dimensionless factor: a corrective coefficient, a jaw skinning
+/// weight, a component of a unit normal, a decoder input, a motion's intensity, length or reach.
+pub const MAX_FACTOR: f32 = 1e3;
+/// The largest magnitude of one of a 6D rotation's six values. Only the columns' directions
+/// matter, but their squares must stay far from `f32` overflow.
+pub const MAX_ROTATION_ENTRY: f32 = 1e6;
+/// The shortest length of a 6D rotation's column: a shorter one has no reliable direction.
+pub const MIN_ROTATION_COLUMN: f32 = 1e-6;
+/// How far a motion generator's reference motion `p` may be from unit norm: `⟨p, p⟩` within
+/// `1 ± UNIT_TOLERANCE`. The exponential map then keeps every generated motion near the unit
+/// sphere, whatever the generator's output.
+pub const UNIT_TOLERANCE: f32 = 1e-3;
+/// The largest magnitude a network (an MLP, or the S2D decoder's layers) may reach anywhere, for
+/// any input within its bounds, as validation bounds it from the file's weights: far below
+/// `f32`'s 3.4e38, so that every sum downstream stays finite.
+pub const MAX_NETWORK_VALUE: f32 = 1e20;
+
 /// A fixed-size field of the header or of a section-table entry: where it starts and how many
 /// bytes it takes. All numbers in it are little-endian.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -254,6 +277,44 @@ mod tests {
             &ENTRY_FIELDS,
         ));
         assert!(errors.is_empty(), "docs/FORMAT.md:\n{}", errors.join("\n"));
+    }
+
+    /// The value limits, by the name of their constant, as `docs/FORMAT.md` ("Value bounds")
+    /// must state them.
+    const VALUE_LIMITS: [(&str, f32); 6] = [
+        ("MAX_COORDINATE", MAX_COORDINATE),
+        ("MAX_FACTOR", MAX_FACTOR),
+        ("MAX_ROTATION_ENTRY", MAX_ROTATION_ENTRY),
+        ("MIN_ROTATION_COLUMN", MIN_ROTATION_COLUMN),
+        ("MAX_NETWORK_VALUE", MAX_NETWORK_VALUE),
+        ("UNIT_TOLERANCE", UNIT_TOLERANCE),
+    ];
+
+    #[test]
+    fn format_md_value_limits_match_the_constants() {
+        let mut lines = FORMAT_MD
+            .lines()
+            .skip_while(|l| !l.starts_with("### Value bounds"))
+            .skip_while(|l| !l.starts_with('|'))
+            .take_while(|l| l.starts_with('|'));
+        let mut seen = Vec::new();
+        for line in lines.by_ref().skip(2) {
+            let cells: Vec<&str> = line.trim_matches('|').split('|').map(str::trim).collect();
+            let (Some(name), Some(value)) = (cells.first(), cells.get(1)) else {
+                continue;
+            };
+            let name = name.trim_matches('`');
+            if let Some((_, limit)) = VALUE_LIMITS.iter().find(|(n, _)| *n == name) {
+                assert_eq!(value.parse::<f32>(), Ok(*limit), "docs/FORMAT.md, {name}");
+                seen.push(name);
+            }
+        }
+        for (name, _) in VALUE_LIMITS {
+            assert!(
+                seen.contains(&name),
+                "docs/FORMAT.md's value bounds lack {name}"
+            );
+        }
     }
 
     #[test]

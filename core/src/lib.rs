@@ -31,7 +31,7 @@
 //!
 //! let mut positions = vec![0.0f32; 3 * actor.vertex_count()];
 //! let mut normals = vec![0.0f32; 3 * actor.vertex_count()];
-//! actor.pose(&actor.pose_from_9d(&jaw, &head), &weights, &mut positions)?;
+//! actor.pose(&actor.pose_from_9d(&jaw, &head)?, &weights, &mut positions)?;
 //! actor.normals(&positions, &mut normals)?;
 //!
 //! // The f32 frame hash (`replay::frame_hash`): the positions, then the normals.
@@ -96,6 +96,7 @@ pub mod error;
 pub mod fast;
 pub mod format;
 pub mod hash;
+pub mod input;
 pub mod layout;
 pub mod linalg;
 pub mod motion;
@@ -113,6 +114,6 @@ pub mod spiral;
 pub mod srvf;
 pub mod tensor;
 
-pub use error::{BufferError, FormatError};
+pub use error::{BufferError, EvalError, FormatError, InputError};
 pub use format::{ArtifactKind, Dtype, Section, SinewFile};
 pub use tensor::{F32s, I32s, U32s};

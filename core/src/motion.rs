@@ -12,9 +12,11 @@
 
 use rand_core::{RngCore, SeedableRng};
 
-use crate::error::{BufferError, FormatError};
-use crate::format::{ArtifactKind, SinewFile};
-use crate::network::load_mlp;
+use crate::error::{Argument, Bound, BufferError, EvalError, FormatError};
+use crate::format::{ArtifactKind, SinewFile, out_of_range};
+use crate::input::check_values;
+use crate::layout::{MAX_FACTOR, UNIT_TOLERANCE};
+use crate::network::{check_bound_within, load_mlp};
 use crate::nn::Mlp;
 use crate::srvf::{FRAMES, decode, exp_map, length_for_reach, project_tangent};
 use crate::tensor::F32s;
@@ -38,6 +40,10 @@ pub fn gaussian_noise(seed: u64, out: &mut [f32]) {
     }
 }
 
+/// The largest magnitude of a value of [`gaussian_noise`]: `√(−2 ln 2⁻²⁴) ≈ 5.77`, rounded up
+/// (`u1` is at least 2⁻²⁴, and the cosine at most 1). The one-hot label's values are 0 and 1.
+pub const NOISE_BOUND: f32 = 5.8;
+
 /// A validated generator.
 #[derive(Debug)]
 pub struct MotionGenerator<'a> {
@@ -60,7 +66,12 @@ impl<'a> MotionGenerator<'a> {
     /// `[FRAMES, dims]` with `dims` whole 3D points, and `motion.length`: `[1]`, one positive
     /// length for every label, or `[LABELS, 2]`, per label a positive mean and a non-negative
     /// spread, all finite; and, if present, `motion.reach` `[LABELS, 2]`, per label a positive
-    /// mean and a non-negative spread, all finite.
+    /// mean and a non-negative spread, all finite. Every value is bounded so that any seed,
+    /// label, neutral within ±[`crate::layout::MAX_COORDINATE`] and intensity within
+    /// ±[`MAX_FACTOR`] give a finite curve (docs/FORMAT.md, "Value bounds"): the generator's
+    /// outputs within ±[`MAX_FACTOR`] for noise within ±[`NOISE_BOUND`], `motion.p` of unit
+    /// norm within [`UNIT_TOLERANCE`], means positive and spreads non-negative, all at most
+    /// [`MAX_FACTOR`].
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::MotionGenerator)?;
         if file.metadata().get("content") != Some(CONTENT) {
@@ -77,8 +88,9 @@ impl<'a> MotionGenerator<'a> {
         if mlp.inputs() <= LABELS || mlp.outputs() != FRAMES * dims {
             return Err(FormatError::IncompatibleShapes);
         }
-        if !p.iter().all(f32::is_finite) {
-            return Err(FormatError::NonFinite);
+        check_bound_within(&mlp, "motion.g", f64::from(NOISE_BOUND), MAX_FACTOR)?;
+        if libm::fabsf(squared_norm(&p) - 1.0) > UNIT_TOLERANCE {
+            return Err(out_of_range("motion.p", 0, Bound::UnitMotion));
         }
         let (shape, rank) = file.dims_of("motion.length")?;
         let lengths = match (rank, shape[0]) {
@@ -88,12 +100,12 @@ impl<'a> MotionGenerator<'a> {
             }
             _ => return Err(FormatError::IncompatibleShapes),
         };
-        check_spreads(&lengths, rank == 2)?;
+        check_spreads("motion.length", &lengths, rank == 2)?;
         let reaches = match file.section("motion.reach") {
             None => None,
             Some(_) => {
                 let reaches = file.f32_tensor("motion.reach", &[LABELS as u32, 2])?;
-                check_spreads(&reaches, true)?;
+                check_spreads("motion.reach", &reaches, true)?;
                 Some(reaches)
             }
         };
@@ -221,7 +233,9 @@ impl<'a> MotionGenerator<'a> {
     ///
     /// # Errors
     /// [`BufferError::Input`] for a label not below [`LABELS`] or a neutral of another length;
-    /// [`BufferError::Output`], [`BufferError::Scratch`] for wrong buffer lengths.
+    /// [`BufferError::Output`], [`BufferError::Scratch`] for wrong buffer lengths;
+    /// [`EvalError::Input`] for an intensity outside ±[`MAX_FACTOR`] or a neutral coordinate
+    /// outside ±[`crate::layout::MAX_COORDINATE`] (or either not finite).
     pub fn landmarks(
         &self,
         label: usize,
@@ -230,12 +244,16 @@ impl<'a> MotionGenerator<'a> {
         neutral: &[f32],
         scratch: &mut [f32],
         out: &mut [f32],
-    ) -> Result<(), BufferError> {
+    ) -> Result<(), EvalError> {
         if neutral.len() != self.dims {
-            return Err(BufferError::Input);
+            return Err(BufferError::Input.into());
         }
         if scratch.len() < self.scratch_len() {
-            return Err(BufferError::Scratch);
+            return Err(BufferError::Scratch.into());
+        }
+        if label < LABELS && out.len() == self.curve_len() {
+            check_values(Argument::Intensity, &[intensity])?;
+            check_values(Argument::Neutral, neutral)?;
         }
         // The motion itself lives in the first motion-sized part of the scratch.
         let (q, rest) = scratch.split_at_mut(self.motion_len());
@@ -247,7 +265,7 @@ impl<'a> MotionGenerator<'a> {
                 (mean + spread * g).max(0.0)
             }
         };
-        decode(q, neutral, intensity * length, out)
+        Ok(decode(q, neutral, intensity * length, out)?)
     }
 
     /// [`MotionGenerator::motion`] with scratch of at least `scratch_len() − motion_len()`;
@@ -286,16 +304,26 @@ impl<'a> MotionGenerator<'a> {
     }
 }
 
-/// Checks `values` as (mean, spread) pairs (`pairs`) or single means: each mean positive, each
-/// spread non-negative, all finite.
-fn check_spreads(values: &F32s<'_>, pairs: bool) -> Result<(), FormatError> {
-    let mut values = values.iter();
-    while let Some(mean) = values.next() {
-        let spread = if pairs { values.next() } else { Some(0.0) };
-        match spread {
-            Some(spread)
-                if mean.is_finite() && mean > 0.0 && spread.is_finite() && spread >= 0.0 => {}
-            _ => return Err(FormatError::NonFinite),
+/// `⟨p, p⟩ = Σ p_i² / FRAMES`, summed in index order as [`crate::srvf::inner`].
+fn squared_norm(p: &F32s<'_>) -> f32 {
+    let mut s = 0.0f32;
+    for x in p.iter() {
+        s += x * x;
+    }
+    s / FRAMES as f32
+}
+
+/// Checks section `name`'s `values` as (mean, spread) pairs (`pairs`) or single means: each mean
+/// positive, each spread non-negative, all at most [`MAX_FACTOR`].
+fn check_spreads(name: &str, values: &F32s<'_>, pairs: bool) -> Result<(), FormatError> {
+    for (i, v) in values.iter().enumerate() {
+        let bound = if pairs && i % 2 == 1 {
+            Bound::NonNegativeFactor
+        } else {
+            Bound::PositiveFactor
+        };
+        if !bound.contains(v) {
+            return Err(out_of_range(name, i, bound));
         }
     }
     Ok(())

@@ -6,7 +6,7 @@
 //! - `p.<i>.w`: `f32 [out, in]`, layer `i`'s weight, row-major (one row per output);
 //! - `p.<i>.b`: `f32 [out]`, layer `i`'s bias.
 
-use crate::error::FormatError;
+use crate::error::{Bound, FormatError, SectionName};
 use crate::format::SinewFile;
 use crate::nn::{Activation, Dense, MAX_LAYERS, Mlp};
 
@@ -54,15 +54,22 @@ pub fn load_mlp<'a>(file: &SinewFile<'a>, prefix: &str) -> Result<Mlp<'a>, Forma
     if prefix.len() > MAX_PREFIX_LEN {
         return Err(FormatError::LimitExceeded);
     }
+    let acts_name = simple_name(prefix, ".act")?;
     let acts_section = file
-        .section(&simple_name(prefix, ".act")?)
-        .ok_or(FormatError::MissingSection)?;
-    let acts = acts_section.u32s().ok_or(FormatError::WrongDtype)?;
+        .section(&acts_name)
+        .ok_or_else(|| crate::format::missing(&acts_name))?;
+    let acts = acts_section
+        .u32s()
+        .ok_or_else(|| crate::format::wrong_dtype(&acts_name))?;
     let layers = acts.len();
     if layers == 0 || layers > MAX_LAYERS || acts_section.dims().len() != 1 {
         return Err(FormatError::LimitExceeded);
     }
-    let params = file.f32_tensor(&simple_name(prefix, ".par")?, &[layers as u32])?;
+    let params = file.f32_tensor_within(
+        &simple_name(prefix, ".par")?,
+        &[layers as u32],
+        Bound::Factor,
+    )?;
     let mut dense: heapless::Vec<Dense<'a>, MAX_LAYERS> = heapless::Vec::new();
     for i in 0..layers {
         let w_name = name(prefix, i, ".w")?;
@@ -78,6 +85,35 @@ pub fn load_mlp<'a>(file: &SinewFile<'a>, prefix: &str) -> Result<Mlp<'a>, Forma
         dense.push(layer).map_err(|_| FormatError::LimitExceeded)?;
     }
     Mlp::new(&dense)
+}
+
+/// The worst-case magnitude of the outputs of `mlp`, loaded under `prefix`, for inputs of
+/// magnitude at most `input` ([`Mlp::bound`]): what a loader checks before it accepts a network
+/// (docs/FORMAT.md, "Value bounds").
+///
+/// # Errors
+/// [`FormatError::Unbounded`] naming the layer's weight section `prefix.<i>.w` and the row.
+pub fn check_bound(mlp: &Mlp<'_>, prefix: &str, input: f64) -> Result<f64, FormatError> {
+    check_bound_within(mlp, prefix, input, crate::layout::MAX_NETWORK_VALUE)
+}
+
+/// [`check_bound`] with the network's outputs held to `output_limit` as well
+/// ([`Mlp::bound_within`]).
+///
+/// # Errors
+/// As [`check_bound`].
+pub fn check_bound_within(
+    mlp: &Mlp<'_>,
+    prefix: &str,
+    input: f64,
+    output_limit: f32,
+) -> Result<f64, FormatError> {
+    mlp.bound_within(input, output_limit)
+        .map_err(|(layer, row)| FormatError::Unbounded {
+            section: name(prefix, layer, ".w")
+                .map_or_else(|_| SectionName::new(prefix), |n| SectionName::new(&n)),
+            row: u32::try_from(row).unwrap_or(u32::MAX),
+        })
 }
 
 #[cfg(test)]

@@ -8,6 +8,7 @@
 //! spiral convolution, golden tests) uses the same order.
 
 use crate::error::{BufferError, FormatError};
+use crate::layout::MAX_NETWORK_VALUE;
 use crate::tensor::F32s;
 
 /// Most layers an [`Mlp`] can hold.
@@ -184,6 +185,16 @@ impl<'a> Dense<'a> {
         self.activation
     }
 
+    /// The worst-case magnitude of this layer's outputs for inputs of magnitude at most `x`:
+    /// per output `Σ |w| · x + |b|` in `f64`, widened by the rounding of the `f32` sum, through
+    /// the activation's worst case (docs/FORMAT.md, "Value bounds").
+    ///
+    /// # Errors
+    /// The first output whose bound passes ±[`MAX_NETWORK_VALUE`].
+    pub fn bound(&self, x: f64) -> Result<f64, usize> {
+        layer_bound(self.weight, self.bias, self.inputs, self.activation, x)
+    }
+
     /// The weights, `[outputs, inputs]` row-major.
     pub fn weight(&self) -> F32s<'a> {
         self.weight
@@ -225,6 +236,84 @@ impl<'a> Dense<'a> {
     }
 }
 
+/// The unit roundoff of `f32`, 2⁻²⁴: each operation's result is within this fraction of the
+/// exact one.
+pub(crate) const UNIT_ROUNDOFF: f64 = 5.960_464_477_539_063e-8;
+
+/// `(1 + 2⁻²⁴)^operations`, how far the roundings of that many `f32` additions and products in a
+/// row can take a sum beyond its exact value, by squaring in `f64` (whose own rounding, 2⁻⁵³
+/// per step, is far below the 2⁻²⁴ being raised).
+pub(crate) fn rounding_growth(operations: usize) -> f64 {
+    let (mut base, mut k, mut out) = (1.0 + UNIT_ROUNDOFF, operations, 1.0f64);
+    while k > 0 {
+        if k & 1 == 1 {
+            out *= base;
+        }
+        base *= base;
+        k >>= 1;
+    }
+    out
+}
+
+/// The worst-case magnitude of a layer's outputs `act(W x + b)` for inputs of magnitude at most
+/// `x` (`weight`: `[outputs, inputs]` row-major), computed in `f64`: per row `Σ |w| · x + |b|`,
+/// widened by the rounding a sum of `inputs + 1` terms in `f32` can add, `(1 + 2⁻²⁴)^(inputs + 2)`,
+/// then through the activation: sine 1, ELU at least `−|α|`, leaky ReLU `|slope|` times, the
+/// others at most the pre-activation (with one more rounding).
+///
+/// # Errors
+/// The first row whose pre-activation, or the activation's product with its parameter, can pass
+/// ±[`MAX_NETWORK_VALUE`].
+pub(crate) fn layer_bound(
+    weight: F32s<'_>,
+    bias: F32s<'_>,
+    inputs: usize,
+    activation: Activation,
+    x: f64,
+) -> Result<f64, usize> {
+    layer_bound_within(weight, bias, inputs, activation, x, MAX_NETWORK_VALUE)
+}
+
+/// [`layer_bound`] with another limit than [`MAX_NETWORK_VALUE`] for the outputs.
+pub(crate) fn layer_bound_within(
+    weight: F32s<'_>,
+    bias: F32s<'_>,
+    inputs: usize,
+    activation: Activation,
+    x: f64,
+    output_limit: f32,
+) -> Result<f64, usize> {
+    let limit = f64::from(MAX_NETWORK_VALUE);
+    let output_limit = f64::from(output_limit);
+    let rounding = rounding_growth(inputs + 2);
+    let param = f64::from(libm::fabsf(activation.param()));
+    let mut out = 0.0f64;
+    for (row, b) in bias.iter().enumerate() {
+        let mut sum = 0.0f64;
+        for w in weight.slice(row * inputs, inputs).iter() {
+            sum += f64::from(libm::fabsf(w));
+        }
+        let z = (sum * x + f64::from(libm::fabsf(b))) * rounding;
+        let y = match activation {
+            Activation::Sine { .. } => {
+                if z * param > limit {
+                    return Err(row);
+                }
+                1.0
+            }
+            Activation::Elu { .. } => z.max(param),
+            Activation::LeakyRelu { .. } => z * param.max(1.0),
+            Activation::Identity | Activation::Gelu | Activation::Relu => z,
+        } * (1.0 + 4.0 * UNIT_ROUNDOFF);
+        // `!(y <= limit)` also catches a NaN bound (only from an input bound that was NaN).
+        if !(z <= limit && y <= limit && y <= output_limit) {
+            return Err(row);
+        }
+        out = out.max(y);
+    }
+    Ok(out)
+}
+
 /// Whether every value of `v` is finite.
 pub(crate) fn all_finite(v: F32s<'_>) -> bool {
     v.iter().all(f32::is_finite)
@@ -256,6 +345,34 @@ impl<'a> Mlp<'a> {
             return Err(FormatError::IncompatibleShapes);
         }
         Ok(Self { layers: v })
+    }
+
+    /// The worst-case magnitude of the network's outputs for inputs of magnitude at most
+    /// `input`, layer by layer as [`Dense::bound`].
+    ///
+    /// # Errors
+    /// `(layer, row)`: the first layer and output whose bound passes ±[`MAX_NETWORK_VALUE`].
+    pub fn bound(&self, input: f64) -> Result<f64, (usize, usize)> {
+        self.bound_within(input, MAX_NETWORK_VALUE)
+    }
+
+    /// [`Mlp::bound`], the outputs (the last layer's) held to `output_limit` as well.
+    ///
+    /// # Errors
+    /// `(layer, row)`: the first layer and output whose bound passes its limit.
+    pub fn bound_within(&self, input: f64, output_limit: f32) -> Result<f64, (usize, usize)> {
+        let mut x = input;
+        let last = self.layers.len().saturating_sub(1);
+        for (layer, d) in self.layers.iter().enumerate() {
+            let limit = if layer == last {
+                output_limit
+            } else {
+                MAX_NETWORK_VALUE
+            };
+            x = layer_bound_within(d.weight, d.bias, d.inputs, d.activation, x, limit)
+                .map_err(|row| (layer, row))?;
+        }
+        Ok(x)
     }
 
     /// The layers in evaluation order.

@@ -23,13 +23,15 @@
 //!   learned it, and plays it on the target's vertices of the same index.
 
 use crate::aim::{AimActor, MAX_SHAPES};
-use crate::error::{BufferError, FormatError};
-use crate::format::{ArtifactKind, SinewFile};
+use crate::error::{Argument, Bound, BufferError, EvalError, FormatError};
+use crate::format::{ArtifactKind, SinewFile, out_of_range};
 use crate::hash::FrameHasher;
+use crate::layout::MAX_COORDINATE;
 use crate::linalg::Vec3;
-use crate::network::load_mlp;
+use crate::network::{check_bound, load_mlp};
 use crate::nn::Mlp;
 use crate::replay::{AIM_POSE_LEN, FrameCheck, ReplayError, model_hash};
+use crate::rotation::try_rigid_from_9d;
 use crate::skinning::skin_vertex;
 use crate::tensor::{F32s, U32s};
 
@@ -95,7 +97,11 @@ impl<'a> Performance<'a> {
     /// # Errors
     /// A [`FormatError`] for a bad container, another kind, a missing or misshapen section,
     /// neither or both coefficient forms, no frames, a code or coefficient count over this
-    /// build's limits, or a non-finite or non-positive box.
+    /// build's limits, or a value outside its bound (docs/FORMAT.md, "Value bounds"): a head or
+    /// jaw the actor would refuse ([`AimActor::pose_from_9d`]), a global coefficient or a frame
+    /// code outside ±[`crate::layout::MAX_FACTOR`], a box or point outside ±[`MAX_COORDINATE`]
+    /// (the half extent positive), or an F_W that can exceed
+    /// ±[`crate::layout::MAX_NETWORK_VALUE`].
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::Performance)?;
         let model = file.u32_tensor(MODEL_HASH, &[2])?;
@@ -105,6 +111,7 @@ impl<'a> Performance<'a> {
             return Err(FormatError::IncompatibleShapes);
         }
         let poses = file.f32_tensor(POSES, &[frames, AIM_POSE_LEN as u32])?;
+        check_poses(poses)?;
         let (coefficients, shapes) = match (file.section(WEIGHTS), file.section(CODES)) {
             (Some(_), None) => {
                 let (shape, rank) = file.dims_of(WEIGHTS)?;
@@ -115,13 +122,14 @@ impl<'a> Performance<'a> {
                 if shapes > MAX_SHAPES {
                     return Err(FormatError::LimitExceeded);
                 }
-                (
-                    Coefficients::Global(file.f32_tensor(WEIGHTS, &[frames, shape[1]])?),
-                    shapes,
-                )
+                let weights =
+                    file.f32_tensor_within(WEIGHTS, &[frames, shape[1]], Bound::Factor)?;
+                (Coefficients::Global(weights), shapes)
             }
             (None, Some(_)) => local(&file, frames)?,
-            _ => return Err(FormatError::MissingSection),
+            // Exactly one form: neither is a missing section, both do not fit together.
+            (None, None) => return Err(crate::format::missing(WEIGHTS)),
+            (Some(_), Some(_)) => return Err(FormatError::IncompatibleShapes),
         };
         if file.section(POINTS).is_some() && !matches!(coefficients, Coefficients::Local { .. }) {
             // A global fit has no per-point coefficients to evaluate anywhere.
@@ -257,22 +265,23 @@ impl<'a> Performance<'a> {
     /// [`BufferError::Input`] if `f` is past the end, the actor's coefficient count differs or
     /// the file's points number other than the actor's vertices;
     /// [`BufferError::Scratch`] if `scratch` is shorter than [`Self::scratch_len`];
-    /// [`BufferError::Output`] if `out` is not `[V, 3]`.
+    /// [`BufferError::Output`] if `out` is not `[V, 3]`. Never [`EvalError::Input`]: the file's
+    /// frames were checked at load as the actor checks a caller's.
     pub fn pose(
         &self,
         actor: &AimActor<'_>,
         f: usize,
         scratch: &mut [f32],
         out: &mut [f32],
-    ) -> Result<(), BufferError> {
+    ) -> Result<(), EvalError> {
         let (head, jaw) = self.head_jaw(f).ok_or(BufferError::Input)?;
         if actor.shape_count() != self.shapes {
-            return Err(BufferError::Input);
+            return Err(BufferError::Input.into());
         }
         if scratch.len() < self.scratch_len() {
-            return Err(BufferError::Scratch);
+            return Err(BufferError::Scratch.into());
         }
-        let pose = actor.pose_from_9d(&jaw, &head);
+        let pose = actor.pose_from_9d(&jaw, &head)?;
         let (weights, rest) = scratch.split_at_mut(self.shapes);
         match &self.coefficients {
             Coefficients::Global(_) => {
@@ -289,10 +298,10 @@ impl<'a> Performance<'a> {
             } => {
                 let v = actor.vertex_count();
                 if out.len() != 3 * v {
-                    return Err(BufferError::Output);
+                    return Err(BufferError::Output.into());
                 }
                 let tpl = match points {
-                    Some(p) if p.len() != 3 * v => return Err(BufferError::Input),
+                    Some(p) if p.len() != 3 * v => return Err(BufferError::Input.into()),
                     Some(p) => *p,
                     None => actor.template(),
                 };
@@ -343,11 +352,18 @@ fn local<'a>(file: &SinewFile<'a>, frames: u32) -> Result<(Coefficients<'a>, usi
     if code_len > MAX_CODE {
         return Err(FormatError::LimitExceeded);
     }
-    let codes = file.f32_tensor(CODES, &[frames, shape[1]])?;
+    let codes = file.f32_tensor_within(CODES, &[frames, shape[1]], Bound::Factor)?;
     let bx = file.f32_tensor(BOX, &[4])?;
     let (centre, half) = ([bx.at(0), bx.at(1), bx.at(2)], bx.at(3));
-    if !centre.iter().all(|x| x.is_finite()) || !half.is_finite() || half <= 0.0 {
-        return Err(FormatError::NonFinite);
+    for (i, x) in bx.iter().enumerate() {
+        let bound = if i < 3 {
+            Bound::Coordinate
+        } else {
+            Bound::PositiveCoordinate
+        };
+        if !bound.contains(x) {
+            return Err(out_of_range(BOX, i, bound));
+        }
     }
     let fw = load_mlp(file, F_W)?;
     let shapes = fw.outputs();
@@ -360,14 +376,16 @@ fn local<'a>(file: &SinewFile<'a>, frames: u32) -> Result<(Coefficients<'a>, usi
             if rank != 2 || shape[0] == 0 || shape[1] != 3 {
                 return Err(FormatError::IncompatibleShapes);
             }
-            let p = file.f32_tensor(POINTS, &[shape[0], 3])?;
-            if !p.iter().all(f32::is_finite) {
-                return Err(FormatError::NonFinite);
-            }
-            Some(p)
+            Some(file.f32_tensor_within(POINTS, &[shape[0], 3], Bound::Coordinate)?)
         }
         None => None,
     };
+    // F_W sees the codes and ĉ = (c − centre) / half for points c within ±MAX_COORDINATE (the
+    // file's own, or the actor's template).
+    let reach = centre.map(libm::fabsf).into_iter().fold(0.0f32, f32::max) + MAX_COORDINATE;
+    let code_max = codes.iter().map(libm::fabsf).fold(0.0f32, f32::max);
+    let input = (f64::from(reach) / f64::from(half)).max(f64::from(code_max));
+    check_bound(&fw, F_W, input)?;
     if shapes > MAX_SHAPES {
         return Err(FormatError::LimitExceeded);
     }
@@ -384,6 +402,34 @@ fn local<'a>(file: &SinewFile<'a>, frames: u32) -> Result<(Coefficients<'a>, usi
     ))
 }
 
+/// Checks every frame's head and jaw (`perf.pose`, `[J, 18]`) as the actor checks a caller's
+/// ([`try_rigid_from_9d`]).
+///
+/// # Errors
+/// [`FormatError::ValueOutOfRange`] naming the first refused value: [`Bound::Rotation`] for a
+/// rotation's, [`Bound::Coordinate`] for a translation's.
+fn check_poses(poses: F32s<'_>) -> Result<(), FormatError> {
+    for (f, row) in poses.as_bytes().chunks_exact(4 * AIM_POSE_LEN).enumerate() {
+        let row = F32s::new(row).unwrap_or(F32s::empty());
+        for (half, argument) in [(0, Argument::Head), (9, Argument::Jaw)] {
+            let nine: [f32; 9] = core::array::from_fn(|i| row.at(half + i));
+            if let Err(e) = try_rigid_from_9d(&nine, argument) {
+                let bound = if e.index < 6 {
+                    Bound::Rotation
+                } else {
+                    Bound::Coordinate
+                };
+                return Err(out_of_range(
+                    POSES,
+                    f * AIM_POSE_LEN + half + e.index,
+                    bound,
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Poses frame `f` ([`Performance::pose`]), computes the actor's normals and returns the frame's
 /// f32 hash: the positions, then the normals, as an f32 replay frame's.
 ///
@@ -396,7 +442,7 @@ pub fn frame_hash(
     scratch: &mut [f32],
     positions: &mut [f32],
     normals: &mut [f32],
-) -> Result<u64, BufferError> {
+) -> Result<u64, EvalError> {
     perf.pose(actor, f, scratch, positions)?;
     actor.normals(positions, normals)?;
     let mut h = FrameHasher::new();
@@ -419,7 +465,7 @@ pub fn check_frame(
     scratch: &mut [f32],
     positions: &mut [f32],
     normals: &mut [f32],
-) -> Result<FrameCheck, BufferError> {
+) -> Result<FrameCheck, EvalError> {
     let hash = frame_hash(perf, actor, f, scratch, positions, normals)?;
     Ok(FrameCheck {
         frame: f,

@@ -21,9 +21,10 @@
 use core::fmt;
 
 use crate::aim::{AimActor, MAX_SHAPES};
-use crate::error::{BufferError, FormatError};
+use crate::error::{Argument, BufferError, EvalError, FormatError, InputError};
 use crate::format::{ArtifactKind, SinewFile};
 use crate::hash::FrameHasher;
+use crate::input::check_values;
 use crate::q16::{PoseQ16, Q16, q16_slice};
 use crate::s2d::S2dDecoder;
 use crate::tensor::{F32s, U32s};
@@ -245,6 +246,8 @@ pub enum ReplayError {
     },
     /// A caller buffer has the wrong length.
     Buffer(BufferError),
+    /// A frame's input is refused: NaN, infinite, out of range or a degenerate rotation.
+    Input(InputError),
 }
 
 impl fmt::Display for ReplayError {
@@ -273,11 +276,27 @@ impl fmt::Display for ReplayError {
                  {actor} vertices"
             ),
             Self::Buffer(e) => write!(f, "{e}"),
+            Self::Input(e) => write!(f, "{e}"),
         }
     }
 }
 
 impl core::error::Error for ReplayError {}
+
+impl From<InputError> for ReplayError {
+    fn from(e: InputError) -> Self {
+        Self::Input(e)
+    }
+}
+
+impl From<EvalError> for ReplayError {
+    fn from(e: EvalError) -> Self {
+        match e {
+            EvalError::Buffer(e) => Self::Buffer(e),
+            EvalError::Input(e) => Self::Input(e),
+        }
+    }
+}
 
 impl From<BufferError> for ReplayError {
     fn from(e: BufferError) -> Self {
@@ -291,7 +310,9 @@ impl From<BufferError> for ReplayError {
 ///
 /// # Errors
 /// [`ReplayError::NoQ16Cache`] in Q16 mode without the cache; [`ReplayError::Buffer`] if a
-/// buffer has the wrong length.
+/// buffer has the wrong length; [`ReplayError::Input`] if the head, the jaw or a coefficient is
+/// refused ([`AimActor::pose_from_9d`], [`AimActor::pose`]), in every mode alike. Nothing is
+/// written then.
 pub fn pose_frame(
     actor: &AimActor<'_>,
     mode: Mode,
@@ -299,7 +320,7 @@ pub fn pose_frame(
     jaw: &[f32; 9],
     buf: &mut FrameBuffers<'_>,
 ) -> Result<(), ReplayError> {
-    let pose = actor.pose_from_9d(jaw, head);
+    let pose = actor.pose_from_9d(jaw, head)?;
     match mode {
         Mode::F32 => {
             actor.pose(&pose, buf.weights, buf.positions)?;
@@ -311,6 +332,12 @@ pub fn pose_frame(
         }
         Mode::Q16 => {
             let cache = actor.q16().ok_or(ReplayError::NoQ16Cache)?;
+            if buf.weights.len() != actor.shape_count() {
+                return Err(ReplayError::Buffer(BufferError::Input));
+            }
+            // The f32 path checks the coefficients in `AimActor::pose`; this one converts them
+            // first, and Q16.16 would saturate what it refuses.
+            check_values(Argument::Weights, buf.weights)?;
             q16_slice(buf.weights, buf.weights_q16)?;
             cache.pose(
                 &PoseQ16::from_pose(&pose),
@@ -697,99 +724,4 @@ pub fn verify_s2d(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use std::vec;
-    use std::vec::Vec;
-
-    const ACTOR: &[u8] = include_bytes!("../../tests/data/aim-procedural.sinew");
-    const ACTOR_REPLAYS: [&[u8]; 3] = [
-        include_bytes!("../../tests/data/aim-procedural.f32.replay.sinew"),
-        include_bytes!("../../tests/data/aim-procedural.q16.replay.sinew"),
-        include_bytes!("../../tests/data/aim-procedural.fast.replay.sinew"),
-    ];
-    const DECODER: &[u8] = include_bytes!("../../tests/data/s2d-ict.sinew");
-    const DECODER_REPLAY: &[u8] = include_bytes!("../../tests/data/s2d-ict.replay.sinew");
-
-    #[test]
-    fn hash_words_are_low_word_first_and_read_back() {
-        let h = 0x0123_4567_89AB_CDEF_u64;
-        assert_eq!(hash_words(h), [0x89AB_CDEF, 0x0123_4567]);
-        let bytes: Vec<u8> = hash_words(h).iter().flat_map(|w| w.to_le_bytes()).collect();
-        assert_eq!(word_pair(&U32s::new(&bytes).unwrap(), 0), Some(h));
-        let replay = AimReplay::from_bytes(ACTOR_REPLAYS[0]).unwrap();
-        assert_eq!(replay.model_hash(), model_hash(ACTOR));
-    }
-
-    #[test]
-    fn golden_aim_replays_verify_frame_by_frame() {
-        let actor = AimActor::from_bytes(ACTOR).unwrap();
-        let (n, m) = (3 * actor.vertex_count(), actor.shape_count());
-        for bytes in ACTOR_REPLAYS {
-            let replay = AimReplay::from_bytes(bytes).unwrap();
-            let (mut p, mut nrm, mut w) = (vec![0.0; n], vec![0.0; n], vec![0.0; m]);
-            let (mut pq, mut wq) = (vec![Q16::ZERO; n], vec![Q16::ZERO; m]);
-            let mut buf = FrameBuffers {
-                positions: &mut p,
-                normals: &mut nrm,
-                positions_q16: &mut pq,
-                weights: &mut w,
-                weights_q16: &mut wq,
-            };
-            let mut checks = Vec::new();
-            let first_bad = verify(ACTOR, &actor, &replay, &mut buf, |c| checks.push(*c));
-            assert_eq!(first_bad, Ok(None), "{}", replay.mode());
-            assert_eq!(checks.len(), replay.frames());
-            assert!(
-                checks
-                    .iter()
-                    .enumerate()
-                    .all(|(f, c)| c.frame == f && c.ok())
-            );
-            let last = check_frame(&actor, &replay, replay.frames() - 1, &mut buf).unwrap();
-            assert_eq!(last, checks[replay.frames() - 1]);
-            assert_eq!(
-                check_frame(&actor, &replay, replay.frames(), &mut buf),
-                Err(ReplayError::Buffer(BufferError::Input))
-            );
-        }
-    }
-
-    #[test]
-    fn golden_s2d_replay_verifies_frame_by_frame() {
-        let decoder = S2dDecoder::from_bytes(DECODER).unwrap();
-        let replay = S2dReplay::from_bytes(DECODER_REPLAY).unwrap();
-        let v = 3 * decoder.vertex_count();
-        let mut input = vec![0.0; decoder.input_len()];
-        let mut neutral = vec![0.0; v];
-        let mut scratch = vec![0.0; decoder.scratch_len()];
-        let mut vertices = vec![0.0; v];
-        let mut buf = S2dBuffers {
-            input: &mut input,
-            neutral: &mut neutral,
-            scratch: &mut scratch,
-            vertices: &mut vertices,
-        };
-        let mut checks = Vec::new();
-        let first_bad = verify_s2d(DECODER, &decoder, &replay, &mut buf, |c| checks.push(*c));
-        assert_eq!(first_bad, Ok(None));
-        assert_eq!(checks.len(), replay.frames());
-        assert!(checks.iter().all(FrameCheck::ok));
-        assert_eq!(
-            check_s2d_frame(&decoder, &replay, replay.frames(), &mut buf),
-            Err(ReplayError::Buffer(BufferError::Input))
-        );
-        // The neutral goes in whole or not at all.
-        assert_eq!(
-            replay.copy_neutral(&mut vec![0.0; v - 3]),
-            Err(BufferError::Input)
-        );
-        assert_eq!(replay.copy_neutral(&mut []), Err(BufferError::Input));
-        // Without the neutral, frame 0 decodes onto the template, which is another face.
-        let mut empty = [];
-        buf.neutral = &mut empty;
-        let onto_template = check_s2d_frame(&decoder, &replay, 0, &mut buf).unwrap();
-        assert_eq!(onto_template.expected, checks[0].expected);
-        assert!(!onto_template.ok());
-    }
-}
+mod tests;

@@ -8,6 +8,9 @@
 //! **rows** instead, i.e. it returns the transpose of [`from_6d`]; an exporter from such code must
 //! transpose (or swap the meaning of `[a1, a2]`) to match.
 
+use crate::error::{Argument, InputError, InputErrorKind};
+use crate::input::check_value;
+use crate::layout::MIN_ROTATION_COLUMN;
 use crate::linalg::{Mat3, Rigid, Vec3};
 
 /// The 6D encoding of the identity rotation: columns `(1, 0, 0)` and `(0, 1, 0)`.
@@ -44,32 +47,67 @@ pub const fn identity_6d() -> [f32; 6] {
 /// first column is `x` and whose second column follows `a2`.
 pub fn from_6d(r: &[f32; 6]) -> Mat3 {
     // Zhou et al. 2019, Sec. 4 (6D → SO(3)): b1 = N(a1), b2 = N(a2 − (b1·a2) b1), b3 = b1 × b2
-    let [a1x, a1y, a1z, a2x, a2y, a2z] = *r;
-    let a1 = Vec3::new(a1x, a1y, a1z);
-    let a2 = Vec3::new(a2x, a2y, a2z);
-
-    let mut b1 = a1.normalize();
-    if b1 == Vec3::ZERO {
-        b1 = Vec3::X;
-    }
-
-    let resid = a2 - b1.scale(b1.dot(a2));
-    let rn = resid.norm();
-    let b2 = if rn.is_finite() && rn > PARALLEL_TOLERANCE * a2.norm() {
-        resid.normalize()
-    } else {
-        fallback_second(b1)
-    };
-    // `normalize` can still return zero if `rn` was positive but the division underflowed; the
-    // tolerance test above excludes that for every finite `a2` whose norm is representable.
-    let b2 = if b2 == Vec3::ZERO {
-        fallback_second(b1)
-    } else {
-        b2
-    };
-
+    let (a1, a2) = columns(r);
+    let b1 = first_column(a1).unwrap_or(Vec3::X);
+    let b2 = second_column(b1, a2).unwrap_or_else(|| fallback_second(b1));
     let b3 = b1.cross(b2);
     Mat3::from_cols(b1, b2, b3)
+}
+
+/// Rotation matrix from the 6D representation, refusing what [`from_6d`] would have to guess:
+/// the caller's rotation `argument` (its values 0..6 are `r`) must have six finite values within
+/// ±[`crate::layout::MAX_ROTATION_ENTRY`], each column at least [`MIN_ROTATION_COLUMN`] long, and a second
+/// column whose part orthogonal to the first is longer than [`PARALLEL_TOLERANCE`] times its
+/// length. Such a rotation gives exactly [`from_6d`]'s matrix, bit for bit: both run the same
+/// arithmetic, and these inputs never reach its fallbacks.
+///
+/// # Errors
+/// [`InputError`] naming the value (non-finite, out of range) or the column (degenerate: index 0
+/// for the first, 3 for the second).
+pub fn try_from_6d(r: &[f32; 6], argument: Argument) -> Result<Mat3, InputError> {
+    for (index, &v) in r.iter().enumerate() {
+        check_value(argument, index, v)?;
+    }
+    let degenerate = |index| InputError::new(argument, index, InputErrorKind::Degenerate);
+    let (a1, a2) = columns(r);
+    // Each value is within ±1e6, so the squared lengths (at most 3e12) cannot overflow, and a
+    // length of at least 1e-6 has a square far above f32's smallest normal number.
+    if a1.norm() < MIN_ROTATION_COLUMN {
+        return Err(degenerate(0));
+    }
+    if a2.norm() < MIN_ROTATION_COLUMN {
+        return Err(degenerate(3));
+    }
+    let b1 = first_column(a1).ok_or(degenerate(0))?;
+    let b2 = second_column(b1, a2).ok_or(degenerate(3))?;
+    let b3 = b1.cross(b2);
+    Ok(Mat3::from_cols(b1, b2, b3))
+}
+
+/// The two columns `a1 = r[0..3]`, `a2 = r[3..6]`.
+fn columns(r: &[f32; 6]) -> (Vec3, Vec3) {
+    let [a1x, a1y, a1z, a2x, a2y, a2z] = *r;
+    (Vec3::new(a1x, a1y, a1z), Vec3::new(a2x, a2y, a2z))
+}
+
+/// `b1 = a1 / |a1|`, or `None` when `a1` cannot be normalised (see [`Vec3::normalize`]).
+fn first_column(a1: Vec3) -> Option<Vec3> {
+    let b1 = a1.normalize();
+    (b1 != Vec3::ZERO).then_some(b1)
+}
+
+/// `b2 = normalize(a2 − (b1·a2) b1)`, or `None` when `a2` is zero, non-finite or parallel to
+/// `b1` within [`PARALLEL_TOLERANCE`].
+fn second_column(b1: Vec3, a2: Vec3) -> Option<Vec3> {
+    let resid = a2 - b1.scale(b1.dot(a2));
+    let rn = resid.norm();
+    if !(rn.is_finite() && rn > PARALLEL_TOLERANCE * a2.norm()) {
+        return None;
+    }
+    // `normalize` can still return zero if `rn` was positive but the division underflowed; the
+    // tolerance test above excludes that for every finite `a2` whose norm is representable.
+    let b2 = resid.normalize();
+    (b2 != Vec3::ZERO).then_some(b2)
 }
 
 /// A unit vector orthogonal to the unit vector `b1`: the coordinate axis least aligned with it
@@ -102,6 +140,21 @@ pub fn to_6d(m: &Mat3) -> [f32; 6] {
 pub fn rigid_from_9d(p: &[f32; 9]) -> Rigid {
     let [r0, r1, r2, r3, r4, r5, tx, ty, tz] = *p;
     Rigid::new(from_6d(&[r0, r1, r2, r3, r4, r5]), Vec3::new(tx, ty, tz))
+}
+
+/// [`rigid_from_9d`] refusing what it would have to guess: the rotation as [`try_from_6d`], the
+/// translation's values finite and within ±[`crate::layout::MAX_COORDINATE`]. The caller's
+/// transform `argument` has its 9 values in `p`.
+///
+/// # Errors
+/// [`InputError`] naming the value, or the rotation's degenerate column.
+pub fn try_rigid_from_9d(p: &[f32; 9], argument: Argument) -> Result<Rigid, InputError> {
+    let [r0, r1, r2, r3, r4, r5, tx, ty, tz] = *p;
+    let rot = try_from_6d(&[r0, r1, r2, r3, r4, r5], argument)?;
+    for (index, v) in [(6, tx), (7, ty), (8, tz)] {
+        check_value(argument, index, v)?;
+    }
+    Ok(Rigid::new(rot, Vec3::new(tx, ty, tz)))
 }
 
 /// The 9 parameters `[6D rotation, tx, ty, tz]` of a rigid transform; inverse of

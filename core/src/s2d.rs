@@ -28,9 +28,13 @@
 
 use core::fmt::Write;
 
-use crate::error::{BufferError, FormatError};
+use crate::error::{
+    Argument, Bound, BufferError, EvalError, FormatError, InputError, InputErrorKind, SectionName,
+};
 use crate::format::{ArtifactKind, NAME_LEN, SinewFile};
-use crate::nn::{Activation, Dense, all_finite};
+use crate::input::check_values;
+use crate::layout::MAX_FACTOR;
+use crate::nn::{Activation, Dense};
 use crate::sparse::Csr;
 use crate::spiral::{SpiralConv, Spirals, zero_row};
 use crate::tensor::{F32s, U32s};
@@ -75,6 +79,14 @@ fn to_u32(n: usize) -> Result<u32, FormatError> {
     u32::try_from(n).map_err(|_| FormatError::LimitExceeded)
 }
 
+/// [`FormatError::Unbounded`] for `row` of the section `section`.
+fn unbounded(section: &str, row: usize) -> FormatError {
+    FormatError::Unbounded {
+        section: SectionName::new(section),
+        row: u32::try_from(row).unwrap_or(u32::MAX),
+    }
+}
+
 /// The dimensions of a rank-2 section.
 fn dims2(file: &SinewFile<'_>, name: &str) -> Result<[u32; 2], FormatError> {
     let ([a, b, ..], rank) = file.dims_of(name)?;
@@ -95,7 +107,11 @@ impl<'a> S2dDecoder<'a> {
     }
 
     /// Validates the S2D sections of an already-checked container (of any kind, so that a
-    /// decoder can travel inside another artefact).
+    /// decoder can travel inside another artefact). Besides every shape and index, the template
+    /// must lie within ±[`crate::layout::MAX_COORDINATE`], the up-sampling weights and the
+    /// activation's parameter within ±[`MAX_FACTOR`], and the layers, chained, must stay within
+    /// ±[`crate::layout::MAX_NETWORK_VALUE`] for every input within ±[`MAX_FACTOR`]
+    /// (docs/FORMAT.md, "Value bounds").
     pub fn from_file(file: SinewFile<'a>) -> Result<Self, FormatError> {
         let cfg = file.u32_tensor("s2d.cfg", &[3])?;
         let [inputs, fc_features, outputs] = [0, 1, 2].map(|i| cfg.get(i).unwrap_or(0) as usize);
@@ -126,7 +142,8 @@ impl<'a> S2dDecoder<'a> {
             }
             let sp = name(format_args!("s2d.h{k}.spiral"))?;
             let idx = file.u32_tensor(&sp, &[rows, len])?;
-            let s = Spirals::new(idx, rows as usize, len as usize, rows as usize)?;
+            let s = Spirals::new(idx, rows as usize, len as usize, rows as usize)
+                .map_err(|e| e.in_section(&sp))?;
             vertices
                 .push(n as usize)
                 .map_err(|_| FormatError::LimitExceeded)?;
@@ -136,13 +153,10 @@ impl<'a> S2dDecoder<'a> {
         let n0 = n_at(0);
         let coarsest = n_at(levels - 1) + 1;
 
-        let neutral = file.f32_tensor("s2d.h0.pos", &[to_u32(n0)?, 3])?;
-        if !all_finite(neutral) {
-            return Err(FormatError::NonFinite);
-        }
+        let neutral = file.f32_tensor_within("s2d.h0.pos", &[to_u32(n0)?, 3], Bound::Coordinate)?;
         let landmarks = file.u32_tensor("s2d.lmk", &[to_u32(inputs / 3)?])?;
-        if landmarks.iter().any(|i| i as usize >= n0) {
-            return Err(FormatError::IndexOutOfRange);
+        if let Some(i) = landmarks.iter().position(|i| i as usize >= n0) {
+            return Err(FormatError::index_out_of_range("s2d.lmk", i));
         }
 
         let fc_out = coarsest
@@ -151,6 +165,10 @@ impl<'a> S2dDecoder<'a> {
         let fc_w = file.f32_tensor("s2d.fc.w", &[to_u32(fc_out)?, to_u32(inputs)?])?;
         let fc_b = file.f32_tensor("s2d.fc.b", &[to_u32(fc_out)?])?;
         let fc = Dense::new(fc_w, fc_b, inputs, fc_out, Activation::Identity)?;
+        // The worst case of every feature map, layer after layer, for inputs within ±MAX_FACTOR.
+        let mut bound = fc
+            .bound(f64::from(MAX_FACTOR))
+            .map_err(|row| unbounded("s2d.fc.w", row))?;
 
         let conv_at = |prefix: &str, k: Option<usize>, inputs: usize, act: Activation| {
             let spirals = *spirals
@@ -181,7 +199,8 @@ impl<'a> S2dDecoder<'a> {
             None => Activation::Elu { alpha: 1.0 },
             Some(_) => Activation::from_code(
                 file.u32_tensor("s2d.act", &[1])?.at(0),
-                file.f32_tensor("s2d.par", &[1])?.at(0),
+                file.f32_tensor_within("s2d.par", &[1], Bound::Factor)?
+                    .at(0),
             )?,
         };
 
@@ -203,11 +222,25 @@ impl<'a> S2dDecoder<'a> {
                 return Err(FormatError::IncompatibleShapes);
             }
             let col = file.u32_tensor(&col_name, &[nnz])?;
-            let val = file.f32_tensor(&name(format_args!("s2d.u{k}.val"))?, &[nnz])?;
-            ups.push(Csr::new(rows, cols, ptr, col, val)?)
-                .map_err(|_| FormatError::LimitExceeded)?;
+            let val_name = name(format_args!("s2d.u{k}.val"))?;
+            let val = file.f32_tensor_within(&val_name, &[nnz], Bound::Factor)?;
+            let ptr_name = name(format_args!("s2d.u{k}.ptr"))?;
+            let up = Csr::new(rows, cols, ptr, col, val).map_err(|e| match e {
+                FormatError::IndexOutOfRange { section, .. } if section.as_str() == "col_idx" => {
+                    e.in_section(&col_name)
+                }
+                e => e.in_section(&ptr_name),
+            })?;
+            bound = up.bound(bound).map_err(|row| unbounded(&val_name, row))?;
+            ups.push(up).map_err(|_| FormatError::LimitExceeded)?;
             half = grow(half, rows, width)?;
             let conv = conv_at("s2d.conv", Some(k), width, stage_act)?;
+            bound = conv.bound(bound).map_err(|row| {
+                unbounded(
+                    &name(format_args!("s2d.conv.{k}.w")).unwrap_or_default(),
+                    row,
+                )
+            })?;
             width = conv.out_features();
             half = grow(half, rows, width)?;
             convs.push(conv).map_err(|_| FormatError::LimitExceeded)?;
@@ -216,6 +249,8 @@ impl<'a> S2dDecoder<'a> {
         if out.out_features() != outputs {
             return Err(FormatError::IncompatibleShapes);
         }
+        out.bound(bound)
+            .map_err(|row| unbounded("s2d.out.w", row))?;
         half = grow(half, n0 + 1, outputs)?;
         // The largest convolution's repacked weight block (`SpiralConv::scratch_len`).
         let conv_scratch = convs
@@ -295,7 +330,7 @@ impl<'a> S2dDecoder<'a> {
         neutral: &[f32],
         expressive: &[f32],
         out: &mut [f32],
-    ) -> Result<(), BufferError> {
+    ) -> Result<(), EvalError> {
         if self.input_code == INPUT_NEUTRAL_SCALE {
             landmark_input_neutral_scale(neutral, expressive, out)
         } else {
@@ -318,22 +353,35 @@ impl<'a> S2dDecoder<'a> {
     ///
     /// # Errors
     /// [`BufferError::Input`], [`BufferError::Output`] for wrong lengths,
-    /// [`BufferError::Scratch`] if `scratch` is too short.
+    /// [`BufferError::Scratch`] if `scratch` is too short; [`EvalError::Input`] for an input
+    /// value that is not finite or outside ±[`MAX_FACTOR`] (the range the decoder was bounded
+    /// for at load). Nothing is written then.
     pub fn displacements(
         &self,
         input: &[f32],
         scratch: &mut [f32],
         out: &mut [f32],
-    ) -> Result<(), BufferError> {
+    ) -> Result<(), EvalError> {
         if input.len() != self.inputs {
-            return Err(BufferError::Input);
+            return Err(BufferError::Input.into());
         }
         if Some(out.len()) != self.vertex_count().checked_mul(3) {
-            return Err(BufferError::Output);
+            return Err(BufferError::Output.into());
         }
         if scratch.len() < self.scratch_len() {
-            return Err(BufferError::Scratch);
+            return Err(BufferError::Scratch.into());
         }
+        check_values(Argument::Input, input)?;
+        Ok(self.displacements_unchecked(input, scratch, out)?)
+    }
+
+    /// [`Self::displacements`] once the lengths and the input are checked.
+    fn displacements_unchecked(
+        &self,
+        input: &[f32],
+        scratch: &mut [f32],
+        out: &mut [f32],
+    ) -> Result<(), BufferError> {
         // Every length below was bounded by `half` in `from_file`, so each `get` succeeds and each
         // kernel's own length check passes; the `?`s cannot fire on a validated model.
         let (a, rest) = scratch
@@ -374,7 +422,7 @@ impl<'a> S2dDecoder<'a> {
         input: &[f32],
         scratch: &mut [f32],
         out_vertices: &mut [f32],
-    ) -> Result<(), BufferError> {
+    ) -> Result<(), EvalError> {
         self.displacements(input, scratch, out_vertices)?;
         for (o, n) in out_vertices.iter_mut().zip(self.neutral.iter()) {
             *o += n;
@@ -386,16 +434,21 @@ impl<'a> S2dDecoder<'a> {
     /// transfer to a new identity.
     ///
     /// # Errors
-    /// [`BufferError::Input`] if `neutral` is not `[n_0, 3]`, else as [`Self::displacements`].
+    /// [`BufferError::Input`] if `neutral` is not `[n_0, 3]`; [`EvalError::Input`] for a neutral
+    /// value that is not finite or outside ±[`crate::layout::MAX_COORDINATE`]; else as
+    /// [`Self::displacements`].
     pub fn decode_onto(
         &self,
         neutral: &[f32],
         input: &[f32],
         scratch: &mut [f32],
         out_vertices: &mut [f32],
-    ) -> Result<(), BufferError> {
+    ) -> Result<(), EvalError> {
         if neutral.len() != self.neutral.len() {
-            return Err(BufferError::Input);
+            return Err(BufferError::Input.into());
+        }
+        if input.len() == self.inputs && out_vertices.len() == neutral.len() {
+            check_values(Argument::Neutral, neutral)?;
         }
         self.displacements(input, scratch, out_vertices)?;
         for (o, n) in out_vertices.iter_mut().zip(neutral) {
@@ -406,51 +459,64 @@ impl<'a> S2dDecoder<'a> {
 }
 
 /// The decoder's input from two landmark sets ([`INPUT_FROBENIUS`]): each set, `[K, 3]`, is
-/// centred on its mean and divided by its Frobenius norm (left only centred if the norm is 0),
-/// and `out = normalised(expressive) − normalised(neutral)`, `[K · 3]`.
+/// centred on its mean and divided by its Frobenius norm, and
+/// `out = normalised(expressive) − normalised(neutral)`, `[K · 3]`.
 ///
 /// # Errors
 /// [`BufferError::Input`] if the sets differ in length or are not whole points;
-/// [`BufferError::Output`] if `out` has another length.
+/// [`BufferError::Output`] if `out` has another length; [`EvalError::Input`] for a landmark
+/// coordinate that is not finite or outside ±[`crate::layout::MAX_COORDINATE`], or a set whose
+/// points all coincide (nothing to normalise by). Nothing is written then.
 pub fn landmark_input(
     neutral: &[f32],
     expressive: &[f32],
     out: &mut [f32],
-) -> Result<(), BufferError> {
-    centred_difference(neutral, expressive, out, |e, n, se, sn| e * se - n * sn)
+) -> Result<(), EvalError> {
+    centred_difference(neutral, expressive, out, true, |e, n, se, sn| {
+        e * se - n * sn
+    })
 }
 
 /// The decoder's input from two landmark sets ([`INPUT_NEUTRAL_SCALE`]): each set, `[K, 3]`, is
-/// centred on its mean, and `out = (centred(expressive) − centred(neutral)) / ‖centred(neutral)‖`
-/// (not scaled if that norm is 0), `[K · 3]`: the landmark displacement, less its mean, in units
-/// of the neutral's size.
+/// centred on its mean, and `out = (centred(expressive) − centred(neutral)) / ‖centred(neutral)‖`,
+/// `[K · 3]`: the landmark displacement, less its mean, in units of the neutral's size.
 ///
 /// # Errors
-/// As [`landmark_input`].
+/// As [`landmark_input`], except that only the neutral's points must not all coincide (the
+/// expressive set is not normalised by its own size).
 pub fn landmark_input_neutral_scale(
     neutral: &[f32],
     expressive: &[f32],
     out: &mut [f32],
-) -> Result<(), BufferError> {
-    centred_difference(neutral, expressive, out, |e, n, _, sn| (e - n) * sn)
+) -> Result<(), EvalError> {
+    centred_difference(neutral, expressive, out, false, |e, n, _, sn| (e - n) * sn)
 }
 
 /// Centres both `[K, 3]` sets and writes `combine(e, n, se, sn)` for each coordinate, with `e`, `n`
-/// the centred coordinates and `se`, `sn` the reciprocal norms of the expressive and neutral sets.
+/// the centred coordinates and `se`, `sn` the reciprocal norms of the expressive and neutral sets;
+/// the neutral's norm, and with `both` the expressive's, must be positive.
 fn centred_difference(
     neutral: &[f32],
     expressive: &[f32],
     out: &mut [f32],
+    both: bool,
     combine: impl Fn(f32, f32, f32, f32) -> f32,
-) -> Result<(), BufferError> {
+) -> Result<(), EvalError> {
     if neutral.len() != expressive.len() || !neutral.len().is_multiple_of(3) {
-        return Err(BufferError::Input);
+        return Err(BufferError::Input.into());
     }
     if out.len() != neutral.len() {
-        return Err(BufferError::Output);
+        return Err(BufferError::Output.into());
     }
-    let (cn, sn) = centre_scale(neutral);
-    let (ce, se) = centre_scale(expressive);
+    check_values(Argument::Neutral, neutral)?;
+    check_values(Argument::Expressive, expressive)?;
+    let degenerate = |argument| InputError::new(argument, 0, InputErrorKind::Degenerate);
+    let (cn, sn) = centre_scale(neutral).ok_or(degenerate(Argument::Neutral))?;
+    let (ce, se) = match centre_scale(expressive) {
+        Some(c) => c,
+        None if both => return Err(degenerate(Argument::Expressive).into()),
+        None => (centre_size(expressive).0, 1.0),
+    };
     for ((o, n), e) in out
         .chunks_exact_mut(3)
         .zip(neutral.chunks_exact(3))
@@ -463,10 +529,11 @@ fn centred_difference(
     Ok(())
 }
 
-/// Mean of a `[K, 3]` set and the reciprocal of its centred Frobenius norm (1 for a zero norm).
-fn centre_scale(points: &[f32]) -> ([f32; 3], f32) {
+/// Mean of a `[K, 3]` set and the reciprocal of its centred Frobenius norm; `None` for a zero
+/// norm (an empty set, or points that all coincide).
+fn centre_scale(points: &[f32]) -> Option<([f32; 3], f32)> {
     let (c, norm) = centre_size(points);
-    (c, if norm > 0.0 { 1.0 / norm } else { 1.0 })
+    (norm > 0.0).then(|| (c, 1.0 / norm))
 }
 
 /// Mean of a `[K, 3]` set and its centred Frobenius norm, summed in point order (the landmark
@@ -532,16 +599,57 @@ mod tests {
         assert_close(&again, &out);
         assert_eq!(
             landmark_input(&neutral, &expressive[..3], &mut out),
-            Err(BufferError::Input)
+            Err(BufferError::Input.into())
         );
         assert_eq!(
             landmark_input(&neutral, &expressive, &mut out[..5]),
-            Err(BufferError::Output)
+            Err(BufferError::Output.into())
         );
-        // A degenerate set is only centred.
+        // A set whose points all coincide has no size to normalise by: refused, nothing
+        // written, naming the set.
         let mut z = [9.0; 6];
-        landmark_input(&[1.0; 6], &[1.0; 6], &mut z).unwrap();
-        assert_eq!(z, [0.0; 6]);
+        let degenerate = |argument| {
+            Err(EvalError::Input(InputError::new(
+                argument,
+                0,
+                InputErrorKind::Degenerate,
+            )))
+        };
+        assert_eq!(
+            landmark_input(&[1.0; 6], &expressive, &mut z),
+            degenerate(Argument::Neutral)
+        );
+        assert_eq!(
+            landmark_input(&neutral, &[1.0; 6], &mut z),
+            degenerate(Argument::Expressive)
+        );
+        assert_eq!(z, [9.0; 6]);
+        // The neutral-scale input only divides by the neutral's size.
+        landmark_input_neutral_scale(&neutral, &[1.0; 6], &mut z).unwrap();
+        assert_eq!(
+            landmark_input_neutral_scale(&[1.0; 6], &expressive, &mut z),
+            degenerate(Argument::Neutral)
+        );
+        // NaN and out-of-range coordinates are refused by index.
+        let mut bad = neutral;
+        bad[4] = f32::NAN;
+        assert_eq!(
+            landmark_input(&bad, &expressive, &mut z),
+            Err(EvalError::Input(InputError::new(
+                Argument::Neutral,
+                4,
+                InputErrorKind::NonFinite
+            )))
+        );
+        bad[4] = 1e6;
+        assert_eq!(
+            landmark_input(&neutral, &bad, &mut z),
+            Err(EvalError::Input(InputError::new(
+                Argument::Expressive,
+                4,
+                InputErrorKind::OutOfRange
+            )))
+        );
     }
 
     #[test]
@@ -567,11 +675,11 @@ mod tests {
         assert_close(&again, &[2.0 * s, -4.0 * s, 0.0, -2.0 * s, 4.0 * s, 0.0]);
         assert_eq!(
             landmark_input_neutral_scale(&neutral, &expressive[..3], &mut out),
-            Err(BufferError::Input)
+            Err(BufferError::Input.into())
         );
         assert_eq!(
             landmark_input_neutral_scale(&neutral, &expressive, &mut out[..5]),
-            Err(BufferError::Output)
+            Err(BufferError::Output.into())
         );
     }
 }

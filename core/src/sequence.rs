@@ -10,7 +10,7 @@
 //! working memory is free again before the first frame is decoded. Nothing allocates; every
 //! buffer is the caller's ([`SequenceBuffers`]), sized by [`Sequence`]'s `*_len` methods.
 
-use crate::error::{BufferError, FormatError};
+use crate::error::{BufferError, EvalError, FormatError};
 use crate::hash::frame_hash;
 use crate::motion::MotionGenerator;
 use crate::s2d::S2dDecoder;
@@ -98,16 +98,18 @@ impl<'a> Sequence<'a> {
     ///
     /// # Errors
     /// [`BufferError::Input`] for a label out of range or a neutral of the wrong length;
-    /// [`BufferError::Output`], [`BufferError::Scratch`] for wrong buffer lengths.
+    /// [`BufferError::Output`], [`BufferError::Scratch`] for wrong buffer lengths;
+    /// [`EvalError::Input`] for an intensity or a neutral the generator refuses
+    /// ([`MotionGenerator::landmarks`]).
     pub fn curve(
         &self,
         label: usize,
         seed: u64,
         intensity: f32,
         buf: &mut SequenceBuffers<'_>,
-    ) -> Result<(), BufferError> {
+    ) -> Result<(), EvalError> {
         if buf.input.len() != self.input_len() {
-            return Err(BufferError::Input);
+            return Err(BufferError::Input.into());
         }
         self.neutral_landmarks(buf.neutral, buf.input)?;
         let scratch = buf
@@ -123,11 +125,13 @@ impl<'a> Sequence<'a> {
     ///
     /// # Errors
     /// [`BufferError::Input`] for `t` past [`FRAMES`] or a buffer of the wrong length;
-    /// [`BufferError::Output`], [`BufferError::Scratch`] as the decoder reports them.
-    pub fn frame(&self, t: usize, buf: &mut SequenceBuffers<'_>) -> Result<(), BufferError> {
+    /// [`BufferError::Output`], [`BufferError::Scratch`] as the decoder reports them;
+    /// [`EvalError::Input`] for curve frames or a neutral the decoder refuses
+    /// ([`S2dDecoder::input`], [`S2dDecoder::decode_onto`]).
+    pub fn frame(&self, t: usize, buf: &mut SequenceBuffers<'_>) -> Result<(), EvalError> {
         let d = self.input_len();
         if t > FRAMES || buf.curve.len() != self.curve_len() {
-            return Err(BufferError::Input);
+            return Err(BufferError::Input.into());
         }
         let (first, rest) = buf.curve.split_at(d);
         let to = match t.checked_sub(1) {
@@ -152,7 +156,7 @@ impl<'a> Sequence<'a> {
     ///
     /// # Errors
     /// As [`Sequence::frame`].
-    pub fn frame_hash(&self, t: usize, buf: &mut SequenceBuffers<'_>) -> Result<u64, BufferError> {
+    pub fn frame_hash(&self, t: usize, buf: &mut SequenceBuffers<'_>) -> Result<u64, EvalError> {
         self.frame(t, buf)?;
         Ok(frame_hash(buf.vertices))
     }
@@ -285,19 +289,31 @@ mod tests {
     fn bad_buffers_labels_and_frames_are_refused() {
         let s = sequence();
         let mut b = Owned::new(&s, vec![0.0; 6]);
-        assert_eq!(s.curve(0, 1, 1.0, &mut b.view()), Err(BufferError::Input));
+        assert_eq!(
+            s.curve(0, 1, 1.0, &mut b.view()),
+            Err(BufferError::Input.into())
+        );
         let mut b = Owned::new(&s, Vec::new());
-        assert_eq!(s.curve(12, 1, 1.0, &mut b.view()), Err(BufferError::Input));
+        assert_eq!(
+            s.curve(12, 1, 1.0, &mut b.view()),
+            Err(BufferError::Input.into())
+        );
         s.curve(0, 1, 1.0, &mut b.view()).unwrap();
-        assert_eq!(s.frame(FRAMES + 1, &mut b.view()), Err(BufferError::Input));
+        assert_eq!(
+            s.frame(FRAMES + 1, &mut b.view()),
+            Err(BufferError::Input.into())
+        );
         b.scratch.truncate(s.scratch_len() - 1);
         assert!(s.frame(1, &mut b.view()).is_err());
         let mut b = Owned::new(&s, Vec::new());
         b.input.pop();
-        assert_eq!(s.curve(0, 1, 1.0, &mut b.view()), Err(BufferError::Input));
+        assert_eq!(
+            s.curve(0, 1, 1.0, &mut b.view()),
+            Err(BufferError::Input.into())
+        );
         let mut b = Owned::new(&s, Vec::new());
         b.curve.pop();
-        assert_eq!(s.frame(1, &mut b.view()), Err(BufferError::Input));
+        assert_eq!(s.frame(1, &mut b.view()), Err(BufferError::Input.into()));
     }
 
     #[test]

@@ -4,7 +4,8 @@
 //!
 //! Positions are `f32` triples interleaved `x, y, z` per vertex.
 
-use crate::error::{BufferError, FormatError};
+use crate::error::{Argument, BufferError, FormatError, InputError};
+use crate::input::check_value;
 use crate::linalg::{Mat3, Rigid, Vec3};
 use crate::rotation;
 use crate::tensor::{F32s, U32s};
@@ -45,6 +46,22 @@ impl BoneTransform {
         }
     }
 
+    /// [`Self::from_9d`] refusing what it would have to guess ([`rotation::try_rigid_from_9d`]);
+    /// `argument` names the caller's 9 values in errors.
+    ///
+    /// # Errors
+    /// [`InputError`] naming the value or the rotation's degenerate column.
+    pub fn try_from_9d(
+        params: &[f32; 9],
+        pivot: Vec3,
+        argument: Argument,
+    ) -> Result<Self, InputError> {
+        Ok(Self {
+            rigid: rotation::try_rigid_from_9d(params, argument)?,
+            pivot,
+        })
+    }
+
     /// `T_b(x) = R (x − p) + p + t`, evaluated as `((R (x − p)) + p) + t`.
     #[inline]
     pub fn apply(&self, x: Vec3) -> Vec3 {
@@ -67,6 +84,32 @@ impl Pose {
         jaw: BoneTransform::IDENTITY,
         head: Rigid::IDENTITY,
     };
+
+    /// Checks a pose built by hand (a pose from `AimActor::pose_from_9d` always passes): every
+    /// rotation entry finite and within ±[`crate::layout::MAX_FACTOR`], every translation and
+    /// the pivot within ±[`crate::layout::MAX_COORDINATE`]. The matrices need not be rotations;
+    /// these bounds alone keep a valid actor's pose finite.
+    ///
+    /// # Errors
+    /// [`InputError`] naming [`Argument::PoseHead`] (rotation by columns 0..9, translation
+    /// 9..12) or [`Argument::PoseJaw`] (the same, then the pivot 12..15) and the value.
+    pub fn check(&self) -> Result<(), InputError> {
+        let [h0, h1, h2] = self.head.rot.cols;
+        check_vectors(Argument::PoseHead, &[h0, h1, h2, self.head.trans])?;
+        let [j0, j1, j2] = self.jaw.rigid.rot.cols;
+        let jaw = [j0, j1, j2, self.jaw.rigid.trans, self.jaw.pivot];
+        check_vectors(Argument::PoseJaw, &jaw)
+    }
+}
+
+/// [`check_value`] of every component of `vectors`, indexed x y z per vector.
+fn check_vectors(argument: Argument, vectors: &[Vec3]) -> Result<(), InputError> {
+    for (i, v) in vectors.iter().enumerate() {
+        for (j, x) in v.to_array().into_iter().enumerate() {
+            check_value(argument, 3 * i + j, x)?;
+        }
+    }
+    Ok(())
 }
 
 /// The neutral skin point from the anatomy: `s0 = b0 + d0 · n0`.
@@ -178,13 +221,14 @@ impl<'a> Triangles<'a> {
     ///
     /// # Errors
     /// [`FormatError::IncompatibleShapes`] if the number of indices is not a multiple of 3;
-    /// [`FormatError::IndexOutOfRange`] if an index is `>= n_vertices`.
+    /// [`FormatError::IndexOutOfRange`] (argument `indices`, the index's position) if an index
+    /// is `>= n_vertices`.
     pub fn new(indices: U32s<'a>, n_vertices: usize) -> Result<Self, FormatError> {
         if !indices.len().is_multiple_of(3) {
             return Err(FormatError::IncompatibleShapes);
         }
-        if indices.iter().any(|i| i as usize >= n_vertices) {
-            return Err(FormatError::IndexOutOfRange);
+        if let Some(at) = indices.iter().position(|i| i as usize >= n_vertices) {
+            return Err(FormatError::index_out_of_range("indices", at));
         }
         Ok(Self {
             indices,
@@ -417,7 +461,10 @@ mod tests {
         let b = u32_bytes(&[0, 1, 2, 2, 1, 3]);
         let idx = U32s::new(&b).unwrap();
         assert!(Triangles::new(idx, 4).is_ok());
-        assert_eq!(Triangles::new(idx, 3), Err(FormatError::IndexOutOfRange));
+        assert_eq!(
+            Triangles::new(idx, 3),
+            Err(FormatError::index_out_of_range("indices", 5))
+        );
         assert_eq!(
             Triangles::new(idx.slice(0, 4), 4),
             Err(FormatError::IncompatibleShapes)

@@ -27,8 +27,9 @@ impl<'a> Csr<'a> {
     /// # Errors
     /// - [`FormatError::IncompatibleShapes`] if `row_ptr` does not hold `rows + 1` values or
     ///   `col_idx` and `values` differ in length;
-    /// - [`FormatError::IndexOutOfRange`] if `row_ptr[0] != 0`, `row_ptr` decreases anywhere, its
-    ///   last value is not `nnz`, or a column index is `>= cols`;
+    /// - [`FormatError::IndexOutOfRange`] naming `row_ptr` and the pointer's position if
+    ///   `row_ptr[0] != 0`, `row_ptr` decreases anywhere or its last value is not `nnz`, or
+    ///   naming `col_idx` and the entry if a column index is `>= cols`;
     /// - [`FormatError::NonFinite`] if a value is NaN or infinite.
     pub fn new(
         rows: usize,
@@ -41,21 +42,21 @@ impl<'a> Csr<'a> {
             return Err(FormatError::IncompatibleShapes);
         }
         if row_ptr.get(0) != Some(0) {
-            return Err(FormatError::IndexOutOfRange);
+            return Err(FormatError::index_out_of_range("row_ptr", 0));
         }
         let mut prev = 0usize;
-        for p in row_ptr.iter() {
+        for (at, p) in row_ptr.iter().enumerate() {
             let p = p as usize;
             if p < prev {
-                return Err(FormatError::IndexOutOfRange);
+                return Err(FormatError::index_out_of_range("row_ptr", at));
             }
             prev = p;
         }
         if prev != values.len() {
-            return Err(FormatError::IndexOutOfRange);
+            return Err(FormatError::index_out_of_range("row_ptr", rows));
         }
-        if col_idx.iter().any(|c| c as usize >= cols) {
-            return Err(FormatError::IndexOutOfRange);
+        if let Some(at) = col_idx.iter().position(|c| c as usize >= cols) {
+            return Err(FormatError::index_out_of_range("col_idx", at));
         }
         if !all_finite(values) {
             return Err(FormatError::NonFinite);
@@ -67,6 +68,34 @@ impl<'a> Csr<'a> {
             col_idx,
             values,
         })
+    }
+
+    /// The worst-case magnitude of [`Self::mul_dense`]'s outputs for inputs of magnitude at most
+    /// `x`: per row `Σ |v| · x` in `f64`, widened by the rounding of the `f32` sum.
+    ///
+    /// # Errors
+    /// The first row whose bound passes ±[`crate::layout::MAX_NETWORK_VALUE`].
+    pub fn bound(&self, x: f64) -> Result<f64, usize> {
+        let limit = f64::from(crate::layout::MAX_NETWORK_VALUE);
+        let mut ptrs = self.row_ptr.iter();
+        let mut start = ptrs.next().unwrap_or(0) as usize;
+        let mut out = 0.0f64;
+        for (row, end) in ptrs.enumerate() {
+            let end = end as usize;
+            let len = end.saturating_sub(start);
+            let mut sum = 0.0f64;
+            for v in self.values.slice(start, len).iter() {
+                sum += f64::from(libm::fabsf(v));
+            }
+            let rounding = crate::nn::rounding_growth(len + 1);
+            let y = sum * x * rounding;
+            if y.is_nan() || y > limit {
+                return Err(row);
+            }
+            out = out.max(y);
+            start = end;
+        }
+        Ok(out)
     }
 
     /// Number of rows.
@@ -226,19 +255,20 @@ mod tests {
             mk(2, 2, &rp, &ci[..4], &va),
             Err(FormatError::IncompatibleShapes)
         );
+        let out_of_range = |what, at| Err(FormatError::index_out_of_range(what, at));
         assert_eq!(
             mk(2, 2, &u(&[1, 1, 2]), &ci, &va),
-            Err(FormatError::IndexOutOfRange)
+            out_of_range("row_ptr", 0)
         );
         assert_eq!(
             mk(2, 2, &u(&[0, 2, 1]), &ci, &va),
-            Err(FormatError::IndexOutOfRange)
+            out_of_range("row_ptr", 2)
         );
         assert_eq!(
             mk(2, 2, &u(&[0, 1, 1]), &ci, &va),
-            Err(FormatError::IndexOutOfRange)
+            out_of_range("row_ptr", 2)
         );
-        assert_eq!(mk(2, 1, &rp, &ci, &va), Err(FormatError::IndexOutOfRange));
+        assert_eq!(mk(2, 1, &rp, &ci, &va), out_of_range("col_idx", 1));
         assert_eq!(
             mk(2, 2, &rp, &ci, &fb(&[1.0, f32::NAN])),
             Err(FormatError::NonFinite)

@@ -26,8 +26,8 @@ impl<'a> Spirals<'a> {
     ///
     /// # Errors
     /// [`FormatError::IncompatibleShapes`] if `len` is zero or `indices` does not hold
-    /// `n_vertices × len` values; [`FormatError::IndexOutOfRange`] if an index is
-    /// `>= n_source_vertices`.
+    /// `n_vertices × len` values; [`FormatError::IndexOutOfRange`] (argument `indices`, the
+    /// index's position) if an index is `>= n_source_vertices`.
     pub fn new(
         indices: U32s<'a>,
         n_vertices: usize,
@@ -37,8 +37,8 @@ impl<'a> Spirals<'a> {
         if len == 0 || Some(indices.len()) != n_vertices.checked_mul(len) {
             return Err(FormatError::IncompatibleShapes);
         }
-        if indices.iter().any(|i| i as usize >= n_source_vertices) {
-            return Err(FormatError::IndexOutOfRange);
+        if let Some(at) = indices.iter().position(|i| i as usize >= n_source_vertices) {
+            return Err(FormatError::index_out_of_range("indices", at));
         }
         Ok(Self {
             indices,
@@ -122,6 +122,17 @@ impl<'a> SpiralConv<'a> {
             out_f,
             activation,
         })
+    }
+
+    /// The worst-case magnitude of the outputs for inputs of magnitude at most `x`: each output
+    /// is a [`crate::nn::Dense`] row over the gathered spiral, bounded the same way
+    /// ([`crate::nn::Dense::bound`]).
+    ///
+    /// # Errors
+    /// The first output feature whose bound passes ±[`crate::layout::MAX_NETWORK_VALUE`].
+    pub fn bound(&self, x: f64) -> Result<f64, usize> {
+        let width = self.spirals.len * self.in_f;
+        crate::nn::layer_bound(self.weight, self.bias, width, self.activation, x)
     }
 
     /// The spirals.
@@ -484,7 +495,7 @@ mod tests {
         assert_eq!(s.spiral(1).iter().collect::<Vec<_>>(), [2, 0, 1]);
         assert_eq!(
             Spirals::new(idx, 2, 3, 2),
-            Err(FormatError::IndexOutOfRange)
+            Err(FormatError::index_out_of_range("indices", 2))
         );
         assert_eq!(
             Spirals::new(idx, 3, 3, 3),

@@ -54,10 +54,12 @@ fn bench(c: &mut Criterion) {
     let bytes = synthetic_actor(9409, 19);
     let actor = AimActor::from_bytes(&bytes).expect("valid actor");
     let weights: Vec<f32> = (0..19).map(|j| j as f32 / 19.0).collect();
-    let pose = actor.pose_from_9d(
-        &[1.0, 0.0, 0.0, 0.0, 0.98, -0.2, 0.0, -0.1, 0.05],
-        &[0.99, 0.0, 0.1, 0.0, 1.0, 0.0, 1.0, 2.0, 3.0],
-    );
+    let pose = actor
+        .pose_from_9d(
+            &[1.0, 0.0, 0.0, 0.0, 0.98, -0.2, 0.0, -0.1, 0.05],
+            &[0.99, 0.0, 0.1, 0.0, 1.0, 0.0, 1.0, 2.0, 3.0],
+        )
+        .expect("a valid pose");
     let mut out = vec![0.0; 3 * actor.vertex_count()];
     let mut normals = vec![0.0; 3 * actor.vertex_count()];
     let mut group = c.benchmark_group("aim_playback");

@@ -328,7 +328,7 @@ fn exported_rig_poses_as_the_core_plays() {
     let (mut worst_core, mut worst_rounding) = (0.0f64, 0.0f64);
     let mut core = vec![0.0f32; 3 * v];
     for (f, (frame, gl)) in frames.iter().zip(&posed).enumerate() {
-        let pose = actor.pose_from_9d(&frame.jaw, &frame.head);
+        let pose = actor.pose_from_9d(&frame.jaw, &frame.head).unwrap();
         actor.pose(&pose, &frame.weights, &mut core).unwrap();
         let gl_units: Vec<f32> = gl.iter().map(|x| (x / scale) as f32).collect();
         for i in 0..3 * v {

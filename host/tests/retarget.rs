@@ -131,7 +131,11 @@ fn the_parts_are_the_jaw_alone_and_the_soft_tissue_alone() {
         let (head, j) = original.head_jaw(f).unwrap();
         let mut expected = vec![0.0; jaw[f].len()];
         actor
-            .pose(&actor.pose_from_9d(&j, &head), &zeros, &mut expected)
+            .pose(
+                &actor.pose_from_9d(&j, &head).unwrap(),
+                &zeros,
+                &mut expected,
+            )
             .unwrap();
         assert_eq!(jaw[f], expected, "frame {f}: jaw only");
         // Soft tissue only: the same head, the jaw at rest, the fit's coefficients.
@@ -378,7 +382,7 @@ fn the_points_section_is_checked_against_the_actor_and_the_coefficients() {
     let mut out = vec![0.0; 3 * actor.vertex_count()];
     assert_eq!(
         p.pose(&actor, 0, &mut scratch, &mut out),
-        Err(BufferError::Input)
+        Err(BufferError::Input.into())
     );
     // Points beside global coefficients mean nothing and are refused.
     let jaw = retarget_files("aim-ict.sinew", "aim-ict.sinew", "fit-ict.sinew", Part::Jaw).unwrap();

@@ -92,3 +92,57 @@ impl Rng {
         (0..n).map(|_| self.uniform(lo, hi)).collect()
     }
 }
+
+/// A copy of the valid `.sinew` file `bytes` with value `index` of its `f32` section `name` set to
+/// `value`, and every checksum recomputed ([`reseal`]): a file whose CRCs are valid but whose
+/// numbers are not. Panics if the section or the value is not there.
+pub fn with_f32(bytes: &[u8], name: &str, index: usize, value: f32) -> Vec<u8> {
+    let mut seen = false;
+    let out = map_f32(bytes, name, |i, x| {
+        seen |= i == index;
+        if i == index { value } else { x }
+    });
+    assert!(seen, "{name} has no value {index}");
+    out
+}
+
+/// A copy of the valid `.sinew` file `bytes` with every value `x` (at index `i`) of its `f32`
+/// section `name` replaced by `f(i, x)`, and every checksum recomputed ([`reseal`]).
+pub fn map_f32(bytes: &[u8], name: &str, mut f: impl FnMut(usize, f32) -> f32) -> Vec<u8> {
+    let file = sinew_core::SinewFile::from_bytes(bytes).expect("a valid file to edit");
+    let section = file
+        .section(name)
+        .unwrap_or_else(|| panic!("no section {name}"));
+    let start = section.offset as usize;
+    let mut out = bytes.to_vec();
+    for i in 0..section.elements() {
+        let at = start + 4 * i;
+        let x = f32::from_le_bytes(out[at..at + 4].try_into().unwrap());
+        out[at..at + 4].copy_from_slice(&f(i, x).to_le_bytes());
+    }
+    reseal(&mut out);
+    out
+}
+
+/// Recomputes every section's CRC-32 and then the header's, so that edited data passes the
+/// checksums (the table's offsets and lengths must still lie inside the file).
+pub fn reseal(bytes: &mut [u8]) {
+    use sinew_core::format::{
+        CRC32, ENTRY_CRC, ENTRY_LENGTH, ENTRY_OFFSET, HEADER_CRC, HEADER_CRC_OFFSET, HEADER_LEN,
+        HEADER_SECTION_COUNT, SECTION_ENTRY_LEN,
+    };
+    let word = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().unwrap());
+    let count = word(bytes, HEADER_SECTION_COUNT.offset) as usize;
+    for i in 0..count {
+        let e = HEADER_LEN + i * SECTION_ENTRY_LEN;
+        let offset = word(bytes, e + ENTRY_OFFSET.offset) as usize;
+        let length = word(bytes, e + ENTRY_LENGTH.offset) as usize;
+        let crc = CRC32.checksum(&bytes[offset..offset + length]);
+        bytes[e + ENTRY_CRC.offset..e + ENTRY_CRC.end()].copy_from_slice(&crc.to_le_bytes());
+    }
+    let mut digest = CRC32.digest();
+    digest.update(&bytes[..HEADER_CRC_OFFSET]);
+    digest.update(&bytes[HEADER_LEN..HEADER_LEN + count * SECTION_ENTRY_LEN]);
+    let crc = digest.finalize();
+    bytes[HEADER_CRC.range()].copy_from_slice(&crc.to_le_bytes());
+}

@@ -1,6 +1,7 @@
 //! The core's S2D decoder on hand-written artefacts: a tiny network whose output is computed by
 //! hand, and the validation of every section's shape and bounds.
 
+use sinew_core::error::{Bound, SectionName};
 use sinew_core::s2d::S2dDecoder;
 use sinew_core::{ArtifactKind, BufferError, FormatError};
 use sinew_host::SinewWriter;
@@ -168,19 +169,19 @@ fn tiny_decoder_hand_computed() {
 
     assert_eq!(
         dec.decode(&[1.0, 2.0], &mut scratch, &mut out),
-        Err(BufferError::Input)
+        Err(BufferError::Input.into())
     );
     assert_eq!(
         dec.decode(&[1.0, 2.0, 3.0], &mut scratch, &mut out[..5]),
-        Err(BufferError::Output)
+        Err(BufferError::Output.into())
     );
     assert_eq!(
         dec.decode(&[1.0, 2.0, 3.0], &mut scratch[..25], &mut out),
-        Err(BufferError::Scratch)
+        Err(BufferError::Scratch.into())
     );
     assert_eq!(
         dec.decode_onto(&[0.0; 3], &[1.0, 2.0, 3.0], &mut scratch, &mut out),
-        Err(BufferError::Input)
+        Err(BufferError::Input.into())
     );
 }
 
@@ -265,7 +266,9 @@ fn every_shape_and_bound_is_validated() {
         (
             "a third level without its sections",
             Box::new(|t| t.levels = vec![2, 2, 1, 1, 1, 1]),
-            FormatError::MissingSection,
+            FormatError::MissingSection {
+                section: SectionName::new("s2d.h2.spiral"),
+            },
         ),
         (
             "empty level",
@@ -280,7 +283,7 @@ fn every_shape_and_bound_is_validated() {
         (
             "coarse spiral past the dummy",
             Box::new(|t| t.sp1[0] = 2),
-            FormatError::IndexOutOfRange,
+            FormatError::index_out_of_range("s2d.h1.spiral", 0),
         ),
         (
             "unknown input normalisation",
@@ -295,7 +298,10 @@ fn every_shape_and_bound_is_validated() {
         (
             "non-finite stage activation parameter",
             Box::new(|t| t.act = Some((vec![5], vec![f32::NAN]))),
-            FormatError::NonFinite,
+            FormatError::NonFiniteValue {
+                section: SectionName::new("s2d.par"),
+                index: 0,
+            },
         ),
         (
             "stage activation without its parameter",
@@ -305,17 +311,23 @@ fn every_shape_and_bound_is_validated() {
         (
             "landmark outside the mesh",
             Box::new(|t| t.lmk[0] = 2),
-            FormatError::IndexOutOfRange,
+            FormatError::index_out_of_range("s2d.lmk", 0),
         ),
         (
             "non-finite neutral",
             Box::new(|t| t.neutral[4] = f32::NAN),
-            FormatError::NonFinite,
+            FormatError::NonFiniteValue {
+                section: SectionName::new("s2d.h0.pos"),
+                index: 4,
+            },
         ),
         (
             "non-finite FC weight",
             Box::new(|t| t.fc_w[1] = f32::INFINITY),
-            FormatError::NonFinite,
+            FormatError::NonFiniteValue {
+                section: SectionName::new("s2d.fc.w"),
+                index: 1,
+            },
         ),
         (
             "FC of the wrong width",
@@ -328,7 +340,7 @@ fn every_shape_and_bound_is_validated() {
         (
             "spiral past the dummy",
             Box::new(|t| t.sp0[1] = 3),
-            FormatError::IndexOutOfRange,
+            FormatError::index_out_of_range("s2d.h0.spiral", 1),
         ),
         (
             "spirals of the wrong count",
@@ -338,17 +350,17 @@ fn every_shape_and_bound_is_validated() {
         (
             "CSR column past the coarse dummy",
             Box::new(|t| t.up_col[3] = 2),
-            FormatError::IndexOutOfRange,
+            FormatError::index_out_of_range("s2d.u0.col", 3),
         ),
         (
             "CSR row pointers decrease",
             Box::new(|t| t.up_ptr[1] = 4),
-            FormatError::IndexOutOfRange,
+            FormatError::index_out_of_range("s2d.u0.ptr", 2),
         ),
         (
             "CSR row pointers end early",
             Box::new(|t| t.up_ptr[3] = 3),
-            FormatError::IndexOutOfRange,
+            FormatError::index_out_of_range("s2d.u0.ptr", 3),
         ),
         (
             "CSR with a row too few",
@@ -363,7 +375,10 @@ fn every_shape_and_bound_is_validated() {
         (
             "non-finite CSR value",
             Box::new(|t| t.up_val[0] = f32::NAN),
-            FormatError::NonFinite,
+            FormatError::NonFiniteValue {
+                section: SectionName::new("s2d.u0.val"),
+                index: 0,
+            },
         ),
         (
             "stage convolution reads the wrong width",
@@ -383,7 +398,55 @@ fn every_shape_and_bound_is_validated() {
         (
             "non-finite output bias",
             Box::new(|t| t.out_b[2] = f32::NEG_INFINITY),
-            FormatError::NonFinite,
+            FormatError::NonFiniteValue {
+                section: SectionName::new("s2d.out.b"),
+                index: 2,
+            },
+        ),
+        (
+            "neutral beyond the coordinate limit",
+            Box::new(|t| t.neutral[4] = 2e5),
+            FormatError::ValueOutOfRange {
+                section: SectionName::new("s2d.h0.pos"),
+                index: 4,
+                bound: Bound::Coordinate,
+            },
+        ),
+        (
+            "up-sampling weight beyond the factor limit",
+            Box::new(|t| t.up_val[0] = -2e3),
+            FormatError::ValueOutOfRange {
+                section: SectionName::new("s2d.u0.val"),
+                index: 0,
+                bound: Bound::Factor,
+            },
+        ),
+        (
+            "stage activation parameter beyond the factor limit",
+            Box::new(|t| t.act = Some((vec![5], vec![1e4]))),
+            FormatError::ValueOutOfRange {
+                section: SectionName::new("s2d.par"),
+                index: 0,
+                bound: Bound::Factor,
+            },
+        ),
+        (
+            // Finite, but inputs within ±1e3 times 1e30 would overflow f32.
+            "FC weight that can overflow",
+            Box::new(|t| t.fc_w[4] = 1e30),
+            FormatError::Unbounded {
+                section: SectionName::new("s2d.fc.w"),
+                row: 1,
+            },
+        ),
+        (
+            // FC outputs up to 1,001 times 1e19: beyond 1e20.
+            "stage convolution weight that can overflow",
+            Box::new(|t| t.conv_w[0] = 1e19),
+            FormatError::Unbounded {
+                section: SectionName::new("s2d.conv.0.w"),
+                row: 0,
+            },
         ),
     ];
     for (what, edit, expected) in cases {
@@ -416,7 +479,9 @@ fn missing_sections_and_wrong_kind() {
         let name = file.section_at(skip).unwrap().name().to_owned();
         assert_eq!(
             S2dDecoder::from_bytes(&w.to_bytes().unwrap()).map(|_| ()),
-            Err(FormatError::MissingSection),
+            Err(FormatError::MissingSection {
+                section: SectionName::new(&name)
+            }),
             "without {name}"
         );
     }

@@ -52,6 +52,29 @@ static int failed(SinewStatus status, const SinewError *err, const char *what) {
 
 static const char *MODE_NAMES[] = {"f32", "q16", "fast"};
 
+/* A NaN in the head is refused in every mode, not guessed into a rotation: the status says so
+ * even without an error record. Returns 1 if it is not refused. */
+static int refuses_nan(const SinewModel *model, const SinewModelInfo *info, const char *what) {
+    float head[9] = {1, 0, 0, 0, 1, 0, 0, 0, 0}, jaw[9] = {1, 0, 0, 0, 1, 0, 0, 0, 0};
+    head[3] = strtof("nan", NULL);
+    float *weights = calloc(info->shape_count + 1, sizeof(float));
+    float *scratch = calloc(info->scratch_floats, sizeof(float));
+    int bad = weights == NULL || scratch == NULL;
+    for (uint32_t m = 0; m < 3 && !bad; m++) {
+        uint64_t hash = 0;
+        SinewStatus status = sinew_aim_frame_hash(model, m, head, jaw, weights, info->shape_count,
+                                                  scratch, info->scratch_floats, &hash, NULL);
+        if (status != SINEW_STATUS_INVALID_INPUT) {
+            fprintf(stderr, "%s: a NaN head in mode %s gave \"%s\", not a refusal\n", what,
+                    MODE_NAMES[m], sinew_status_string((uint32_t)status));
+            bad = 1;
+        }
+    }
+    free(weights);
+    free(scratch);
+    return bad;
+}
+
 /* Plays one replay file against an open model, printing "LABEL FRAME HASH" per frame. Returns the
  * number of differing frames, or -1 when something fails. */
 static int play(const SinewModel *model, const SinewModelInfo *info, const char *path,
@@ -160,6 +183,9 @@ int main(int argc, char **argv) {
             snprintf(path, sizeof path, "%s/%s.%s.replay.sinew", dir, name, MODE_NAMES[m]);
             int r = play(model, &info, path, MODE_NAMES[m]);
             bad = r < 0 ? r : bad + r;
+        }
+        if (bad >= 0 && refuses_nan(model, &info, name)) {
+            bad = -1;
         }
     } else {
         printf("# %s.sinew: %zu vertices, %zu inputs, %zu scratch values; per frame: the decoded "

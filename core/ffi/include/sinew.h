@@ -35,6 +35,10 @@ typedef enum SinewStatus {
   SINEW_STATUS_MODEL_MISMATCH = 7,
   // An internal error was caught before it crossed the C boundary (a bug: please report it).
   SINEW_STATUS_INTERNAL = 8,
+  // A number the caller gave is refused: NaN, infinite, outside its documented range, or
+  // degenerate (a 6D rotation's column too short or parallel to the other, a landmark set
+  // whose points all coincide). The message names the argument and the index.
+  SINEW_STATUS_INVALID_INPUT = 9,
 } SinewStatus;
 
 // What a model or replay handle holds.
@@ -169,6 +173,11 @@ enum SinewStatus sinew_aim_triangles(const struct SinewModel *model,
 // `head`, `jaw`: 9 floats each; `weights`: `weights_len == shape_count`; `positions`:
 // `positions_len == 3 * vertex_count`; `normals`: NULL, or `normals_len == 3 * vertex_count`.
 //
+// A NaN or infinite value, a value out of range (a rotation's beyond ±1e6, a translation's
+// beyond ±1e5, a coefficient's beyond ±1e3) or a degenerate rotation (a column shorter than
+// 1e-6, or the columns parallel) is refused with `SINEW_STATUS_INVALID_INPUT`, the message
+// naming the argument and the index (`head[3] is NaN or infinite`); nothing is written then.
+//
 // # Safety
 // `model` is a live handle; every non-NULL pointer points to at least the stated number of
 // floats (read or written), and output buffers overlap no other argument; `err` is NULL or
@@ -187,7 +196,7 @@ enum SinewStatus sinew_aim_pose(const struct SinewModel *model,
 // Poses an AIM frame in `mode` (a `SINEW_MODE_*` code) and writes its hash to `*hash`: the very
 // hash `sinew replay record` pins and every target checks (`sinew_core::replay::frame_hash`).
 // f32 and fast modes hash the positions then the normals, Q16 mode the positions' raw Q16.16
-// bits.
+// bits. Inputs are refused as `sinew_aim_pose` refuses them, in every mode alike.
 //
 // `scratch`: at least `scratch_floats` floats. Afterwards, in the f32 and fast modes, it holds
 // the frame's positions (first `3 * vertex_count` floats) then its normals; in Q16 mode its
@@ -351,6 +360,11 @@ enum SinewStatus sinew_replay_s2d_neutral(const struct SinewReplay *replay,
                                           float *out,
                                           size_t out_len,
                                           struct SinewError *err);
+
+// What a status code means, as a static NUL-terminated sentence ("a buffer has the wrong length
+// or alignment"), for callers that passed no `SinewError`. An unknown code gives "unknown
+// status". The string is never freed.
+const char *sinew_status_string(uint32_t status);
 
 #ifdef __cplusplus
 }  // extern "C"

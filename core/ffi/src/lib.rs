@@ -27,4 +27,4 @@ pub use replay::{
     sinew_replay_free, sinew_replay_info, sinew_replay_open, sinew_replay_s2d_frame,
     sinew_replay_s2d_neutral,
 };
-pub use status::{SINEW_MESSAGE_LEN, SinewError, SinewStatus};
+pub use status::{SINEW_MESSAGE_LEN, SinewError, SinewStatus, sinew_status_string};

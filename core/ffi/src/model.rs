@@ -161,7 +161,7 @@ fn open(bytes: &'static [u8]) -> Result<SinewModel> {
         other => {
             return Err(Fail::new(
                 SinewStatus::WrongKind,
-                format_args!("the artefact is a {other:?}, not an AIM actor or an S2D decoder"),
+                format_args!("the artefact is {other}, not an AIM actor or an S2D decoder"),
             ));
         }
     };
@@ -265,6 +265,11 @@ pub unsafe extern "C" fn sinew_aim_triangles(
 /// `head`, `jaw`: 9 floats each; `weights`: `weights_len == shape_count`; `positions`:
 /// `positions_len == 3 * vertex_count`; `normals`: NULL, or `normals_len == 3 * vertex_count`.
 ///
+/// A NaN or infinite value, a value out of range (a rotation's beyond ±1e6, a translation's
+/// beyond ±1e5, a coefficient's beyond ±1e3) or a degenerate rotation (a column shorter than
+/// 1e-6, or the columns parallel) is refused with `SINEW_STATUS_INVALID_INPUT`, the message
+/// naming the argument and the index (`head[3] is NaN or infinite`); nothing is written then.
+///
 /// # Safety
 /// `model` is a live handle; every non-NULL pointer points to at least the stated number of
 /// floats (read or written), and output buffers overlap no other argument; `err` is NULL or
@@ -295,14 +300,14 @@ pub unsafe extern "C" fn sinew_aim_pose(
         if let Some(n) = &normals {
             expect_len("normals", n.len(), 3 * actor.vertex_count())?;
         }
-        let pose = actor.pose_from_9d(&jaw, &head);
+        let pose = actor.pose_from_9d(&jaw, &head).map_err(Fail::input)?;
         actor
             .pose(&pose, weights, positions)
-            .map_err(|e| Fail::buffer("pose", e))?;
+            .map_err(|e| Fail::eval("pose", e))?;
         if let Some(n) = normals {
             actor
                 .normals(positions, n)
-                .map_err(|e| Fail::buffer("normals", e))?;
+                .map_err(|e| Fail::eval("normals", e))?;
         }
         Ok(())
     })
@@ -324,7 +329,7 @@ pub(crate) fn mode_of(code: u32) -> Result<Mode> {
 /// Poses an AIM frame in `mode` (a `SINEW_MODE_*` code) and writes its hash to `*hash`: the very
 /// hash `sinew replay record` pins and every target checks (`sinew_core::replay::frame_hash`).
 /// f32 and fast modes hash the positions then the normals, Q16 mode the positions' raw Q16.16
-/// bits.
+/// bits. Inputs are refused as `sinew_aim_pose` refuses them, in every mode alike.
 ///
 /// `scratch`: at least `scratch_floats` floats. Afterwards, in the f32 and fast modes, it holds
 /// the frame's positions (first `3 * vertex_count` floats) then its normals; in Q16 mode its
@@ -434,12 +439,20 @@ pub unsafe extern "C" fn sinew_s2d_landmark_input(
         let decoder = ptr::handle(model, "model")?.s2d()?;
         let neutral = ptr::slice(neutral, landmarks_len, "neutral")?;
         let expressive = ptr::slice(expressive, landmarks_len, "expressive")?;
-        expect_len("the landmark sets", landmarks_len, decoder.input_len())?;
+        if landmarks_len != decoder.input_len() {
+            return Err(Fail::new(
+                SinewStatus::BufferLength,
+                format_args!(
+                    "neutral and expressive have {landmarks_len} elements each, {} expected",
+                    decoder.input_len()
+                ),
+            ));
+        }
         let input = ptr::slice_mut(input, input_len, "input")?;
         expect_len("input", input.len(), decoder.input_len())?;
         decoder
             .input(neutral, expressive, input)
-            .map_err(|e| Fail::buffer("landmark input", e))
+            .map_err(|e| Fail::eval("landmark input", e))
     })
 }
 
@@ -487,7 +500,7 @@ pub unsafe extern "C" fn sinew_s2d_decode(
             Some(n) => decoder.decode_onto(n, input, scratch, vertices),
             None => decoder.decode(input, scratch, vertices),
         }
-        .map_err(|e| Fail::buffer("decode", e))?;
+        .map_err(|e| Fail::eval("decode", e))?;
         if !hash.is_null() {
             let mut h = FrameHasher::new();
             h.write_f32s(vertices);

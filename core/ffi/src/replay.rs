@@ -128,7 +128,7 @@ fn open(bytes: &'static [u8]) -> Result<SinewReplay> {
     if file.kind != ArtifactKind::Replay {
         return Err(Fail::new(
             SinewStatus::WrongKind,
-            format_args!("the artefact is a {:?}, not a replay", file.kind),
+            format_args!("the artefact is {}, not a replay", file.kind),
         ));
     }
     let loaded = if file.section(S2D_INPUTS).is_some() {

@@ -1,11 +1,11 @@
 //! Status codes, the caller's error record, and the one wrapper every entry point runs in.
 
-use std::ffi::c_char;
+use std::ffi::{CStr, c_char};
 use std::fmt::Display;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use sinew_core::replay::ReplayError;
-use sinew_core::{BufferError, FormatError};
+use sinew_core::{BufferError, EvalError, FormatError, InputError};
 
 /// Bytes in [`SinewError::message`], the terminating NUL included. Longer messages are cut at a
 /// character boundary.
@@ -35,6 +35,39 @@ pub enum SinewStatus {
     ModelMismatch = 7,
     /// An internal error was caught before it crossed the C boundary (a bug: please report it).
     Internal = 8,
+    /// A number the caller gave is refused: NaN, infinite, outside its documented range, or
+    /// degenerate (a 6D rotation's column too short or parallel to the other, a landmark set
+    /// whose points all coincide). The message names the argument and the index.
+    InvalidInput = 9,
+}
+
+impl SinewStatus {
+    /// What the status means, in a few words (the text `sinew_status_string` returns).
+    const fn text(code: u32) -> &'static CStr {
+        match code {
+            0 => c"success",
+            1 => c"a required pointer is NULL",
+            2 => c"the bytes are not a valid artefact",
+            3 => c"the artefact or handle is of another kind than the call needs",
+            4 => c"a buffer has the wrong length or alignment",
+            5 => c"an index or code is out of range",
+            6 => c"the model cannot do what was asked",
+            7 => c"the replay was recorded with another model, or does not fit it",
+            8 => c"internal error (a bug: please report it)",
+            9 => c"an input value is NaN, infinite, out of range or degenerate",
+            _ => c"unknown status",
+        }
+    }
+}
+
+/// What a status code means, as a static NUL-terminated sentence ("a buffer has the wrong length
+/// or alignment"), for callers that passed no `SinewError`. An unknown code gives "unknown
+/// status". The string is never freed.
+// Safety (of the unmangled symbol): the name is unique to this library, prefixed `sinew_`.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_status_string(status: u32) -> *const c_char {
+    SinewStatus::text(status).as_ptr()
 }
 
 /// A call's failure, written by every entry point that takes one (pass NULL to skip it). On
@@ -75,10 +108,25 @@ impl Fail {
         Self::new(SinewStatus::BufferLength, format_args!("{what}: {e}"))
     }
 
+    /// A refused input: the core's message names the argument (as the C parameter) and index.
+    pub(crate) fn input(e: InputError) -> Self {
+        Self::new(SinewStatus::InvalidInput, e)
+    }
+
+    /// A frame call's failure: a buffer (`what: ` and the core's message) or a refused input.
+    pub(crate) fn eval(what: &str, e: EvalError) -> Self {
+        match e {
+            EvalError::Input(e) => Self::input(e),
+            EvalError::Buffer(e) => Self::buffer(what, e),
+            e => Self::new(SinewStatus::Internal, format_args!("{what}: {e}")),
+        }
+    }
+
     pub(crate) fn replay(e: ReplayError) -> Self {
         let status = match e {
             ReplayError::NoQ16Cache => SinewStatus::Unsupported,
             ReplayError::Buffer(_) => SinewStatus::BufferLength,
+            ReplayError::Input(_) => SinewStatus::InvalidInput,
             _ => SinewStatus::ModelMismatch,
         };
         Self::new(status, e)

@@ -1,8 +1,9 @@
 // Types of sinew.mjs, Sinew's face models in JavaScript. Reference: docs/WASM.md.
 //
 // Every failure is thrown: an `Error` whose message is sinew-core's (e.g. "header says the file
-// is 81008 bytes, but it is 1000 bytes (truncated or padded)"), a `TypeError` for an argument
-// of the wrong type, a `RangeError` for a frame index that is not a non-negative integer.
+// is 81008 bytes, but it is 1000 bytes (truncated or padded)"), an `InputError` for a value the
+// core refuses (e.g. "head[3] is NaN or infinite"), a `TypeError` for an argument of the wrong
+// type, a `RangeError` for a frame index that is not a non-negative integer.
 
 /** Bytes of a `.sinew` file: an ArrayBuffer or any typed array (node's Buffer included). */
 export type Bytes = ArrayBuffer | ArrayBufferView;
@@ -15,6 +16,20 @@ export type Floats = Float32Array | ArrayLike<number>;
  * Response, its bytes, or a compiled WebAssembly.Module.
  */
 export function init(source?: string | URL | Response | Bytes | WebAssembly.Module): Promise<void>;
+
+/**
+ * A value the core refuses instead of guessing: NaN, infinite, outside its range (a 6D
+ * rotation's values ±1e6, translations and coordinates ±1e5, coefficients and decoder inputs
+ * ±1e3), or degenerate (a rotation's column shorter than 1e-6 or parallel to the other,
+ * landmarks that all coincide). Nothing is computed then.
+ */
+export class InputError extends Error {
+  readonly name: "InputError";
+  /** The parameter's name in this API: `head`, `jaw`, `coefficients`, `positions`, `input`, `neutral`, `neutralLandmarks`, `landmarks`. */
+  readonly argument: string;
+  /** The value's index in it; for a degenerate 6D rotation its column's first index (0 or 3). */
+  readonly index: number;
+}
 
 /** A validated AIM actor or S2D decoder. */
 export class Model {

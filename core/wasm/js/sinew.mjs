@@ -4,10 +4,26 @@
 // The module's exports speak in numbers only (core/wasm/src/exports.rs): inputs are copied
 // into the module's I/O area, an operation returns the length of its result there (or -1, and
 // `sinew_error` gives the message), and models and replays are handles. This file turns that
-// into classes, typed arrays and Error exceptions. WebAssembly memory is little-endian, as are
+// into classes, typed arrays and Error exceptions (an InputError, with the argument and the
+// index, when the core refuses a value). WebAssembly memory is little-endian, as are
 // the typed arrays of every platform a browser or node runs on.
 
 let wasm = null;
+
+/**
+ * A value the core refuses instead of guessing: NaN, infinite, outside its range, or degenerate
+ * (a 6D rotation's column too short or parallel to the other, landmarks that all coincide).
+ * `argument` is the parameter's name in this API (`head`, `coefficients`, `neutralLandmarks`),
+ * `index` the value's position in it (for a degenerate rotation, its column's first index).
+ */
+export class InputError extends Error {
+  constructor(message, argument, index) {
+    super(message);
+    this.name = "InputError";
+    this.argument = argument;
+    this.index = index;
+  }
+}
 
 /**
  * Instantiates the WebAssembly module once. `source` is the module's URL (default: the
@@ -71,13 +87,23 @@ function put(...parts) {
 /** The result of an operation that returned `status`: a copy of its bytes, or an Error thrown. */
 function take(status) {
   const w = exports();
-  if (status < 0) {
-    const len = w.sinew_error();
-    throw new Error(text(len));
-  }
+  if (status < 0) throw failure();
   const ptr = w.sinew_io_ptr() >>> 0;
   // A copy: the memory may grow (and its buffer be replaced) at the next call.
   return new Uint8Array(w.memory.buffer).slice(ptr, ptr + status);
+}
+
+/** The last failed operation's exception: an InputError when the core refused a value. */
+function failure() {
+  const w = exports();
+  // The argument's name first: `sinew_error` replaces the I/O area and forgets the refusal.
+  const len = w.sinew_error_argument();
+  if (len >= 0) {
+    const argument = text(len);
+    const index = w.sinew_error_index();
+    return new InputError(text(w.sinew_error()), argument, index);
+  }
+  return new Error(text(w.sinew_error()));
 }
 
 function text(len) {
@@ -132,7 +158,7 @@ function load(bytes, loader) {
   const w = exports();
   put(bytesOf(bytes, "the file"));
   const handle = loader(w);
-  if (handle < 0) throw new Error(text(w.sinew_error()));
+  if (handle < 0) throw failure();
   return handle;
 }
 

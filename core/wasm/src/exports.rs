@@ -7,7 +7,8 @@
 //! as little-endian values) to the address returned, then calls an operation. An operation reads
 //! its inputs from the I/O area, replaces the area with its result and returns the result's
 //! length in bytes (read it at [`sinew_io_ptr`]), or `-1` when it failed: [`sinew_error`] then
-//! puts the message in the I/O area. No Rust reference to the area is alive between calls, so
+//! puts the message in the I/O area (when the core refused an input, [`sinew_error_argument`]
+//! and [`sinew_error_index`], called first, say which). No Rust reference to the area is alive between calls, so
 //! JavaScript's writes never alias a borrow; memory can grow during any call, so JavaScript
 //! takes a fresh view of it after each.
 //!
@@ -18,9 +19,9 @@
 //! Every export carries `#[unsafe(no_mangle)]` (exported under its own name), the one kind of
 //! unsafe code in this crate; no other symbol in the module has a `sinew_` name.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 
-use crate::{Error, FrameInputs, Model, Performance, Replay};
+use crate::{Error, FrameInputs, Model, Performance, Refused, Replay};
 
 #[derive(Debug)]
 enum Object {
@@ -45,6 +46,8 @@ thread_local! {
     static IO: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
     /// The message of the last failed operation.
     static ERROR: RefCell<String> = const { RefCell::new(String::new()) };
+    /// The input the core refused in the last failed operation, if that was why it failed.
+    static REFUSED: Cell<Option<Refused>> = const { Cell::new(None) };
     /// Models, replays and performances; handle `h` is slot `h − 1`.
     static OBJECTS: RefCell<Vec<Option<Object>>> = const { RefCell::new(Vec::new()) };
 }
@@ -66,7 +69,7 @@ fn finish(outcome: Outcome) -> i32 {
             len
         }
         Err(e) => {
-            ERROR.with_borrow_mut(|m| *m = e.0);
+            fail(e);
             -1
         }
     }
@@ -168,7 +171,7 @@ fn handle_or_error(result: Result<i32, Error>) -> i32 {
     match result {
         Ok(h) => h,
         Err(e) => {
-            ERROR.with_borrow_mut(|m| *m = e.0);
+            fail(e);
             -1
         }
     }
@@ -195,11 +198,41 @@ pub extern "C" fn sinew_io_ptr() -> u32 {
     IO.with_borrow_mut(|io| io.as_mut_ptr() as usize as u32)
 }
 
+/// Keeps a failure for [`sinew_error`] and, when the core refused an input,
+/// [`sinew_error_argument`] and [`sinew_error_index`].
+fn fail(e: Error) {
+    REFUSED.set(e.refused());
+    ERROR.with_borrow_mut(|m| *m = e.message().to_owned());
+}
+
+/// When the last failure was a refused input: puts the argument's name (UTF-8) in the I/O area
+/// and returns its length; otherwise -1. Call it before [`sinew_error`], which forgets it.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_error_argument() -> i32 {
+    match REFUSED.get() {
+        Some(r) => finish(Ok(r.argument.as_bytes().to_vec())),
+        None => -1,
+    }
+}
+
+/// When the last failure was a refused input, the value's index in its argument; otherwise -1.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_error_index() -> i32 {
+    REFUSED
+        .get()
+        .map_or(-1, |r| i32::try_from(r.index).unwrap_or(i32::MAX))
+}
+
 /// Puts the last failure's message (UTF-8) in the I/O area; returns its length in bytes.
 // Safety: exported under its own name; no other symbol in the module is called so.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_error() -> i32 {
+    REFUSED.set(None);
     finish(Ok(ERROR.with_borrow_mut(std::mem::take).into_bytes()))
 }
 

@@ -16,6 +16,7 @@ use std::fmt;
 
 use self_cell::self_cell;
 use sinew_core::aim::AimActor;
+use sinew_core::error::{Argument, EvalError, InputError};
 use sinew_core::format::{ArtifactKind, SinewFile};
 use sinew_core::hash::FrameHasher;
 use sinew_core::replay::{self, AimReplay, S2D_INPUTS, S2dReplay};
@@ -29,25 +30,47 @@ pub use performance::{Performance, PerformanceFrame};
 /// Values in a head or jaw pose: a 6D rotation, then a translation.
 pub const POSE_9D: usize = 9;
 
-/// Why a call failed: the core's message ([`sinew_core::FormatError`], `BufferError` or
-/// `ReplayError` as displayed) or this crate's own about a caller's input.
+/// Why a call failed: the core's message ([`sinew_core::FormatError`], `BufferError`,
+/// `InputError` or `ReplayError` as displayed, a refused input named as the JavaScript API names
+/// the argument) or this crate's own about a caller's input.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Error(String);
+pub struct Error {
+    message: String,
+    input: Option<Refused>,
+}
+
+/// Which input the core refused, named as the JavaScript call names the argument: what the
+/// JavaScript `InputError` carries besides the message.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Refused {
+    /// The argument's name in the JavaScript API (`head`, `coefficients`, `neutralLandmarks`).
+    pub argument: &'static str,
+    /// The value's index in it (for a degenerate 6D rotation, its column's first index).
+    pub index: usize,
+}
 
 impl Error {
     fn new(message: impl Into<String>) -> Self {
-        Self(message.into())
+        Self {
+            message: message.into(),
+            input: None,
+        }
     }
 
     /// The message.
     pub fn message(&self) -> &str {
-        &self.0
+        &self.message
+    }
+
+    /// The refused input, when the core refused one of the call's values.
+    pub fn refused(&self) -> Option<Refused> {
+        self.input
     }
 }
 
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
+        f.write_str(&self.message)
     }
 }
 
@@ -55,19 +78,72 @@ impl std::error::Error for Error {}
 
 impl From<sinew_core::FormatError> for Error {
     fn from(e: sinew_core::FormatError) -> Self {
-        Self(e.to_string())
+        Self::new(e.to_string())
     }
 }
 
 impl From<sinew_core::BufferError> for Error {
     fn from(e: sinew_core::BufferError) -> Self {
-        Self(e.to_string())
+        Self::new(e.to_string())
     }
 }
 
 impl From<replay::ReplayError> for Error {
     fn from(e: replay::ReplayError) -> Self {
-        Self(e.to_string())
+        match e {
+            replay::ReplayError::Input(e) => e.into(),
+            e => Self::new(e.to_string()),
+        }
+    }
+}
+
+impl From<InputError> for Error {
+    fn from(e: InputError) -> Self {
+        Self::input(e, &[])
+    }
+}
+
+impl From<EvalError> for Error {
+    fn from(e: EvalError) -> Self {
+        match e {
+            EvalError::Input(e) => e.into(),
+            e => Self::new(e.to_string()),
+        }
+    }
+}
+
+impl Error {
+    /// The core's message about a refused input, with the argument named as the JavaScript call
+    /// names it: `coefficients` for the core's `weights`, and the names in `rename`.
+    fn input(e: InputError, rename: &[(Argument, &'static str)]) -> Self {
+        let core = e.argument.name();
+        let js = rename
+            .iter()
+            .find(|(a, _)| *a == e.argument)
+            .map(|(_, name)| *name)
+            .unwrap_or(match e.argument {
+                Argument::Weights => "coefficients",
+                _ => core,
+            });
+        let message = e.to_string();
+        Self {
+            message: match message.strip_prefix(core) {
+                Some(rest) => format!("{js}{rest}"),
+                None => message,
+            },
+            input: Some(Refused {
+                argument: js,
+                index: e.index,
+            }),
+        }
+    }
+
+    /// [`Self::input`] for an input refusal, the message as it is otherwise.
+    fn eval(e: EvalError, rename: &[(Argument, &'static str)]) -> Self {
+        match e {
+            EvalError::Input(e) => Self::input(e, rename),
+            e => e.into(),
+        }
     }
 }
 
@@ -194,9 +270,8 @@ impl Model {
             }
             other => {
                 return Err(Error::new(format!(
-                    "{} (a {} artefact; a model is an AIM actor or an S2D decoder)",
+                    "{} ({other}; a model is an AIM actor or an S2D decoder)",
                     sinew_core::FormatError::WrongKind,
-                    other.name()
                 )));
             }
         };
@@ -315,14 +390,15 @@ impl Model {
     /// `head`, `jaw`: `[9]`; `coefficients`: `[M]`; returns `[V, 3]` positions.
     ///
     /// # Errors
-    /// Not an AIM actor, or an input of the wrong length.
+    /// Not an AIM actor, an input of the wrong length, or a value the core refuses (NaN,
+    /// infinite, out of range, a degenerate rotation), named with its argument and index.
     pub fn pose(&self, head: &[f32], jaw: &[f32], coefficients: &[f32]) -> Result<Vec<f32>, Error> {
         let actor = self.aim("pose")?;
         let head = pose_9d("head", head)?;
         let jaw = pose_9d("jaw", jaw)?;
         check_len("coefficients", coefficients.len(), actor.shape_count())?;
         let mut out = vec![0.0; 3 * actor.vertex_count()];
-        actor.pose(&actor.pose_from_9d(&jaw, &head), coefficients, &mut out)?;
+        actor.pose(&actor.pose_from_9d(&jaw, &head)?, coefficients, &mut out)?;
         Ok(out)
     }
 
@@ -332,7 +408,7 @@ impl Model {
     /// `positions`: `[V, 3]`; returns `[V, 3]`.
     ///
     /// # Errors
-    /// Not an AIM actor, or positions of the wrong length.
+    /// Not an AIM actor, positions of the wrong length, or a position that is NaN or infinite.
     pub fn normals(&self, positions: &[f32]) -> Result<Vec<f32>, Error> {
         let actor = self.aim("normals")?;
         check_len("positions", positions.len(), 3 * actor.vertex_count())?;
@@ -348,7 +424,8 @@ impl Model {
     /// `neutral`, `landmarks`: `[inputs / 3, 3]`; returns `[inputs]`.
     ///
     /// # Errors
-    /// Not an S2D decoder, or landmark sets of the wrong length.
+    /// Not an S2D decoder, landmark sets of the wrong length, or a coordinate the core refuses
+    /// (NaN, infinite, out of range) or a set whose points all coincide.
     pub fn landmark_input(&self, neutral: &[f32], landmarks: &[f32]) -> Result<Vec<f32>, Error> {
         let ModelInner::S2d { cell, .. } = &self.inner else {
             return Err(self.wrong_kind("landmarkInput", Kind::S2d));
@@ -357,7 +434,15 @@ impl Model {
         check_len("neutral landmarks", neutral.len(), decoder.input_len())?;
         check_len("landmarks", landmarks.len(), decoder.input_len())?;
         let mut out = vec![0.0; decoder.input_len()];
-        decoder.input(neutral, landmarks, &mut out)?;
+        decoder.input(neutral, landmarks, &mut out).map_err(|e| {
+            Error::eval(
+                e,
+                &[
+                    (Argument::Neutral, "neutralLandmarks"),
+                    (Argument::Expressive, "landmarks"),
+                ],
+            )
+        })?;
         Ok(out)
     }
 
@@ -369,7 +454,8 @@ impl Model {
     /// `input`: `[inputs]`; `neutral`: `[V, 3]`; returns `[V, 3]` vertices.
     ///
     /// # Errors
-    /// Not an S2D decoder, or an input or neutral of the wrong length.
+    /// Not an S2D decoder, an input or neutral of the wrong length, or a value the core
+    /// refuses (NaN, infinite, out of range).
     pub fn decode(&mut self, input: &[f32], neutral: Option<&[f32]>) -> Result<Vec<f32>, Error> {
         let kind_error = self.wrong_kind("decode", Kind::S2d);
         let ModelInner::S2d { cell, scratch } = &mut self.inner else {
@@ -438,9 +524,9 @@ impl Replay {
         let file = SinewFile::from_bytes(&bytes)?;
         if file.kind != ArtifactKind::Replay {
             return Err(Error::new(format!(
-                "{} (a {} artefact, not a replay)",
+                "{} ({}, not a replay)",
                 sinew_core::FormatError::WrongKind,
-                file.kind.name()
+                file.kind
             )));
         }
         let s2d = file.section(S2D_INPUTS).is_some();

@@ -47,9 +47,9 @@ impl Performance {
         let file = sinew_core::format::SinewFile::from_bytes(&bytes)?;
         if file.kind != sinew_core::format::ArtifactKind::Performance {
             return Err(Error::new(format!(
-                "{} (a {} artefact, not a fitted performance)",
+                "{} ({}, not a fitted performance)",
                 sinew_core::FormatError::WrongKind,
-                file.kind.name()
+                file.kind
             )));
         }
         let cell = PerformanceCell::try_new(bytes.into_boxed_slice(), |b| {

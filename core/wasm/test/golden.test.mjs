@@ -141,10 +141,10 @@ test("bad bytes throw the core's message", () => {
 
 test("wrong kinds are refused", () => {
   assert.throws(() => Model.load(data("aim-ict.f32.replay.sinew")), {
-    message: "the artefact is of another kind than expected (a replay artefact; a model is an AIM actor or an S2D decoder)",
+    message: "the artefact is of another kind than expected (a replay; a model is an AIM actor or an S2D decoder)",
   });
   assert.throws(() => Replay.load(data("s2d-ict.sinew")), {
-    message: "the artefact is of another kind than expected (a s2d-decoder artefact, not a replay)",
+    message: "the artefact is of another kind than expected (an S2D decoder, not a replay)",
   });
   const aim = Model.load(data("aim-procedural.sinew"));
   const s2d = Model.load(data("s2d-ict.sinew"));

@@ -68,10 +68,10 @@ test("a performance is refused on another actor, an S2D decoder and as another k
   const s2d = Model.load(data("s2d-ict.sinew"));
   assert.throws(() => perf.check(s2d), { message: "a performance plays on an AIM actor, this model is an S2D decoder" });
   assert.throws(() => Performance.load(data("aim-ict.f32.replay.sinew")), {
-    message: "the artefact is of another kind than expected (a replay artefact, not a fitted performance)",
+    message: "the artefact is of another kind than expected (a replay, not a fitted performance)",
   });
-  assert.throws(() => Model.load(data("fit-ict.sinew")), { message: /a performance artefact/ });
-  assert.throws(() => Replay.load(data("fit-ict.sinew")), { message: /a performance artefact, not a replay/ });
+  assert.throws(() => Model.load(data("fit-ict.sinew")), { message: /\(a fitted performance; a model is/ });
+  assert.throws(() => Replay.load(data("fit-ict.sinew")), { message: /\(a fitted performance, not a replay\)/ });
   const bytes = data("fit-ict.sinew");
   assert.throws(() => Performance.load(bytes.subarray(0, 200)), {
     message: `header says the file is ${bytes.length} bytes, but it is 200 bytes (truncated or padded)`,

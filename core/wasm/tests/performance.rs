@@ -106,10 +106,13 @@ fn another_actor_or_kind_is_refused() {
     let e = Performance::load(data("aim-ict.f32.replay.sinew")).unwrap_err();
     assert_eq!(
         e.message(),
-        "the artefact is of another kind than expected (a replay artefact, not a fitted performance)"
+        "the artefact is of another kind than expected (a replay, not a fitted performance)"
     );
     let e = Model::load(data("fit-ict.sinew")).unwrap_err();
-    assert!(e.message().contains("a performance artefact"), "{e}");
+    assert!(
+        e.message().contains("(a fitted performance; a model is"),
+        "{e}"
+    );
     let bytes = data("fit-ict.sinew");
     let e = Performance::load(bytes[..200].to_vec()).unwrap_err();
     assert_eq!(

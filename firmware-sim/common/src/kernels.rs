@@ -159,7 +159,7 @@ fn mlp(
         *layer = Some(Dense::new(f32s(w)?, f32s(b)?, i, o, *act)?);
     }
     let [Some(l0), Some(l1), Some(l2)] = layers else {
-        return Err(KernelError::Format(FormatError::MissingSection));
+        return Err(KernelError::Format(FormatError::IncompatibleShapes));
     };
     let layers = [l0, l1, l2];
     let net = Mlp::new(&layers)?;

@@ -420,8 +420,11 @@ pub fn phase_costs(
     let buffer = |e| Error::Playback(ReplayError::Buffer(e));
     let mut costs = PhaseCosts::default();
     let t = now();
-    let pose = actor.pose_from_9d(&jaw, &head);
-    actor.pose(&pose, weights, positions).map_err(buffer)?;
+    let refused = |e: sinew_core::EvalError| Error::Playback(e.into());
+    let pose = actor
+        .pose_from_9d(&jaw, &head)
+        .map_err(|e| refused(e.into()))?;
+    actor.pose(&pose, weights, positions).map_err(refused)?;
     costs.pose_f32 = now() - t;
     if let Some(cache) = actor.q16() {
         let t = now();
@@ -435,7 +438,7 @@ pub fn phase_costs(
     sinew_core::fast::vertex_normals(actor.triangles(), positions, normals).map_err(buffer)?;
     costs.normals_fast = now() - t;
     let t = now();
-    actor.normals(positions, normals).map_err(buffer)?;
+    actor.normals(positions, normals).map_err(refused)?;
     costs.normals_f32 = now() - t;
     let t = now();
     let mut h = FrameHasher::new();

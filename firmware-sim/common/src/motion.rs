@@ -90,7 +90,7 @@ impl<'s> MotionRun<'s> {
         carve(&sequence, &mut scratch.frame).and_then(|mut buf| {
             sequence
                 .curve(hashes.label, hashes.seed, hashes.intensity, &mut buf)
-                .map_err(|e| Error::Playback(ReplayError::Buffer(e)))
+                .map_err(|e| Error::Playback(ReplayError::from(e)))
         })?;
         Ok(Self {
             sequence,
@@ -117,7 +117,7 @@ impl<'s> MotionRun<'s> {
         let hash = self
             .sequence
             .frame_hash(t, &mut carve(&self.sequence, self.arena)?)
-            .map_err(|e| Error::Playback(ReplayError::Buffer(e)))?;
+            .map_err(|e| Error::Playback(ReplayError::from(e)))?;
         Ok(FrameCheck {
             frame: t,
             hash,
@@ -213,7 +213,7 @@ pub fn motion_costs(
     let sequence = load(golden)?;
     let h = HashList::parse(golden.replay).ok_or(Error::HashList)?;
     let mut buf = carve(&sequence, &mut scratch.frame)?;
-    let buffer = |e| Error::Playback(ReplayError::Buffer(e));
+    let buffer = |e: sinew_core::EvalError| Error::Playback(ReplayError::from(e));
     let mut costs = MotionCosts::default();
     let start = now();
     sequence

@@ -69,7 +69,7 @@ impl<'s> PerformanceRun<'s> {
 
     fn play(&mut self, f: usize) -> Result<FrameCheck, Error> {
         let n = 3 * self.actor.vertex_count();
-        let buffer = |e| Error::Playback(ReplayError::Buffer(e));
+        let refused = |e: sinew_core::EvalError| Error::Playback(ReplayError::from(e));
         let (positions, normals) = self.scratch.frame.split_at_mut(3 * MAX_VERTICES);
         let (Some(positions), Some(normals)) = (positions.get_mut(..n), normals.get_mut(..n))
         else {
@@ -85,7 +85,7 @@ impl<'s> PerformanceRun<'s> {
             positions,
             normals,
         )
-        .map_err(buffer)
+        .map_err(refused)
     }
 }
 

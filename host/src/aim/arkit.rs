@@ -446,7 +446,11 @@ mod tests {
         let pose = |f: &Frame| {
             let mut out = vec![0.0; 3 * actor.vertex_count()];
             actor
-                .pose(&actor.pose_from_9d(&f.jaw, &f.head), &f.weights, &mut out)
+                .pose(
+                    &actor.pose_from_9d(&f.jaw, &f.head).unwrap(),
+                    &f.weights,
+                    &mut out,
+                )
                 .unwrap();
             out
         };

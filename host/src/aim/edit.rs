@@ -4,8 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
+use sinew_core::FormatError;
 use sinew_core::aim::AimActor;
-use sinew_core::{BufferError, FormatError};
 
 use crate::figures::render::PngError;
 use crate::io::container::ContainerError;
@@ -84,7 +84,7 @@ pub enum EditError {
     },
     /// The core refused the edit.
     #[error(transparent)]
-    Edit(BufferError),
+    Edit(sinew_core::EvalError),
     /// The output folder could not be created.
     #[error(transparent)]
     CreateFolder(#[from] crate::io::atomic::CreateFolderError),

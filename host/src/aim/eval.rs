@@ -27,6 +27,16 @@ pub enum EvalError {
         /// The data's shapes.
         data: usize,
     },
+    /// The core refused to pose a training shape (its learned jaw transform is degenerate or out
+    /// of range).
+    #[error("training shape {shape}")]
+    Pose {
+        /// The shape's index (0 = neutral).
+        shape: usize,
+        /// What the core said.
+        #[source]
+        source: sinew_core::EvalError,
+    },
     /// A ground-truth shape with another vertex count than the model.
     #[error("shape {shape} has {vertices} vertices, the model {model}")]
     VertexCount {
@@ -67,16 +77,26 @@ pub fn training_poses(actor: &AimActor<'_>) -> Result<Vec<[f32; 9]>, EvalError> 
 }
 
 /// Poses training shape `i` (0 = neutral) through the core.
-pub fn pose_training_shape(actor: &AimActor<'_>, jaw: &[f32; 9], i: usize) -> Vec<f32> {
+///
+/// # Errors
+/// [`EvalError::Pose`] if the core refuses the learned jaw transform `jaw` (the buffers' sizes
+/// come from the actor itself).
+pub fn pose_training_shape(
+    actor: &AimActor<'_>,
+    jaw: &[f32; 9],
+    i: usize,
+) -> Result<Vec<f32>, EvalError> {
     let mut w = vec![0.0; actor.shape_count()];
     if i > 0 {
         w[i - 1] = 1.0;
     }
-    let pose = actor.pose_from_9d(jaw, &IDENTITY_9D);
+    let refused = |source| EvalError::Pose { shape: i, source };
+    let pose = actor
+        .pose_from_9d(jaw, &IDENTITY_9D)
+        .map_err(|e| refused(e.into()))?;
     let mut out = vec![0.0; 3 * actor.vertex_count()];
-    // Buffer sizes come from the actor itself, so this cannot fail.
-    let _ = actor.pose(&pose, &w, &mut out);
-    out
+    actor.pose(&pose, &w, &mut out).map_err(refused)?;
+    Ok(out)
 }
 
 /// Errors of the baked `actor` against `shapes` (neutral first, the training order).
@@ -109,7 +129,7 @@ pub fn shape_errors(
                 model: v,
             });
         }
-        let posed = pose_training_shape(actor, &poses[i], i);
+        let posed = pose_training_shape(actor, &poses[i], i)?;
         let errs: Vec<f32> = gt
             .iter()
             .zip(posed.chunks_exact(3))

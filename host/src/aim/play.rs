@@ -4,8 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
+use sinew_core::FormatError;
 use sinew_core::aim::AimActor;
-use sinew_core::{BufferError, FormatError};
 
 use crate::io::container::ContainerError;
 use crate::io::mesh::{Mesh, MeshError};
@@ -89,7 +89,7 @@ pub enum PlayError {
         frame: usize,
         /// The core's reason.
         #[source]
-        source: BufferError,
+        source: sinew_core::EvalError,
     },
     /// A frame's OBJ could not be written.
     #[error(transparent)]
@@ -223,7 +223,12 @@ pub fn play_frames(
     // The core's f32 posing, as `sinew_core::replay::pose_frame` does it in f32 mode, without
     // the normals an OBJ does not carry.
     for (i, f) in frames.iter().enumerate() {
-        let pose = actor.pose_from_9d(&f.jaw, &f.head);
+        let pose = actor
+            .pose_from_9d(&f.jaw, &f.head)
+            .map_err(|e| PlayError::Pose {
+                frame: i,
+                source: e.into(),
+            })?;
         actor
             .pose(&pose, &f.weights, &mut buf)
             .map_err(|source| PlayError::Pose { frame: i, source })?;

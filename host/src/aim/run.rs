@@ -282,7 +282,7 @@ pub fn pictures(bytes: &[u8], set: &TrainingSet, dir: &Path) -> Result<(), RunEr
         .max_by(|a, b| a.1.1.mean.total_cmp(&b.1.1.mean))
         .map_or(0, |(i, _)| i);
     let poses = super::eval::training_poses(&actor)?;
-    let posed = super::eval::pose_training_shape(&actor, &poses[worst], worst);
+    let posed = super::eval::pose_training_shape(&actor, &poses[worst], worst)?;
     let posed: Vec<[f32; 3]> = crate::io::mesh::points(posed.iter().copied());
     // Each figure from the front and from three-quarters, side by side.
     let both = |positions: &[[f32; 3]], values: &[f32], hi: f32, label: &str, title: &str| {

@@ -131,6 +131,15 @@ pub enum GltfError {
         #[source]
         source: FormatError,
     },
+    /// The core refused a frame's head or jaw (a degenerate or out-of-range transform).
+    #[error("frame {frame}")]
+    Frame {
+        /// The frame.
+        frame: usize,
+        /// What the core said.
+        #[source]
+        source: sinew_core::InputError,
+    },
     /// The glTF document could not be serialised.
     #[error(transparent)]
     Json(#[from] serde_json::Error),
@@ -541,7 +550,7 @@ pub fn glb(
             &place,
             pivot_m,
             [face_node, jaw, head],
-        );
+        )?;
     }
     let scene = b.root.push(json::Scene {
         extensions: None,
@@ -574,16 +583,18 @@ fn animate(
     place: &Place,
     pivot_m: [f32; 3],
     [face, jaw, head]: [json::Index<json::Node>; 3],
-) {
+) -> Result<(), GltfError> {
     use json::accessor::Type;
     use json::animation::Property;
     let times: Vec<f32> = (0..frames.len()).map(|i| i as f32 / fps).collect();
     let input = b.floats(&times, Type::Scalar, true, None);
     let mut weights = Vec::new();
     let (mut jt, mut jr, mut ht, mut hr) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for f in frames {
+    for (frame, f) in frames.iter().enumerate() {
         weights.extend_from_slice(&f.weights);
-        let pose = actor.pose_from_9d(&f.jaw, &f.head);
+        let pose = actor
+            .pose_from_9d(&f.jaw, &f.head)
+            .map_err(|source| GltfError::Frame { frame, source })?;
         let t = pose.jaw.rigid.trans;
         jt.extend(
             place
@@ -653,6 +664,7 @@ fn animate(
         name: Some("performance".into()),
         samplers,
     });
+    Ok(())
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 //! they are the bits every target plays.
 
 use sinew_core::aim::AimActor;
-use sinew_core::error::{BufferError, FormatError};
+use sinew_core::error::FormatError;
 use sinew_core::format::ArtifactKind;
 use sinew_core::performance::{self as perf, Performance};
 use sinew_core::replay::{hash_words, model_hash};
@@ -50,7 +50,7 @@ pub enum BakeError {
         frame: usize,
         /// What the core said.
         #[source]
-        source: BufferError,
+        source: sinew_core::EvalError,
     },
 }
 

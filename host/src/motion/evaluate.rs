@@ -26,7 +26,6 @@ use std::path::{Path, PathBuf};
 use burn::tensor::Device;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use sinew_core::error::BufferError;
 use sinew_core::motion::MotionGenerator;
 use sinew_core::s2d::S2dDecoder;
 
@@ -121,7 +120,7 @@ pub enum EvalError {
         seed: u64,
         /// What the core said.
         #[source]
-        source: BufferError,
+        source: sinew_core::EvalError,
     },
     /// The decoder refused a motion whose landmarks are re-extracted.
     #[error("{}: re-extracting landmarks", path.display())]
@@ -167,10 +166,10 @@ pub enum EvalError {
 pub enum RedetectError {
     /// The frame cannot be the decoder's input.
     #[error("decoder input")]
-    Input(#[source] BufferError),
+    Input(#[source] sinew_core::EvalError),
     /// The frame cannot be decoded.
     #[error("decoding")]
-    Decode(#[source] BufferError),
+    Decode(#[source] sinew_core::EvalError),
 }
 
 /// Seeds of the k-th generated test motion: `seed · SEED_STRIDE + k`; diversity seed j:

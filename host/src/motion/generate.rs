@@ -123,7 +123,7 @@ pub enum MotionGenerateError {
     },
     /// The core refused to generate a motion.
     #[error("generating")]
-    Generating(#[source] BufferError),
+    Generating(#[source] sinew_core::EvalError),
     /// The motion's curve cannot be decoded onto the neutral.
     #[error("decoding the motion")]
     DecodeMotion(#[source] BufferError),
@@ -134,7 +134,7 @@ pub enum MotionGenerateError {
         frame: usize,
         /// What the core said.
         #[source]
-        source: BufferError,
+        source: sinew_core::EvalError,
     },
     /// Two motions with no geodesic between them.
     #[error(transparent)]
@@ -375,7 +375,7 @@ pub fn interpolate(
     generator
         .motion(a, opts.seed, &mut scratch, &mut q1)
         .and_then(|()| generator.motion(b, opts.seed, &mut scratch, &mut q2))
-        .map_err(MotionGenerateError::Generating)?;
+        .map_err(|e| MotionGenerateError::Generating(e.into()))?;
     let d = generator.dims();
     let mut buffers = l.buffers();
     let mut apexes = Vec::with_capacity(steps);

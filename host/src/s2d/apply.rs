@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use sinew_core::error::{BufferError, FormatError};
+use sinew_core::error::FormatError;
 use sinew_core::s2d::S2dDecoder;
 
 use crate::io::container::ContainerError;
@@ -82,10 +82,10 @@ pub enum ApplyError {
 pub enum DecodeError {
     /// The landmarks cannot be the decoder's input.
     #[error("landmarks")]
-    Landmarks(#[source] BufferError),
+    Landmarks(#[source] sinew_core::EvalError),
     /// The input cannot be decoded.
     #[error("decoding")]
-    Decoding(#[source] BufferError),
+    Decoding(#[source] sinew_core::EvalError),
 }
 
 /// A loaded decoder with its buffers.

@@ -205,7 +205,7 @@ fn the_baked_generator_is_a_motion_generator_the_core_reads() {
     );
     assert_eq!(
         core.landmarks(0, 1, 1.0, &neutral[..3], &mut scratch, &mut curve),
-        Err(sinew_core::BufferError::Input)
+        Err(sinew_core::BufferError::Input.into())
     );
 
     // Diversity: different seeds give different motions of one label, at a positive mean

@@ -52,12 +52,12 @@ pub enum ExperimentError {
     #[error("the model's landmark vertices differ from the pairs'")]
     Landmarks,
     /// The core refused to decode a pair.
-    #[error("decoding pair {pair}: {error:?}")]
+    #[error("decoding pair {pair}: {error}")]
     Decode {
         /// The pair.
         pair: usize,
         /// The core's error.
-        error: sinew_core::BufferError,
+        error: sinew_core::EvalError,
     },
     /// A model file the core cannot read.
     #[error("{}: {source}", path.display())]
