@@ -4,75 +4,19 @@
 #![allow(unsafe_code)] // Calling the C API is `unsafe` by nature; each call site says why it holds.
 
 use std::ffi::CStr;
-use std::path::PathBuf;
 use std::ptr::null_mut;
 
 use sinew::*;
 
-fn new_error() -> SinewError {
-    SinewError {
-        status: SinewStatus::Internal,
-        message: [0; SINEW_MESSAGE_LEN],
-    }
-}
-
-fn message(err: &SinewError) -> String {
-    // Safety: the library always NUL-terminates the message within the array.
-    unsafe { CStr::from_ptr(err.message.as_ptr()) }
-        .to_str()
-        .unwrap()
-        .to_owned()
-}
-
-/// An open model over bytes the struct keeps alive (the handle borrows them).
-struct Model {
-    handle: *mut SinewModel,
-    info: SinewModelInfo,
-    _bytes: Vec<u8>,
-}
-
-impl Model {
-    fn open(name: &str) -> Self {
-        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../tests/data")
-            .join(name);
-        let bytes = std::fs::read(&path).unwrap();
-        let mut handle = null_mut();
-        let mut info = std::mem::MaybeUninit::uninit();
-        // Safety: `bytes` outlives the handle (both in `Model`, freed in `drop` first); `info`
-        // is written by a successful call.
-        let info = unsafe {
-            assert_eq!(
-                sinew_model_open(bytes.as_ptr(), bytes.len(), &mut handle, null_mut()),
-                SinewStatus::Ok
-            );
-            assert_eq!(
-                sinew_model_info(handle, info.as_mut_ptr(), null_mut()),
-                SinewStatus::Ok
-            );
-            info.assume_init()
-        };
-        Self {
-            handle,
-            info,
-            _bytes: bytes,
-        }
-    }
-}
-
-impl Drop for Model {
-    fn drop(&mut self) {
-        // Safety: the handle came from `sinew_model_open` and is freed once.
-        unsafe { sinew_model_free(self.handle) };
-    }
-}
+mod common;
+use common::{Model, message, new_error};
 
 /// Non-finite, out-of-range and degenerate inputs are refused with `SINEW_STATUS_INVALID_INPUT`
 /// in every mode, the message naming the argument and the index, and nothing is written.
 #[test]
 fn refused_inputs_name_the_argument_and_index() {
     let aim = Model::open("aim-procedural.sinew");
-    let info = aim.info;
+    let info = aim.info();
     let identity = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0f32];
     let weights = vec![0.0f32; info.shape_count];
     let with = |i: usize, v: f32| {
