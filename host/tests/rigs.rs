@@ -523,6 +523,65 @@ fn a_rig_is_learned_and_played_back_in_its_own_frame() {
     ]);
     let e: serde_json::Value = serde_json::from_slice(&std::fs::read(&eval).unwrap()).unwrap();
     assert_eq!(e["mean_error_mm"], r["mean_error_mm"]);
+    // The kit actor's golden fit retargeted onto the rig's actor (another topology, 4 of its 19
+    // shapes): matched through the face template, each rig shape playing the kit shape of its
+    // name; the rig's face moves as the kit actor's does at the same places.
+    let retargeted = d.join("retarget");
+    let (source, fit) = (
+        common::repo("tests/data/aim-ict.sinew"),
+        common::repo("tests/data/fit-ict.sinew"),
+    );
+    ok(&[
+        "retarget",
+        "--source",
+        &source,
+        "--target",
+        s(&model),
+        "--fit",
+        &fit,
+        "--out",
+        s(&retargeted),
+    ]);
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(retargeted.join("report.json")).unwrap()).unwrap();
+    assert_eq!(r["correspondence"], "template");
+    assert_eq!(r["shapes_at_rest"], serde_json::json!([]));
+    let (source, fit) = (std::fs::read(source).unwrap(), std::fs::read(fit).unwrap());
+    let target = std::fs::read(&model).unwrap();
+    let (moved, _) = sinew_host::fit::bake::play(&source, &fit).unwrap();
+    let perf = std::fs::read(retargeted.join("target.sinew")).unwrap();
+    let (played, _) = sinew_host::fit::bake::play(&target, &perf).unwrap();
+    let rest = |bytes: &[u8]| -> Vec<[f32; 3]> {
+        let a = sinew_core::aim::AimActor::from_bytes(bytes).unwrap();
+        let flat: Vec<f32> = a.template().iter().collect();
+        flat.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect()
+    };
+    let (from, to) = (rest(&source), rest(&target));
+    let nearest: Vec<usize> = to
+        .iter()
+        .map(|p| {
+            (0..from.len())
+                .min_by(|&a, &b| {
+                    let d = |q: [f32; 3]| (0..3).map(|k| (q[k] - p[k]).powi(2)).sum::<f32>();
+                    d(from[a]).total_cmp(&d(from[b]))
+                })
+                .unwrap()
+        })
+        .collect();
+    for (f, (src, dst)) in moved.iter().zip(&played).enumerate() {
+        let (mut off, mut motion) = (0.0f64, 0.0f64);
+        for (v, &o) in nearest.iter().enumerate() {
+            let a: [f32; 3] = std::array::from_fn(|k| src[3 * o + k] - from[o][k]);
+            let b: [f32; 3] = std::array::from_fn(|k| dst[3 * v + k] - to[v][k]);
+            off += f64::from((0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f32>().sqrt());
+            motion += f64::from((0..3).map(|k| a[k].powi(2)).sum::<f32>().sqrt());
+        }
+        assert!(
+            off < 0.35 * motion,
+            "frame {f}: the rig moves {off} cm away from the kit actor's {motion} cm (sums)"
+        );
+    }
+
     // Shapes the rig lacks are refused by name.
     let stderr = err(&[
         "train",

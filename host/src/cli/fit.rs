@@ -205,8 +205,9 @@ pub(crate) struct RetargetArgs {
     /// The baked AIM actor whose performance is retargeted.
     #[arg(long)]
     source: PathBuf,
-    /// The baked AIM actor that plays it, in vertex correspondence with the source (same
-    /// vertices and triangles, same shapes).
+    /// The baked AIM actor that plays it: in vertex correspondence with the source, or of any
+    /// other topology (matched through the built-in face template); its shapes play the
+    /// source's of the same names.
     #[arg(long)]
     target: PathBuf,
     /// A performance folder of the source (`sinew data performance`) to fit the source to
@@ -271,6 +272,16 @@ pub(crate) fn retarget(args: RetargetArgs) -> Result<()> {
             _ => String::new(),
         }
     );
+    if r.correspondence == "template" {
+        println!("the actors' topologies differ: matched through the built-in face template");
+    }
+    if !r.shapes_at_rest.is_empty() {
+        println!(
+            "{} has no source shape of the name of {}: at rest",
+            args.target.display(),
+            r.shapes_at_rest.join(", ")
+        );
+    }
     Ok(())
 }
 

@@ -291,6 +291,8 @@ pub fn retarget_command(
         fit_mean_error_mm: fit_error,
         seconds_per_frame: parts.seconds_per_frame,
         strip_frames: parts.strip_frames,
+        correspondence: parts.plan.correspondence().to_owned(),
+        shapes_at_rest: parts.plan.unmatched.clone(),
     };
     crate::io::atomic::write(
         &out.join("report.json"),

@@ -1,12 +1,14 @@
 //! Performance retargeting (AIM Sec. 5.4, Fig. 8): a performance fitted on a source actor, played
-//! on a target actor in vertex correspondence.
+//! on a target actor: in vertex correspondence, or of another topology and other shapes through
+//! the built-in face template and the shapes' names ([`plan`]).
 //!
 //! The fit's per-frame head and jaw transforms `T_g`, `T_b` and coefficients `w` are the
 //! target's inputs as they are; only the actor changes, so the target moves as the source did
 //! with its own rest shape, jaw pivot, skinning weights and correctives. Local coefficients
 //! `w_j(c) = F_W(z_j, ĉ)` are evaluated at the source's template points, where the fit learned
 //! them (the performance carries them as `perf.points`), and applied at the target's vertex of
-//! the same index.
+//! the same index, or, across topologies, at the source point that corresponds to each target
+//! vertex. The target's correctives take the source's coefficients of the shapes of their names.
 //!
 //! The same frames split into Fig. 8's two parts: the rigid jaw alone (`T_b` with no
 //! correctives) and the soft tissue alone (the correctives with the jaw at rest); the head
@@ -30,6 +32,9 @@ use crate::io::atomic::AtomicWriteError;
 use crate::io::container::{ContainerError, SinewWriter, WriterError};
 use crate::io::mesh::{Mesh, MeshError, points};
 use crate::training::backend::Backend;
+
+mod plan;
+pub use plan::Plan;
 
 /// The jaw transform of the jaw at rest: the identity's 6D rotation, no translation.
 const JAW_AT_REST: [f32; 9] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0];
@@ -102,44 +107,14 @@ pub enum RetargetError {
         #[source]
         source: ReplayError,
     },
-    /// Actors with different vertex counts.
+    /// Actors that share no shape by name and have different numbers of shapes.
     #[error(
-        "{} has {source_vertices} vertices and {} {target_vertices}: retargeting needs two \
-         actors in vertex correspondence (bake the target on `sinew data neutral --like SOURCE` \
-         for that)",
+        "{} has {source_shapes} correctives and {} {target_shapes}, and no name in common: \
+         the target cannot play the source's shapes",
         source_actor.display(),
         target_actor.display()
     )]
-    VertexCount {
-        /// The source actor's file.
-        source_actor: PathBuf,
-        /// The target actor's file.
-        target_actor: PathBuf,
-        /// The source's vertices.
-        source_vertices: usize,
-        /// The target's vertices.
-        target_vertices: usize,
-    },
-    /// Actors with the same vertex count but other triangles.
-    #[error(
-        "the triangles of {} and {} differ: the actors are not in vertex correspondence",
-        source_actor.display(),
-        target_actor.display()
-    )]
-    Triangles {
-        /// The source actor's file.
-        source_actor: PathBuf,
-        /// The target actor's file.
-        target_actor: PathBuf,
-    },
-    /// Actors trained on different numbers of shapes.
-    #[error(
-        "{} has {source_shapes} correctives and {} {target_shapes}: both must be trained on the \
-         same shapes",
-        source_actor.display(),
-        target_actor.display()
-    )]
-    ShapeCount {
+    NoSharedShapes {
         /// The source actor's file.
         source_actor: PathBuf,
         /// The target actor's file.
@@ -148,6 +123,28 @@ pub enum RetargetError {
         source_shapes: usize,
         /// The target's correctives.
         target_shapes: usize,
+    },
+    /// An actor's shape names (its `shapes` metadata) that cannot be read.
+    #[error("{}: its shape names", path.display())]
+    ShapeNames {
+        /// The actor file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: Box<crate::fit::baseline::BaselineError>,
+    },
+    /// Actors of other topologies whose rest shapes the face template cannot be registered on.
+    #[error(
+        "{}: no correspondence with the other actor (its topology differs, and the face \
+         template could not be registered onto its rest shape)",
+        path.display()
+    )]
+    Correspondence {
+        /// The actor file.
+        path: PathBuf,
+        /// Why the registration failed.
+        #[source]
+        source: Box<crate::rig::RigError>,
     },
     /// A frame whose head and jaw transforms cannot be read.
     #[error("{}: frame {frame} unreadable", path.display())]
@@ -222,73 +219,57 @@ fn actor<'a>(input: Input<'a>) -> Result<AimActor<'a>, RetargetError> {
     })
 }
 
-/// Checks that `source` and `target` are AIM actors in correspondence: the same vertices (count
-/// and triangles) and the same number of correctives.
-fn check_correspondence(
-    (source, src): (Input<'_>, &AimActor<'_>),
-    (target, dst): (Input<'_>, &AimActor<'_>),
-) -> Result<(), RetargetError> {
-    let paths = || (source.path.to_owned(), target.path.to_owned());
-    if src.vertex_count() != dst.vertex_count() {
-        let (source_actor, target_actor) = paths();
-        return Err(RetargetError::VertexCount {
-            source_actor,
-            target_actor,
-            source_vertices: src.vertex_count(),
-            target_vertices: dst.vertex_count(),
-        });
-    }
-    if !src
-        .triangles()
-        .indices()
-        .iter()
-        .eq(dst.triangles().indices().iter())
-    {
-        let (source_actor, target_actor) = paths();
-        return Err(RetargetError::Triangles {
-            source_actor,
-            target_actor,
-        });
-    }
-    if src.shape_count() != dst.shape_count() {
-        let (source_actor, target_actor) = paths();
-        return Err(RetargetError::ShapeCount {
-            source_actor,
-            target_actor,
-            source_shapes: src.shape_count(),
-            target_shapes: dst.shape_count(),
-        });
-    }
-    Ok(())
-}
-
 /// The `.sinew` performance of `part` of `fit` (a performance of the actor `source`) retargeted
 /// onto the actor `target`, with each frame's f32 hash as the core plays it on `target`.
 ///
 /// # Errors
 /// If an input is not what it should be (an actor, a performance), the fit is not of `source`,
-/// or the actors are not in correspondence (the same vertices, triangles and shape count); the
-/// error names the files.
+/// or the actors cannot be put in correspondence ([`Plan::new`]); the error names the files.
 pub fn retarget(
     source: Input<'_>,
     target: Input<'_>,
     fit: Input<'_>,
     part: Part,
 ) -> Result<Vec<u8>, RetargetError> {
+    check_fit(source, fit)?;
+    let plan = Plan::new((source, &actor(source)?), (target, &actor(target)?))?;
+    retarget_planned(source, target, fit, part, &plan)
+}
+
+/// Reads `fit` as a performance of the actor `source`.
+fn check_fit<'a>(source: Input<'_>, fit: Input<'a>) -> Result<Performance<'a>, RetargetError> {
     let src = actor(source)?;
-    let dst = actor(target)?;
-    let not_a_performance = |source| RetargetError::NotAPerformance {
+    let p = Performance::from_bytes(fit.bytes).map_err(|e| RetargetError::NotAPerformance {
         path: fit.path.to_owned(),
-        source,
-    };
-    let p = Performance::from_bytes(fit.bytes).map_err(not_a_performance)?;
+        source: e,
+    })?;
     p.check_actor(source.bytes, &src)
         .map_err(|reason| RetargetError::OtherActor {
             fit: fit.path.to_owned(),
             actor: source.path.to_owned(),
             source: reason,
         })?;
-    check_correspondence((source, &src), (target, &dst))?;
+    Ok(p)
+}
+
+/// [`retarget`] with the actors' [`Plan`] worked out before (once for several parts).
+///
+/// # Errors
+/// As [`retarget`].
+pub fn retarget_planned(
+    source: Input<'_>,
+    target: Input<'_>,
+    fit: Input<'_>,
+    part: Part,
+    plan: &Plan,
+) -> Result<Vec<u8>, RetargetError> {
+    let src = actor(source)?;
+    actor(target)?;
+    let not_a_performance = |source| RetargetError::NotAPerformance {
+        path: fit.path.to_owned(),
+        source,
+    };
+    let p = check_fit(source, fit)?;
     let layout = |e| RetargetError::Layout {
         fit: fit.path.to_owned(),
         target_actor: target.path.to_owned(),
@@ -304,6 +285,9 @@ pub fn retarget(
         format!("{:016x}", model_hash(source.bytes)),
     )
     .meta("retargeted_part", part.name());
+    if !plan.unmatched.is_empty() {
+        w.meta("retargeted_at_rest", plan.unmatched.join(","));
+    }
     w.u32s(
         perf::MODEL_HASH,
         &[2],
@@ -321,7 +305,8 @@ pub fn retarget(
         poses.extend(if part == Part::Soft { JAW_AT_REST } else { jaw });
     }
     w.f32s(perf::POSES, &[frames, 18], &poses).map_err(layout)?;
-    let m = p.shape_count();
+    let m = plan.shapes.len();
+    let in_order = plan.shapes_in_order(p.shape_count());
     match (part, p.coefficients()) {
         (Part::Jaw, _) => {
             for name in [perf::WEIGHTS, perf::CODES, perf::BOX, perf::F_W] {
@@ -330,15 +315,52 @@ pub fn retarget(
             w.f32s(perf::WEIGHTS, &[frames, m], &vec![0.0; frames * m])
                 .map_err(layout)?;
         }
-        (_, Coefficients::Local { points, .. }) => {
+        (_, Coefficients::Local { points, fw, .. }) => {
             // F_W sees the points it was fitted at: the source's own, or those a retargeted
-            // source performance already carries.
+            // source performance already carries, at each target vertex's place on the source.
             let at = points.unwrap_or_else(|| src.template());
-            let values: Vec<f32> = at.iter().collect();
+            let values = plan.points(&src, at);
             w.f32s(perf::POINTS, &[values.len() / 3, 3], &values)
                 .map_err(layout)?;
+            if !in_order {
+                // F_W's last layer gives one output per source shape: its rows, remapped, give
+                // the target's.
+                let last = fw.layers().len() - 1;
+                let layer = &fw.layers()[last];
+                let inputs = layer.inputs();
+                let weight: Vec<f32> = layer.weight().iter().collect();
+                let bias: Vec<f32> = layer.bias().iter().collect();
+                let mut remapped = vec![0.0; m * inputs];
+                for k in 0..inputs {
+                    let column: Vec<f32> = (0..p.shape_count())
+                        .map(|j| weight[j * inputs + k])
+                        .collect();
+                    for (i, v) in plan.remap(&column).into_iter().enumerate() {
+                        remapped[i * inputs + k] = v;
+                    }
+                }
+                let (w_name, b_name) = (
+                    format!("{}.{last}.w", perf::F_W),
+                    format!("{}.{last}.b", perf::F_W),
+                );
+                w.remove_prefixed(&w_name);
+                w.remove_prefixed(&b_name);
+                w.f32s(&w_name, &[m, inputs], &remapped).map_err(layout)?;
+                w.f32s(&b_name, &[m], &plan.remap(&bias)).map_err(layout)?;
+            }
         }
-        (_, Coefficients::Global(_)) => {}
+        (_, Coefficients::Global(weights)) => {
+            if !in_order {
+                let source: Vec<f32> = weights.iter().collect();
+                let remapped: Vec<f32> = source
+                    .chunks_exact(p.shape_count().max(1))
+                    .flat_map(|frame| plan.remap(frame))
+                    .collect();
+                w.remove_prefixed(perf::WEIGHTS);
+                w.f32s(perf::WEIGHTS, &[frames, m], &remapped)
+                    .map_err(layout)?;
+            }
+        }
     }
     let unhashed = w.to_bytes().map_err(layout)?;
     let (_, hashes) = play(target.bytes, &unhashed).map_err(|e| RetargetError::Play {
@@ -386,6 +408,11 @@ pub struct RetargetReport {
     pub seconds_per_frame: f64,
     /// Frames drawn in strip.png (0-based).
     pub strip_frames: Vec<usize>,
+    /// How the target's vertices were matched to the source's: `vertex` (the same vertices and
+    /// triangles) or `template` (another topology, through the built-in face template).
+    pub correspondence: String,
+    /// The target's shapes that play none of the source's (no shape of their name), at rest.
+    pub shapes_at_rest: Vec<String>,
 }
 
 /// The three parts of a fit retargeted and written by [`write_parts`], with what the report
@@ -401,6 +428,8 @@ pub struct Retargeted {
     /// The strip: one row per strip frame; columns the source as fitted, the target, jaw only,
     /// soft tissue only.
     pub strip: Image,
+    /// How the actors were matched.
+    pub plan: Plan,
 }
 
 /// Reads `path` and checks that it is an AIM actor; returns its bytes.
@@ -447,9 +476,11 @@ pub fn write_parts(
         bytes: &fit,
     };
     let start = Instant::now();
+    check_fit(source, fit_input)?;
+    let plan = Plan::new((source, &actor(source)?), (target, &actor(target)?))?;
     let mut parts = Vec::with_capacity(Part::ALL.len());
     for part in Part::ALL {
-        let baked = retarget(source, target, fit_input, part)?;
+        let baked = retarget_planned(source, target, fit_input, part, &plan)?;
         let (frames, _) = play(target.bytes, &baked).map_err(|e| RetargetError::Play {
             fit: fit_path.to_owned(),
             target_actor: target.path.to_owned(),
@@ -498,6 +529,7 @@ pub fn write_parts(
         seconds_per_frame,
         strip: strip_picture(&mesh, &columns, &strip_frames),
         strip_frames,
+        plan,
     })
 }
 

@@ -192,9 +192,14 @@ impl SinewWriter {
         self
     }
 
-    /// Adds a metadata entry. Keys hold no `=` or newline; values no newline.
+    /// Sets a metadata entry (replacing the key's value where it is set already, in its place).
+    /// Keys hold no `=` or newline; values no newline.
     pub fn meta(&mut self, key: &str, value: impl ToString) -> &mut Self {
-        self.metadata.push((key.to_owned(), value.to_string()));
+        let value = value.to_string();
+        match self.metadata.iter_mut().find(|(k, _)| k == key) {
+            Some(entry) => entry.1 = value,
+            None => self.metadata.push((key.to_owned(), value)),
+        }
         self
     }
 

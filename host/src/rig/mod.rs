@@ -14,6 +14,7 @@ use crate::io::mesh::Mesh;
 use crate::io::rig::{IDENTITY, RigFile, RigReadError};
 use crate::io::units::Unit;
 
+pub mod correspond;
 pub mod inspect;
 pub mod landmarks;
 pub mod record;
