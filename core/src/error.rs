@@ -180,7 +180,8 @@ pub enum FormatError {
     TooShort,
     /// The first eight bytes are not the `.sinew` magic.
     BadMagic,
-    /// The file was written by a newer, incompatible major version of the format.
+    /// The file's major format version is outside the range this build reads
+    /// ([`crate::layout::MIN_VERSION_MAJOR`] to [`crate::layout::VERSION_MAJOR`]).
     UnsupportedMajor {
         /// The major version found in the file.
         found: u16,
@@ -307,9 +308,16 @@ impl fmt::Display for FormatError {
                 crate::layout::HEADER_LEN
             ),
             Self::BadMagic => write!(f, "not a .sinew file (bad magic bytes)"),
+            Self::UnsupportedMajor { found } if found > crate::layout::VERSION_MAJOR => write!(
+                f,
+                "format major version {found} is newer than this build reads ({} to {})",
+                crate::layout::MIN_VERSION_MAJOR,
+                crate::layout::VERSION_MAJOR
+            ),
             Self::UnsupportedMajor { found } => write!(
                 f,
-                "format major version {found} is newer than this build supports ({})",
+                "format major version {found} is older than this build reads ({} to {})",
+                crate::layout::MIN_VERSION_MAJOR,
                 crate::layout::VERSION_MAJOR
             ),
             Self::NonZeroReserved => write!(f, "a reserved field or padding byte is not zero"),

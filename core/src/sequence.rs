@@ -129,25 +129,47 @@ impl<'a> Sequence<'a> {
     /// [`EvalError::Input`] for curve frames or a neutral the decoder refuses
     /// ([`S2dDecoder::input`], [`S2dDecoder::decode_onto`]).
     pub fn frame(&self, t: usize, buf: &mut SequenceBuffers<'_>) -> Result<(), EvalError> {
+        self.frame_of(
+            t,
+            buf.curve,
+            buf.neutral,
+            buf.input,
+            buf.scratch,
+            buf.vertices,
+        )
+    }
+
+    /// [`Sequence::frame`] over buffers given one by one, the curve only read: for callers that
+    /// keep a generated curve apart from the buffers of the frames (the C API).
+    ///
+    /// # Errors
+    /// As [`Sequence::frame`].
+    pub fn frame_of(
+        &self,
+        t: usize,
+        curve: &[f32],
+        neutral: &[f32],
+        input: &mut [f32],
+        scratch: &mut [f32],
+        vertices: &mut [f32],
+    ) -> Result<(), EvalError> {
         let d = self.input_len();
-        if t > FRAMES || buf.curve.len() != self.curve_len() {
+        if t > FRAMES || curve.len() != self.curve_len() {
             return Err(BufferError::Input.into());
         }
-        let (first, rest) = buf.curve.split_at(d);
+        let (first, rest) = curve.split_at(d);
         let to = match t.checked_sub(1) {
             None => first,
             Some(k) => rest.get(k * d..(k + 1) * d).ok_or(BufferError::Input)?,
         };
-        self.decoder.input(first, to, buf.input)?;
-        let scratch = buf
-            .scratch
+        self.decoder.input(first, to, input)?;
+        let scratch = scratch
             .get_mut(..self.decoder.scratch_len())
             .ok_or(BufferError::Scratch)?;
-        if buf.neutral.is_empty() {
-            self.decoder.decode(buf.input, scratch, buf.vertices)
+        if neutral.is_empty() {
+            self.decoder.decode(input, scratch, vertices)
         } else {
-            self.decoder
-                .decode_onto(buf.neutral, buf.input, scratch, buf.vertices)
+            self.decoder.decode_onto(neutral, input, scratch, vertices)
         }
     }
 
