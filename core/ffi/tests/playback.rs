@@ -387,9 +387,12 @@ impl Drop for Seq {
     }
 }
 
+/// A hash list's sequence: the label's name and index, the seed and the intensity.
+type Named = (String, usize, u64, f32);
+
 /// `motion-ict.hashes`: the `sequence NAME LABEL SEED INTENSITY` line and the `motion T HASH`
 /// lines.
-fn motion_hashes() -> ((String, usize, u64, f32), Vec<(usize, u64)>) {
+fn motion_hashes() -> (Named, Vec<(usize, u64)>) {
     let text = String::from_utf8(data("motion-ict.hashes")).unwrap();
     let mut sequence = None;
     let mut frames = Vec::new();
