@@ -476,6 +476,8 @@ pub enum Argument {
     Expressive,
     /// A motion's intensity.
     Intensity,
+    /// A generated landmark curve, `[(FRAMES + 1) × 3K]` (a sequence's frames decode from it).
+    Curve,
 }
 
 impl Argument {
@@ -496,6 +498,7 @@ impl Argument {
             Self::Neutral => "neutral",
             Self::Expressive => "expressive",
             Self::Intensity => "intensity",
+            Self::Curve => "curve",
         }
     }
 

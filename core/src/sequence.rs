@@ -10,8 +10,9 @@
 //! working memory is free again before the first frame is decoded. Nothing allocates; every
 //! buffer is the caller's ([`SequenceBuffers`]), sized by [`Sequence`]'s `*_len` methods.
 
-use crate::error::{BufferError, EvalError, FormatError};
+use crate::error::{Argument, BufferError, EvalError, FormatError};
 use crate::hash::frame_hash;
+use crate::input::{check_value, check_values};
 use crate::motion::MotionGenerator;
 use crate::s2d::S2dDecoder;
 use crate::srvf::FRAMES;
@@ -112,6 +113,9 @@ impl<'a> Sequence<'a> {
             return Err(BufferError::Input.into());
         }
         self.neutral_landmarks(buf.neutral, buf.input)?;
+        // The whole face is checked, so that a refusal names the value's index in it (the
+        // generator checks the landmarks gathered from it, and would name their index).
+        check_values(Argument::Neutral, buf.neutral)?;
         let scratch = buf
             .scratch
             .get_mut(..self.generator.scratch_len())
@@ -162,6 +166,13 @@ impl<'a> Sequence<'a> {
             None => first,
             Some(k) => rest.get(k * d..(k + 1) * d).ok_or(BufferError::Input)?,
         };
+        // The two frames are checked where they lie in the curve, so that a refusal names the
+        // value's index in it (the decoder would name its index in one landmark set).
+        for (offset, frame) in [(0, first), (t * d, to)] {
+            for (i, &v) in frame.iter().enumerate() {
+                check_value(Argument::Curve, offset + i, v)?;
+            }
+        }
         self.decoder.input(first, to, input)?;
         let scratch = scratch
             .get_mut(..self.decoder.scratch_len())

@@ -341,14 +341,26 @@ fn sequence_calls_refuse_what_they_cannot_generate() {
         )
     );
     assert_eq!(frame(1, &good, v3 + 3).0, SinewStatus::BufferLength);
-    // A curve frame the decoder refuses.
+    // A curve value, named by its index in the curve.
     let mut bad = good.clone();
-    bad[3 * info.landmark_count + 5] = f32::INFINITY;
+    let at = 3 * info.landmark_count + 5;
+    bad[at] = f32::INFINITY;
     assert_eq!(
         frame(1, &bad, v3),
         (
             SinewStatus::InvalidInput,
-            "expressive[5] is NaN or infinite".into()
+            format!("curve[{at}] is NaN or infinite")
+        )
+    );
+    // A neutral face coordinate, named by its index in the face.
+    let mut neutral = vec![0.0f32; v3];
+    neutral[v3 - 1] = 2e5;
+    let (status, msg, _) = curve(0, 1.0, Some(&neutral), cf);
+    assert_eq!(
+        (status, msg),
+        (
+            SinewStatus::InvalidInput,
+            format!("neutral[{}] is outside ±1e5", v3 - 1)
         )
     );
     assert_eq!(frame(1, &good, v3), (SinewStatus::Ok, String::new()));
