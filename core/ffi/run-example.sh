@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Builds the C API as a static library (release), compiles examples/replay.c against it with
-# strict warnings, plays every golden model's replays from C and diffs the printed hash lists
-# against tests/data/*.hashes. Exits non-zero on a build error, a warning, a failed call, a
-# frame that differs from its recording, or any line that differs from the golden list.
+# strict warnings, plays every golden artefact from C (the AIM and S2D replays, the fitted
+# performance fit-ict on aim-ict, the generated sequence motion-ict through s2d-ict) and diffs
+# the printed hash lists against tests/data/*.hashes. Exits non-zero on a build error, a
+# warning, a failed call, a frame that differs from its recording, or any line that differs from
+# the golden list.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -20,4 +22,13 @@ for name in aim-procedural aim-ict s2d-ict; do
   "$out/replay" tests/data "$name" >"$out/$name.hashes"
   diff -u "tests/data/$name.hashes" "$out/$name.hashes"
   echo "$name: $(grep -vc '^#' "$out/$name.hashes") frames match tests/data/$name.hashes"
+done
+
+# A performance played on its actor, a sequence generated on its decoder: the lists' hash lines
+# (their comments describe the files and are not compared).
+for pair in "fit-ict aim-ict" "motion-ict s2d-ict"; do
+  read -r name model <<<"$pair"
+  "$out/replay" tests/data "$name" "$model" >"$out/$name.hashes"
+  diff -u <(grep -v '^#' "tests/data/$name.hashes") <(grep -v '^#' "$out/$name.hashes")
+  echo "$name on $model: $(grep -vc '^#' "$out/$name.hashes") lines match tests/data/$name.hashes"
 done

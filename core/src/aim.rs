@@ -221,6 +221,17 @@ impl<'a> AimActor<'a> {
         self.shapes
     }
 
+    /// The recorded name of corrective shape `i` (coefficient `i`, below [`Self::shape_count`]):
+    /// entry `i + 1` of the metadata `shapes`, the training shapes' names with the neutral first.
+    /// `None` past the end, or when the file records no names or not exactly M + 1 of them.
+    pub fn shape_name(&self, i: usize) -> Option<&'a str> {
+        let names = self.file.metadata().get("shapes")?;
+        if names.split(',').count() != self.shapes + 1 || i >= self.shapes {
+            return None;
+        }
+        names.split(',').nth(i + 1).map(str::trim)
+    }
+
     /// The template triangles.
     pub const fn triangles(&self) -> &Triangles<'a> {
         &self.triangles

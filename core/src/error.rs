@@ -180,7 +180,8 @@ pub enum FormatError {
     TooShort,
     /// The first eight bytes are not the `.sinew` magic.
     BadMagic,
-    /// The file was written by a newer, incompatible major version of the format.
+    /// The file's major format version is outside the range this build reads
+    /// ([`crate::layout::MIN_VERSION_MAJOR`] to [`crate::layout::VERSION_MAJOR`]).
     UnsupportedMajor {
         /// The major version found in the file.
         found: u16,
@@ -307,9 +308,16 @@ impl fmt::Display for FormatError {
                 crate::layout::HEADER_LEN
             ),
             Self::BadMagic => write!(f, "not a .sinew file (bad magic bytes)"),
+            Self::UnsupportedMajor { found } if found > crate::layout::VERSION_MAJOR => write!(
+                f,
+                "format major version {found} is newer than this build reads ({} to {})",
+                crate::layout::MIN_VERSION_MAJOR,
+                crate::layout::VERSION_MAJOR
+            ),
             Self::UnsupportedMajor { found } => write!(
                 f,
-                "format major version {found} is newer than this build supports ({})",
+                "format major version {found} is older than this build reads ({} to {})",
+                crate::layout::MIN_VERSION_MAJOR,
                 crate::layout::VERSION_MAJOR
             ),
             Self::NonZeroReserved => write!(f, "a reserved field or padding byte is not zero"),
@@ -468,6 +476,8 @@ pub enum Argument {
     Expressive,
     /// A motion's intensity.
     Intensity,
+    /// A generated landmark curve, `[(FRAMES + 1) × 3K]` (a sequence's frames decode from it).
+    Curve,
 }
 
 impl Argument {
@@ -488,6 +498,7 @@ impl Argument {
             Self::Neutral => "neutral",
             Self::Expressive => "expressive",
             Self::Intensity => "intensity",
+            Self::Curve => "curve",
         }
     }
 
@@ -631,5 +642,122 @@ impl From<BufferError> for EvalError {
 impl From<InputError> for EvalError {
     fn from(e: InputError) -> Self {
         Self::Input(e)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::string::{String, ToString};
+    use std::vec::Vec;
+
+    use super::*;
+
+    /// Every variant's message: none prints a Rust value (`Debug` output, a type's name), each
+    /// reads as a lower-case phrase, and each that carries a section or an index names it.
+    #[test]
+    fn every_format_error_message_reads_as_words_and_names_what_it_carries() {
+        let s = SectionName::new("cache.e");
+        let cases: Vec<(FormatError, &[&str])> = Vec::from([
+            (FormatError::TooShort, &["32-byte header"][..]),
+            (FormatError::BadMagic, &[".sinew"]),
+            (
+                FormatError::UnsupportedMajor { found: 7 },
+                &["7 is newer", "1 to 1"],
+            ),
+            (
+                FormatError::UnsupportedMajor { found: 0 },
+                &["0 is older", "1 to 1"],
+            ),
+            (FormatError::NonZeroReserved, &["reserved"]),
+            (
+                FormatError::LengthMismatch {
+                    header: 100,
+                    actual: 90,
+                },
+                &["100 bytes", "90 bytes"],
+            ),
+            (FormatError::TooManySections, &["4096"]),
+            (FormatError::HeaderChecksum, &["CRC-32"]),
+            (FormatError::TruncatedSection { section: 3 }, &["section 3"]),
+            (FormatError::BadLayout { section: 4 }, &["section 4"]),
+            (FormatError::SectionChecksum { section: 5 }, &["section 5"]),
+            (FormatError::BadName { section: 6 }, &["section 6"]),
+            (FormatError::DuplicateName { section: 7 }, &["section 7"]),
+            (FormatError::UnknownDtype { section: 8 }, &["section 8"]),
+            (FormatError::BadShape { section: 9 }, &["section 9"]),
+            (FormatError::ShapeMismatch { section: 10 }, &["section 10"]),
+            (FormatError::MissingSection { section: s }, &["cache.e"]),
+            (FormatError::WrongDtype { section: s }, &["cache.e"]),
+            (FormatError::IncompatibleShapes, &["shapes"]),
+            (FormatError::NonFinite, &["NaN"]),
+            (
+                FormatError::NonFiniteValue {
+                    section: s,
+                    index: 11,
+                },
+                &["cache.e", "value 11"],
+            ),
+            (
+                FormatError::ValueOutOfRange {
+                    section: s,
+                    index: 12,
+                    bound: Bound::Coordinate,
+                },
+                &["cache.e", "value 12", "±1e5"],
+            ),
+            (
+                FormatError::Unbounded {
+                    section: s,
+                    row: 13,
+                },
+                &["cache.e", "row 13"],
+            ),
+            (
+                FormatError::index_out_of_range("tpl.tri", 14),
+                &["tpl.tri", "value 14"],
+            ),
+            (FormatError::LimitExceeded, &["limits"]),
+            (FormatError::UnknownCode, &["code"]),
+            (FormatError::BadMetadata, &["metadata"]),
+            (FormatError::WrongKind, &["kind"]),
+        ]);
+        for (e, names) in cases {
+            let m = e.to_string();
+            for leak in [
+                "{",
+                "}",
+                "Some(",
+                "None",
+                "Other(",
+                "SectionName",
+                "\"",
+                "::",
+            ] {
+                assert!(!m.contains(leak), "{m:?} shows a Rust value ({leak})");
+            }
+            let first = m.chars().next().unwrap();
+            assert!(!first.is_uppercase() || m.starts_with("CRC"), "{m:?}");
+            // An article before a vowel sound: "a AIM", "a S2D", "a index" are broken English.
+            for bad in [" a A", " a S2D", " a index", " a unknown", " a e"] {
+                assert!(!m.contains(bad), "{m:?} has {bad:?}");
+            }
+            for name in names {
+                assert!(m.contains(name), "{m:?} does not name {name:?}");
+            }
+        }
+        let every_bound = [
+            Bound::Coordinate,
+            Bound::PositiveCoordinate,
+            Bound::Factor,
+            Bound::PositiveFactor,
+            Bound::NonNegativeFactor,
+            Bound::UnitMotion,
+            Bound::Rotation,
+        ];
+        let words: Vec<String> = every_bound.iter().map(ToString::to_string).collect();
+        assert!(
+            words.iter().all(|w| !w.contains('{') && !w.is_empty()),
+            "{words:?}"
+        );
     }
 }

@@ -373,7 +373,7 @@ impl<'a> SinewFile<'a> {
         let minor = field16(HEADER_MINOR)?;
         let flags = field32(HEADER_FLAGS)?;
         let kind = ArtifactKind::from_code(field16(HEADER_KIND)?);
-        if major > VERSION_MAJOR || major == 0 {
+        if !(MIN_VERSION_MAJOR..=VERSION_MAJOR).contains(&major) {
             return Err(FormatError::UnsupportedMajor { found: major });
         }
         if field16(HEADER_RESERVED)? != 0 {

@@ -10,6 +10,9 @@
 pub const MAGIC: [u8; 8] = [0x89, b'S', b'N', b'W', b'\r', b'\n', 0x1A, b'\n'];
 /// Major format version: a reader rejects files with a larger major version.
 pub const VERSION_MAJOR: u16 = 1;
+/// The oldest major format version this build reads (files of `MIN_VERSION_MAJOR` to
+/// [`VERSION_MAJOR`] load).
+pub const MIN_VERSION_MAJOR: u16 = 1;
 /// Minor format version: additions that older readers can skip (new section kinds, new flags).
 pub const VERSION_MINOR: u16 = 0;
 /// Length of the fixed header in bytes.

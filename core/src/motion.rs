@@ -45,7 +45,7 @@ pub fn gaussian_noise(seed: u64, out: &mut [f32]) {
 pub const NOISE_BOUND: f32 = 5.8;
 
 /// A validated generator.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct MotionGenerator<'a> {
     mlp: Mlp<'a>,
     p: F32s<'a>,
@@ -58,6 +58,8 @@ pub struct MotionGenerator<'a> {
     reaches: Option<F32s<'a>>,
     noise: usize,
     dims: usize,
+    /// The metadata `labels`: the labels' names, comma-separated, if the file records them.
+    labels: Option<&'a str>,
 }
 
 impl<'a> MotionGenerator<'a> {
@@ -109,7 +111,12 @@ impl<'a> MotionGenerator<'a> {
                 Some(reaches)
             }
         };
+        let labels = file
+            .metadata()
+            .get("labels")
+            .filter(|names| names.split(',').count() == LABELS);
         Ok(Self {
+            labels,
             noise: mlp.inputs() - LABELS,
             mlp,
             p,
@@ -117,6 +124,13 @@ impl<'a> MotionGenerator<'a> {
             reaches,
             dims,
         })
+    }
+
+    /// The name of `label` (below [`LABELS`]) as the file records it (metadata `labels`, e.g.
+    /// `mouth_open`); `None` past the end or when the file records no names or not [`LABELS`] of
+    /// them.
+    pub fn label_name(&self, label: usize) -> Option<&'a str> {
+        self.labels?.split(',').nth(label).map(str::trim)
     }
 
     /// Noise dimensions.

@@ -10,8 +10,9 @@
 //! working memory is free again before the first frame is decoded. Nothing allocates; every
 //! buffer is the caller's ([`SequenceBuffers`]), sized by [`Sequence`]'s `*_len` methods.
 
-use crate::error::{BufferError, EvalError, FormatError};
+use crate::error::{Argument, BufferError, EvalError, FormatError};
 use crate::hash::frame_hash;
+use crate::input::{check_value, check_values};
 use crate::motion::MotionGenerator;
 use crate::s2d::S2dDecoder;
 use crate::srvf::FRAMES;
@@ -112,6 +113,9 @@ impl<'a> Sequence<'a> {
             return Err(BufferError::Input.into());
         }
         self.neutral_landmarks(buf.neutral, buf.input)?;
+        // The whole face is checked, so that a refusal names the value's index in it (the
+        // generator checks the landmarks gathered from it, and would name their index).
+        check_values(Argument::Neutral, buf.neutral)?;
         let scratch = buf
             .scratch
             .get_mut(..self.generator.scratch_len())
@@ -129,25 +133,54 @@ impl<'a> Sequence<'a> {
     /// [`EvalError::Input`] for curve frames or a neutral the decoder refuses
     /// ([`S2dDecoder::input`], [`S2dDecoder::decode_onto`]).
     pub fn frame(&self, t: usize, buf: &mut SequenceBuffers<'_>) -> Result<(), EvalError> {
+        self.frame_of(
+            t,
+            buf.curve,
+            buf.neutral,
+            buf.input,
+            buf.scratch,
+            buf.vertices,
+        )
+    }
+
+    /// [`Sequence::frame`] over buffers given one by one, the curve only read: for callers that
+    /// keep a generated curve apart from the buffers of the frames (the C API).
+    ///
+    /// # Errors
+    /// As [`Sequence::frame`].
+    pub fn frame_of(
+        &self,
+        t: usize,
+        curve: &[f32],
+        neutral: &[f32],
+        input: &mut [f32],
+        scratch: &mut [f32],
+        vertices: &mut [f32],
+    ) -> Result<(), EvalError> {
         let d = self.input_len();
-        if t > FRAMES || buf.curve.len() != self.curve_len() {
+        if t > FRAMES || curve.len() != self.curve_len() {
             return Err(BufferError::Input.into());
         }
-        let (first, rest) = buf.curve.split_at(d);
+        let (first, rest) = curve.split_at(d);
         let to = match t.checked_sub(1) {
             None => first,
             Some(k) => rest.get(k * d..(k + 1) * d).ok_or(BufferError::Input)?,
         };
-        self.decoder.input(first, to, buf.input)?;
-        let scratch = buf
-            .scratch
+        // The two frames are checked where they lie in the curve, so that a refusal names the
+        // value's index in it (the decoder would name its index in one landmark set).
+        for (offset, frame) in [(0, first), (t * d, to)] {
+            for (i, &v) in frame.iter().enumerate() {
+                check_value(Argument::Curve, offset + i, v)?;
+            }
+        }
+        self.decoder.input(first, to, input)?;
+        let scratch = scratch
             .get_mut(..self.decoder.scratch_len())
             .ok_or(BufferError::Scratch)?;
-        if buf.neutral.is_empty() {
-            self.decoder.decode(buf.input, scratch, buf.vertices)
+        if neutral.is_empty() {
+            self.decoder.decode(input, scratch, vertices)
         } else {
-            self.decoder
-                .decode_onto(buf.neutral, buf.input, scratch, buf.vertices)
+            self.decoder.decode_onto(neutral, input, scratch, vertices)
         }
     }
 

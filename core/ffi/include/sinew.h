@@ -9,6 +9,17 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// The version of the C ABI: the layout of every struct and the signature of every call in
+// `sinew.h`. It changes when a released struct or call changes incompatibly (a call or a status
+// code added keeps it); `libsinew.so`'s SONAME is `libsinew.so.SINEW_ABI_VERSION`, and
+// `sinew_abi_version()` returns the library's, so a program can check it was built with the
+// header of the library it loads.
+#define SINEW_ABI_VERSION 1
+
+// Frames of a generated motion after its neutral frame 0: `sinew_sequence_frame` plays
+// `t = 1 ..= SINEW_SEQUENCE_FRAMES` (and `t = 0`, the neutral itself).
+#define SINEW_SEQUENCE_FRAMES 30
+
 // Bytes in [`SinewError::message`], the terminating NUL included. Longer messages are cut at a
 // character boundary.
 #define SINEW_MESSAGE_LEN 256
@@ -39,6 +50,8 @@ typedef enum SinewStatus {
   // degenerate (a 6D rotation's column too short or parallel to the other, a landmark set
   // whose points all coincide). The message names the argument and the index.
   SINEW_STATUS_INVALID_INPUT = 9,
+  // What was asked for is not in the artefact: a metadata key it does not record.
+  SINEW_STATUS_NOT_FOUND = 10,
 } SinewStatus;
 
 // What a model or replay handle holds.
@@ -64,9 +77,18 @@ typedef enum SinewMode {
 // valid and unchanged until [`sinew_model_free`].
 typedef struct SinewModel SinewModel;
 
+// An opened fitted performance (opaque to C). It borrows the bytes it was opened from: they
+// must stay valid and unchanged until [`sinew_performance_free`].
+typedef struct SinewPerformance SinewPerformance;
+
 // An opened replay (opaque to C). It borrows the bytes it was opened from: they must stay valid
 // and unchanged until [`sinew_replay_free`].
 typedef struct SinewReplay SinewReplay;
+
+// A generator and the S2D decoder whose landmarks it moves (opaque to C). It borrows the
+// generator's bytes and the decoder model's bytes; it does not keep the decoder's handle, which
+// may be freed first (its bytes may not).
+typedef struct SinewSequence SinewSequence;
 
 // A call's failure, written by every entry point that takes one (pass NULL to skip it). On
 // success `status` is `SINEW_STATUS_OK` and `message` is empty.
@@ -101,6 +123,25 @@ typedef struct SinewModelInfo {
   bool has_q16;
 } SinewModelInfo;
 
+// A fitted performance's contents, from [`sinew_performance_info`].
+typedef struct SinewPerformanceInfo {
+  // Frames (at least one).
+  size_t frame_count;
+  // The actor's corrective coefficients M (per frame for a global fit, per vertex for a
+  // local one).
+  size_t shape_count;
+  // Whether the coefficients vary per vertex (a local fit: F_W evaluated at every vertex);
+  // `sinew_performance_frame` then has no coefficients to give.
+  bool is_local;
+  // Whether the file carries each frame's hash as baked (`sinew_performance_expected`).
+  bool has_hashes;
+  // The content hash of the actor it was fitted to (`sinew_model_content_hash`).
+  uint64_t model_hash;
+  // Floats of scratch `sinew_performance_pose` needs: the coefficients and, for a local fit,
+  // F_W's input and working memory.
+  size_t scratch_floats;
+} SinewPerformanceInfo;
+
 // A replay's contents, from [`sinew_replay_info`]. Counts that do not apply to the kind are 0.
 typedef struct SinewReplayInfo {
   // The kind of model it replays.
@@ -120,9 +161,96 @@ typedef struct SinewReplayInfo {
   uint64_t model_hash;
 } SinewReplayInfo;
 
+// A generated sequence's sizes, from [`sinew_sequence_info`].
+typedef struct SinewSequenceInfo {
+  // Labels the generator knows (CoMA's twelve expression classes); `label` is below this.
+  size_t label_count;
+  // Frames after the neutral (`SINEW_SEQUENCE_FRAMES`).
+  size_t frame_count;
+  // Landmarks K the generator moves and the decoder reads.
+  size_t landmark_count;
+  // Vertices V of the decoded mesh; `vertices` and a `neutral` hold `3 * V` floats.
+  size_t vertex_count;
+  // Noise values the generator draws from the seed.
+  size_t noise_len;
+  // Floats of the landmark curve, `(frame_count + 1) * 3 * K`, frame 0 the neutral's
+  // landmarks.
+  size_t curve_floats;
+  // Floats of scratch `sinew_sequence_curve` and `sinew_sequence_frame` need.
+  size_t scratch_floats;
+} SinewSequenceInfo;
+
+// The `.sinew` format versions the library reads, from [`sinew_format_versions`].
+typedef struct SinewFormatVersions {
+  // The oldest major version it reads.
+  uint16_t min_major;
+  // The newest major version it reads; a file of a newer major version is refused
+  // (`SINEW_STATUS_INVALID_FORMAT`).
+  uint16_t max_major;
+  // The minor version it was written for; files of a newer minor version of a major it reads
+  // load too (their additions are skipped, docs/FORMAT.md "Stability promise").
+  uint16_t minor;
+} SinewFormatVersions;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+// Writes the content hash of the model's bytes (xxh64, `sinew_core::replay::model_hash`) to
+// `*hash`: the hash that replays and fitted performances name, and `sinew inspect` reports.
+// Computed once when the model was opened.
+//
+// # Safety
+// `model` is a live handle; `hash` points to a writable `uint64_t`; `err` is NULL or points to
+// a writable `SinewError`.
+enum SinewStatus sinew_model_content_hash(const struct SinewModel *model,
+                                          uint64_t *hash,
+                                          struct SinewError *err);
+
+// Copies the model's whole metadata text (`key=value` lines separated by `\n`, docs/FORMAT.md
+// "Metadata") and a NUL to `buf` (`buf_len` bytes), and the bytes that takes to `*needed` when
+// `needed` is not NULL. With `buf` NULL, `buf_len` 0 and `needed` not NULL, only the size is
+// written. A `buf` too short is `SINEW_STATUS_BUFFER_LENGTH`.
+//
+// # Safety
+// `model` is a live handle; `buf` points to `buf_len` writable bytes (or is NULL for a size
+// query); `needed` is NULL or points to a writable `size_t`; `err` is NULL or points to a
+// writable `SinewError`.
+enum SinewStatus sinew_model_metadata(const struct SinewModel *model,
+                                      char *buf,
+                                      size_t buf_len,
+                                      size_t *needed,
+                                      struct SinewError *err);
+
+// Copies the value of the metadata key `key` (a NUL-terminated UTF-8 string: `units`, e.g.
+// `cm`; `axes`, e.g. `x-left-of-actor,y-up,z-forward`; `source`, `tool`, …) and a NUL to `buf`,
+// as `sinew_model_metadata` copies the whole text. A key the file does not record is
+// `SINEW_STATUS_NOT_FOUND`.
+//
+// # Safety
+// As `sinew_model_metadata`; `key` points to a NUL-terminated string.
+enum SinewStatus sinew_model_meta(const struct SinewModel *model,
+                                  const char *key,
+                                  char *buf,
+                                  size_t buf_len,
+                                  size_t *needed,
+                                  struct SinewError *err);
+
+// Copies the name of an AIM actor's corrective shape `index` (the coefficient at `weights[index]`,
+// below `shape_count`) and a NUL to `buf`, as `sinew_model_metadata` copies text: the training
+// shape's name the file records (metadata `shapes`, the neutral first and skipped), or
+// `shape_1` … `shape_M` when it records none, as `sinew export gltf` names the morph targets.
+// `SINEW_STATUS_OUT_OF_RANGE` for an index past the shapes, `SINEW_STATUS_WRONG_KIND` for an S2D
+// decoder.
+//
+// # Safety
+// As `sinew_model_metadata`.
+enum SinewStatus sinew_model_shape_name(const struct SinewModel *model,
+                                        size_t index,
+                                        char *buf,
+                                        size_t buf_len,
+                                        size_t *needed,
+                                        struct SinewError *err);
 
 // Opens a model from `len` bytes at `bytes`: a `.sinew` AIM actor or S2D decoder, validated
 // completely (every later call on the handle only reads in-range data).
@@ -280,6 +408,150 @@ enum SinewStatus sinew_hash_frame(const float *first,
                                   uint64_t *hash,
                                   struct SinewError *err);
 
+// Opens a fitted performance (`sinew fit --out`, docs/FORMAT.md "Performance") from `len`
+// bytes at `bytes`, validated completely (every frame's head and jaw, the coefficients, F_W's
+// bound). On success `*out` is a new handle, to be released with `sinew_performance_free`; on
+// failure `*out` is set to NULL.
+//
+// # Safety
+// `bytes` must point to `len` readable bytes that stay valid and unchanged until the handle is
+// freed (the handle borrows them). `out` must point to writable memory for one pointer; `err`
+// is NULL or points to a writable `SinewError`.
+enum SinewStatus sinew_performance_open(const uint8_t *bytes,
+                                        size_t len,
+                                        struct SinewPerformance **out,
+                                        struct SinewError *err);
+
+// Releases a handle from `sinew_performance_open`. NULL is ignored.
+//
+// # Safety
+// `perf` is NULL or a handle from `sinew_performance_open` not yet freed; no other call may be
+// using it, and it must not be used afterwards.
+void sinew_performance_free(struct SinewPerformance *perf);
+
+// Writes the performance's frames, coefficient count, form and sizes to `*out`.
+//
+// # Safety
+// `perf` is a live handle; `out` points to a writable `SinewPerformanceInfo`; `err` is NULL or
+// points to a writable `SinewError`.
+enum SinewStatus sinew_performance_info(const struct SinewPerformance *perf,
+                                        struct SinewPerformanceInfo *out,
+                                        struct SinewError *err);
+
+// Checks that `perf` was fitted (or retargeted) to `model`: the content hash, the coefficient
+// count and, for a performance carrying its own points, their count against the vertices.
+// `SINEW_STATUS_MODEL_MISMATCH` with the reason otherwise, `SINEW_STATUS_WRONG_KIND` for an S2D
+// decoder. `sinew_performance_pose` checks the same at every call.
+//
+// # Safety
+// `perf` and `model` are live handles; `err` is NULL or points to a writable `SinewError`.
+enum SinewStatus sinew_performance_check_model(const struct SinewPerformance *perf,
+                                               const struct SinewModel *model,
+                                               struct SinewError *err);
+
+// Frame `frame`'s inputs: writes head and jaw (9 floats each: 6D rotation, translation; the
+// form `sinew_aim_pose` takes) and, when `weights` is not NULL, the frame's coefficients
+// (`weights_len == shape_count`). A local fit has no per-frame coefficients (they vary per
+// vertex): pass NULL, or get `SINEW_STATUS_UNSUPPORTED`.
+//
+// # Safety
+// `perf` is a live handle; `head` and `jaw` point to 9 writable floats each; `weights` is NULL
+// or points to `weights_len` writable floats; `err` is NULL or points to a writable
+// `SinewError`.
+enum SinewStatus sinew_performance_frame(const struct SinewPerformance *perf,
+                                         size_t frame,
+                                         float *head,
+                                         float *jaw,
+                                         float *weights,
+                                         size_t weights_len,
+                                         struct SinewError *err);
+
+// Writes the hash baked into the file for frame `frame` to `*hash`;
+// `SINEW_STATUS_UNSUPPORTED` when the file carries none (`has_hashes` of the info).
+//
+// # Safety
+// `perf` is a live handle; `hash` points to a writable `uint64_t`; `err` is NULL or points to a
+// writable `SinewError`.
+enum SinewStatus sinew_performance_expected(const struct SinewPerformance *perf,
+                                            size_t frame,
+                                            uint64_t *hash,
+                                            struct SinewError *err);
+
+// Poses `model`, the actor the performance was fitted to (checked at every call, as
+// `sinew_performance_check_model`), for frame `frame` in f32: AIM eq. 17 with the frame's head,
+// jaw and coefficients, the local ones evaluated per vertex by F_W (eq. 19). Writes
+// `positions` (`3 * vertex_count`) and, when `normals` is not NULL, the area-weighted vertex
+// normals; when `hash` is not NULL too, the frame's hash (positions then normals, exactly
+// `sinew_core::performance::frame_hash`, the hash `sinew fit` bakes). A `hash` without `normals`
+// is `SINEW_STATUS_NULL_POINTER`: the hash covers the normals.
+//
+// `scratch`: at least `scratch_floats` of the performance info; contents on entry ignored.
+//
+// # Safety
+// `perf` and `model` are live handles; every non-NULL pointer points to the stated number of
+// elements, output buffers overlapping no other argument; `hash` is NULL or points to a
+// writable `uint64_t`; `err` is NULL or points to a writable `SinewError`.
+enum SinewStatus sinew_performance_pose(const struct SinewPerformance *perf,
+                                        const struct SinewModel *model,
+                                        size_t frame,
+                                        float *scratch,
+                                        size_t scratch_len,
+                                        float *positions,
+                                        size_t positions_len,
+                                        float *normals,
+                                        size_t normals_len,
+                                        uint64_t *hash,
+                                        struct SinewError *err);
+
+// Poses an AIM actor for one frame in Q16.16 fixed point (`SINEW_MODE_Q16`: the actor's Q16.16
+// cache, integer arithmetic only) and writes the positions' raw Q16.16 values (value × 65536, as
+// `int32_t`) to `positions`, `positions_len == 3 * vertex_count`. `sinew_hash_q16` of them is the
+// frame's Q16 hash. Inputs are refused as `sinew_aim_pose` refuses them;
+// `SINEW_STATUS_UNSUPPORTED` for an actor baked without the cache (`has_q16` of the info).
+//
+// # Safety
+// `model` is a live handle; `head` and `jaw` point to 9 floats, `weights` to `weights_len`,
+// `positions` to `positions_len` writable `int32_t` overlapping no other argument; `err` is NULL
+// or points to a writable `SinewError`.
+enum SinewStatus sinew_aim_pose_q16(const struct SinewModel *model,
+                                    const float *head,
+                                    const float *jaw,
+                                    const float *weights,
+                                    size_t weights_len,
+                                    int32_t *positions,
+                                    size_t positions_len,
+                                    struct SinewError *err);
+
+// Poses an AIM actor for one frame in the fast mode (`SINEW_MODE_FAST`): the positions as
+// `sinew_aim_pose` computes them, and the vertex normals normalised with micromath's
+// approximate inverse square root. `positions_len == normals_len == 3 * vertex_count`; both are
+// required. `sinew_hash_frame(positions, normals)` is the frame's fast hash. Inputs are refused
+// as `sinew_aim_pose` refuses them.
+//
+// # Safety
+// As `sinew_aim_pose`, with `normals` required.
+enum SinewStatus sinew_aim_pose_fast(const struct SinewModel *model,
+                                     const float *head,
+                                     const float *jaw,
+                                     const float *weights,
+                                     size_t weights_len,
+                                     float *positions,
+                                     size_t positions_len,
+                                     float *normals,
+                                     size_t normals_len,
+                                     struct SinewError *err);
+
+// The frame hash of Q16.16 values the caller holds (`sinew_aim_pose_q16`'s positions): each
+// value's 32 bits through xxh64, exactly the Q16 mode's `sinew_aim_frame_hash`.
+//
+// # Safety
+// `values` points to `len` `int32_t`; `hash` points to a writable `uint64_t`; `err` is NULL or
+// points to a writable `SinewError`.
+enum SinewStatus sinew_hash_q16(const int32_t *values,
+                                size_t len,
+                                uint64_t *hash,
+                                struct SinewError *err);
+
 // Opens a replay (`*.replay.sinew`, written by `sinew replay record`) from `len` bytes at
 // `bytes`, validated completely. On success `*out` is a new handle, to be released with
 // `sinew_replay_free`; on failure `*out` is set to NULL.
@@ -361,10 +633,118 @@ enum SinewStatus sinew_replay_s2d_neutral(const struct SinewReplay *replay,
                                           size_t out_len,
                                           struct SinewError *err);
 
+// Opens a Motion3DGAN generator (`sinew train motion`, `len` bytes at `bytes`, validated
+// completely) paired with `decoder`, an open S2D decoder whose landmarks it moves. On success
+// `*out` is a new handle, to be released with `sinew_sequence_free`; on failure `*out` is set to
+// NULL. `SINEW_STATUS_WRONG_KIND` if `decoder` is an AIM actor or the bytes another kind of
+// artefact; `SINEW_STATUS_MODEL_MISMATCH` if the generator moves another number of landmarks.
+//
+// # Safety
+// `bytes` must point to `len` readable bytes that stay valid and unchanged until the handle is
+// freed, and so must the bytes `decoder` was opened from (the handle borrows both; `decoder`
+// itself may be freed first). `out` must point to writable memory for one pointer; `err` is NULL
+// or points to a writable `SinewError`.
+enum SinewStatus sinew_sequence_open(const uint8_t *bytes,
+                                     size_t len,
+                                     const struct SinewModel *decoder,
+                                     struct SinewSequence **out,
+                                     struct SinewError *err);
+
+// Releases a handle from `sinew_sequence_open`. NULL is ignored.
+//
+// # Safety
+// `sequence` is NULL or a handle from `sinew_sequence_open` not yet freed; no other call may be
+// using it, and it must not be used afterwards.
+void sinew_sequence_free(struct SinewSequence *sequence);
+
+// Writes the sequence's labels, frames and buffer sizes to `*out`.
+//
+// # Safety
+// `sequence` is a live handle; `out` points to a writable `SinewSequenceInfo`; `err` is NULL or
+// points to a writable `SinewError`.
+enum SinewStatus sinew_sequence_info(const struct SinewSequence *sequence,
+                                     struct SinewSequenceInfo *out,
+                                     struct SinewError *err);
+
+// Copies the name of `label` (below `label_count`, e.g. `mouth_open`) as the generator records
+// it (metadata `labels`) and a NUL to `buf`, the bytes that takes to `*needed` when not NULL
+// (with `buf` NULL and `buf_len` 0, only the size). `SINEW_STATUS_OUT_OF_RANGE` past the labels,
+// `SINEW_STATUS_NOT_FOUND` when the file records no names.
+//
+// # Safety
+// `sequence` is a live handle; `buf` points to `buf_len` writable bytes (or is NULL for a size
+// query); `needed` is NULL or points to a writable `size_t`; `err` is NULL or points to a
+// writable `SinewError`.
+enum SinewStatus sinew_sequence_label_name(const struct SinewSequence *sequence,
+                                           size_t label,
+                                           char *buf,
+                                           size_t buf_len,
+                                           size_t *needed,
+                                           struct SinewError *err);
+
+// Generates the landmark curve of `label` from `seed` at `intensity` (1: a reach drawn from the
+// label's training motions; 0.5 half as far) into `curve` (`curve_len == curve_floats`): frame
+// 0 the neutral's landmarks, then `frame_count` frames of the motion
+// (`sinew_core::sequence::Sequence::curve`). The neutral is `neutral` (`3 * vertex_count`
+// floats, the face the frames will decode onto) or, when NULL, the decoder's template.
+// `SINEW_STATUS_OUT_OF_RANGE` for a label past `label_count`; `SINEW_STATUS_INVALID_INPUT` for an
+// intensity or a neutral coordinate that is NaN, infinite or out of range.
+//
+// # Safety
+// `sequence` is a live handle; `neutral` is NULL or points to `neutral_len` floats; `curve` and
+// `scratch` point to the stated number of writable floats, overlapping no other argument; `err`
+// is NULL or points to a writable `SinewError`.
+enum SinewStatus sinew_sequence_curve(const struct SinewSequence *sequence,
+                                      size_t label,
+                                      uint64_t seed,
+                                      float intensity,
+                                      const float *neutral,
+                                      size_t neutral_len,
+                                      float *curve,
+                                      size_t curve_len,
+                                      float *scratch,
+                                      size_t scratch_len,
+                                      struct SinewError *err);
+
+// Decodes frame `t` (0 to `frame_count`; 0 is the neutral) of a curve from
+// `sinew_sequence_curve` into `vertices` (`3 * vertex_count` floats): the decoder's input from
+// curve frames 0 and `t`, decoded onto `neutral` (the one the curve was generated on) or, when
+// NULL, the decoder's template (`sinew_core::sequence::Sequence::frame`). When `hash` is not
+// NULL, writes the frame's hash (the vertices' f32 bits, as `sinew_s2d_decode` and the
+// `motion-ict` goldens hash them). `SINEW_STATUS_OUT_OF_RANGE` for `t` past `frame_count`.
+//
+// # Safety
+// `sequence` is a live handle; `curve` points to `curve_len` floats, `neutral` is NULL or points
+// to `neutral_len` floats; `scratch` and `vertices` point to the stated number of writable
+// floats, overlapping no other argument; `hash` is NULL or points to a writable `uint64_t`;
+// `err` is NULL or points to a writable `SinewError`.
+enum SinewStatus sinew_sequence_frame(const struct SinewSequence *sequence,
+                                      size_t t,
+                                      const float *curve,
+                                      size_t curve_len,
+                                      const float *neutral,
+                                      size_t neutral_len,
+                                      float *scratch,
+                                      size_t scratch_len,
+                                      float *vertices,
+                                      size_t vertices_len,
+                                      uint64_t *hash,
+                                      struct SinewError *err);
+
 // What a status code means, as a static NUL-terminated sentence ("a buffer has the wrong length
 // or alignment"), for callers that passed no `SinewError`. An unknown code gives "unknown
 // status". The string is never freed.
 const char *sinew_status_string(uint32_t status);
+
+// The library's version as a static NUL-terminated string (`"0.1.0"`), never freed.
+const char *sinew_version(void);
+
+// The library's C ABI version: equal to the `SINEW_ABI_VERSION` of the header it was built
+// with. A program compares it with its own `SINEW_ABI_VERSION` before any other call.
+uint32_t sinew_abi_version(void);
+
+// The `.sinew` format versions the library reads.
+struct SinewFormatVersions sinew_format_versions(void);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -36,6 +36,9 @@ pub(crate) enum Loaded {
 pub struct SinewModel {
     pub(crate) bytes: &'static [u8],
     pub(crate) loaded: Loaded,
+    /// The content hash of `bytes` ([`replay::model_hash`]), computed once at open: replays and
+    /// performances name it, and a performance compares it at every frame.
+    pub(crate) hash: u64,
 }
 
 /// A model's sizes, from [`sinew_model_info`]. Counts that do not apply to the kind are 0.
@@ -84,6 +87,14 @@ impl SinewModel {
                 SinewStatus::WrongKind,
                 "the model is an AIM actor, not an S2D decoder",
             )),
+        }
+    }
+
+    /// The validated container (metadata, sections).
+    pub(crate) fn file(&self) -> &SinewFile<'static> {
+        match &self.loaded {
+            Loaded::Aim(a) => a.file(),
+            Loaded::S2d(d) => d.file(),
         }
     }
 
@@ -137,7 +148,7 @@ pub(crate) fn expect_len(what: &str, len: usize, expected: usize) -> Result<()> 
 }
 
 /// Checks that scratch holds at least what the model needs.
-fn expect_scratch(len: usize, needed: usize) -> Result<()> {
+pub(crate) fn expect_scratch(len: usize, needed: usize) -> Result<()> {
     if len >= needed {
         Ok(())
     } else {
@@ -165,7 +176,11 @@ fn open(bytes: &'static [u8]) -> Result<SinewModel> {
             ));
         }
     };
-    Ok(SinewModel { bytes, loaded })
+    Ok(SinewModel {
+        bytes,
+        loaded,
+        hash: replay::model_hash(bytes),
+    })
 }
 
 /// Opens a model from `len` bytes at `bytes`: a `.sinew` AIM actor or S2D decoder, validated

@@ -3,6 +3,7 @@
 //! checked (that the memory is really there, and not written by someone else meanwhile) is the
 //! caller's promise, stated on each entry point.
 
+use std::ffi::{CStr, c_char};
 use std::mem::{align_of, size_of};
 
 use crate::status::{Fail, Result, SinewStatus};
@@ -97,4 +98,57 @@ pub(crate) fn write<T: Copy>(ptr: *mut T, value: T, what: &str) -> Result<()> {
 /// The caller's handle at `ptr`, shared.
 pub(crate) fn handle<'a, T>(ptr: *const T, what: &str) -> Result<&'a T> {
     slice(ptr, 1, what).map(|s| &s[0])
+}
+
+/// Copies `text` and a terminating NUL into the caller's `buf` of `len` bytes, and writes the
+/// bytes that takes (the text's length plus one) to `*needed` when `needed` is not NULL. A NULL
+/// `buf` with `len` 0 and a non-NULL `needed` is a size query: only `*needed` is written.
+pub(crate) fn write_text(
+    text: &str,
+    buf: *mut c_char,
+    len: usize,
+    needed: *mut usize,
+) -> Result<()> {
+    let need = text.len() + 1;
+    if !needed.is_null() {
+        write(needed, need, "needed")?;
+        if buf.is_null() && len == 0 {
+            return Ok(());
+        }
+    }
+    let out = slice_mut(buf.cast::<u8>(), len, "buf")?;
+    let Some((head, tail)) = out.split_at_mut_checked(text.len()) else {
+        return Err(Fail::new(
+            SinewStatus::BufferLength,
+            format_args!("buf has {len} bytes, the text needs {need} with its NUL"),
+        ));
+    };
+    let Some(nul) = tail.first_mut() else {
+        return Err(Fail::new(
+            SinewStatus::BufferLength,
+            format_args!("buf has {len} bytes, the text needs {need} with its NUL"),
+        ));
+    };
+    head.copy_from_slice(text.as_bytes());
+    *nul = 0;
+    Ok(())
+}
+
+/// The caller's NUL-terminated UTF-8 string at `ptr`.
+///
+/// The caller promises a NUL within readable memory at `ptr`.
+pub(crate) fn c_str<'a>(ptr: *const c_char, what: &str) -> Result<&'a str> {
+    if ptr.is_null() {
+        return Err(Fail::null(what));
+    }
+    #[allow(unsafe_code)]
+    // Safety: `ptr` is not NULL; the caller promises a NUL-terminated string there, unchanged
+    // during the call.
+    let s = unsafe { CStr::from_ptr(ptr) };
+    s.to_str().map_err(|_| {
+        Fail::new(
+            SinewStatus::InvalidInput,
+            format_args!("{what} is not UTF-8"),
+        )
+    })
 }

@@ -39,6 +39,8 @@ pub enum SinewStatus {
     /// degenerate (a 6D rotation's column too short or parallel to the other, a landmark set
     /// whose points all coincide). The message names the argument and the index.
     InvalidInput = 9,
+    /// What was asked for is not in the artefact: a metadata key it does not record.
+    NotFound = 10,
 }
 
 impl SinewStatus {
@@ -55,6 +57,7 @@ impl SinewStatus {
             7 => c"the replay was recorded with another model, or does not fit it",
             8 => c"internal error (a bug: please report it)",
             9 => c"an input value is NaN, infinite, out of range or degenerate",
+            10 => c"the artefact does not record what was asked for",
             _ => c"unknown status",
         }
     }

@@ -49,8 +49,18 @@ export class Model {
   readonly triangleCount: number;
   /** Content hash of the model's bytes, 16 hex digits; a replay names it. */
   readonly hash: string;
-  /** Metadata (`units`, provenance). */
+  /** Metadata (`units`, `axes`, provenance). */
   readonly metadata: Record<string, string>;
+  /** The length unit of positions (`cm` for the ICT actors), or null if the file records none. */
+  readonly units: string | null;
+  /** The axes' directions (e.g. `x-left-of-actor,y-up,z-forward`), or null if the file records none. */
+  readonly axes: string | null;
+  /**
+   * AIM: `[shapeCount]` the corrective shapes' names in coefficient order (sliders, morph
+   * targets): the recorded training shapes without the neutral, or `shape_1` … when the file
+   * records none. Empty for an S2D decoder.
+   */
+  shapeNames(): string[];
   /** `[triangleCount * 3]` vertex indices, counter-clockwise (empty for an S2D decoder). */
   triangles(): Uint32Array;
   /** `[landmarkCount]` the vertex of each input landmark (empty for an AIM actor). */
@@ -64,6 +74,18 @@ export class Model {
    * translation; the jaw about the actor's pivot); `coefficients`: `[shapeCount]`.
    */
   pose(head: Floats, jaw: Floats, coefficients: Floats): Float32Array;
+  /**
+   * AIM: `[vertexCount * 3]` posed positions in Q16.16 fixed point, as raw values (value × 65536):
+   * the Q16 replays' mode (needs the actor's Q16.16 cache). `frameHashQ16` of them is the frame's
+   * Q16 hash.
+   */
+  poseQ16(head: Floats, jaw: Floats, coefficients: Floats): Int32Array;
+  /**
+   * AIM: the fast mode's frame: `pose`'s positions and normals normalised with micromath's
+   * approximate inverse square root, `[vertexCount * 3]` each. `frameHash(positions, normals)` is
+   * the frame's fast hash.
+   */
+  poseFast(head: Floats, jaw: Floats, coefficients: Floats): { positions: Float32Array; normals: Float32Array };
   /** AIM: `[vertexCount * 3]` area-weighted unit normals of posed positions. */
   normals(positions: Floats): Float32Array;
   /** S2D: the decoder's `[inputLength]` input from `[landmarkCount * 3]` neutral and expressive landmarks. */
@@ -94,7 +116,7 @@ export class Replay {
   /** Validates a `.sinew` replay. */
   static load(bytes: Bytes): Replay;
   readonly kind: "aim" | "s2d";
-  /** The numeric mode it was recorded in; this package plays "f32" (S2D replays are all "f32"). */
+  /** The numeric mode it was recorded in (S2D replays are all "f32"); play "q16" frames with `poseQ16`, "fast" with `poseFast`. */
   readonly mode: "f32" | "q16" | "fast";
   readonly frameCount: number;
   /** Content hash of the model it was recorded with, 16 hex digits. */
@@ -144,6 +166,44 @@ export class Performance {
   expected(f: number): string | null;
   free(): void;
 }
+
+/** Options of a generated motion. */
+export interface MotionOptions {
+  /** How far the motion goes, 1 (the default) as its label's training motions. */
+  intensity?: number;
+  /** `[vertexCount * 3]` the face to play on, in the decoder's topology (default: its template). */
+  neutral?: Floats | null;
+}
+
+/**
+ * A validated Motion3DGAN generator (`sinew train motion`): a label and a seed become a landmark
+ * curve, each frame of which an S2D decoder (a `Model` of kind "s2d") turns into a dense face.
+ */
+export class Motion {
+  private constructor();
+  /** Validates a `.sinew` motion generator. */
+  static load(bytes: Bytes): Motion;
+  /** The labels' names in index order (`mouth_open`, …). */
+  readonly labels: string[];
+  readonly labelCount: number;
+  /** Frames of a motion after its neutral frame 0. */
+  readonly frameCount: number;
+  /** Landmarks it moves (the decoder's landmarkCount). */
+  readonly landmarkCount: number;
+  /**
+   * `[(frameCount + 1) * landmarkCount * 3]` the landmark curve of `label` (index or name) from
+   * `seed` (an integer from 0 below 2⁶⁴; a BigInt above 2⁵³), frame 0 the neutral's landmarks.
+   */
+  curve(decoder: Model, label: number | string, seed: number | bigint, options?: MotionOptions): Float32Array;
+  /** `[vertexCount * 3]` frame `t` (0 to frameCount) of `curve` decoded onto `neutral` or the template. */
+  frame(decoder: Model, curve: Floats, t: number, neutral?: Floats | null): Float32Array;
+  /** Frames 1 to frameCount of the sequence of `label` and `seed`, each `[vertexCount * 3]`. */
+  frames(decoder: Model, label: number | string, seed: number | bigint, options?: MotionOptions): Float32Array[];
+  free(): void;
+}
+
+/** The hash of a Q16 frame, 16 hex digits: each raw Q16.16 value's 32 bits (`poseQ16`'s output). */
+export function frameHashQ16(values: Int32Array): string;
 
 /**
  * A frame's hash, 16 hex digits: the values of every array in order. `frameHash(positions,

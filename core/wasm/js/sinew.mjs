@@ -113,6 +113,7 @@ function text(len) {
 }
 
 const takeF32 = (status) => new Float32Array(take(status).buffer);
+const takeI32 = (status) => new Int32Array(take(status).buffer);
 const takeU32 = (status) => new Uint32Array(take(status).buffer);
 const takeText = (status) => new TextDecoder().decode(take(status));
 
@@ -134,7 +135,7 @@ class Handle {
   #handle;
 
   constructor(key, handle) {
-    if (key !== token) throw new TypeError("sinew: use Model.load, Replay.load or Performance.load");
+    if (key !== token) throw new TypeError("sinew: use Model.load, Replay.load, Performance.load or Motion.load");
     this.#handle = handle;
     finalizer.register(this, handle, this);
   }
@@ -211,9 +212,26 @@ export class Model extends Handle {
   get hash() {
     return this.#info.hash;
   }
-  /** The metadata (`units`, provenance) as an object of strings. */
+  /** The metadata (`units`, `axes`, provenance) as an object of strings. */
   get metadata() {
     return keyValues(takeText(exports().sinew_metadata(this._h)));
+  }
+  /** The length unit of positions (`cm` for the ICT actors), or null if the file records none. */
+  get units() {
+    return this.metadata.units ?? null;
+  }
+  /** The axes' directions (`x-left-of-actor,y-up,z-forward`), or null if the file records none. */
+  get axes() {
+    return this.metadata.axes ?? null;
+  }
+  /**
+   * An AIM actor's corrective shapes' names in coefficient order (the sliders or morph targets):
+   * the recorded training shapes without the neutral, or `shape_1` … when the file records none.
+   * Empty for an S2D decoder.
+   */
+  shapeNames() {
+    const text = takeText(exports().sinew_names(this._h));
+    return text === "" ? [] : text.split("\n");
   }
   /** Triangle vertex indices, 3 per triangle (empty for an S2D decoder). */
   triangles() {
@@ -238,6 +256,31 @@ export class Model extends Handle {
     const j = floats(jaw, "jaw");
     put(f32Bytes(h), f32Bytes(j), f32Bytes(floats(coefficients, "coefficients")));
     return takeF32(exports().sinew_pose(this._h, h.length, j.length));
+  }
+
+  /**
+   * Poses an AIM actor in Q16.16 fixed point (the Q16 replays' mode): the positions' raw values
+   * (value × 65536), x y z per vertex. `frameHashQ16(poseQ16(...))` is the frame's Q16 hash.
+   */
+  poseQ16(head, jaw, coefficients) {
+    const h = floats(head, "head");
+    const j = floats(jaw, "jaw");
+    put(f32Bytes(h), f32Bytes(j), f32Bytes(floats(coefficients, "coefficients")));
+    return takeI32(exports().sinew_pose_q16(this._h, h.length, j.length));
+  }
+
+  /**
+   * Poses an AIM actor in the fast mode: `{ positions, normals }`, the positions of `pose` and
+   * the normals normalised with micromath's approximate inverse square root.
+   * `frameHash(positions, normals)` is the frame's fast hash.
+   */
+  poseFast(head, jaw, coefficients) {
+    const h = floats(head, "head");
+    const j = floats(jaw, "jaw");
+    put(f32Bytes(h), f32Bytes(j), f32Bytes(floats(coefficients, "coefficients")));
+    const v = takeF32(exports().sinew_pose_fast(this._h, h.length, j.length));
+    const n = v.length / 2;
+    return { positions: v.subarray(0, n), normals: v.subarray(n) };
   }
 
   /** Area-weighted vertex normals of an AIM actor's posed positions. */
@@ -391,8 +434,98 @@ export class Performance extends Handle {
   }
 }
 
+/**
+ * A validated Motion3DGAN generator (`sinew train motion`): a label and a seed become a landmark
+ * curve, each of whose frames an S2D decoder turns into a dense face.
+ */
+export class Motion extends Handle {
+  #info;
+  #labels;
+
+  /** Validates a `.sinew` motion generator; throws an Error saying what is wrong. */
+  static load(bytes) {
+    return new Motion(token, load(bytes, (w) => w.sinew_motion_load()));
+  }
+
+  constructor(key, handle) {
+    super(key, handle);
+    this.#info = keyValues(takeText(exports().sinew_info(handle)));
+    this.#labels = takeText(exports().sinew_names(handle)).split("\n");
+  }
+
+  /** The labels' names in index order (`mouth_open`, …; `label_0` … when the file records none). */
+  get labels() {
+    return [...this.#labels];
+  }
+  /** Number of labels. */
+  get labelCount() {
+    return Number(this.#info.labels);
+  }
+  /** Frames of a motion after its neutral frame 0. */
+  get frameCount() {
+    return Number(this.#info.frames);
+  }
+  /** Landmarks it moves (the decoder's). */
+  get landmarkCount() {
+    return Number(this.#info.landmarks);
+  }
+
+  /**
+   * The landmark curve of `label` (an index or a name) from `seed` (a non-negative integer or
+   * BigInt below 2⁶⁴) on the S2D decoder `decoder`: `(frameCount + 1) · 3K` values, frame 0 the
+   * neutral's landmarks. `intensity` (default 1) scales how far the motion goes; `neutral` is the
+   * face to play on (default: the decoder's template).
+   */
+  curve(decoder, label, seed, { intensity = 1, neutral } = {}) {
+    const index = this.#label(label);
+    const s = seedOf(seed);
+    const parts = [];
+    if (neutral !== undefined && neutral !== null) parts.push(f32Bytes(floats(neutral, "neutral")));
+    put(...parts);
+    const low = Number(s & 0xffff_ffffn);
+    const high = Number(s >> 32n);
+    return takeF32(exports().sinew_motion_curve(this._h, modelHandle(decoder), index, low, high, intensity));
+  }
+
+  /** Frame `t` (0 to frameCount) of `curve` decoded onto `neutral` (default: the template). */
+  frame(decoder, curve, t, neutral) {
+    const c = floats(curve, "curve");
+    const parts = [f32Bytes(c)];
+    if (neutral !== undefined && neutral !== null) parts.push(f32Bytes(floats(neutral, "neutral")));
+    put(...parts);
+    return takeF32(exports().sinew_motion_frame(this._h, modelHandle(decoder), frameIndex(t), c.length));
+  }
+
+  /** Every frame 1 to frameCount of the sequence of `label` and `seed`, as `curve` and `frame`. */
+  frames(decoder, label, seed, options = {}) {
+    const c = this.curve(decoder, label, seed, options);
+    const out = [];
+    for (let t = 1; t <= this.frameCount; t++) out.push(this.frame(decoder, c, t, options.neutral));
+    return out;
+  }
+
+  #label(label) {
+    if (typeof label === "string") {
+      const i = this.#labels.indexOf(label);
+      if (i < 0) throw new RangeError(`sinew: unknown label "${label}" (labels: ${this.#labels.join(", ")})`);
+      return i;
+    }
+    if (!Number.isInteger(label) || label < 0 || label > 0xffff_ffff) {
+      throw new RangeError(`sinew: a label is a name or a non-negative integer, got ${label}`);
+    }
+    return label;
+  }
+}
+
+/** A seed as a BigInt in [0, 2⁶⁴). */
+function seedOf(seed) {
+  if (typeof seed === "bigint" && seed >= 0n && seed < 1n << 64n) return seed;
+  if (Number.isSafeInteger(seed) && seed >= 0) return BigInt(seed);
+  throw new RangeError(`sinew: a seed is an integer from 0 below 2^64 (a BigInt above 2^53), got ${seed}`);
+}
+
 function modelHandle(model) {
-  if (!(model instanceof Model)) throw new TypeError("sinew: a performance plays on a Model");
+  if (!(model instanceof Model)) throw new TypeError("sinew: a performance or a motion plays on a Model");
   return model._h;
 }
 
@@ -403,4 +536,11 @@ function modelHandle(model) {
 export function frameHash(...arrays) {
   put(...arrays.map((a, i) => f32Bytes(floats(a, `array ${i}`))));
   return takeText(exports().sinew_frame_hash());
+}
+
+/** The hash of a Q16 frame (16 hex digits): each raw Q16.16 value's 32 bits, as `poseQ16` gives them. */
+export function frameHashQ16(values) {
+  if (!(values instanceof Int32Array)) throw new TypeError("sinew: frameHashQ16 takes an Int32Array");
+  put(new Uint8Array(values.buffer, values.byteOffset, values.byteLength));
+  return takeText(exports().sinew_frame_hash_q16());
 }

@@ -21,13 +21,14 @@
 
 use std::cell::{Cell, RefCell};
 
-use crate::{Error, FrameInputs, Model, Performance, Refused, Replay};
+use crate::{Error, FrameInputs, Model, Motion, Performance, Refused, Replay};
 
 #[derive(Debug)]
 enum Object {
     Model(Model),
     Replay(Replay),
     Performance(Performance),
+    Motion(Motion),
 }
 
 impl Object {
@@ -37,6 +38,7 @@ impl Object {
             Self::Model(_) => "a model",
             Self::Replay(_) => "a replay",
             Self::Performance(_) => "a performance",
+            Self::Motion(_) => "a motion generator",
         }
     }
 }
@@ -109,7 +111,7 @@ fn slot(handle: i32) -> Option<usize> {
 
 fn stale(handle: i32) -> Error {
     Error::new(format!(
-        "handle {handle} is not a live model, replay or performance"
+        "handle {handle} is not a live model, replay, performance or motion generator"
     ))
 }
 
@@ -269,7 +271,8 @@ pub extern "C" fn sinew_free(handle: i32) {
 /// `shapes`, `inputs`, `triangles` and `hash` (16 hex digits); for a replay `kind`, `mode`,
 /// `frames`, `model` (the model's hash) and `neutral` (1 if it carries one); for a performance
 /// `kind=performance`, `form` (`global` or `local`), `frames`, `shapes`, `model` and `hashes` (1
-/// if it carries its frames' hashes).
+/// if it carries its frames' hashes); for a motion generator `kind=motion`, `labels`, `frames`,
+/// `landmarks` and `noise`.
 // Safety: exported under its own name; no other symbol in the module is called so.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
@@ -303,6 +306,13 @@ pub extern "C" fn sinew_info(handle: i32) -> i32 {
                 p.shape_count(),
                 p.model_hash(),
                 u8::from(p.has_hashes())
+            )),
+            Some(Object::Motion(m)) => Ok(format!(
+                "kind=motion\nlabels={}\nframes={}\nlandmarks={}\nnoise={}\n",
+                m.label_count(),
+                m.frame_count(),
+                m.landmark_count(),
+                m.noise_len()
             )),
             None => Err(stale(handle)),
         }
@@ -561,5 +571,150 @@ pub extern "C" fn sinew_performance_expected(perf: i32, frame: u32) -> i32 {
         Ok(p.expected(frame as usize)?
             .map(|h| format!("{h:016x}").into_bytes())
             .unwrap_or_default())
+    }))
+}
+
+/// The names, one per line, of a model's corrective shapes ([`Model::shape_names`]) or of a
+/// motion generator's labels ([`Motion::label_names`]). Result: UTF-8 text.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_names(handle: i32) -> i32 {
+    let names = OBJECTS.with_borrow(|objects| {
+        match slot(handle)
+            .and_then(|i| objects.get(i))
+            .and_then(Option::as_ref)
+        {
+            Some(Object::Model(m)) => Ok(m.shape_names()),
+            Some(Object::Motion(m)) => Ok(m.label_names()),
+            Some(other) => Err(not_a(handle, other, "a model or a motion generator")),
+            None => Err(stale(handle)),
+        }
+    });
+    finish(names.map(|n| n.join("\n").into_bytes()))
+}
+
+fn i32_bytes(values: &[i32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+/// Poses an AIM actor in Q16.16 ([`Model::pose_q16`]); the I/O area as [`sinew_pose`]'s. Result:
+/// the positions' raw Q16.16 values (`i32`).
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_pose_q16(handle: i32, head_len: u32, jaw_len: u32) -> i32 {
+    let values = io_f32s();
+    finish(with_model(handle, |m| {
+        let (head, rest) = split_at(&values, head_len)?;
+        let (jaw, coefficients) = split_at(rest, jaw_len)?;
+        Ok(i32_bytes(&m.pose_q16(head, jaw, coefficients)?))
+    }))
+}
+
+/// Poses an AIM actor in the fast mode ([`Model::pose_fast`]); the I/O area as [`sinew_pose`]'s.
+/// Result (`f32`): the positions, then the normals.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_pose_fast(handle: i32, head_len: u32, jaw_len: u32) -> i32 {
+    let values = io_f32s();
+    finish(with_model(handle, |m| {
+        let (head, rest) = split_at(&values, head_len)?;
+        let (jaw, coefficients) = split_at(rest, jaw_len)?;
+        let (positions, normals) = m.pose_fast(head, jaw, coefficients)?;
+        Ok(f32_bytes(&[positions, normals].concat()))
+    }))
+}
+
+/// The Q16 frame hash ([`crate::frame_hash_q16`]) of the `i32` values in the I/O area. Result:
+/// 16 hex digits.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_frame_hash_q16() -> i32 {
+    let values: Vec<i32> = IO.with_borrow(|io| {
+        let (values, _) = io.as_chunks::<4>();
+        values.iter().map(|c| i32::from_le_bytes(*c)).collect()
+    });
+    finish(Ok(
+        format!("{:016x}", crate::frame_hash_q16(&values)).into_bytes()
+    ))
+}
+
+/// Loads the motion generator whose bytes are in the I/O area ([`Motion::load`]); returns its
+/// handle, or -1.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_motion_load() -> i32 {
+    handle_or_error(Motion::load(io_bytes()).and_then(|m| insert(Object::Motion(m))))
+}
+
+/// Runs `f` on the motion generator behind `motion` and the model behind `model`.
+fn with_motion<T>(
+    motion: i32,
+    model: i32,
+    f: impl FnOnce(&Motion, &Model) -> Result<T, Error>,
+) -> Result<T, Error> {
+    OBJECTS.with_borrow(|objects| {
+        let get = |h: i32| {
+            slot(h)
+                .and_then(|i| objects.get(i))
+                .and_then(Option::as_ref)
+        };
+        let g = match get(motion) {
+            Some(Object::Motion(g)) => g,
+            Some(other) => return Err(not_a(motion, other, "a motion generator")),
+            None => return Err(stale(motion)),
+        };
+        match get(model) {
+            Some(Object::Model(m)) => f(g, m),
+            Some(other) => Err(not_a(model, other, "a model")),
+            None => Err(stale(model)),
+        }
+    })
+}
+
+/// The landmark curve of a label and a seed ([`Motion::curve`]) on the decoder `model`; the I/O
+/// area holds the neutral face to generate on, or nothing for the decoder's template. The seed
+/// is `seed_high · 2³² + seed_low`. Result: the curve (`f32`).
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_motion_curve(
+    motion: i32,
+    model: i32,
+    label: u32,
+    seed_low: u32,
+    seed_high: u32,
+    intensity: f32,
+) -> i32 {
+    let neutral = io_f32s();
+    let seed = (u64::from(seed_high) << 32) | u64::from(seed_low);
+    finish(with_motion(motion, model, |g, m| {
+        let neutral = (!neutral.is_empty()).then_some(&neutral[..]);
+        Ok(f32_bytes(&g.curve(
+            m,
+            label as usize,
+            seed,
+            intensity,
+            neutral,
+        )?))
+    }))
+}
+
+/// Frame `t` of a curve decoded on the decoder `model` ([`Motion::frame`]); the I/O area holds
+/// the curve (`curve_len` values), then the neutral face, or nothing for the template. Result:
+/// the vertices (`f32`).
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_motion_frame(motion: i32, model: i32, t: u32, curve_len: u32) -> i32 {
+    let values = io_f32s();
+    finish(with_motion(motion, model, |g, m| {
+        let (curve, neutral) = split_at(&values, curve_len)?;
+        let neutral = (!neutral.is_empty()).then_some(neutral);
+        Ok(f32_bytes(&g.frame(m, curve, t as usize, neutral)?))
     }))
 }

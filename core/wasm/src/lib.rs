@@ -23,8 +23,12 @@ use sinew_core::replay::{self, AimReplay, S2D_INPUTS, S2dReplay};
 use sinew_core::s2d::S2dDecoder;
 
 pub mod exports;
+mod modes;
+mod motion;
 mod performance;
 
+pub use modes::frame_hash_q16;
+pub use motion::Motion;
 pub use performance::{Performance, PerformanceFrame};
 
 /// Values in a head or jaw pose: a 6D rotation, then a translation.

@@ -76,3 +76,79 @@ impl Drop for Model {
         unsafe { sinew_model_free(self.handle) };
     }
 }
+
+/// A section of a container [`container`] writes: its name, data type code (2 `f32`, 3 `u32`),
+/// dimensions and little-endian data.
+pub struct Section {
+    pub name: &'static str,
+    pub dtype: u8,
+    pub dims: Vec<u32>,
+    pub data: Vec<u8>,
+}
+
+impl Section {
+    /// An `f32` tensor.
+    pub fn f32s(name: &'static str, dims: &[u32], values: &[f32]) -> Self {
+        Self {
+            name,
+            dtype: 2,
+            dims: dims.to_vec(),
+            data: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+        }
+    }
+
+    /// A `u32` tensor.
+    pub fn u32s(name: &'static str, dims: &[u32], values: &[u32]) -> Self {
+        Self {
+            name,
+            dtype: 3,
+            dims: dims.to_vec(),
+            data: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+        }
+    }
+}
+
+/// A `.sinew` container of artefact kind `kind` holding `sections` (tensors), laid out and
+/// checksummed as docs/FORMAT.md prescribes: what the host's writer does, for artefacts the
+/// goldens do not include (the C API's tests cannot depend on the host).
+pub fn container(kind: u16, sections: &[Section]) -> Vec<u8> {
+    use sinew_core::format::CRC32;
+    let align = |n: usize| n.div_ceil(16) * 16;
+    let table_end = 32 + 64 * sections.len();
+    let mut offsets = Vec::new();
+    let mut at = align(table_end);
+    for s in sections {
+        offsets.push(at);
+        at = align(at + s.data.len());
+    }
+    let end = offsets
+        .last()
+        .zip(sections.last())
+        .map_or(align(table_end), |(o, s)| o + s.data.len());
+    let mut out = vec![0u8; end];
+    out[..8].copy_from_slice(&sinew_core::format::MAGIC);
+    out[8..10].copy_from_slice(&1u16.to_le_bytes());
+    out[16..18].copy_from_slice(&kind.to_le_bytes());
+    out[20..24].copy_from_slice(&(sections.len() as u32).to_le_bytes());
+    out[24..28].copy_from_slice(&(end as u32).to_le_bytes());
+    for (i, (s, offset)) in sections.iter().zip(&offsets).enumerate() {
+        let e = 32 + 64 * i;
+        out[e..e + 2].copy_from_slice(&2u16.to_le_bytes());
+        out[e + 2] = s.dtype;
+        out[e + 3] = s.dims.len() as u8;
+        out[e + 4..e + 4 + s.name.len()].copy_from_slice(s.name.as_bytes());
+        for (d, dim) in s.dims.iter().enumerate() {
+            out[e + 36 + 4 * d..e + 40 + 4 * d].copy_from_slice(&dim.to_le_bytes());
+        }
+        out[e + 52..e + 56].copy_from_slice(&(*offset as u32).to_le_bytes());
+        out[e + 56..e + 60].copy_from_slice(&(s.data.len() as u32).to_le_bytes());
+        out[e + 60..e + 64].copy_from_slice(&CRC32.checksum(&s.data).to_le_bytes());
+        out[*offset..offset + s.data.len()].copy_from_slice(&s.data);
+    }
+    let mut digest = CRC32.digest();
+    digest.update(&out[..28]);
+    digest.update(&out[32..table_end]);
+    let crc = digest.finalize();
+    out[28..32].copy_from_slice(&crc.to_le_bytes());
+    out
+}
