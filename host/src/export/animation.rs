@@ -5,13 +5,16 @@
 //! clip lasts N / fps, its last keyframe equals its first, and an engine that repeats it goes from
 //! frame N − 1 back to frame 0 over one frame's time, as between any two frames, never jumping.
 //! Each rotation keeps the sign of the one before it (q and −q are one rotation), so that a
-//! plain linear blend of neighbouring keys, as some engines do, takes the short way too.
+//! plain linear blend of neighbouring keys, as some engines do, takes the short way too. The
+//! rotations are unit quaternions of the core's matrices ([`quaternion`]).
 
 use gltf_json as json;
 use json::validation::Checked::Valid;
 use sinew_core::aim::AimActor;
 
-use super::gltf::{GltfError, quaternion};
+use sinew_core::InputError;
+use sinew_core::linalg::Mat3;
+
 use super::place::Place;
 use crate::aim::play::Frame;
 use crate::io::glb::Builder;
@@ -45,7 +48,8 @@ fn continuous(q: [f32; 4], before: Option<&[f32]>) -> [f32; 4] {
 
 /// Adds the animation over `frames` (keyed at i / fps; the first again at N / fps when
 /// `looped`); each keyframe's morph weights are the frame's, then `extra` zeros for targets the
-/// animation does not drive.
+/// animation does not drive. A frame whose head or jaw the core refuses is returned with its
+/// index.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn animate(
     b: &mut Builder,
@@ -57,7 +61,7 @@ pub(crate) fn animate(
     place: &Place,
     pivot_m: [f32; 3],
     nodes: &Animated,
-) -> Result<(), GltfError> {
+) -> Result<(), (usize, InputError)> {
     use json::accessor::Type;
     use json::animation::Property;
     let keys = keyframes(frames, looped);
@@ -71,7 +75,7 @@ pub(crate) fn animate(
         weights.extend(std::iter::repeat_n(0.0, extra));
         let pose = actor
             .pose_from_9d(&f.jaw, &f.head)
-            .map_err(|source| GltfError::Frame { frame, source })?;
+            .map_err(|source| (frame, source))?;
         let t = pose.jaw.rigid.trans;
         jt.extend(
             place
@@ -150,4 +154,47 @@ pub(crate) fn animate(
         samplers,
     });
     Ok(())
+}
+
+/// A unit quaternion `[x, y, z, w]` of a rotation matrix (Shepperd's method, in f64).
+pub fn quaternion(m: &Mat3) -> [f32; 4] {
+    let c = m.cols.map(|v| [v.x, v.y, v.z].map(f64::from));
+    // r[i][j]: row i, column j.
+    let r = |i: usize, j: usize| c[j][i];
+    let trace = r(0, 0) + r(1, 1) + r(2, 2);
+    let q = if trace > 0.0 {
+        let s = (trace + 1.0).sqrt() * 2.0;
+        [
+            (r(2, 1) - r(1, 2)) / s,
+            (r(0, 2) - r(2, 0)) / s,
+            (r(1, 0) - r(0, 1)) / s,
+            s / 4.0,
+        ]
+    } else if r(0, 0) > r(1, 1) && r(0, 0) > r(2, 2) {
+        let s = (1.0 + r(0, 0) - r(1, 1) - r(2, 2)).sqrt() * 2.0;
+        [
+            s / 4.0,
+            (r(0, 1) + r(1, 0)) / s,
+            (r(0, 2) + r(2, 0)) / s,
+            (r(2, 1) - r(1, 2)) / s,
+        ]
+    } else if r(1, 1) > r(2, 2) {
+        let s = (1.0 + r(1, 1) - r(0, 0) - r(2, 2)).sqrt() * 2.0;
+        [
+            (r(0, 1) + r(1, 0)) / s,
+            s / 4.0,
+            (r(1, 2) + r(2, 1)) / s,
+            (r(0, 2) - r(2, 0)) / s,
+        ]
+    } else {
+        let s = (1.0 + r(2, 2) - r(0, 0) - r(1, 1)).sqrt() * 2.0;
+        [
+            (r(0, 2) + r(2, 0)) / s,
+            (r(1, 2) + r(2, 1)) / s,
+            s / 4.0,
+            (r(1, 0) - r(0, 1)) / s,
+        ]
+    };
+    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    q.map(|v| (v / n) as f32)
 }

@@ -29,12 +29,12 @@ use json::validation::Checked::Valid;
 use serde::Serialize;
 use sinew_core::FormatError;
 use sinew_core::aim::AimActor;
-use sinew_core::linalg::Mat3;
 use sinew_core::replay::ReplayError;
 
+pub use super::animation::quaternion;
 use super::animation::{Animated, animate};
 pub use super::names::{Names, Targets};
-use super::place::Place;
+use super::place::{Place, PlaceError};
 use crate::aim::arkit::ArkitError;
 use crate::aim::play::{Frame, PoseFile, PoseFileError, corrective_names};
 use crate::geometry::uv::UvError;
@@ -328,49 +328,6 @@ pub fn joint_weight(k: f32) -> f32 {
     k.clamp(0.0, 1.0)
 }
 
-/// A unit quaternion `[x, y, z, w]` of a rotation matrix (Shepperd's method, in f64).
-pub fn quaternion(m: &Mat3) -> [f32; 4] {
-    let c = m.cols.map(|v| [v.x, v.y, v.z].map(f64::from));
-    // r[i][j]: row i, column j.
-    let r = |i: usize, j: usize| c[j][i];
-    let trace = r(0, 0) + r(1, 1) + r(2, 2);
-    let q = if trace > 0.0 {
-        let s = (trace + 1.0).sqrt() * 2.0;
-        [
-            (r(2, 1) - r(1, 2)) / s,
-            (r(0, 2) - r(2, 0)) / s,
-            (r(1, 0) - r(0, 1)) / s,
-            s / 4.0,
-        ]
-    } else if r(0, 0) > r(1, 1) && r(0, 0) > r(2, 2) {
-        let s = (1.0 + r(0, 0) - r(1, 1) - r(2, 2)).sqrt() * 2.0;
-        [
-            s / 4.0,
-            (r(0, 1) + r(1, 0)) / s,
-            (r(0, 2) + r(2, 0)) / s,
-            (r(2, 1) - r(1, 2)) / s,
-        ]
-    } else if r(1, 1) > r(2, 2) {
-        let s = (1.0 + r(1, 1) - r(0, 0) - r(2, 2)).sqrt() * 2.0;
-        [
-            (r(0, 1) + r(1, 0)) / s,
-            s / 4.0,
-            (r(1, 2) + r(2, 1)) / s,
-            (r(0, 2) - r(2, 0)) / s,
-        ]
-    } else {
-        let s = (1.0 + r(2, 2) - r(0, 0) - r(1, 1)).sqrt() * 2.0;
-        [
-            (r(0, 2) + r(2, 0)) / s,
-            (r(1, 2) + r(2, 1)) / s,
-            s / 4.0,
-            (r(1, 0) - r(0, 1)) / s,
-        ]
-    };
-    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-    q.map(|v| (v / n) as f32)
-}
-
 fn node(name: &str) -> json::Node {
     json::Node {
         name: Some(name.to_string()),
@@ -404,7 +361,10 @@ pub fn glb(
     let v = actor.vertex_count();
     let m = actor.shape_count();
     let scale = metres_per_unit(actor)?;
-    let place = Place::of(actor, scale)?;
+    let place = Place::of(actor, scale).map_err(|e| match e {
+        PlaceError::Rig(e) => GltfError::Rig(e),
+        PlaceError::Uv(e) => GltfError::Uv(e),
+    })?;
     let v_out = place.vertices();
     let file = actor.file();
     let section = |name: &str, shape: &[u32]| {
@@ -610,7 +570,8 @@ pub fn glb(
             &place,
             pivot_m,
             &nodes,
-        )?;
+        )
+        .map_err(|(frame, source)| GltfError::Frame { frame, source })?;
     }
     let scene = b.root.push(json::Scene {
         extensions: None,

@@ -8,10 +8,20 @@
 use sinew_core::aim::AimActor;
 use sinew_core::linalg::{Mat3, Vec3};
 
-use super::gltf::GltfError;
 use crate::geometry::align::{M3, inv3, mat_mul, mat_vec, transpose};
 use crate::geometry::uv::{self, CornerUvs};
 use crate::rig::record::{Record, RecordError};
+
+/// Why an actor's placement cannot be made.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum PlaceError {
+    /// The actor's record of its rig is broken.
+    #[error(transparent)]
+    Rig(#[from] RecordError),
+    /// Its texture coordinates do not fit it.
+    #[error(transparent)]
+    Uv(#[from] crate::geometry::uv::UvError),
+}
 
 /// The map from the actor's face frame to the exported file's.
 #[derive(Debug)]
@@ -33,7 +43,7 @@ pub(crate) struct Place {
 
 impl Place {
     /// The map for `actor`, whose unit is `scale` metres.
-    pub(crate) fn of(actor: &AimActor<'_>, scale: f32) -> Result<Self, GltfError> {
+    pub(crate) fn of(actor: &AimActor<'_>, scale: f32) -> Result<Self, PlaceError> {
         let Some(record) = crate::aim::play::rig_record(actor)? else {
             let triangles: Vec<u32> = actor.triangles().indices().iter().collect();
             let v = actor.vertex_count();
