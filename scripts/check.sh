@@ -32,28 +32,54 @@ cargo test --workspace --locked
 # burn and everything under it a second time.
 sinew="$(cd "${CARGO_TARGET_DIR:-target}" && pwd)/debug/sinew"
 
-step "glTF: the golden ICT actor exported (poses; ARKit capture with bones) and a sample rig, Khronos validator"
+step "glTF: the golden ICT actor and a rig actor exported, Khronos validator, and posed by three.js as sinew play poses them"
 if ! command -v npm >/dev/null; then
   apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq nodejs npm >/dev/null
 fi
 gltf_dir=$(mktemp -d)
+# Each export is checked against sinew play's frames of the same poses (host/tests/three/check.mjs):
+# FRAMES GLB OBJ-UNIT TOLERANCE-MM per line (docs/ENGINES.md gives the tolerances).
+three_checks=()
+"$sinew" play --model tests/data/aim-ict.sinew \
+  --poses host/tests/gltf/poses.json --out "$gltf_dir/poses" >/dev/null
+"$sinew" export gltf --model tests/data/aim-ict.sinew --poses host/tests/gltf/poses.json \
+  --names arkit --loop --out "$gltf_dir/poses.glb" >/dev/null
+"$sinew" play --model tests/data/aim-ict.sinew \
+  --arkit tests/data/arkit-sample.csv --out "$gltf_dir/arkit" >/dev/null 2>&1
 "$sinew" export gltf --model tests/data/aim-ict.sinew \
-  --poses host/tests/gltf/poses.json --out "$gltf_dir/poses.glb" >/dev/null
-"$sinew" export gltf --model tests/data/aim-ict.sinew \
-  --arkit tests/data/arkit-sample.csv --bones --out "$gltf_dir/arkit.glb" >/dev/null
+  --arkit tests/data/arkit-sample.csv --bones --out "$gltf_dir/arkit.glb" >/dev/null 2>&1
 glbs=("$gltf_dir/poses.glb" "$gltf_dir/arkit.glb")
-# A studio rig as `sinew data rig` writes it (morph targets, UVs split at a seam, a node transform).
-kit="${SINEW_DATA:-../shared/data}/ict-facekit"
+three_checks+=("poses poses.glb 0.01 0.5" "arkit arkit.glb 0.01 0.5")
+# A studio rig as `sinew data rig` writes it (morph targets, UVs split at a seam, a node transform),
+# and an actor learned briefly from the same rig as an OBJ folder (texture coordinates per corner),
+# exported in the rig's frame.
+data="${SINEW_DATA:-../shared/data}"
+kit="$data/ict-facekit"
 if [ -d "$kit" ]; then
   "$sinew" data rig --data "$kit" --out "$gltf_dir/rig.glb" --scene --vertices 3000 >/dev/null
-  glbs+=("$gltf_dir/rig.glb")
+  "$sinew" data rig --data "$kit" --out "$gltf_dir/rig" --vertices 3000 >/dev/null
+  "$sinew" train aim --rig "$gltf_dir/rig" --units cm --templates "$data" \
+    --shapes jawOpen,mouthSmile_L,browInnerUp_L,browInnerUp_R --iterations 20 --quiet \
+    --out "$gltf_dir/rig-actor.sinew" --report "$gltf_dir/rig-actor.json" >/dev/null
+  "$sinew" play --model "$gltf_dir/rig-actor.sinew" \
+    --poses host/tests/three/rig-poses.json --out "$gltf_dir/rig-actor" >/dev/null
+  "$sinew" export gltf --model "$gltf_dir/rig-actor.sinew" --poses host/tests/three/rig-poses.json \
+    --names arkit --loop --out "$gltf_dir/rig-actor.glb" >/dev/null
+  glbs+=("$gltf_dir/rig.glb" "$gltf_dir/rig-actor.glb")
+  three_checks+=("rig-actor rig-actor.glb 0.01 0.01")
 elif [ "${SINEW_REQUIRE_DATA:-}" = 1 ]; then
   echo "no ICT-FaceKit at $kit (SINEW_REQUIRE_DATA=1)" >&2
   exit 1
 else
-  echo "no ICT-FaceKit at $kit: the sample rig's glTF is not validated"
+  echo "no ICT-FaceKit at $kit: the sample rig and the rig actor's glTF are not checked"
 fi
 (cd host/tests/gltf && npm ci --no-audit --no-fund --silent && node validate.mjs "${glbs[@]}")
+(cd host/tests/three && npm ci --no-audit --no-fund --silent)
+for check in "${three_checks[@]}"; do
+  read -r frames glb unit tolerance <<<"$check"
+  node host/tests/three/check.mjs --frames "$gltf_dir/$frames" --glb "$gltf_dir/$glb" \
+    --obj-unit "$unit" --tolerance-mm "$tolerance"
+done
 rm -rf "$gltf_dir"
 
 step "C API: the golden replays from C (core/ffi/examples/replay.c)"

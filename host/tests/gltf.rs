@@ -4,47 +4,15 @@
 //! same frames on the golden ICT actor. The evaluator below reads only the .glb, so it checks
 //! what an engine would see.
 
-use std::path::Path;
+mod common;
 
+use common::gltf::{Gltf, axis_angle, golden, pose_gltf};
 use gltf_json as json;
-use json::validation::Checked::Valid;
 use sinew_core::aim::AimActor;
 use sinew_core::linalg::{Mat3, Vec3};
 use sinew_host::aim::play::Frame;
-use sinew_host::export::gltf::{glb, joint_weight, metres_per_unit};
+use sinew_host::export::gltf::{Names, Options, glb, joint_weight, metres_per_unit};
 use sinew_host::training::tolerance::{GLTF_RIG, GLTF_ROUNDING};
-
-type M4 = [[f64; 4]; 4];
-
-fn golden() -> Vec<u8> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/aim-ict.sinew");
-    std::fs::read(p).unwrap()
-}
-
-/// A rotation about a unit axis, as the core's matrix.
-fn axis_angle(axis: [f64; 3], angle: f64) -> Mat3 {
-    let (s, c) = angle.sin_cos();
-    let [x, y, z] = axis;
-    let r = [
-        [
-            c + x * x * (1.0 - c),
-            x * y * (1.0 - c) - z * s,
-            x * z * (1.0 - c) + y * s,
-        ],
-        [
-            y * x * (1.0 - c) + z * s,
-            c + y * y * (1.0 - c),
-            y * z * (1.0 - c) - x * s,
-        ],
-        [
-            z * x * (1.0 - c) - y * s,
-            z * y * (1.0 - c) + x * s,
-            c + z * z * (1.0 - c),
-        ],
-    ];
-    let col = |j: usize| Vec3::new(r[0][j] as f32, r[1][j] as f32, r[2][j] as f32);
-    Mat3::from_cols(col(0), col(1), col(2))
-}
 
 /// 30 frames: every coefficient on a smooth curve, the jaw opening along its learned jawOpen
 /// transform (blended in from the identity, as the ARKit mapping does), and the head turning and
@@ -73,235 +41,13 @@ fn frames(actor: &AimActor<'_>) -> Vec<Frame> {
         .collect()
 }
 
-struct Gltf {
-    root: json::Root,
-    bin: Vec<u8>,
-}
-
-impl Gltf {
-    fn accessor(&self, i: json::Index<json::Accessor>) -> Vec<f64> {
-        let a = &self.root.accessors[i.value()];
-        let view = &self.root.buffer_views[a.buffer_view.unwrap().value()];
-        let start = view.byte_offset.map_or(0, |o| o.0 as usize)
-            + a.byte_offset.map_or(0, |o| o.0 as usize);
-        let Valid(kind) = a.type_ else {
-            panic!("accessor type")
-        };
-        let n = a.count.0 as usize * kind.multiplicity();
-        let Valid(json::accessor::GenericComponentType(c)) = a.component_type else {
-            panic!("component type")
-        };
-        let bytes = &self.bin[start..];
-        match c {
-            json::accessor::ComponentType::F32 => bytes
-                .chunks_exact(4)
-                .take(n)
-                .map(|b| f64::from(f32::from_le_bytes(b.try_into().unwrap())))
-                .collect(),
-            json::accessor::ComponentType::U8 => bytes[..n].iter().map(|b| f64::from(*b)).collect(),
-            other => panic!("component type {other:?} not read here"),
-        }
-    }
-
-    /// `(translation, rotation xyzw)` of a node at time `t`: the animated values where a channel
-    /// targets it (linear, slerp for the rotation), else its rest values.
-    fn trs(&self, node: usize, t: f64) -> ([f64; 3], [f64; 4]) {
-        let n = &self.root.nodes[node];
-        let mut tr = n.translation.unwrap_or([0.0; 3]).map(f64::from);
-        let mut rot = n
-            .rotation
-            .map_or([0.0, 0.0, 0.0, 1.0], |q| q.0.map(f64::from));
-        for anim in &self.root.animations {
-            for ch in &anim.channels {
-                if ch.target.node.value() != node {
-                    continue;
-                }
-                let s = &anim.samplers[ch.sampler.value()];
-                let times = self.accessor(s.input);
-                let out = self.accessor(s.output);
-                let k = times.iter().rposition(|x| *x <= t).unwrap_or(0);
-                let (k1, a) = if k + 1 < times.len() {
-                    (k + 1, (t - times[k]) / (times[k + 1] - times[k]))
-                } else {
-                    (k, 0.0)
-                };
-                match ch.target.path {
-                    Valid(json::animation::Property::Translation) => {
-                        tr = std::array::from_fn(|i| {
-                            out[3 * k + i] * (1.0 - a) + out[3 * k1 + i] * a
-                        })
-                    }
-                    Valid(json::animation::Property::Rotation) => {
-                        let q0: [f64; 4] = std::array::from_fn(|i| out[4 * k + i]);
-                        let q1: [f64; 4] = std::array::from_fn(|i| out[4 * k1 + i]);
-                        rot = slerp(q0, q1, a);
-                    }
-                    _ => {}
-                }
-            }
-        }
-        (tr, rot)
-    }
-
-    fn morph_weights(&self, node: usize, t: f64, m: usize) -> Vec<f64> {
-        for anim in &self.root.animations {
-            for ch in &anim.channels {
-                if ch.target.node.value() == node
-                    && ch.target.path == Valid(json::animation::Property::MorphTargetWeights)
-                {
-                    let s = &anim.samplers[ch.sampler.value()];
-                    let times = self.accessor(s.input);
-                    let out = self.accessor(s.output);
-                    let k = times
-                        .iter()
-                        .position(|x| (*x - t).abs() < 1e-9)
-                        .expect("keyframe");
-                    return out[m * k..m * (k + 1)].to_vec();
-                }
-            }
-        }
-        vec![0.0; m]
-    }
-
-    /// A node's world matrix: its parents' times its own TRS.
-    fn world(&self, node: usize, t: f64) -> M4 {
-        let (tr, q) = self.trs(node, t);
-        let local = trs_matrix(tr, q);
-        let parent = self.root.nodes.iter().position(|p| {
-            p.children
-                .as_ref()
-                .is_some_and(|c| c.iter().any(|c| c.value() == node))
-        });
-        match parent {
-            Some(p) => mul(&self.world(p, t), &local),
-            None => local,
-        }
-    }
-}
-
-fn slerp(q0: [f64; 4], mut q1: [f64; 4], a: f64) -> [f64; 4] {
-    let mut d: f64 = (0..4).map(|i| q0[i] * q1[i]).sum();
-    if d < 0.0 {
-        q1 = q1.map(|x| -x);
-        d = -d;
-    }
-    if a == 0.0 || d > 1.0 - 1e-12 {
-        return std::array::from_fn(|i| q0[i] * (1.0 - a) + q1[i] * a);
-    }
-    let th = d.acos();
-    let (s0, s1) = (((1.0 - a) * th).sin() / th.sin(), (a * th).sin() / th.sin());
-    std::array::from_fn(|i| q0[i] * s0 + q1[i] * s1)
-}
-
-fn trs_matrix(t: [f64; 3], q: [f64; 4]) -> M4 {
-    let [x, y, z, w] = q;
-    [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - z * w),
-            2.0 * (x * z + y * w),
-            t[0],
-        ],
-        [
-            2.0 * (x * y + z * w),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - x * w),
-            t[1],
-        ],
-        [
-            2.0 * (x * z - y * w),
-            2.0 * (y * z + x * w),
-            1.0 - 2.0 * (x * x + y * y),
-            t[2],
-        ],
-        [0.0, 0.0, 0.0, 1.0],
-    ]
-}
-
-fn mul(a: &M4, b: &M4) -> M4 {
-    std::array::from_fn(|r| std::array::from_fn(|c| (0..4).map(|k| a[r][k] * b[k][c]).sum()))
-}
-
-fn apply(m: &M4, p: [f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|r| m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2] + m[r][3])
-}
-
-/// Every frame of the face mesh posed by glTF's rules, in metres, `[frames][V·3]`.
-fn pose_gltf(g: &Gltf) -> Vec<Vec<f64>> {
-    let face = g
-        .root
-        .nodes
-        .iter()
-        .position(|n| n.name.as_deref() == Some("face"))
-        .unwrap();
-    let node = &g.root.nodes[face];
-    let mesh = &g.root.meshes[node.mesh.unwrap().value()];
-    let skin = &g.root.skins[node.skin.unwrap().value()];
-    let prim = &mesh.primitives[0];
-    let attr = |s: json::mesh::Semantic| g.accessor(prim.attributes[&Valid(s)]);
-    let base = attr(json::mesh::Semantic::Positions);
-    let joints = attr(json::mesh::Semantic::Joints(0));
-    let weights = attr(json::mesh::Semantic::Weights(0));
-    let targets: Vec<Vec<f64>> = prim
-        .targets
-        .as_ref()
-        .unwrap()
-        .iter()
-        .map(|t| g.accessor(t.positions.unwrap()))
-        .collect();
-    let ibm = g.accessor(skin.inverse_bind_matrices.unwrap());
-    let times = {
-        let anim = &g.root.animations[0];
-        g.accessor(anim.samplers[0].input)
-    };
-    times
-        .iter()
-        .map(|&t| {
-            let w = g.morph_weights(face, t, targets.len());
-            let jm: Vec<M4> = skin
-                .joints
-                .iter()
-                .enumerate()
-                .map(|(j, n)| {
-                    // Inverse bind matrices are column-major.
-                    let b: M4 =
-                        std::array::from_fn(|r| std::array::from_fn(|c| ibm[16 * j + 4 * c + r]));
-                    mul(&g.world(n.value(), t), &b)
-                })
-                .collect();
-            let mut out = Vec::with_capacity(base.len());
-            for v in 0..base.len() / 3 {
-                let p: [f64; 3] = std::array::from_fn(|c| {
-                    base[3 * v + c]
-                        + (0..targets.len())
-                            .map(|j| w[j] * targets[j][3 * v + c])
-                            .sum::<f64>()
-                });
-                let mut s = [0.0; 3];
-                for i in 0..4 {
-                    let q = apply(&jm[joints[4 * v + i] as usize], p);
-                    for c in 0..3 {
-                        s[c] += weights[4 * v + i] * q[c];
-                    }
-                }
-                out.extend(s);
-            }
-            out
-        })
-        .collect()
-}
-
 #[test]
 fn exported_rig_poses_as_the_core_plays() {
     let bytes = golden();
     let actor = AimActor::from_bytes(&bytes).unwrap();
     let frames = frames(&actor);
-    let (file, summary) = glb(&actor, &frames, 30.0, false).unwrap();
-    let (text, bin) = sinew_host::io::glb::read(&file).unwrap();
-    let g = Gltf {
-        root: serde_json::from_slice(text).unwrap(),
-        bin: bin.to_vec(),
-    };
+    let (file, summary) = glb(&actor, &frames, &Options::default()).unwrap();
+    let g = Gltf::parse(&file);
     let names = g.root.meshes[0].extras.as_ref().unwrap().get();
     assert!(
         names.contains("\"jawOpen\"") && names.contains("\"noseSneer_R\""),
@@ -385,7 +131,11 @@ fn exported_rig_poses_as_the_core_plays() {
 fn rest_export_has_the_rig_without_animation() {
     let bytes = golden();
     let actor = AimActor::from_bytes(&bytes).unwrap();
-    let (file, summary) = glb(&actor, &[], 30.0, true).unwrap();
+    let bones = Options {
+        bones: true,
+        ..Options::default()
+    };
+    let (file, summary) = glb(&actor, &[], &bones).unwrap();
     let (text, _) = sinew_host::io::glb::read(&file).unwrap();
     let root: json::Root = serde_json::from_slice(text).unwrap();
     assert!(root.animations.is_empty());
@@ -400,4 +150,98 @@ fn rest_export_has_the_rig_without_animation() {
         .unwrap();
     let p = actor.jaw_pivot();
     assert_eq!(jaw.translation, Some([p.x * 0.01, p.y * 0.01, p.z * 0.01]));
+}
+
+/// With ARKit's names, the golden actor's sided shapes take ARKit's spelling and the two shapes
+/// ARKit does not split (`browInnerUp`, `cheekPuff`) get a target of their own, which the
+/// animation leaves at 0, so the rig still poses as before.
+#[test]
+fn arkit_names_bind_by_name_and_leave_the_pose_alone() {
+    let bytes = golden();
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let frames = frames(&actor);
+    let options = Options {
+        names: Names::Arkit,
+        ..Options::default()
+    };
+    let (file, summary) = glb(&actor, &frames, &options).unwrap();
+    let g = Gltf::parse(&file);
+    let names = g.target_names();
+    let own = sinew_host::aim::play::corrective_names(&actor);
+    let m = own.len();
+    assert_eq!(names.len(), m + 2, "{names:?}");
+    assert_eq!(summary.combined_targets, ["browInnerUp", "cheekPuff"]);
+    for (a, b) in [
+        ("mouthSmile_L", "mouthSmileLeft"),
+        ("noseSneer_R", "noseSneerRight"),
+        ("eyeBlink_R", "eyeBlinkRight"),
+        ("jawOpen", "jawOpen"),
+        ("browInnerUp_L", "browInnerUp_L"),
+    ] {
+        let j = own.iter().position(|n| n == a).unwrap();
+        assert_eq!(names[j], b);
+    }
+    // Each combined target is the sum of its sides: here one side each.
+    let targets = g.face().targets.as_ref().unwrap();
+    for (combined, side) in [(m, "browInnerUp_L"), (m + 1, "cheekPuff_L")] {
+        let j = own.iter().position(|n| n == side).unwrap();
+        assert_eq!(
+            g.accessor(targets[combined].positions.unwrap()),
+            g.accessor(targets[j].positions.unwrap()),
+            "{}",
+            names[combined]
+        );
+    }
+    let anim = &g.root.animations[0];
+    let weights = g.accessor(anim.samplers[0].output);
+    assert_eq!(weights.len(), frames.len() * (m + 2));
+    for key in weights.chunks_exact(m + 2) {
+        assert_eq!(&key[m..], [0.0, 0.0]);
+    }
+    let plain = Gltf::parse(&glb(&actor, &frames, &Options::default()).unwrap().0);
+    assert_eq!(pose_gltf(&g), pose_gltf(&plain));
+}
+
+/// Looping keys the first frame once more, one frame after the last: the clip's end equals its
+/// start, and everything before is the unlooped animation.
+#[test]
+fn a_looped_animation_ends_where_it_starts() {
+    let bytes = golden();
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let frames = frames(&actor);
+    let options = Options {
+        looped: true,
+        ..Options::default()
+    };
+    let (file, summary) = glb(&actor, &frames, &options).unwrap();
+    assert_eq!((summary.frames, summary.keyframes), (30, 31));
+    let g = Gltf::parse(&file);
+    let anim = &g.root.animations[0];
+    let times = g.accessor(anim.samplers[0].input);
+    assert_eq!(times.len(), 31);
+    assert_eq!(times[30], f64::from(30.0f32 / 30.0));
+    for s in &anim.samplers {
+        let out = g.accessor(s.output);
+        let w = out.len() / 31;
+        let (first, last) = (&out[..w], &out[30 * w..]);
+        // A rotation may come back as −q, the same rotation.
+        let flipped: Vec<f64> = last.iter().map(|x| -x).collect();
+        assert!(
+            first == last || (w == 4 && first == flipped),
+            "{first:?} {last:?}"
+        );
+    }
+    let posed = pose_gltf(&g);
+    assert_eq!(posed[30], posed[0]);
+    let plain = pose_gltf(&Gltf::parse(
+        &glb(&actor, &frames, &Options::default()).unwrap().0,
+    ));
+    let worst = posed[..30]
+        .iter()
+        .flatten()
+        .zip(plain.iter().flatten())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    // Only a rotation's sign may differ, which changes nothing but rounding.
+    assert!(worst < 1e-9, "{worst}");
 }

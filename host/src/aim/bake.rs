@@ -162,6 +162,35 @@ pub fn with_q16_cache(actor_bytes: &[u8]) -> Result<Vec<u8>, Q16CacheError> {
     Ok(w.to_bytes()?)
 }
 
+/// The metadata entry `uv` (`geometry::uv`) of an actor baked on `template` (whose triangles are
+/// `triangles`, its fan triangulation): the template's own texture coordinates, or else those of
+/// `training` (the checkpoint's template, another resolution of the same face) carried onto it.
+/// None for an actor learned from a rig, whose record (`metadata`'s `rig`) holds the rig's, or
+/// where neither mesh has coordinates.
+pub fn uv_metadata(
+    metadata: &[(String, String)],
+    template: &crate::io::mesh::Mesh,
+    triangles: &[[u32; 3]],
+    training: Option<&crate::io::mesh::Mesh>,
+) -> Result<Option<(String, String)>, crate::geometry::uv::UvError> {
+    use crate::geometry::uv::{CornerUvs, KEY};
+    if metadata.iter().any(|(k, _)| k == crate::rig::record::KEY) {
+        return Ok(None);
+    }
+    let uvs = match CornerUvs::of_mesh(template) {
+        Some(uvs) => uvs,
+        None => match training.and_then(|t| Some((t, CornerUvs::of_mesh(t)?))) {
+            Some((t, uvs)) => uvs.transfer(t, &template.positions, triangles),
+            None => return Ok(None),
+        },
+    };
+    let flat: Vec<u32> = triangles.iter().flatten().copied().collect();
+    Ok(Some((
+        KEY.into(),
+        uvs.metadata(&flat, template.positions.len())?,
+    )))
+}
+
 /// Metadata recorded in every baked actor.
 pub fn metadata(
     set: &TrainingSet,

@@ -155,13 +155,27 @@ pub fn bake(
         None => Mesh::read(&checkpoint.join("template.obj"))?,
     };
     let triangles = mesh.triangles();
+    // Texture coordinates: the template's, or the training template's carried onto it.
+    let training = checkpoint.join("template.obj");
+    let training = match template {
+        Some(_) if training.exists() => Some(Mesh::read(&training)?),
+        _ => None,
+    };
+    let mut metadata = state.metadata.clone();
+    metadata.retain(|(k, _)| k != crate::geometry::uv::KEY);
+    metadata.extend(crate::aim::bake::uv_metadata(
+        &metadata,
+        &mesh,
+        &triangles,
+        training.as_ref(),
+    )?);
     let input = crate::aim::bake::BakeInput {
         points: &mesh.positions,
         triangles: &triangles,
         jaw_pivot: state.jaw_pivot,
         normalisation: state.normalisation,
         playback_only,
-        metadata: state.metadata.clone(),
+        metadata,
     };
     let device = Backend::Flex.device(state.config.seed)?;
     let (mut bytes, _) = crate::aim::bake::bake(&net, &input, &device)?;

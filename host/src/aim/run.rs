@@ -37,6 +37,9 @@ pub enum RunError {
     /// The baked actor could not be laid out.
     #[error(transparent)]
     Bake(#[from] WriterError),
+    /// The template's texture coordinates could not be recorded.
+    #[error(transparent)]
+    Uv(crate::geometry::uv::UvError),
     /// The model, configuration or report could not be written.
     #[error(transparent)]
     Write(#[from] AtomicWriteError),
@@ -149,13 +152,18 @@ pub fn run(
         .device(config.seed)
         .map_err(TrainError::backend)?;
     let triangles = set.template.triangles();
+    let mut recorded = metadata(set, config).map_err(RunError::Json)?;
+    recorded.extend(
+        crate::aim::bake::uv_metadata(&recorded, &set.template, &triangles, None)
+            .map_err(RunError::Uv)?,
+    );
     let input = BakeInput {
         points: &set.template.positions,
         triangles: &triangles,
         jaw_pivot: set.jaw_pivot,
         normalisation: state.normalisation,
         playback_only: false,
-        metadata: metadata(set, config).map_err(RunError::Json)?,
+        metadata: recorded,
     };
     let (bytes, _) = bake(&model, &input, &device)?;
     crate::io::atomic::write(&out.model, &bytes)?;

@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use clap::{Args, Subcommand};
-use sinew_host::export::gltf::Frames;
+use clap::{Args, Subcommand, ValueEnum};
+use sinew_host::export::gltf::{Frames, Names, Options};
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum Export {
@@ -38,6 +38,24 @@ pub(crate) struct GltfArgs {
     /// Add the anatomy surface (the learned bone points) as a second mesh.
     #[arg(long)]
     bones: bool,
+    /// Morph target names: the actor's shape names, or ARKit's spelling (`mouthSmile_L` as
+    /// `mouthSmileLeft`, plus one target under ARKit's name for a shape ARKit does not split by
+    /// side, such as `browInnerUp`), for engines that bind ARKit's blendshapes by name.
+    #[arg(long, value_enum, default_value_t = NameStyle::Actor)]
+    names: NameStyle,
+    /// Make the animation loop: key the first frame again one frame after the last, so that a
+    /// repeating engine never jumps (the clip lasts frames / fps).
+    #[arg(long = "loop")]
+    looped: bool,
+}
+
+/// `--names`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub(crate) enum NameStyle {
+    /// The actor's own shape names.
+    Actor,
+    /// ARKit's blendshape names.
+    Arkit,
 }
 
 /// Runs `sinew export …`.
@@ -50,13 +68,20 @@ pub(crate) fn run(cmd: Export) -> Result<()> {
                 (None, None, Some(f)) => Frames::Performance(f),
                 (None, None, None) => Frames::None,
             };
-            let summary = sinew_host::export::gltf::export(
-                &args.model,
-                &args.out,
-                frames,
-                args.fps,
-                args.bones,
-            )?;
+            if args.looped && matches!(frames, Frames::None) {
+                anyhow::bail!("--loop needs an animation: give --poses, --arkit or --performance");
+            }
+            let options = Options {
+                fps: args.fps,
+                bones: args.bones,
+                names: match args.names {
+                    NameStyle::Actor => Names::Actor,
+                    NameStyle::Arkit => Names::Arkit,
+                },
+                looped: args.looped,
+            };
+            let summary =
+                sinew_host::export::gltf::export(&args.model, &args.out, frames, &options)?;
             if !summary.unplayable.is_empty() {
                 eprintln!(
                     "the actor cannot play these capture channels: {}",

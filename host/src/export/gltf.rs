@@ -7,8 +7,12 @@
 //!   its child `jaw`, whose rest translation is the pivot p, so that its animated translation
 //!   p + t and rotation R give T_b(x) = R (x − p) + p + t through the inverse bind matrix
 //!   translate(−p). Each vertex is weighted k on the jaw and 1 − k on the head.
-//! - With frames, one animation: morph weights, the jaw's and the head's rotation (a unit
-//!   quaternion from the 6D rotation's matrix) and translation, keyed at frame i / fps.
+//! - With frames, one animation (`super::animation`): morph weights, the jaw's and the head's
+//!   rotation (a unit quaternion from the 6D rotation's matrix) and translation, keyed at frame
+//!   i / fps, and with [`Options::looped`] the first frame again at N / fps.
+//! - Texture coordinates (`TEXCOORD_0`) where the actor has them: a rig's, or a kit actor's
+//!   metadata `uv`, with vertices split at seams (`super::place`).
+//! - Morph target names the actor's, or ARKit's ([`Names`], `super::names`).
 //!
 //! Coordinates are in metres (glTF's unit) from the artefact's `units`; the axes (x to the
 //! actor's left, y up, z forward) are glTF's already.
@@ -25,12 +29,15 @@ use json::validation::Checked::Valid;
 use serde::Serialize;
 use sinew_core::FormatError;
 use sinew_core::aim::AimActor;
-use sinew_core::linalg::Mat3;
 use sinew_core::replay::ReplayError;
 
-use super::place::Place;
+pub use super::animation::quaternion;
+use super::animation::{Animated, animate};
+pub use super::names::{Names, Targets};
+use super::place::{Place, PlaceError};
 use crate::aim::arkit::ArkitError;
 use crate::aim::play::{Frame, PoseFile, PoseFileError, corrective_names};
+use crate::geometry::uv::UvError;
 use crate::io::atomic::AtomicWriteError;
 use crate::io::container::ContainerError;
 use crate::io::glb::{Builder, GlbError};
@@ -149,6 +156,9 @@ pub enum GltfError {
     /// The actor's record of its rig is broken.
     #[error(transparent)]
     Rig(#[from] crate::rig::record::RecordError),
+    /// The actor's texture coordinates (metadata `uv`) do not fit it.
+    #[error(transparent)]
+    Uv(#[from] UvError),
 }
 
 impl From<crate::io::glb::BuildError> for GltfError {
@@ -174,15 +184,49 @@ pub enum Frames<'a> {
     Performance(&'a Path),
 }
 
+/// How to export, besides the actor and its frames.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Frames per second of the animation.
+    pub fps: f32,
+    /// Add the anatomy surface (bone points b0) as a second mesh.
+    pub bones: bool,
+    /// How the morph targets are named.
+    pub names: Names,
+    /// Key the first frame again after the last, so that the animation loops without a jump
+    /// (`super::animation`).
+    pub looped: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            fps: 30.0,
+            bones: false,
+            names: Names::Actor,
+            looped: false,
+        }
+    }
+}
+
 /// What an export wrote, for the command's report.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
-    /// Vertices of the base mesh.
+    /// Vertices of the base mesh (seam copies included).
     pub vertices: usize,
-    /// Morph targets (the actor's corrective shapes).
+    /// Vertices added where texture coordinates disagree at a vertex (seams).
+    pub seam_copies: usize,
+    /// Whether the mesh carries texture coordinates (`TEXCOORD_0`).
+    pub texture_coordinates: bool,
+    /// Morph targets: the actor's corrective shapes, then the combined ARKit ones.
     pub morph_targets: usize,
+    /// Morph targets under ARKit's name that sum shapes ARKit does not split by side.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub combined_targets: Vec<String>,
     /// Animation frames (0 without one).
     pub frames: usize,
+    /// Animation keyframes: the frames, and with looping the first once more.
+    pub keyframes: usize,
     /// Vertices whose learned jaw weight k lies outside [0, 1], clamped for glTF.
     pub clamped_weights: usize,
     /// Largest |k − clamp(k)|.
@@ -201,9 +245,9 @@ pub fn export(
     model: &Path,
     out: &Path,
     frames: Frames<'_>,
-    fps: f32,
-    bones: bool,
+    options: &Options,
 ) -> Result<Summary, ExportError> {
+    let fps = options.fps;
     if !(fps.is_finite() && fps > 0.0) {
         return Err(ExportError::Fps { fps });
     }
@@ -221,11 +265,10 @@ pub fn export(
         }
         Frames::Performance(p) => (performance_frames(&bytes, &actor, p)?, Vec::new()),
     };
-    let (glb, mut summary) =
-        glb(&actor, &poses, fps, bones).map_err(|source| ExportError::Gltf {
-            path: model.to_path_buf(),
-            source,
-        })?;
+    let (glb, mut summary) = glb(&actor, &poses, options).map_err(|source| ExportError::Gltf {
+        path: model.to_path_buf(),
+        source,
+    })?;
     crate::io::atomic::write(out, &glb)?;
     summary.unplayable = unplayable;
     Ok(summary)
@@ -285,49 +328,6 @@ pub fn joint_weight(k: f32) -> f32 {
     k.clamp(0.0, 1.0)
 }
 
-/// A unit quaternion `[x, y, z, w]` of a rotation matrix (Shepperd's method, in f64).
-pub fn quaternion(m: &Mat3) -> [f32; 4] {
-    let c = m.cols.map(|v| [v.x, v.y, v.z].map(f64::from));
-    // r[i][j]: row i, column j.
-    let r = |i: usize, j: usize| c[j][i];
-    let trace = r(0, 0) + r(1, 1) + r(2, 2);
-    let q = if trace > 0.0 {
-        let s = (trace + 1.0).sqrt() * 2.0;
-        [
-            (r(2, 1) - r(1, 2)) / s,
-            (r(0, 2) - r(2, 0)) / s,
-            (r(1, 0) - r(0, 1)) / s,
-            s / 4.0,
-        ]
-    } else if r(0, 0) > r(1, 1) && r(0, 0) > r(2, 2) {
-        let s = (1.0 + r(0, 0) - r(1, 1) - r(2, 2)).sqrt() * 2.0;
-        [
-            s / 4.0,
-            (r(0, 1) + r(1, 0)) / s,
-            (r(0, 2) + r(2, 0)) / s,
-            (r(2, 1) - r(1, 2)) / s,
-        ]
-    } else if r(1, 1) > r(2, 2) {
-        let s = (1.0 + r(1, 1) - r(0, 0) - r(2, 2)).sqrt() * 2.0;
-        [
-            (r(0, 1) + r(1, 0)) / s,
-            s / 4.0,
-            (r(1, 2) + r(2, 1)) / s,
-            (r(0, 2) - r(2, 0)) / s,
-        ]
-    } else {
-        let s = (1.0 + r(2, 2) - r(0, 0) - r(1, 1)).sqrt() * 2.0;
-        [
-            (r(0, 2) + r(2, 0)) / s,
-            (r(1, 2) + r(2, 1)) / s,
-            s / 4.0,
-            (r(1, 0) - r(0, 1)) / s,
-        ]
-    };
-    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-    q.map(|v| (v / n) as f32)
-}
-
 fn node(name: &str) -> json::Node {
     json::Node {
         name: Some(name.to_string()),
@@ -349,21 +349,23 @@ fn unit_normals(actor: &AimActor<'_>, positions: &[f32]) -> Vec<f32> {
     n
 }
 
-/// The `.glb` bytes of `actor` with an animation of `frames` (none when empty) at `fps`, and the
-/// anatomy surface (bone points b0) as a second mesh when `bones`.
+/// The `.glb` bytes of `actor` with an animation of `frames` (none when empty), as `options`
+/// say.
 pub fn glb(
     actor: &AimActor<'_>,
     frames: &[Frame],
-    fps: f32,
-    bones: bool,
+    options: &Options,
 ) -> Result<(Vec<u8>, Summary), GltfError> {
     use json::accessor::{ComponentType, Type};
     use json::buffer::Target::ArrayBuffer;
     let v = actor.vertex_count();
     let m = actor.shape_count();
     let scale = metres_per_unit(actor)?;
-    let place = Place::of(actor, scale)?;
-    let v_out = place.vertices(v);
+    let place = Place::of(actor, scale).map_err(|e| match e {
+        PlaceError::Rig(e) => GltfError::Rig(e),
+        PlaceError::Uv(e) => GltfError::Uv(e),
+    })?;
+    let v_out = place.vertices();
     let file = actor.file();
     let section = |name: &str, shape: &[u32]| {
         file.f32_tensor(name, shape)
@@ -383,7 +385,7 @@ pub fn glb(
     let normals_out = place.normals(&place.spread(&normals, 3));
     let pos = b.floats(&positions, Type::Vec3, true, Some(ArrayBuffer));
     let nrm = b.floats(&normals_out, Type::Vec3, false, Some(ArrayBuffer));
-    let indices = b.indices(&place.triangles(actor));
+    let indices = b.indices(place.triangles());
     let uvs = place
         .uvs()
         .map(|uv| b.floats(&uv, Type::Vec2, false, Some(ArrayBuffer)));
@@ -425,13 +427,24 @@ pub fn glb(
         Some(ArrayBuffer),
     );
 
-    // Morph targets: each corrective's displacement and the normal change it makes.
-    let mut targets = Vec::with_capacity(m);
+    // Morph targets: each corrective's displacement and the normal change it makes, then each
+    // combined ARKit target's (the sum of its shapes' correctives).
+    let named = Targets::of(&corrective_names(actor), options.names);
+    let sums: Vec<Vec<usize>> = (0..m)
+        .map(|j| vec![j])
+        .chain(named.combined.iter().map(|(_, shapes)| shapes.clone()))
+        .collect();
+    let mut targets = Vec::with_capacity(sums.len());
     let mut shaped = rest.clone();
-    for j in 0..m {
+    for shapes in &sums {
         let delta: Vec<f32> = (0..v)
             .flat_map(|i| (0..3).map(move |c| (i, c)))
-            .map(|(i, c)| correctives.at((i * m + j) * 3 + c))
+            .map(|(i, c)| {
+                shapes
+                    .iter()
+                    .map(|&j| correctives.at((i * m + j) * 3 + c))
+                    .sum()
+            })
             .collect();
         for ((s, r), d) in shaped.iter_mut().zip(&rest).zip(&delta) {
             *s = r + d;
@@ -445,7 +458,7 @@ pub fn glb(
             tangents: None,
         });
     }
-    let names = corrective_names(actor);
+    let names = named.all_names();
     let primitive = |attributes: BTreeMap<_, _>, targets| json::mesh::Primitive {
         attributes,
         extensions: None,
@@ -474,7 +487,7 @@ pub fn glb(
         )?),
         name: Some("face".into()),
         primitives: vec![primitive(face_attributes, Some(targets))],
-        weights: Some(vec![0.0; m]),
+        weights: Some(vec![0.0; sums.len()]),
     });
 
     // Joints: head (root) and jaw at the pivot.
@@ -521,7 +534,7 @@ pub fn glb(
     };
     let mut scene_nodes = vec![root, face_node];
 
-    if bones {
+    if options.bones {
         let bone: Vec<f32> = section("cache.b0", &[v32, 3])?.iter().collect();
         let bn = place.normals(&place.spread(&unit_normals(actor, &bone), 3));
         let bp = place.points(&place.spread(&bone, 3));
@@ -542,15 +555,23 @@ pub fn glb(
     }
 
     if !frames.is_empty() {
+        let nodes = Animated {
+            face: face_node,
+            jaw,
+            head,
+        };
         animate(
             &mut b,
             actor,
             frames,
-            fps,
+            options.fps,
+            options.looped,
+            named.combined.len(),
             &place,
             pivot_m,
-            [face_node, jaw, head],
-        )?;
+            &nodes,
+        )
+        .map_err(|(frame, source)| GltfError::Frame { frame, source })?;
     }
     let scene = b.root.push(json::Scene {
         extensions: None,
@@ -562,8 +583,12 @@ pub fn glb(
     let glb = b.finish()?;
     let summary = Summary {
         vertices: v_out,
-        morph_targets: m,
+        seam_copies: place.seam_copies(),
+        texture_coordinates: uvs.is_some(),
+        morph_targets: sums.len(),
+        combined_targets: named.combined.iter().map(|(n, _)| n.clone()).collect(),
         frames: frames.len(),
+        keyframes: super::animation::keyframes(frames, options.looped).len(),
         clamped_weights: clamped,
         max_clamp,
         metres_per_unit: scale,
@@ -571,100 +596,6 @@ pub fn glb(
         bytes: glb.len(),
     };
     Ok((glb, summary))
-}
-
-/// One animation over `frames`: morph weights on the face node, the jaw's and the head's
-/// rotation and translation.
-fn animate(
-    b: &mut Builder,
-    actor: &AimActor<'_>,
-    frames: &[Frame],
-    fps: f32,
-    place: &Place,
-    pivot_m: [f32; 3],
-    [face, jaw, head]: [json::Index<json::Node>; 3],
-) -> Result<(), GltfError> {
-    use json::accessor::Type;
-    use json::animation::Property;
-    let times: Vec<f32> = (0..frames.len()).map(|i| i as f32 / fps).collect();
-    let input = b.floats(&times, Type::Scalar, true, None);
-    let mut weights = Vec::new();
-    let (mut jt, mut jr, mut ht, mut hr) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for (frame, f) in frames.iter().enumerate() {
-        weights.extend_from_slice(&f.weights);
-        let pose = actor
-            .pose_from_9d(&f.jaw, &f.head)
-            .map_err(|source| GltfError::Frame { frame, source })?;
-        let t = pose.jaw.rigid.trans;
-        jt.extend(
-            place
-                .offsets(&[t.x, t.y, t.z])
-                .iter()
-                .zip(pivot_m)
-                .map(|(t, p)| p + t),
-        );
-        jr.extend(quaternion(&place.rotation(&pose.jaw.rigid.rot)));
-        let head_rot = place.rotation(&pose.head.rot);
-        ht.extend(place.head_translation(&head_rot, pose.head.trans));
-        hr.extend(quaternion(&head_rot));
-    }
-    let outputs = [
-        (
-            face,
-            Property::MorphTargetWeights,
-            b.floats(&weights, Type::Scalar, false, None),
-        ),
-        (
-            jaw,
-            Property::Translation,
-            b.floats(&jt, Type::Vec3, false, None),
-        ),
-        (
-            jaw,
-            Property::Rotation,
-            b.floats(&jr, Type::Vec4, false, None),
-        ),
-        (
-            head,
-            Property::Translation,
-            b.floats(&ht, Type::Vec3, false, None),
-        ),
-        (
-            head,
-            Property::Rotation,
-            b.floats(&hr, Type::Vec4, false, None),
-        ),
-    ];
-    let mut samplers = Vec::new();
-    let mut channels = Vec::new();
-    for (i, (node, path, output)) in outputs.into_iter().enumerate() {
-        samplers.push(json::animation::Sampler {
-            extensions: None,
-            extras: None,
-            input,
-            interpolation: Valid(json::animation::Interpolation::Linear),
-            output,
-        });
-        channels.push(json::animation::Channel {
-            sampler: json::Index::new(i as u32),
-            target: json::animation::Target {
-                extensions: None,
-                extras: None,
-                node,
-                path: Valid(path),
-            },
-            extensions: None,
-            extras: None,
-        });
-    }
-    b.root.push(json::Animation {
-        extensions: None,
-        extras: None,
-        channels,
-        name: Some("performance".into()),
-        samplers,
-    });
-    Ok(())
 }
 
 #[cfg(test)]
@@ -685,23 +616,33 @@ mod tests {
         )
         .unwrap();
         let out = dir.path().join("actor.glb");
-        let err = export(&model, &out, Frames::None, 0.0, false).unwrap_err();
+        let zero = Options {
+            fps: 0.0,
+            ..Options::default()
+        };
+        let err = export(&model, &out, Frames::None, &zero).unwrap_err();
         assert!(matches!(err, ExportError::Fps { .. }), "{err}");
         let missing = dir.path().join("missing.sinew");
-        let err = export(&missing, &out, Frames::None, 30.0, false).unwrap_err();
+        let err = export(&missing, &out, Frames::None, &Options::default()).unwrap_err();
         assert!(
             matches!(&err, ExportError::Container(ContainerError::Read { path, .. }) if *path == missing),
             "{err}"
         );
         // The actor is no performance of itself.
-        let err = export(&model, &out, Frames::Performance(&model), 30.0, false).unwrap_err();
+        let err = export(
+            &model,
+            &out,
+            Frames::Performance(&model),
+            &Options::default(),
+        )
+        .unwrap_err();
         assert!(
             matches!(&err, ExportError::NotAPerformance { path, .. } if *path == model),
             "{err}"
         );
         let poses = dir.path().join("poses.json");
         std::fs::write(&poses, "{\"frames\": [{\"weights\": [1e40]}]}").unwrap();
-        let err = export(&model, &out, Frames::Poses(&poses), 30.0, false).unwrap_err();
+        let err = export(&model, &out, Frames::Poses(&poses), &Options::default()).unwrap_err();
         assert!(matches!(err, ExportError::Poses(_)), "{err}");
         assert!(!out.exists());
     }
@@ -724,7 +665,7 @@ mod tests {
         };
         let (bytes, _) = bake(&net, &input, &device).unwrap();
         let actor = AimActor::from_bytes(&bytes).unwrap();
-        let err = glb(&actor, &[], 30.0, false).unwrap_err();
+        let err = glb(&actor, &[], &Options::default()).unwrap_err();
         assert!(matches!(err, GltfError::Units(_)), "{err}");
     }
 }

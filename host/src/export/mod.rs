@@ -2,5 +2,7 @@
 //! targets, the jaw as a skin joint and poses as an animation (docs/ENGINES.md). Above the models,
 //! whose actors and pose frames it reads; below the command line.
 
+mod animation;
 pub mod gltf;
+pub mod names;
 mod place;

@@ -1,13 +1,27 @@
 //! Where an exported actor's coordinates go. A kit actor's face frame is scaled into glTF's
 //! metres; an actor learned from a rig (metadata `rig`) goes back into the rig's own skin-mesh
 //! frame (in metres), onto the rig's own vertices (seam copies split again) and triangles, with
-//! its texture coordinates, and its node transform above the skeleton.
+//! its texture coordinates, and its node transform above the skeleton. Either kind of actor with
+//! texture coordinates per corner (a rig's OBJ `vt`, a kit actor's metadata `uv`) has its
+//! vertices split where its corners disagree (`geometry::uv`).
 
 use sinew_core::aim::AimActor;
 use sinew_core::linalg::{Mat3, Vec3};
 
 use crate::geometry::align::{M3, inv3, mat_mul, mat_vec, transpose};
+use crate::geometry::uv::{self, CornerUvs};
 use crate::rig::record::{Record, RecordError};
+
+/// Why an actor's placement cannot be made.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum PlaceError {
+    /// The actor's record of its rig is broken.
+    #[error(transparent)]
+    Rig(#[from] RecordError),
+    /// Its texture coordinates do not fit it.
+    #[error(transparent)]
+    Uv(#[from] crate::geometry::uv::UvError),
+}
 
 /// The map from the actor's face frame to the exported file's.
 #[derive(Debug)]
@@ -17,13 +31,37 @@ pub(crate) struct Place {
     /// A rig actor's map: `x ↦ a x + c` (face frame in actor units to the rig's frame in
     /// metres), `a`'s inverse transpose for normals, and the rig.
     rig: Option<(M3, M3, [f64; 3], Record)>,
+    /// Per exported vertex, the actor's vertex.
+    source: Vec<u32>,
+    /// The exported triangles, flat.
+    triangles: Vec<u32>,
+    /// Per exported vertex, its texture coordinate, when the actor has them.
+    uvs: Option<Vec<[f32; 2]>>,
+    /// The copies made where a vertex's corners disagree.
+    seam_copies: usize,
 }
 
 impl Place {
     /// The map for `actor`, whose unit is `scale` metres.
-    pub(crate) fn of(actor: &AimActor<'_>, scale: f32) -> Result<Self, RecordError> {
+    pub(crate) fn of(actor: &AimActor<'_>, scale: f32) -> Result<Self, PlaceError> {
         let Some(record) = crate::aim::play::rig_record(actor)? else {
-            return Ok(Self { scale, rig: None });
+            let triangles: Vec<u32> = actor.triangles().indices().iter().collect();
+            let v = actor.vertex_count();
+            let (source, triangles, uvs) = match actor.file().metadata().get(uv::KEY) {
+                Some(value) => {
+                    let split = CornerUvs::parse(value, &triangles, v)?.split(&triangles, v);
+                    (split.source, split.triangles, Some(split.uvs))
+                }
+                None => ((0..v as u32).collect(), triangles, None),
+            };
+            return Ok(Self {
+                scale,
+                rig: None,
+                seam_copies: source.len() - v,
+                source,
+                triangles,
+                uvs,
+            });
         };
         let conventions = record.conventions();
         let metres = record.units.mm() / 1000.0;
@@ -44,32 +82,53 @@ impl Place {
         let a: M3 = std::array::from_fn(|r| std::array::from_fn(|k| cols[k][r]));
         let inverse =
             inv3(a).ok_or_else(|| RecordError::Invalid("its frame is degenerate".into()))?;
+        // The rig's own mesh: its vertices (each an actor vertex through `welded`), triangles and
+        // coordinates, per vertex or per corner; split where corners disagree.
+        let mesh = record.mesh(&vec![[0.0; 3]; actor.vertex_count()]);
+        let triangles: Vec<u32> = mesh.triangles().into_iter().flatten().collect();
+        let rig_vertices = record.welded.len();
+        let (rig_source, triangles, uvs) = match CornerUvs::of_mesh(&mesh) {
+            Some(corner_uvs) => {
+                let split = corner_uvs.split(&triangles, rig_vertices);
+                (split.source, split.triangles, Some(split.uvs))
+            }
+            None => ((0..rig_vertices as u32).collect(), triangles, None),
+        };
+        let seam_copies = rig_source.len() - rig_vertices;
+        let source = rig_source
+            .iter()
+            .map(|&r| record.welded[r as usize])
+            .collect();
         Ok(Self {
             scale,
+            seam_copies,
             rig: Some((a, transpose(inverse), c, record)),
+            source,
+            triangles,
+            uvs,
         })
     }
 
-    /// The exported vertex count for an actor of `v` vertices.
-    pub(crate) fn vertices(&self, v: usize) -> usize {
-        self.rig.as_ref().map_or(v, |r| r.3.welded.len())
+    /// The exported vertex count.
+    pub(crate) fn vertices(&self) -> usize {
+        self.source.len()
+    }
+
+    /// The vertices added where texture coordinates disagree at a vertex.
+    pub(crate) fn seam_copies(&self) -> usize {
+        self.seam_copies
     }
 
     /// Per exported vertex, `width` values of a per-actor-vertex flat list.
     pub(crate) fn spread<T: Copy>(&self, values: &[T], width: usize) -> Vec<T> {
-        match &self.rig {
-            None => values.to_vec(),
-            Some(r) => {
-                r.3.welded
+        self.source
+            .iter()
+            .flat_map(|&w| {
+                values[w as usize * width..(w as usize + 1) * width]
                     .iter()
-                    .flat_map(|&w| {
-                        values[w as usize * width..(w as usize + 1) * width]
-                            .iter()
-                            .copied()
-                    })
-                    .collect()
-            }
-        }
+                    .copied()
+            })
+            .collect()
     }
 
     /// Flat points (`[V, 3]`, actor units) in the exported frame.
@@ -147,25 +206,16 @@ impl Place {
         }
     }
 
-    /// The exported triangles: the rig's, or the actor's.
-    pub(crate) fn triangles(&self, actor: &AimActor<'_>) -> Vec<u32> {
-        match &self.rig {
-            None => actor.triangles().indices().iter().collect(),
-            Some((_, _, _, r)) => r
-                .mesh(&vec![[0.0; 3]; actor.vertex_count()])
-                .triangles()
-                .into_iter()
-                .flatten()
-                .collect(),
-        }
+    /// The exported triangles over the exported vertices, flat.
+    pub(crate) fn triangles(&self) -> &[u32] {
+        &self.triangles
     }
 
-    /// The rig's per-vertex texture coordinates, flat (none for a kit actor, or for a rig whose
-    /// coordinates are per corner).
+    /// Per exported vertex, its texture coordinate, flat (none for an actor without them).
     pub(crate) fn uvs(&self) -> Option<Vec<f32>> {
-        let r = &self.rig.as_ref()?.3;
-        (r.polygon_uvs.is_empty() && !r.uvs.is_empty() && r.uvs.len() == r.welded.len())
-            .then(|| r.uvs.iter().flatten().copied().collect())
+        self.uvs
+            .as_ref()
+            .map(|uvs| uvs.iter().flatten().copied().collect())
     }
 
     /// The rig's node transform, column-major, when it is not the identity.

@@ -11,5 +11,6 @@ pub mod spatial;
 pub mod surface;
 pub mod symmetry;
 pub mod topology;
+pub mod uv;
 pub mod vec3;
 pub mod weld;

@@ -43,3 +43,4 @@ pub fn repo(path: &str) -> String {
     let p: PathBuf = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(path);
     p.to_str().unwrap().to_owned()
 }
+pub mod gltf;

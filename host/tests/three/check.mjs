@@ -1,0 +1,128 @@
+// Poses a .glb from `sinew export gltf` the way three.js does and compares it with `sinew play`'s
+// OBJ frames of the same poses. three.js (npm `three`, pinned in package-lock.json) loads the file
+// with GLTFLoader from its bytes (no browser), plays its animation with an AnimationMixer, and
+// each vertex is morphed and skinned on the CPU by three's own SkinnedMesh.getVertexPosition.
+//
+// Usage: node check.mjs --glb FILE.glb --frames DIR --obj-unit METRES [--tolerance-mm MM]
+//   DIR holds frame_00000.obj, … from `sinew play` of the frames the .glb was exported with;
+//   --obj-unit is the OBJ's unit in metres (0.01 for the kit's centimetres). A looping export
+//   (--loop) has one keyframe more than there are frames: it is compared with frame 0.
+// Exported vertex and OBJ vertex are matched by triangle corner: the export keeps the triangle
+// order of the actor (or of the rig) and only splits vertices at texture seams.
+// Positions are compared in the mesh's own frame: three's world positions with the transform
+// above the skeleton (a rig's node transform) taken off. Exits non-zero when any vertex of any
+// keyframe is further than the tolerance (default 0.5 mm, docs/ENGINES.md) from sinew play's.
+import { readFile, readdir } from 'node:fs/promises';
+import { join } from 'node:path';
+import { parseArgs } from 'node:util';
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+
+const { values: args } = parseArgs({
+  options: {
+    glb: { type: 'string' },
+    frames: { type: 'string' },
+    'obj-unit': { type: 'string' },
+    'tolerance-mm': { type: 'string', default: '0.5' },
+  },
+});
+function fail(message) {
+  console.error(message);
+  process.exit(1);
+}
+if (!args.glb || !args.frames || !args['obj-unit']) {
+  fail('usage: node check.mjs --glb FILE.glb --frames DIR --obj-unit METRES [--tolerance-mm MM]');
+}
+const objUnit = Number(args['obj-unit']);
+const toleranceMm = Number(args['tolerance-mm']);
+if (!(objUnit > 0) || !(toleranceMm > 0)) {
+  fail(`--obj-unit ${args['obj-unit']} and --tolerance-mm ${args['tolerance-mm']} must be positive numbers`);
+}
+
+/** One OBJ frame: positions and the corners of its polygons, fan-triangulated as Sinew does. */
+async function readObj(path) {
+  const positions = [];
+  const corners = [];
+  for (const line of (await readFile(path, 'utf8')).split('\n')) {
+    const f = line.trim().split(/\s+/);
+    if (f[0] === 'v') {
+      positions.push([Number(f[1]), Number(f[2]), Number(f[3])]);
+    } else if (f[0] === 'f') {
+      const poly = f.slice(1).map((c) => Number(c.split('/')[0]) - 1);
+      for (let k = 1; k + 1 < poly.length; k++) corners.push(poly[0], poly[k], poly[k + 1]);
+    }
+  }
+  return { positions, corners };
+}
+
+let gltf;
+try {
+  const bytes = await readFile(args.glb);
+  const buffer = bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength);
+  gltf = await new GLTFLoader().parseAsync(buffer, '');
+} catch (e) {
+  fail(`${args.glb}: three.js cannot load it: ${e.message ?? e}`);
+}
+let face;
+gltf.scene.traverse((o) => {
+  if (o.isSkinnedMesh && o.name === 'face') face = o;
+});
+if (!face) fail(`${args.glb}: no skinned mesh "face"`);
+if (gltf.animations.length !== 1) fail(`${args.glb}: ${gltf.animations.length} animations, expected 1`);
+const clip = gltf.animations[0];
+const times = clip.tracks[0].times;
+
+const names = (await readdir(args.frames)).filter((n) => /^frame_\d+\.obj$/.test(n)).sort();
+if (names.length === 0) fail(`${args.frames}: no frame_NNNNN.obj files`);
+if (times.length !== names.length && times.length !== names.length + 1) {
+  fail(`${args.glb}: ${times.length} keyframes for ${names.length} frames in ${args.frames}`);
+}
+const frames = await Promise.all(names.map((n) => readObj(join(args.frames, n))));
+
+// Exported vertex → OBJ vertex, by corner.
+const index = face.geometry.index.array;
+const corners = frames[0].corners;
+if (index.length !== corners.length) {
+  fail(`${args.glb}: ${index.length / 3} triangles, the OBJ frames ${corners.length / 3}`);
+}
+const count = face.geometry.attributes.position.count;
+const source = new Int32Array(count).fill(-1);
+for (let k = 0; k < index.length; k++) {
+  const i = index[k];
+  if (source[i] !== -1 && source[i] !== corners[k]) {
+    fail(`${args.glb}: exported vertex ${i} is OBJ vertex ${source[i]} and ${corners[k]}`);
+  }
+  source[i] = corners[k];
+}
+
+const mixer = new THREE.AnimationMixer(gltf.scene);
+const action = mixer.clipAction(clip);
+action.setLoop(THREE.LoopOnce, 1);
+action.clampWhenFinished = true;
+action.play();
+// The skeleton's parent: the scene's root, or a rig's node with its transform.
+const above = face.skeleton.bones[0].parent;
+const v = new THREE.Vector3();
+const toFrame = new THREE.Matrix4();
+let worst = { mm: 0, key: 0, vertex: 0 };
+for (let key = 0; key < times.length; key++) {
+  action.time = times[key];
+  mixer.update(0);
+  gltf.scene.updateMatrixWorld(true);
+  toFrame.copy(above.matrixWorld).invert().multiply(face.matrixWorld);
+  const obj = frames[key % frames.length].positions;
+  for (let i = 0; i < count; i++) {
+    if (source[i] < 0) continue;
+    face.getVertexPosition(i, v).applyMatrix4(toFrame);
+    const o = obj[source[i]];
+    const mm = Math.hypot(v.x / objUnit - o[0], v.y / objUnit - o[1], v.z / objUnit - o[2]) * objUnit * 1000;
+    if (!(mm <= worst.mm)) worst = { mm, key, vertex: i };
+  }
+}
+const within = worst.mm <= toleranceMm;
+console.log(
+  `${args.glb}: three.js ${THREE.REVISION}, ${times.length} keyframes of ${count} vertices against ` +
+    `${args.frames}: max ${worst.mm.toExponential(2)} mm (keyframe ${worst.key}, vertex ${worst.vertex}); ` +
+    `tolerance ${toleranceMm} mm: ${within ? 'ok' : 'FAILED'}`,
+);
+process.exit(within ? 0 : 1);
