@@ -9,6 +9,7 @@ pub mod aim;
 pub mod bake;
 pub mod baseline;
 pub mod checkpoint;
+pub mod driver;
 pub mod commands;
 pub mod heatmaps;
 pub mod performance;
