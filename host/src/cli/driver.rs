@@ -8,7 +8,9 @@ use clap::{Args, ValueEnum};
 use sinew_core::driver::{Intrinsics, Space};
 use sinew_core::filter::OneEuro;
 use sinew_host::fit::driver::DriverConfig;
-use sinew_host::fit::driver::commands::{DriveCommand, TrainDriver, drive_command, eval_driver, train_driver};
+use sinew_host::fit::driver::commands::{
+    DriveCommand, TrainDriver, drive_command, eval_driver, train_driver,
+};
 use sinew_host::training::backend::Backend;
 
 /// The landmarks a driver reads.
@@ -128,13 +130,13 @@ pub(crate) struct DriveArgs {
     #[arg(long)]
     out: PathBuf,
     /// The CSV's camera: focal lengths and principal point in pixels, FX,FY,CX,CY.
-    #[arg(long, value_delimiter = ',', num_args = 4)]
+    #[arg(long, value_delimiter = ',')]
     intrinsics: Option<Vec<f32>>,
     /// A CSV row whose confidence is below this is a lost frame (it holds the last pose).
     #[arg(long, default_value_t = 0.5)]
     min_confidence: f32,
     /// The One Euro filter on the driven poses: MIN_CUTOFF_HZ,BETA,FPS (off without it).
-    #[arg(long, value_delimiter = ',', num_args = 3)]
+    #[arg(long, value_delimiter = ',')]
     filter: Option<Vec<f32>>,
 }
 
@@ -143,7 +145,10 @@ pub(crate) fn drive(args: DriveArgs) -> Result<()> {
     let intrinsics = match args.intrinsics.as_deref() {
         None => None,
         Some(&[fx, fy, cx, cy]) => Some(Intrinsics { fx, fy, cx, cy }),
-        Some(other) => bail!("--intrinsics: expected FX,FY,CX,CY, got {} values", other.len()),
+        Some(other) => bail!(
+            "--intrinsics: expected FX,FY,CX,CY, got {} values",
+            other.len()
+        ),
     };
     let filter = match args.filter.as_deref() {
         None => None,
@@ -151,7 +156,10 @@ pub(crate) fn drive(args: DriveArgs) -> Result<()> {
             OneEuro::new(min_cutoff, beta, 1.0, rate)
                 .map_err(|e| anyhow::anyhow!("--filter: {e}"))?,
         ),
-        Some(other) => bail!("--filter: expected MIN_CUTOFF,BETA,FPS, got {} values", other.len()),
+        Some(other) => bail!(
+            "--filter: expected MIN_CUTOFF,BETA,FPS, got {} values",
+            other.len()
+        ),
     };
     let frames = drive_command(&DriveCommand {
         model: args.model,

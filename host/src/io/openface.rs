@@ -134,7 +134,10 @@ pub fn read(path: &Path) -> Result<Vec<OpenFaceFrame>, OpenFaceError> {
 /// # Errors
 /// As [`read`].
 pub fn parse(path: &Path, text: &str) -> Result<Vec<OpenFaceFrame>, OpenFaceError> {
-    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
     let Some((_, header)) = lines.next() else {
         return Err(OpenFaceError::Empty {
             path: path.to_owned(),

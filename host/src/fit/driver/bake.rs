@@ -52,10 +52,7 @@ pub fn bake(
             ),
         )
         .meta("seed", config.seed)
-        .meta(
-            "config",
-            serde_json::to_string(config).unwrap_or_default(),
-        )
+        .meta("config", serde_json::to_string(config).unwrap_or_default())
         .meta(
             "source",
             "sinew train driver: synthetic performances of the actor itself",

@@ -125,7 +125,12 @@ pub fn train_driver(opts: &TrainDriver) -> Result<TrainDriverReport> {
         }
     }
     bar.finish();
-    let units = actor.file().metadata().get("units").unwrap_or("cm").to_owned();
+    let units = actor
+        .file()
+        .metadata()
+        .get("units")
+        .unwrap_or("cm")
+        .to_owned();
     let baked = bake(
         &run.net,
         &norm,
@@ -137,8 +142,12 @@ pub fn train_driver(opts: &TrainDriver) -> Result<TrainDriverReport> {
             camera: sampler.camera,
         },
     )?;
-    sinew_core::driver::Driver::from_bytes(&baked)
-        .map_err(|e| anyhow!("{}: the baked driver does not load: {e}", opts.out.display()))?;
+    sinew_core::driver::Driver::from_bytes(&baked).map_err(|e| {
+        anyhow!(
+            "{}: the baked driver does not load: {e}",
+            opts.out.display()
+        )
+    })?;
     crate::io::atomic::write(&opts.out, &baked)?;
     let curve: Vec<(f64, f64)> = run
         .history

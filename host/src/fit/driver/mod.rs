@@ -49,6 +49,12 @@ pub struct DriverConfig {
     /// The head's translation range in the actor's unit: ±x, ±y, then z from `[2]` to `[3]`
     /// (negative: away from the camera).
     pub head_translation: [f64; 4],
+    /// The jaw's opening about x, radians (uniform in [0, this]).
+    pub jaw_opening: f64,
+    /// The jaw's yaw, radians (uniform in ±).
+    pub jaw_yaw: f64,
+    /// The jaw's translation, the actor's unit (uniform in ± per axis).
+    pub jaw_translation: f64,
     /// The canonical camera's distance in front of the face, in the actor's unit.
     pub distance: f32,
     /// Focal lengths drawn, pixels.
@@ -74,6 +80,9 @@ impl Default for DriverConfig {
             active: 0.35,
             head_rotation: [0.25, 0.35, 0.15],
             head_translation: [3.0, 3.0, -25.0, 10.0],
+            jaw_opening: 0.12,
+            jaw_yaw: 0.03,
+            jaw_translation: 0.05,
             distance: 60.0,
             focal: [500.0, 1500.0],
             noise: 3.0,

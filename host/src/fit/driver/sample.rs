@@ -69,12 +69,14 @@ impl Sampler {
             .unwrap_or_default();
         let tpl = actor.template();
         let n = vertices.len().max(1) as f32;
-        let mean = |c: usize| vertices.iter().map(|&v| tpl.at(3 * v as usize + c)).sum::<f32>() / n;
-        let front = tpl
-            .iter()
-            .skip(2)
-            .step_by(3)
-            .fold(f32::MIN, f32::max);
+        let mean = |c: usize| {
+            vertices
+                .iter()
+                .map(|&v| tpl.at(3 * v as usize + c))
+                .sum::<f32>()
+                / n
+        };
+        let front = tpl.iter().skip(2).step_by(3).fold(f32::MIN, f32::max);
         Self {
             space: config.input,
             shapes: m,
@@ -107,6 +109,19 @@ impl Sampler {
             for ((o, x), i) in jaw.iter_mut().zip(j).zip(IDENTITY_9) {
                 *o += w * (x - i);
             }
+        }
+        // On top, the jaw's own motion as `sinew data performance` draws it: an opening about
+        // x, a little yaw and translation about the pivot.
+        let own = euler(
+            rng.uniform(0.0, c.jaw_opening),
+            rng.uniform(-c.jaw_yaw, c.jaw_yaw),
+            0.0,
+        );
+        let tied = sinew_core::rotation::from_6d(&std::array::from_fn(|i| jaw[i]));
+        let rot = to_6d(&own.mul_mat(&tied));
+        jaw[..6].copy_from_slice(&rot);
+        for t in &mut jaw[6..] {
+            *t += rng.uniform(-c.jaw_translation, c.jaw_translation) as f32;
         }
         let mut pose = Vec::with_capacity(18 + m);
         let r = c.head_rotation;

@@ -115,7 +115,10 @@ fn performance(dir: &Path, space: Space) -> Result<Track, TrackError> {
         path: dir.join(crate::fit::performance::MANIFEST),
     };
     if m.landmarks.vertices.len() != LANDMARKS
-        || m.landmarks.vertices.iter().any(|&v| v as usize >= m.vertices)
+        || m.landmarks
+            .vertices
+            .iter()
+            .any(|&v| v as usize >= m.vertices)
         || m.landmarks.pixels.iter().any(|p| p.len() != LANDMARKS)
     {
         return Err(bad());

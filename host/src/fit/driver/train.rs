@@ -166,11 +166,12 @@ impl Run {
             let y: Tensor<2> = tensor(y, [config.batch, p], device);
             let diff = self.net.forward(x) - y;
             let loss = (diff.clone() * diff).mean();
-            let value = to_vec(loss.clone().detach()).first().copied().unwrap_or(f32::NAN);
+            let value = to_vec(loss.clone().detach())
+                .first()
+                .copied()
+                .unwrap_or(f32::NAN);
             let grads = GradientsParams::from_grads(loss.backward(), &self.net);
-            self.net = self
-                .optim
-                .step(config.lr_at(self.step), self.net, grads);
+            self.net = self.optim.step(config.lr_at(self.step), self.net, grads);
             observe(self.step, value);
             self.history.push(value);
             self.step += 1;
