@@ -478,6 +478,11 @@ pub enum Argument {
     Intensity,
     /// A generated landmark curve, `[(FRAMES + 1) × 3K]` (a sequence's frames decode from it).
     Curve,
+    /// A tracker's landmarks driving an actor, `[68, 2]` or `[68, 3]`.
+    Landmarks,
+    /// A temporal filter's settings: minimum cutoff (Hz), speed coefficient, derivative cutoff
+    /// (Hz) and frame rate (Hz), each within `[0, MAX_FACTOR]`, the cutoffs and the rate above 0.
+    Filter,
 }
 
 impl Argument {
@@ -499,6 +504,8 @@ impl Argument {
             Self::Expressive => "expressive",
             Self::Intensity => "intensity",
             Self::Curve => "curve",
+            Self::Landmarks => "landmarks",
+            Self::Filter => "filter",
         }
     }
 
@@ -513,6 +520,7 @@ impl Argument {
             Self::Head | Self::Jaw if index < 6 => MAX_ROTATION_ENTRY,
             Self::PoseHead | Self::PoseJaw if index < 9 => MAX_FACTOR,
             Self::Mask => return (0.0, 1.0),
+            Self::Filter => return (0.0, MAX_FACTOR),
             Self::Weights | Self::Scale | Self::Input | Self::Intensity => MAX_FACTOR,
             _ => MAX_COORDINATE,
         };

@@ -29,6 +29,8 @@ pub enum ArtifactKind {
     Performance,
     /// A replay script: a model's content hash, inputs and expected frame hashes.
     Replay,
+    /// A landmark driver: a network from one frame's 68 landmarks to an actor's pose.
+    Driver,
     /// A kind this version does not know.
     Other(u16),
 }
@@ -43,6 +45,7 @@ impl ArtifactKind {
             Self::MotionGenerator => 4,
             Self::Performance => 5,
             Self::Replay => 6,
+            Self::Driver => 7,
             Self::Other(c) => c,
         }
     }
@@ -56,6 +59,7 @@ impl ArtifactKind {
             4 => Self::MotionGenerator,
             5 => Self::Performance,
             6 => Self::Replay,
+            7 => Self::Driver,
             c => Self::Other(c),
         }
     }
@@ -69,6 +73,7 @@ impl ArtifactKind {
             Self::MotionGenerator => "motion-generator",
             Self::Performance => "performance",
             Self::Replay => "replay",
+            Self::Driver => "driver",
             Self::Other(_) => "unknown",
         }
     }
@@ -85,6 +90,7 @@ impl core::fmt::Display for ArtifactKind {
             Self::MotionGenerator => f.write_str("a motion generator"),
             Self::Performance => f.write_str("a fitted performance"),
             Self::Replay => f.write_str("a replay"),
+            Self::Driver => f.write_str("a landmark driver"),
             Self::Other(code) => write!(f, "an artefact of unknown kind {code}"),
         }
     }

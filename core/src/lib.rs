@@ -92,8 +92,10 @@
 extern crate std;
 
 pub mod aim;
+pub mod driver;
 pub mod error;
 pub mod fast;
+pub mod filter;
 pub mod format;
 pub mod hash;
 pub mod input;

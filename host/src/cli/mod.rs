@@ -5,6 +5,7 @@
 mod aim;
 mod args;
 mod bones;
+mod driver;
 mod export;
 mod fit;
 mod motion;
@@ -90,6 +91,10 @@ enum Command {
     /// sinew-core compiled to WebAssembly (sliders, orbit, replay playback). Prints the page's
     /// address as its first line; stops on Ctrl-C.
     View(view::ViewArgs),
+    /// Drive a baked actor with a landmark track (an OpenFace 2.0 CSV or a performance folder)
+    /// through its driver in sinew-core: one OBJ per frame and strip.png; a lost frame holds
+    /// the last pose.
+    Drive(driver::DriveArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -104,6 +109,10 @@ enum Train {
     /// `sinew data motions`, with checkpoints and --resume; bake the generator (.sinew) and
     /// write the loss curves beside it.
     Motion(motion::TrainMotionArgs),
+    /// Train a landmark driver for a baked actor: a network from one frame's 68 landmarks to
+    /// its head, jaw and coefficients, learnt from the actor's own poses drawn on the fly, with
+    /// checkpoints and --resume; bake it (.sinew) and write the loss curve beside it.
+    Driver(driver::TrainDriverArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -120,6 +129,9 @@ enum Eval {
     /// generator (through sinew-core) and the LSTM, on generated landmarks and on landmarks
     /// re-extracted from S2D-Dec meshes (report JSON).
     Motion(motion::EvalMotionArgs),
+    /// A landmark driver on a performance folder: per-vertex error against its meshes and the
+    /// core's time per frame.
+    Driver(driver::EvalDriverArgs),
 }
 
 /// Runs the parsed command.
@@ -129,6 +141,9 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Train(Train::Aim(args)) => aim::train(args),
         Command::Train(Train::S2d(args)) => s2d::train(args),
         Command::Train(Train::Motion(args)) => motion::train(args),
+        Command::Train(Train::Driver(args)) => driver::train(args),
+        Command::Eval(Eval::Driver(args)) => driver::eval(args),
+        Command::Drive(args) => driver::drive(args),
         Command::Eval(Eval::S2d(args)) => s2d::eval(args),
         Command::Eval(Eval::Aim(args)) => aim::eval(args),
         Command::Eval(Eval::Fit(args)) => fit::eval(args),

@@ -10,6 +10,7 @@ pub mod bake;
 pub mod baseline;
 pub mod checkpoint;
 pub mod commands;
+pub mod driver;
 pub mod heatmaps;
 pub mod performance;
 pub mod retarget;

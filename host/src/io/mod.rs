@@ -1,4 +1,4 @@
-//! Files in and out: meshes (OBJ, PLY), the ICT-FaceKit reader, ARKit captures (Live Link Face CSV), the `.sinew` writer and
+//! Files in and out: meshes (OBJ, PLY), the ICT-FaceKit reader, ARKit captures (Live Link Face CSV), landmark tracks (OpenFace 2.0 CSV), the `.sinew` writer and
 //! inspector, the data-set folders (manifest and numbers), the real-data folder, and atomic outputs. The lowest layer of the host: it imports
 //! nothing else of the crate.
 
@@ -11,5 +11,6 @@ pub mod glb;
 pub mod ict;
 pub mod inspect;
 pub mod mesh;
+pub mod openface;
 pub mod rig;
 pub mod units;

@@ -1,0 +1,426 @@
+//! A landmark driver: a small network per actor that maps one frame of a tracker's 68 landmarks
+//! to the actor's pose in one forward pass (an amortised fit), as `sinew train driver` bakes it
+//! (docs/FORMAT.md, "Driver"; docs/FIT.md, "Live driver").
+//!
+//! The input is the 68 iBUG landmarks of one frame, either in the image (`[68, 2]`, pixels
+//! normalised by the camera's intrinsics, [`normalise_pixels`]) or in space (`[68, 3]`, in the
+//! actor's unit). The output is a pose the actor plays: head 6D rotation + translation, jaw 6D
+//! rotation + translation, then the `M` corrective coefficients (`[18 + M]`, the layout of a
+//! replay frame). Per frame:
+//!
+//! `x̂ = clamp((x − μ_in) ⊙ s_in, ±MAX_INPUT)`, `y = μ_out + s_out ⊙ F(x̂)`,
+//!
+//! then each 6D rotation of `y` is made orthonormal ([`crate::rotation::from_6d`], whose
+//! fallbacks make every value a rotation), each translation is clamped to ±`MAX_COORDINATE` and
+//! each coefficient to ±`MAX_FACTOR`: every finite input gives a pose the actor accepts.
+//!
+//! Sections (names are the `pub const`s below):
+//! - `drv.model`: `u32 [2]`, the actor's content hash ([`crate::replay::model_hash`]), low word
+//!   first;
+//! - `drv.lmk`: `u32 [68]`, the actor's vertex of each landmark;
+//! - `drv.in`: `f32 [2, D]`, the input's mean `μ_in` and scale `s_in` (D = 136 or 204);
+//! - `drv.out`: `f32 [2, 18 + M]`, the output's offset `μ_out` and scale `s_out`;
+//! - the MLP `drv.net` ([`crate::network`]), D inputs and `18 + M` outputs.
+
+use crate::aim::{AimActor, MAX_SHAPES};
+use crate::error::{Argument, Bound, BufferError, EvalError, FormatError};
+use crate::format::{ArtifactKind, SinewFile, out_of_range};
+use crate::hash::FrameHasher;
+use crate::input::check_values;
+use crate::layout::{MAX_COORDINATE, MAX_FACTOR};
+use crate::network::{check_bound, load_mlp};
+use crate::nn::Mlp;
+use crate::replay::{AIM_POSE_LEN, ReplayError, model_hash};
+use crate::rotation::{from_6d, to_6d};
+use crate::tensor::{F32s, U32s};
+
+/// The actor's content hash.
+pub const MODEL_HASH: &str = "drv.model";
+/// The actor's vertex of each landmark, `[68]`.
+pub const LANDMARK_VERTICES: &str = "drv.lmk";
+/// The input's mean and scale, `[2, D]`.
+pub const INPUT_NORM: &str = "drv.in";
+/// The output's offset and scale, `[2, 18 + M]`.
+pub const OUTPUT_NORM: &str = "drv.out";
+/// The prefix of the network.
+pub const NETWORK: &str = "drv.net";
+
+/// Landmarks per frame: the 68 iBUG points (OpenFace, dlib, OpenSeeFace).
+pub const LANDMARKS: usize = 68;
+/// A normalised input value is clamped to ± this (in units of the training spread), so that a
+/// tracker's wild point cannot push the network outside the range it was bounded for.
+pub const MAX_INPUT: f32 = 16.0;
+/// The largest input scale a driver may carry (a landmark coordinate's training spread is at
+/// least 1e-6 of its unit).
+pub const MAX_INPUT_SCALE: f32 = 1e6;
+
+/// Where a driver's landmarks live.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Space {
+    /// In the image: `[68, 2]`, `((u − cx) / fx, (v − cy) / fy)` (v points down).
+    Image,
+    /// In space: `[68, 3]`, in the actor's unit and frame.
+    World,
+}
+
+impl Space {
+    /// Coordinates per landmark.
+    pub const fn dims(self) -> usize {
+        match self {
+            Self::Image => 2,
+            Self::World => 3,
+        }
+    }
+
+    /// `2d` or `3d`, as `sinew train driver --input` names it.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Image => "2d",
+            Self::World => "3d",
+        }
+    }
+}
+
+/// A validated landmark driver over the artefact's bytes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Driver<'a> {
+    model_hash: u64,
+    space: Space,
+    shapes: usize,
+    vertices: U32s<'a>,
+    input: F32s<'a>,
+    output: F32s<'a>,
+    net: Mlp<'a>,
+}
+
+impl<'a> Driver<'a> {
+    /// Validates `bytes` as a landmark driver.
+    ///
+    /// # Errors
+    /// A [`FormatError`] for a bad container, another kind, a missing or misshapen section, a
+    /// network whose width is neither 136 nor 204 inputs or whose outputs are not `18 + M`
+    /// (`M` up to [`MAX_SHAPES`]), an input mean outside ±`MAX_COORDINATE`, an input scale not
+    /// in (0, [`MAX_INPUT_SCALE`]], an output offset outside ±`MAX_COORDINATE`, an output scale
+    /// outside ±`MAX_FACTOR`, or a network that can exceed ±`MAX_NETWORK_VALUE` for inputs
+    /// within ±[`MAX_INPUT`].
+    pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
+        let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::Driver)?;
+        let model = file.u32_tensor(MODEL_HASH, &[2])?;
+        let vertices = file.u32_tensor(LANDMARK_VERTICES, &[LANDMARKS as u32])?;
+        let net = load_mlp(&file, NETWORK)?;
+        let space = match net.inputs() {
+            n if n == 2 * LANDMARKS => Space::Image,
+            n if n == 3 * LANDMARKS => Space::World,
+            _ => return Err(FormatError::IncompatibleShapes),
+        };
+        let outputs = net.outputs();
+        if outputs <= AIM_POSE_LEN {
+            return Err(FormatError::IncompatibleShapes);
+        }
+        let shapes = outputs - AIM_POSE_LEN;
+        if shapes > MAX_SHAPES {
+            return Err(FormatError::LimitExceeded);
+        }
+        let d = net.inputs();
+        let input = file.f32_tensor(INPUT_NORM, &[2, d as u32])?;
+        for (i, v) in input.iter().enumerate() {
+            let ok = if i < d {
+                Bound::Coordinate.contains(v)
+            } else {
+                v > 0.0 && v <= MAX_INPUT_SCALE
+            };
+            if !ok {
+                let bound = if i < d {
+                    Bound::Coordinate
+                } else {
+                    Bound::PositiveFactor
+                };
+                return Err(out_of_range(INPUT_NORM, i, bound));
+            }
+        }
+        let output = file.f32_tensor(OUTPUT_NORM, &[2, outputs as u32])?;
+        for (i, v) in output.iter().enumerate() {
+            let bound = if i < outputs {
+                Bound::Coordinate
+            } else {
+                Bound::Factor
+            };
+            if !bound.contains(v) {
+                return Err(out_of_range(OUTPUT_NORM, i, bound));
+            }
+        }
+        check_bound(&net, NETWORK, f64::from(MAX_INPUT))?;
+        Ok(Self {
+            model_hash: u64::from(model.at(0)) | (u64::from(model.at(1)) << 32),
+            space,
+            shapes,
+            vertices,
+            input,
+            output,
+            net,
+        })
+    }
+
+    /// The content hash of the actor this driver was trained for.
+    pub const fn model_hash(&self) -> u64 {
+        self.model_hash
+    }
+
+    /// Where its landmarks live.
+    pub const fn space(&self) -> Space {
+        self.space
+    }
+
+    /// The actor's coefficient count M.
+    pub const fn shape_count(&self) -> usize {
+        self.shapes
+    }
+
+    /// Values per frame of input: `68 × 2` or `68 × 3`.
+    pub fn input_len(&self) -> usize {
+        LANDMARKS * self.space.dims()
+    }
+
+    /// Values of the pose [`Self::drive`] writes: `18 + M`.
+    pub const fn output_len(&self) -> usize {
+        AIM_POSE_LEN + self.shapes
+    }
+
+    /// The actor's vertex of landmark `l`, `None` past the 68.
+    pub fn landmark_vertex(&self, l: usize) -> Option<usize> {
+        (l < LANDMARKS).then(|| self.vertices.at(l) as usize)
+    }
+
+    /// The network.
+    pub const fn network(&self) -> &Mlp<'a> {
+        &self.net
+    }
+
+    /// Scratch values [`Self::drive`] needs: the normalised input and the network's own.
+    pub fn scratch_len(&self) -> usize {
+        self.input_len() + self.net.scratch_len()
+    }
+
+    /// Checks that this driver was trained for the actor whose bytes are `model_bytes`.
+    ///
+    /// # Errors
+    /// [`ReplayError::WrongModel`]; [`ReplayError::ShapeCount`]; [`ReplayError::PointCount`]
+    /// when a landmark vertex is not a vertex of the actor (`performance` is then one past the
+    /// largest landmark vertex).
+    pub fn check_actor(&self, model_bytes: &[u8], actor: &AimActor<'_>) -> Result<(), ReplayError> {
+        let found = model_hash(model_bytes);
+        if found != self.model_hash {
+            return Err(ReplayError::WrongModel {
+                expected: self.model_hash,
+                found,
+            });
+        }
+        if actor.shape_count() != self.shapes {
+            return Err(ReplayError::ShapeCount {
+                replay: self.shapes,
+                actor: actor.shape_count(),
+            });
+        }
+        let largest = self.vertices.iter().max().unwrap_or(0) as usize;
+        if largest >= actor.vertex_count() {
+            return Err(ReplayError::PointCount {
+                performance: largest + 1,
+                actor: actor.vertex_count(),
+            });
+        }
+        Ok(())
+    }
+
+    /// One frame's landmarks to the actor's pose: head `[0..9]`, jaw `[9..18]` (6D rotation +
+    /// translation each), coefficients `[18..18 + M]` (module documentation).
+    ///
+    /// # Shapes
+    /// - `landmarks`: `[68, 2]` or `[68, 3]` ([`Self::input_len`])
+    /// - `scratch`: at least [`Self::scratch_len`]
+    /// - `pose`: `[18 + M]` ([`Self::output_len`])
+    ///
+    /// # Errors
+    /// [`BufferError`] for a wrong length; [`EvalError::Input`] naming
+    /// [`Argument::Landmarks`] and the value for a landmark that is NaN, infinite or outside
+    /// ±`MAX_COORDINATE` (nothing is written then).
+    pub fn drive(
+        &self,
+        landmarks: &[f32],
+        scratch: &mut [f32],
+        pose: &mut [f32],
+    ) -> Result<(), EvalError> {
+        let d = self.input_len();
+        if landmarks.len() != d {
+            return Err(BufferError::Input.into());
+        }
+        if pose.len() != self.output_len() {
+            return Err(BufferError::Output.into());
+        }
+        if scratch.len() < self.scratch_len() {
+            return Err(BufferError::Scratch.into());
+        }
+        check_values(Argument::Landmarks, landmarks)?;
+        let (x, rest) = scratch.split_at_mut(d);
+        for (i, (x, &l)) in x.iter_mut().zip(landmarks).enumerate() {
+            let v = (l - self.input.at(i)) * self.input.at(d + i);
+            *x = v.clamp(-MAX_INPUT, MAX_INPUT);
+        }
+        self.net.eval(x, pose, rest)?;
+        let p = self.output_len();
+        for (i, y) in pose.iter_mut().enumerate() {
+            *y = self.output.at(i) + self.output.at(p + i) * *y;
+        }
+        finish_pose(pose);
+        Ok(())
+    }
+
+    /// The 68 landmarks of the actor's posed `positions` (`[V, 3]`) into `out` (`[68, 3]`).
+    ///
+    /// # Errors
+    /// [`BufferError::Output`] if `out` is not `[68, 3]`, [`BufferError::Input`] if a landmark
+    /// vertex is not one of `positions`'.
+    pub fn landmarks_of(&self, positions: &[f32], out: &mut [f32]) -> Result<(), BufferError> {
+        if out.len() != 3 * LANDMARKS {
+            return Err(BufferError::Output);
+        }
+        for (o, v) in out.chunks_exact_mut(3).zip(self.vertices.iter()) {
+            let at = 3 * v as usize;
+            let p = positions.get(at..at + 3).ok_or(BufferError::Input)?;
+            o.copy_from_slice(p);
+        }
+        Ok(())
+    }
+}
+
+/// A driven pose made one the actor accepts: both 6D rotations orthonormal, translations within
+/// ±`MAX_COORDINATE`, coefficients within ±`MAX_FACTOR`. Finite values only change where they
+/// were out of reach; the rotations always pass through Gram–Schmidt.
+pub fn finish_pose(pose: &mut [f32]) {
+    for half in [0usize, 9] {
+        if let Some(nine) = pose.get_mut(half..half + 9) {
+            let r: [f32; 6] = core::array::from_fn(|i| nine.get(i).copied().unwrap_or(0.0));
+            let r = to_6d(&from_6d(&r));
+            for (o, v) in nine.iter_mut().zip(r) {
+                *o = v;
+            }
+            for t in nine.iter_mut().skip(6) {
+                *t = finite_clamp(*t, MAX_COORDINATE);
+            }
+        }
+    }
+    for w in pose.iter_mut().skip(AIM_POSE_LEN) {
+        *w = finite_clamp(*w, MAX_FACTOR);
+    }
+}
+
+/// `v` within ±`limit`; NaN becomes 0.
+fn finite_clamp(v: f32, limit: f32) -> f32 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(-limit, limit)
+    }
+}
+
+/// A pinhole camera's intrinsics in pixels: focal lengths and principal point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Intrinsics {
+    /// Focal length along u.
+    pub fx: f32,
+    /// Focal length along v.
+    pub fy: f32,
+    /// Principal point u.
+    pub cx: f32,
+    /// Principal point v.
+    pub cy: f32,
+}
+
+/// A tracker's pixels `[68, 2]` (`[u, v]`, v down) as a 2D driver reads them:
+/// `((u − cx) / fx, (v − cy) / fy)`.
+///
+/// # Errors
+/// [`BufferError`] for a wrong length; [`EvalError::Input`] naming [`Argument::Landmarks`] for
+/// a pixel that is not finite or outside ±`MAX_COORDINATE`, or naming the intrinsics' value
+/// (as `landmarks[136 + i]`, i: fx, fy, cx, cy) for a focal length that is not positive or a
+/// value that is not finite.
+pub fn normalise_pixels(
+    pixels: &[f32],
+    camera: &Intrinsics,
+    out: &mut [f32],
+) -> Result<(), EvalError> {
+    if pixels.len() != 2 * LANDMARKS {
+        return Err(BufferError::Input.into());
+    }
+    if out.len() != 2 * LANDMARKS {
+        return Err(BufferError::Output.into());
+    }
+    check_values(Argument::Landmarks, pixels)?;
+    let k = [camera.fx, camera.fy, camera.cx, camera.cy];
+    for (i, &v) in k.iter().enumerate() {
+        crate::input::check_value(Argument::Landmarks, 2 * LANDMARKS + i, v)?;
+        if i < 2 && v <= 0.0 {
+            return Err(crate::error::InputError::new(
+                Argument::Landmarks,
+                2 * LANDMARKS + i,
+                crate::error::InputErrorKind::OutOfRange,
+            )
+            .into());
+        }
+    }
+    for (o, p) in out.chunks_exact_mut(2).zip(pixels.chunks_exact(2)) {
+        if let ([ox, oy], [u, v]) = (o, p) {
+            *ox = (*u - camera.cx) / camera.fx;
+            *oy = (*v - camera.cy) / camera.fy;
+        }
+    }
+    Ok(())
+}
+
+/// The caller's buffers for one driven frame.
+#[derive(Debug)]
+pub struct DriveBuffers<'b> {
+    /// At least [`Driver::scratch_len`].
+    pub scratch: &'b mut [f32],
+    /// `[18 + M]`: the driven pose.
+    pub pose: &'b mut [f32],
+    /// `[V, 3]`: the posed positions.
+    pub positions: &'b mut [f32],
+    /// `[V, 3]`: their normals.
+    pub normals: &'b mut [f32],
+}
+
+/// Drives `actor` with one frame's `landmarks` ([`Driver::drive`]), poses it, computes its
+/// normals and returns the frame's f32 hash (the positions, then the normals, as an f32 replay
+/// frame's): the step of every target's driver loop. Call [`Driver::check_actor`] once first.
+///
+/// # Errors
+/// As [`Driver::drive`] and [`AimActor::pose`].
+pub fn frame_hash(
+    driver: &Driver<'_>,
+    actor: &AimActor<'_>,
+    landmarks: &[f32],
+    buf: &mut DriveBuffers<'_>,
+) -> Result<u64, EvalError> {
+    driver.drive(landmarks, buf.scratch, buf.pose)?;
+    play(actor, buf.pose, buf.positions)?;
+    actor.normals(buf.positions, buf.normals)?;
+    let mut h = FrameHasher::new();
+    h.write_f32s(buf.positions);
+    h.write_f32s(buf.normals);
+    Ok(h.finish())
+}
+
+/// Poses `actor` with a driven pose (`[18 + M]`: head, jaw, coefficients) into `out` (`[V, 3]`).
+///
+/// # Errors
+/// [`BufferError::Input`] if `pose` is not `18 + M` long; as [`AimActor::pose`].
+pub fn play(actor: &AimActor<'_>, pose: &[f32], out: &mut [f32]) -> Result<(), EvalError> {
+    if pose.len() != AIM_POSE_LEN + actor.shape_count() {
+        return Err(BufferError::Input.into());
+    }
+    let (head_jaw, weights) = pose.split_at(AIM_POSE_LEN);
+    let head: [f32; 9] = core::array::from_fn(|i| head_jaw.get(i).copied().unwrap_or(0.0));
+    let jaw: [f32; 9] = core::array::from_fn(|i| head_jaw.get(9 + i).copied().unwrap_or(0.0));
+    let built = actor.pose_from_9d(&jaw, &head)?;
+    actor.pose(&built, weights, out)
+}

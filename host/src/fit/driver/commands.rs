@@ -1,0 +1,227 @@
+//! `sinew train driver`, `sinew drive` and `sinew eval driver`: the commands' glue (checkpoints,
+//! progress, the loss picture, reports).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail, ensure};
+use serde::{Deserialize, Serialize};
+use sinew_core::aim::AimActor;
+use sinew_core::driver::{Intrinsics, LANDMARKS};
+use sinew_core::filter::OneEuro;
+use sinew_core::replay::model_hash;
+
+use super::DriverConfig;
+use super::bake::{BakeInputs, bake};
+use super::drive::{bind, poses, write_frames};
+use super::measure::{DriverMeasure, measure};
+use super::sample::Sampler;
+use super::train::{Normalisation, Run, load_checkpoint, save_checkpoint};
+use crate::fit::performance::Performance;
+use crate::training::backend::Backend;
+use crate::training::checkpoint;
+
+/// `sinew train driver`'s settings.
+#[derive(Clone, Debug)]
+pub struct TrainDriver {
+    /// The actor.
+    pub model: PathBuf,
+    /// The driver to write.
+    pub out: PathBuf,
+    /// A JSON report to write.
+    pub report: Option<PathBuf>,
+    /// A checkpoint folder to resume from (default: a fresh run, checkpoints in `OUT.ckpt/`).
+    pub resume: Option<PathBuf>,
+    /// The run's settings.
+    pub config: DriverConfig,
+    /// Steps between checkpoints.
+    pub checkpoint_every: usize,
+    /// The burn backend.
+    pub backend: Backend,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
+/// The report of a run.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct TrainDriverReport {
+    /// The settings.
+    pub config: DriverConfig,
+    /// The actor's content hash, 16 hex digits.
+    pub actor: String,
+    /// The actor's vertex of each landmark.
+    pub landmark_vertices: Vec<u32>,
+    /// Seconds this invocation trained.
+    pub seconds: f64,
+    /// The mean of the last 100 steps' losses (normalised units).
+    pub final_loss: f32,
+    /// The loss of every step.
+    pub history: Vec<f32>,
+}
+
+fn read_actor(model: &Path) -> Result<Vec<u8>> {
+    let bytes = crate::io::container::read(model)?;
+    AimActor::from_bytes(&bytes)
+        .map_err(|e| anyhow!("{}: not an AIM actor: {e}", model.display()))?;
+    Ok(bytes)
+}
+
+/// `sinew train driver`: trains (or resumes), checkpoints, bakes the driver, writes the loss
+/// picture beside it (`OUT` with extension `losses.png`) and the report.
+pub fn train_driver(opts: &TrainDriver) -> Result<TrainDriverReport> {
+    let config = &opts.config;
+    ensure!(
+        config.steps > 0 && config.batch > 0 && config.hidden > 0 && opts.checkpoint_every > 0,
+        "steps, batch, hidden units and the checkpoint interval must be positive"
+    );
+    let bytes = read_actor(&opts.model)?;
+    let actor = AimActor::from_bytes(&bytes).map_err(|e| anyhow!("{e}"))?;
+    let vertices = super::landmark_vertices(&opts.model, &actor)?;
+    let sampler = Sampler::new(&actor, &vertices, config);
+    let norm = Normalisation::measure(&sampler, config.seed);
+    let hash = model_hash(&bytes);
+    let actor_hex = format!("{hash:016x}");
+    let device = opts.backend.autodiff_device(config.seed)?;
+    let inputs = LANDMARKS * config.input.dims();
+    let outputs = 18 + actor.shape_count();
+    let fresh = Run::new(inputs, outputs, config, &device);
+    let (dir, mut run) = match &opts.resume {
+        Some(dir) => (
+            dir.clone(),
+            load_checkpoint(dir, fresh, config, &actor_hex)?,
+        ),
+        None => (checkpoint::checkpoint_dir_for(&opts.out), fresh),
+    };
+    crate::training::interrupt::watch_ctrl_c();
+    let bar = crate::training::progress::bar(config.steps as u64, opts.quiet);
+    bar.set_position(run.step as u64);
+    let started = std::time::Instant::now();
+    let mut stopped = false;
+    while run.step < config.steps {
+        let until = (run.step + opts.checkpoint_every).min(config.steps);
+        run = run.advance(
+            &sampler,
+            &norm,
+            config,
+            &device,
+            until,
+            &mut |_, loss| {
+                bar.inc(1);
+                bar.set_message(format!("loss {loss:.4}"));
+            },
+            &mut || {
+                stopped = crate::training::interrupt::take_stop_request();
+                stopped
+            },
+        );
+        save_checkpoint(&dir, &run, config, &actor_hex)?;
+        if stopped {
+            bar.abandon();
+            bail!(
+                "interrupted after {} steps; checkpoint in {}: continue with --resume {}",
+                run.step,
+                dir.display(),
+                dir.display()
+            );
+        }
+    }
+    bar.finish();
+    let units = actor
+        .file()
+        .metadata()
+        .get("units")
+        .unwrap_or("cm")
+        .to_owned();
+    let baked = bake(
+        &run.net,
+        &norm,
+        config,
+        &BakeInputs {
+            actor_hash: hash,
+            units: &units,
+            vertices: &vertices,
+            camera: sampler.camera,
+        },
+    )?;
+    sinew_core::driver::Driver::from_bytes(&baked).map_err(|e| {
+        anyhow!(
+            "{}: the baked driver does not load: {e}",
+            opts.out.display()
+        )
+    })?;
+    crate::io::atomic::write(&opts.out, &baked)?;
+    let curve: Vec<(f64, f64)> = run
+        .history
+        .iter()
+        .enumerate()
+        .map(|(i, &l)| (i as f64, f64::from(l)))
+        .collect();
+    crate::figures::plot::loss_curves(&[("loss", &curve)], "driver", true, 800, 500)
+        .save_png(&opts.out.with_extension("losses.png"))?;
+    let tail = &run.history[run.history.len().saturating_sub(100)..];
+    let report = TrainDriverReport {
+        config: config.clone(),
+        actor: actor_hex,
+        landmark_vertices: vertices,
+        seconds: started.elapsed().as_secs_f64(),
+        final_loss: tail.iter().sum::<f32>() / tail.len().max(1) as f32,
+        history: run.history,
+    };
+    if let Some(path) = &opts.report {
+        crate::io::atomic::write(path, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    }
+    Ok(report)
+}
+
+/// `sinew drive`'s settings.
+#[derive(Clone, Debug)]
+pub struct DriveCommand {
+    /// The actor.
+    pub model: PathBuf,
+    /// Its driver.
+    pub driver: PathBuf,
+    /// The track: an OpenFace 2.0 CSV or a performance folder.
+    pub landmarks: PathBuf,
+    /// The output folder.
+    pub out: PathBuf,
+    /// A CSV's camera.
+    pub intrinsics: Option<Intrinsics>,
+    /// A CSV row below this confidence is a lost frame.
+    pub min_confidence: f32,
+    /// The One Euro filter: minimum cutoff (Hz), speed coefficient, frame rate (Hz).
+    pub filter: Option<OneEuro>,
+}
+
+/// `sinew drive`: every frame's pose through the core, written as OBJs and `strip.png` once the
+/// whole track has been read and driven (bad input leaves no output); returns the frame count.
+pub fn drive_command(opts: &DriveCommand) -> Result<usize> {
+    let actor_bytes = read_actor(&opts.model)?;
+    let driver_bytes = crate::io::container::read(&opts.driver)?;
+    let bound = bind(&opts.model, &actor_bytes, &opts.driver, &driver_bytes)?;
+    let track = super::track::read(
+        &opts.landmarks,
+        bound.driver.space(),
+        opts.intrinsics,
+        opts.min_confidence,
+    )?;
+    let poses = poses(&bound, &opts.driver, &track, opts.filter.as_ref())
+        .with_context(|| format!("{}: driving", opts.landmarks.display()))?;
+    Ok(write_frames(&bound.actor, &poses, &opts.out)?)
+}
+
+/// `sinew eval driver`: the driver on a performance folder against its meshes.
+pub fn eval_driver(model: &Path, driver: &Path, target: &Path) -> Result<DriverMeasure> {
+    let actor_bytes = read_actor(model)?;
+    let driver_bytes = crate::io::container::read(driver)?;
+    let bound = bind(model, &actor_bytes, driver, &driver_bytes)?;
+    let perf = Performance::read(target)?;
+    ensure!(
+        perf.manifest.vertices == bound.actor.vertex_count(),
+        "{}: meshes of {} vertices, the actor has {}",
+        target.display(),
+        perf.manifest.vertices,
+        bound.actor.vertex_count()
+    );
+    let track = super::track::read(target, bound.driver.space(), None, 0.0)?;
+    let unit = crate::fit::baseline::performance_unit(&perf)?;
+    Ok(measure(&bound, driver, &track, &perf, unit.mm())?)
+}

@@ -1,0 +1,216 @@
+//! What a driver learns from: performances of the actor itself, drawn on the fly. Each sample is
+//! a random pose of the actor (coefficients, the jaw its training shapes move, a head within a
+//! webcam's reach), its 68 landmarks through the core's skinning, seen by a camera of random
+//! focal length with a tracker's noise and dropout, and the pose as the target.
+
+use sinew_core::aim::AimActor;
+use sinew_core::driver::{LANDMARKS, Space, finish_pose};
+use sinew_core::linalg::{Mat3, Vec3};
+use sinew_core::rotation::to_6d;
+use sinew_core::skinning::skin_vertex;
+use sinew_core::tensor::F32s;
+
+use super::DriverConfig;
+use crate::training::random::Stream;
+
+/// The identity transform's 9 values.
+const IDENTITY_9: [f32; 9] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0];
+
+/// The actor as samples need it: its landmark vertices' rest positions, skinning weights and
+/// correctives, its training jaws, and the canonical camera.
+#[derive(Clone, Debug)]
+pub struct Sampler {
+    space: Space,
+    shapes: usize,
+    rest: Vec<Vec3>,
+    k: Vec<f32>,
+    /// Per landmark, its correctives' little-endian bytes (`[M, 3]`), as the core reads them.
+    correctives: Vec<Vec<u8>>,
+    pivot: Vec3,
+    jaws: Vec<[f32; 9]>,
+    /// The canonical camera's centre (the actor's unit): in front of the template's frontmost
+    /// point by [`DriverConfig::distance`], centred on its landmarks, looking along −z.
+    pub camera: [f32; 3],
+    config: DriverConfig,
+}
+
+/// One sample: the landmarks as the driver reads them, and the pose that made them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sample {
+    /// `[68 × dims]`.
+    pub input: Vec<f32>,
+    /// `[18 + M]`: head, jaw, coefficients.
+    pub pose: Vec<f32>,
+}
+
+impl Sampler {
+    /// The sampler of `actor` with landmark vertices `vertices`.
+    pub fn new(actor: &AimActor<'_>, vertices: &[u32], config: &DriverConfig) -> Self {
+        let m = actor.shape_count();
+        let (s0, e) = (actor.rest(), actor.correctives());
+        let at = |t: F32s<'_>, v: usize| Vec3::new(t.at(3 * v), t.at(3 * v + 1), t.at(3 * v + 2));
+        let rest = vertices.iter().map(|&v| at(s0, v as usize)).collect();
+        let k = vertices
+            .iter()
+            .map(|&v| actor.skinning_weights().at(v as usize))
+            .collect();
+        let correctives = vertices
+            .iter()
+            .map(|&v| e.slice(v as usize * 3 * m, 3 * m).as_bytes().to_vec())
+            .collect();
+        let jaws = actor
+            .file()
+            .f32_tensor("train.jaw", &[m as u32, 9])
+            .map(|t| {
+                (0..m)
+                    .map(|i| std::array::from_fn(|c| t.at(9 * i + c)))
+                    .collect()
+            })
+            .unwrap_or_default();
+        let tpl = actor.template();
+        let n = vertices.len().max(1) as f32;
+        let mean = |c: usize| {
+            vertices
+                .iter()
+                .map(|&v| tpl.at(3 * v as usize + c))
+                .sum::<f32>()
+                / n
+        };
+        let front = tpl.iter().skip(2).step_by(3).fold(f32::MIN, f32::max);
+        Self {
+            space: config.input,
+            shapes: m,
+            rest,
+            k,
+            correctives,
+            pivot: actor.jaw_pivot(),
+            jaws,
+            camera: [mean(0), mean(1), front + config.distance],
+            config: config.clone(),
+        }
+    }
+
+    /// The sample of `rng`'s next draws.
+    pub fn sample(&self, rng: &mut Stream) -> Sample {
+        let c = &self.config;
+        let m = self.shapes;
+        let weights: Vec<f32> = (0..m)
+            .map(|_| {
+                if rng.unit() < c.active {
+                    rng.uniform_f32(0.0, 1.0)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        // The jaw the actor's training shapes move, in from the identity by their weights.
+        let mut jaw = IDENTITY_9;
+        for (w, j) in weights.iter().zip(&self.jaws) {
+            for ((o, x), i) in jaw.iter_mut().zip(j).zip(IDENTITY_9) {
+                *o += w * (x - i);
+            }
+        }
+        // On top, the jaw's own motion as `sinew data performance` draws it: an opening about
+        // x, a little yaw and translation about the pivot.
+        let own = euler(
+            rng.uniform(0.0, c.jaw_opening),
+            rng.uniform(-c.jaw_yaw, c.jaw_yaw),
+            0.0,
+        );
+        let tied = sinew_core::rotation::from_6d(&std::array::from_fn(|i| jaw[i]));
+        let rot = to_6d(&own.mul_mat(&tied));
+        jaw[..6].copy_from_slice(&rot);
+        for t in &mut jaw[6..] {
+            *t += rng.uniform(-c.jaw_translation, c.jaw_translation) as f32;
+        }
+        let mut pose = Vec::with_capacity(18 + m);
+        let r = c.head_rotation;
+        let head_rot = euler(
+            rng.uniform(-r[0], r[0]),
+            rng.uniform(-r[1], r[1]),
+            rng.uniform(-r[2], r[2]),
+        );
+        let t = c.head_translation;
+        let head_t = [
+            rng.uniform(-t[0], t[0]),
+            rng.uniform(-t[1], t[1]),
+            rng.uniform(t[2], t[3]),
+        ];
+        pose.extend(to_6d(&head_rot));
+        pose.extend(head_t.map(|x| x as f32));
+        pose.extend(jaw);
+        pose.extend(&weights);
+        finish_pose(&mut pose);
+        let landmarks = self.landmarks(&pose);
+        // A tracker's lost points fall back on its shape prior: the face at rest, same head.
+        let mut rest_pose = pose.clone();
+        rest_pose[9..18].copy_from_slice(&IDENTITY_9);
+        rest_pose[18..].iter_mut().for_each(|w| *w = 0.0);
+        let prior = self.landmarks(&rest_pose);
+        let dropped = if rng.unit() < c.dropout {
+            let len = 3 + rng.below(8);
+            let first = rng.below(LANDMARKS);
+            (first..first + len).map(|l| l % LANDMARKS).collect()
+        } else {
+            Vec::new()
+        };
+        let focal = rng.uniform(c.focal[0], c.focal[1]);
+        let noise = rng.uniform(0.0, c.noise);
+        let mut input = Vec::with_capacity(LANDMARKS * self.space.dims());
+        for (l, (p, q)) in landmarks.iter().zip(&prior).enumerate() {
+            let p = if dropped.contains(&l) { q } else { p };
+            match self.space {
+                Space::Image => {
+                    let depth = f64::from(self.camera[2] - p.z).max(1e-3);
+                    let x = f64::from(p.x - self.camera[0]) / depth;
+                    let y = -f64::from(p.y - self.camera[1]) / depth;
+                    // Pixel noise, normalised by this camera's focal length.
+                    input.push((x + noise / focal * rng.normal()) as f32);
+                    input.push((y + noise / focal * rng.normal()) as f32);
+                }
+                Space::World => {
+                    for v in [p.x, p.y, p.z] {
+                        input.push((f64::from(v) + c.noise_3d * rng.normal()) as f32);
+                    }
+                }
+            }
+        }
+        Sample { input, pose }
+    }
+
+    /// The landmarks of the actor in `pose` (`[18 + M]`), through the core's skinning.
+    pub fn landmarks(&self, pose: &[f32]) -> Vec<Vec3> {
+        let head: [f32; 9] = std::array::from_fn(|i| pose[i]);
+        let jaw: [f32; 9] = std::array::from_fn(|i| pose[9 + i]);
+        let built = sinew_core::skinning::Pose {
+            head: sinew_core::rotation::rigid_from_9d(&head),
+            jaw: sinew_core::skinning::BoneTransform::from_9d(&jaw, self.pivot),
+        };
+        let w = &pose[18..];
+        self.rest
+            .iter()
+            .zip(&self.k)
+            .zip(&self.correctives)
+            .map(|((&s0, &k), e)| {
+                let e = F32s::new(e).unwrap_or(F32s::empty());
+                skin_vertex(s0, k, e, w, &built)
+            })
+            .collect()
+    }
+}
+
+/// Rotation `Rz(γ) Ry(β) Rx(α)`.
+fn euler(a: f64, b: f64, g: f64) -> Mat3 {
+    let (sa, ca) = a.sin_cos();
+    let (sb, cb) = b.sin_cos();
+    let (sg, cg) = g.sin_cos();
+    let m = [
+        [cg * cb, cg * sb * sa - sg * ca, cg * sb * ca + sg * sa],
+        [sg * cb, sg * sb * sa + cg * ca, sg * sb * ca - cg * sa],
+        [-sb, cb * sa, cb * ca],
+    ];
+    let col = |j: usize| Vec3::new(m[0][j] as f32, m[1][j] as f32, m[2][j] as f32);
+    Mat3 {
+        cols: [col(0), col(1), col(2)],
+    }
+}

@@ -1,0 +1,294 @@
+//! OpenFace 2.0's landmark CSV (`FeatureExtraction` output): one row per frame, the 68 iBUG
+//! landmarks' pixels in the columns `x_0 … x_67`, `y_0 … y_67`, the tracker's `confidence` in
+//! [0, 1] and `success` (0: the face was lost in that frame). Column names may carry the spaces
+//! OpenFace writes after each comma; other columns are ignored. Every value read must be a
+//! finite number; every error names the file, the row (1-based, the header is row 1) and the
+//! column.
+
+use std::path::{Path, PathBuf};
+
+/// Landmarks per row.
+pub const LANDMARKS: usize = 68;
+/// The largest CSV this reader opens (1 GiB: about 250,000 frames of OpenFace's 700 columns).
+pub const MAX_BYTES: u64 = 1 << 30;
+/// The most frames a track may hold (more than two hours at 60 frames per second).
+pub const MAX_FRAMES: usize = 500_000;
+
+/// One frame of the track.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OpenFaceFrame {
+    /// `[68, 2]`: each landmark's `[u, v]` in pixels (v down).
+    pub pixels: Vec<f32>,
+    /// The tracker's confidence, [0, 1].
+    pub confidence: f32,
+    /// Whether the tracker found the face.
+    pub success: bool,
+}
+
+/// A CSV that cannot be read as an OpenFace 2.0 landmark track.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OpenFaceError {
+    /// The file cannot be read.
+    #[error("{}: cannot read", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file larger than [`MAX_BYTES`].
+    #[error("{}: {bytes} bytes, more than the {limit} a track may have", path.display())]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size.
+        bytes: u64,
+        /// [`MAX_BYTES`].
+        limit: u64,
+    },
+    /// More rows than [`MAX_FRAMES`].
+    #[error("{}: more than {limit} frames", path.display())]
+    TooManyFrames {
+        /// The file.
+        path: PathBuf,
+        /// [`MAX_FRAMES`].
+        limit: usize,
+    },
+    /// No header, or no rows after it.
+    #[error("{}: no frames (an OpenFace CSV has a header row, then one row per frame)", path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A column the track needs is not in the header.
+    #[error("{}: row 1 (the header) has no column {column:?} (not an OpenFace 2.0 landmark CSV?)", path.display())]
+    MissingColumn {
+        /// The file.
+        path: PathBuf,
+        /// The column.
+        column: String,
+    },
+    /// A row with another number of columns than the header.
+    #[error("{}: row {row} has {found} columns, the header has {expected}", path.display())]
+    Columns {
+        /// The file.
+        path: PathBuf,
+        /// The row (1-based; the header is row 1).
+        row: usize,
+        /// Its columns.
+        found: usize,
+        /// The header's.
+        expected: usize,
+    },
+    /// A value that is not a number.
+    #[error("{}: row {row}, column {column}: {text:?} is not a number", path.display())]
+    NotANumber {
+        /// The file.
+        path: PathBuf,
+        /// The row.
+        row: usize,
+        /// The column's name.
+        column: String,
+        /// The text.
+        text: String,
+    },
+    /// A value that is NaN or infinite.
+    #[error("{}: row {row}, column {column}: {text} is not finite", path.display())]
+    NonFinite {
+        /// The file.
+        path: PathBuf,
+        /// The row.
+        row: usize,
+        /// The column's name.
+        column: String,
+        /// The text.
+        text: String,
+    },
+}
+
+/// Reads the OpenFace 2.0 CSV at `path` (see the module documentation).
+///
+/// # Errors
+/// An [`OpenFaceError`] naming the file, and the row and column where a value is at fault.
+pub fn read(path: &Path) -> Result<Vec<OpenFaceFrame>, OpenFaceError> {
+    let read_error = |source| OpenFaceError::Read {
+        path: path.to_owned(),
+        source,
+    };
+    let bytes = std::fs::metadata(path).map_err(read_error)?.len();
+    if bytes > MAX_BYTES {
+        return Err(OpenFaceError::TooLarge {
+            path: path.to_owned(),
+            bytes,
+            limit: MAX_BYTES,
+        });
+    }
+    let text = std::fs::read_to_string(path).map_err(read_error)?;
+    parse(path, &text)
+}
+
+/// Parses the text of an OpenFace 2.0 CSV read from `path` (named in errors).
+///
+/// # Errors
+/// As [`read`].
+pub fn parse(path: &Path, text: &str) -> Result<Vec<OpenFaceFrame>, OpenFaceError> {
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
+    let Some((_, header)) = lines.next() else {
+        return Err(OpenFaceError::Empty {
+            path: path.to_owned(),
+        });
+    };
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let column = |name: &str| {
+        names
+            .iter()
+            .position(|n| *n == name)
+            .ok_or_else(|| OpenFaceError::MissingColumn {
+                path: path.to_owned(),
+                column: name.to_owned(),
+            })
+    };
+    let mut wanted = Vec::with_capacity(2 * LANDMARKS + 2);
+    for l in 0..LANDMARKS {
+        wanted.push(column(&format!("x_{l}"))?);
+        wanted.push(column(&format!("y_{l}"))?);
+    }
+    let confidence = column("confidence")?;
+    let success = column("success")?;
+    let mut frames = Vec::new();
+    for (index, line) in lines {
+        let row = index + 1;
+        if frames.len() == MAX_FRAMES {
+            return Err(OpenFaceError::TooManyFrames {
+                path: path.to_owned(),
+                limit: MAX_FRAMES,
+            });
+        }
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        if cells.len() != names.len() {
+            return Err(OpenFaceError::Columns {
+                path: path.to_owned(),
+                row,
+                found: cells.len(),
+                expected: names.len(),
+            });
+        }
+        let value = |c: usize| -> Result<f32, OpenFaceError> {
+            let text = cells[c];
+            let v: f32 = text.parse().map_err(|_| OpenFaceError::NotANumber {
+                path: path.to_owned(),
+                row,
+                column: names[c].to_owned(),
+                text: text.to_owned(),
+            })?;
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(OpenFaceError::NonFinite {
+                    path: path.to_owned(),
+                    row,
+                    column: names[c].to_owned(),
+                    text: text.to_owned(),
+                })
+            }
+        };
+        let pixels = wanted
+            .iter()
+            .map(|&c| value(c))
+            .collect::<Result<Vec<_>, _>>()?;
+        frames.push(OpenFaceFrame {
+            pixels,
+            confidence: value(confidence)?,
+            success: value(success)? != 0.0,
+        });
+    }
+    if frames.is_empty() {
+        return Err(OpenFaceError::Empty {
+            path: path.to_owned(),
+        });
+    }
+    Ok(frames)
+}
+
+/// An OpenFace 2.0 CSV of `frames` (each `[68, 2]` pixels, with its confidence and success),
+/// with the columns OpenFace writes before the landmarks, as tests and examples need one.
+pub fn write_csv(frames: &[OpenFaceFrame]) -> String {
+    let mut s = String::from("frame, face_id, timestamp, confidence, success");
+    for axis in ["x", "y"] {
+        for l in 0..LANDMARKS {
+            s.push_str(&format!(", {axis}_{l}"));
+        }
+    }
+    s.push('\n');
+    for (f, frame) in frames.iter().enumerate() {
+        s.push_str(&format!(
+            "{}, 0, {:.3}, {}, {}",
+            f + 1,
+            f as f32 / 30.0,
+            frame.confidence,
+            u8::from(frame.success)
+        ));
+        for axis in 0..2 {
+            for l in 0..LANDMARKS {
+                s.push_str(&format!(", {}", frame.pixels[2 * l + axis]));
+            }
+        }
+        s.push('\n');
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(k: f32) -> OpenFaceFrame {
+        OpenFaceFrame {
+            pixels: (0..2 * LANDMARKS).map(|i| 100.0 + i as f32 + k).collect(),
+            confidence: 0.9,
+            success: true,
+        }
+    }
+
+    #[test]
+    fn a_written_track_reads_back() {
+        let mut frames = vec![frame(0.0), frame(1.5)];
+        frames[1].success = false;
+        let csv = write_csv(&frames);
+        assert_eq!(parse(Path::new("t.csv"), &csv).unwrap(), frames);
+    }
+
+    #[test]
+    fn bad_tracks_name_the_row_and_column() {
+        let path = Path::new("track.csv");
+        let csv = write_csv(&[frame(0.0), frame(1.0)]);
+        let mut lines: Vec<String> = csv.lines().map(str::to_owned).collect();
+        let short = format!("{}\n{}\n", lines[0], "1, 0, 0.0, 0.9, 1, 5");
+        let e = parse(path, &short).unwrap_err();
+        assert!(matches!(e, OpenFaceError::Columns { row: 2, .. }), "{e}");
+        assert!(e.to_string().contains("track.csv: row 2"), "{e}");
+        lines[2] = lines[2].replacen(", 101", ", abc", 1);
+        let e = parse(path, &lines.join("\n")).unwrap_err();
+        assert!(
+            matches!(&e, OpenFaceError::NotANumber { row: 3, column, .. } if column == "x_0"),
+            "{e}"
+        );
+        lines[2] = lines[2].replacen(", abc", ", NaN", 1);
+        let e = parse(path, &lines.join("\n")).unwrap_err();
+        assert!(matches!(e, OpenFaceError::NonFinite { row: 3, .. }), "{e}");
+        let e = parse(path, "frame, x_0\n1, 2\n").unwrap_err();
+        assert!(
+            matches!(&e, OpenFaceError::MissingColumn { column, .. } if column == "y_0"),
+            "{e}"
+        );
+        assert!(matches!(
+            parse(path, &format!("{}\n", lines[0])),
+            Err(OpenFaceError::Empty { .. })
+        ));
+    }
+}

@@ -1,0 +1,203 @@
+//! The live driver as a user runs it: `sinew train driver` (checkpoints, --resume, the loss
+//! picture, the report), `sinew drive` over an OpenFace 2.0 CSV (a lost frame holds the last
+//! pose), and the clear errors of bad tracks and of a driver of another actor, with no output.
+
+use std::path::Path;
+
+use sinew_core::aim::AimActor;
+use sinew_host::fit::driver::sample::Sampler;
+use sinew_host::fit::driver::{DriverConfig, landmark_vertices};
+use sinew_host::io::openface::{OpenFaceFrame, write_csv};
+use sinew_host::training::random::Stream;
+
+mod common;
+use common::{err, ok, repo, s};
+
+const TRAIN: [&str; 10] = [
+    "--steps",
+    "40",
+    "--hidden",
+    "16",
+    "--batch",
+    "32",
+    "--checkpoint-every",
+    "20",
+    "--quiet",
+    "--seed=4",
+];
+
+/// An OpenFace track of the golden actor's own landmarks seen by a 1000 px camera at (320, 240).
+fn track(frames: usize) -> Vec<OpenFaceFrame> {
+    let bytes = std::fs::read(repo("tests/data/aim-ict.sinew")).unwrap();
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let vertices = landmark_vertices(Path::new("aim-ict.sinew"), &actor).unwrap();
+    let sampler = Sampler::new(&actor, &vertices, &DriverConfig::default());
+    let mut rng = Stream::seed_from_u64(9);
+    (0..frames)
+        .map(|_| {
+            let s = sampler.sample(&mut rng);
+            OpenFaceFrame {
+                pixels: s
+                    .input
+                    .chunks_exact(2)
+                    .flat_map(|p| [320.0 + 1000.0 * p[0], 240.0 + 1000.0 * p[1]])
+                    .collect(),
+                confidence: 0.98,
+                success: true,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn a_driver_trains_resumes_and_drives_a_track_holding_lost_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let actor = repo("tests/data/aim-ict.sinew");
+    let out = dir.path().join("driver.sinew");
+    let report = dir.path().join("driver.json");
+    let mut args = vec!["train", "driver", "--model", &actor, "--out", s(&out)];
+    args.extend(["--report", s(&report)]);
+    args.extend(TRAIN);
+    ok(&args);
+    let first = std::fs::read(&out).unwrap();
+    assert!(dir.path().join("driver.losses.png").is_file());
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(r["history"].as_array().unwrap().len(), 40);
+    // Resuming the finished run re-bakes the same driver; another seed is another run.
+    let ckpt = dir.path().join("driver.ckpt");
+    let mut resume = args.clone();
+    resume.extend(["--resume", s(&ckpt)]);
+    ok(&resume);
+    assert_eq!(std::fs::read(&out).unwrap(), first);
+    let seed = resume.iter().position(|a| *a == "--seed=4").unwrap();
+    resume[seed] = "--seed=5";
+    let e = err(&resume);
+    assert!(
+        e.contains("settings.seed: 4 in the checkpoint, 5 now"),
+        "{e}"
+    );
+
+    let mut frames = track(5);
+    frames[2].success = false;
+    frames[3].confidence = 0.1;
+    let csv = dir.path().join("track.csv");
+    std::fs::write(&csv, write_csv(&frames)).unwrap();
+    let played = dir.path().join("played");
+    let drive = [
+        "drive",
+        "--model",
+        &actor,
+        "--driver",
+        s(&out),
+        "--landmarks",
+        s(&csv),
+        "--out",
+        s(&played),
+        "--intrinsics",
+        "1000,1000,320,240",
+    ];
+    ok(&drive);
+    let obj = |f: usize| std::fs::read(played.join(format!("frame_{f:05}.obj"))).unwrap();
+    assert_eq!(obj(2), obj(1), "a lost frame holds the last pose");
+    assert_eq!(obj(3), obj(1), "so does an unsure one");
+    assert_ne!(obj(4), obj(1));
+    assert!(played.join("strip.png").is_file());
+    // The filter changes later frames, not the first.
+    let filtered = dir.path().join("filtered");
+    let mut with_filter = drive.to_vec();
+    with_filter[8] = s(&filtered);
+    with_filter.extend(["--filter", "1,0.1,30"]);
+    ok(&with_filter);
+    let fobj = |f: usize| std::fs::read(filtered.join(format!("frame_{f:05}.obj"))).unwrap();
+    assert_eq!(fobj(0), obj(0));
+    assert_ne!(fobj(4), obj(4));
+}
+
+#[test]
+fn bad_tracks_and_another_actors_driver_are_refused_without_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let actor = repo("tests/data/aim-ict.sinew");
+    let driver = dir.path().join("d.sinew");
+    let mut args = vec!["train", "driver", "--model", &actor, "--out", s(&driver)];
+    args.extend(TRAIN);
+    args[5 + 2] = "2"; // two steps are enough to have a driver
+    ok(&args);
+    let good = write_csv(&track(3));
+    let lines: Vec<&str> = good.lines().collect();
+    let cases = [
+        (
+            format!("{}\n{}\n1, 2, 3\n", lines[0], lines[1]),
+            "row 3 has 3 columns",
+        ),
+        (
+            format!(
+                "{}\n{}\n",
+                lines[0],
+                lines[1].replacen(", 0.98", ", nan", 1)
+            ),
+            "row 2, column confidence: nan is not finite",
+        ),
+        (
+            format!(
+                "{}\n{}\n",
+                lines[0],
+                lines[1].replacen(", 0.98", ", high", 1)
+            ),
+            "row 2, column confidence: \"high\" is not a number",
+        ),
+    ];
+    for (i, (text, expected)) in cases.iter().enumerate() {
+        let csv = dir.path().join(format!("bad{i}.csv"));
+        std::fs::write(&csv, text).unwrap();
+        let out = dir.path().join(format!("out{i}"));
+        let e = err(&[
+            "drive",
+            "--model",
+            &actor,
+            "--driver",
+            s(&driver),
+            "--landmarks",
+            s(&csv),
+            "--out",
+            s(&out),
+            "--intrinsics",
+            "1000,1000,320,240",
+        ]);
+        assert!(
+            e.contains(&format!("bad{i}.csv")) && e.contains(expected),
+            "{e}"
+        );
+        assert!(!out.exists(), "no partial output");
+    }
+    let csv = dir.path().join("good.csv");
+    std::fs::write(&csv, &good).unwrap();
+    let out = dir.path().join("other");
+    let other = repo("tests/data/aim-procedural.sinew");
+    let e = err(&[
+        "drive",
+        "--model",
+        &other,
+        "--driver",
+        s(&driver),
+        "--landmarks",
+        s(&csv),
+        "--out",
+        s(&out),
+        "--intrinsics",
+        "1000,1000,320,240",
+    ]);
+    assert!(e.contains("d.sinew") && e.contains("another actor"), "{e}");
+    assert!(!out.exists());
+    let e = err(&[
+        "drive",
+        "--model",
+        &actor,
+        "--driver",
+        s(&driver),
+        "--landmarks",
+        s(&csv),
+        "--out",
+        s(&out),
+    ]);
+    assert!(e.contains("--intrinsics"), "{e}");
+}

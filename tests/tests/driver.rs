@@ -1,0 +1,175 @@
+//! The core's landmark driver on files the host bakes: validation (kind, shapes, value bounds,
+//! the binding to its actor), evaluation of a pose the actor accepts without allocation, the same
+//! bits on every call, and refusal of a caller's non-finite landmarks.
+
+use burn::tensor::Device;
+use sinew_core::aim::AimActor;
+use sinew_core::driver::{
+    DriveBuffers, Driver, Intrinsics, LANDMARKS, frame_hash, normalise_pixels,
+};
+use sinew_core::error::{Argument, Bound, InputError, InputErrorKind};
+use sinew_core::replay::{ReplayError, model_hash};
+use sinew_core::{EvalError, FormatError};
+use sinew_host::fit::driver::DriverConfig;
+use sinew_host::fit::driver::bake::{BakeInputs, bake};
+use sinew_host::fit::driver::sample::Sampler;
+use sinew_host::fit::driver::train::{Normalisation, network};
+use sinew_host::training::random::Stream;
+use sinew_tests::golden_dir;
+
+fn actor_bytes() -> Vec<u8> {
+    std::fs::read(golden_dir().join("aim-ict.sinew")).unwrap()
+}
+
+/// A driver for the golden actor with random weights (16 hidden units), and the sampler.
+fn baked(actor: &[u8], edit: impl FnOnce(&mut Normalisation)) -> (Vec<u8>, Sampler) {
+    let a = AimActor::from_bytes(actor).unwrap();
+    let vertices = sinew_host::fit::driver::landmark_vertices(&golden_dir(), &a).unwrap();
+    let config = DriverConfig {
+        hidden: 16,
+        ..DriverConfig::default()
+    };
+    let sampler = Sampler::new(&a, &vertices, &config);
+    let mut norm = Normalisation::measure(&sampler, 1);
+    edit(&mut norm);
+    let device: Device = sinew_host::training::backend::Backend::default()
+        .device(3)
+        .unwrap();
+    let net = network(2 * LANDMARKS, 16, 18 + a.shape_count(), &device);
+    let bytes = bake(
+        &net,
+        &norm,
+        &config,
+        &BakeInputs {
+            actor_hash: model_hash(actor),
+            units: "cm",
+            vertices: &vertices,
+            camera: sampler.camera,
+        },
+    )
+    .unwrap();
+    (bytes, sampler)
+}
+
+#[test]
+fn a_driver_drives_its_actor_to_the_same_bits_every_time() {
+    let actor_bytes = actor_bytes();
+    let actor = AimActor::from_bytes(&actor_bytes).unwrap();
+    let (bytes, sampler) = baked(&actor_bytes, |_| {});
+    let driver = Driver::from_bytes(&bytes).unwrap();
+    driver.check_actor(&actor_bytes, &actor).unwrap();
+    assert_eq!(driver.input_len(), 136);
+    assert_eq!(driver.output_len(), 18 + actor.shape_count());
+    let sample = sampler.sample(&mut Stream::seed_from_u64(5));
+    let v = actor.vertex_count();
+    let run = || {
+        let mut scratch = vec![0.0; driver.scratch_len()];
+        let mut pose = vec![0.0; driver.output_len()];
+        let (mut positions, mut normals) = (vec![0.0; 3 * v], vec![0.0; 3 * v]);
+        let h = frame_hash(
+            &driver,
+            &actor,
+            &sample.input,
+            &mut DriveBuffers {
+                scratch: &mut scratch,
+                pose: &mut pose,
+                positions: &mut positions,
+                normals: &mut normals,
+            },
+        )
+        .unwrap();
+        (h, pose)
+    };
+    let (h, pose) = run();
+    assert_eq!(run(), (h, pose.clone()));
+    assert!(pose.iter().all(|x| x.is_finite()));
+    // The rotations come out orthonormal whatever the network says.
+    for half in [0, 9] {
+        let (a, b) = (&pose[half..half + 3], &pose[half + 3..half + 6]);
+        let dot: f32 = a.iter().zip(b).map(|(x, y)| x * y).sum();
+        let na: f32 = a.iter().map(|x| x * x).sum();
+        assert!(dot.abs() < 1e-5 && (na - 1.0).abs() < 1e-5, "{a:?} {b:?}");
+    }
+    // Landmarks of the actor come back from its vertices.
+    let mut flat = vec![0.0; 3 * v];
+    sinew_core::driver::play(&actor, &pose, &mut flat).unwrap();
+    let mut lmk = vec![0.0; 3 * LANDMARKS];
+    driver.landmarks_of(&flat, &mut lmk).unwrap();
+    let l0 = driver.landmark_vertex(0).unwrap();
+    assert_eq!(&lmk[..3], &flat[3 * l0..3 * l0 + 3]);
+}
+
+#[test]
+fn non_finite_landmarks_are_refused_and_nothing_is_written() {
+    let actor_bytes = actor_bytes();
+    let (bytes, sampler) = baked(&actor_bytes, |_| {});
+    let driver = Driver::from_bytes(&bytes).unwrap();
+    let mut input = sampler.sample(&mut Stream::seed_from_u64(1)).input;
+    let mut scratch = vec![0.0; driver.scratch_len()];
+    let mut pose = vec![7.0; driver.output_len()];
+    for (bad, kind) in [
+        (f32::NAN, InputErrorKind::NonFinite),
+        (f32::INFINITY, InputErrorKind::NonFinite),
+        (1e9, InputErrorKind::OutOfRange),
+    ] {
+        input[17] = bad;
+        assert_eq!(
+            driver.drive(&input, &mut scratch, &mut pose),
+            Err(EvalError::Input(InputError::new(
+                Argument::Landmarks,
+                17,
+                kind
+            )))
+        );
+        assert!(pose.iter().all(|&x| x == 7.0), "nothing is written");
+    }
+    let mut out = vec![0.0; 136];
+    let camera = Intrinsics {
+        fx: 0.0,
+        fy: 500.0,
+        cx: 320.0,
+        cy: 240.0,
+    };
+    assert_eq!(
+        normalise_pixels(&vec![100.0; 136], &camera, &mut out),
+        Err(EvalError::Input(InputError::new(
+            Argument::Landmarks,
+            136,
+            InputErrorKind::OutOfRange
+        )))
+    );
+}
+
+#[test]
+fn a_driver_refuses_another_actor_and_bad_values() {
+    let actor_bytes = actor_bytes();
+    let (bytes, _) = baked(&actor_bytes, |_| {});
+    let driver = Driver::from_bytes(&bytes).unwrap();
+    let other = std::fs::read(golden_dir().join("aim-procedural.sinew")).unwrap();
+    let actor = AimActor::from_bytes(&other).unwrap();
+    assert!(matches!(
+        driver.check_actor(&other, &actor),
+        Err(ReplayError::WrongModel { .. })
+    ));
+    let (bytes, _) = baked(&actor_bytes, |n| n.input_scale[3] = 0.0);
+    let e = Driver::from_bytes(&bytes).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            FormatError::ValueOutOfRange {
+                index: 139,
+                bound: Bound::PositiveFactor,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("drv.in"), "{e}");
+    let (bytes, _) = baked(&actor_bytes, |n| n.output_offset[20] = 1e9);
+    let e = Driver::from_bytes(&bytes).unwrap_err();
+    assert!(e.to_string().contains("drv.out"), "{e}");
+    assert_eq!(
+        Driver::from_bytes(&actor_bytes).unwrap_err(),
+        FormatError::WrongKind
+    );
+}
