@@ -16,6 +16,16 @@ pub enum BackendError {
         /// The backend asked for.
         backend: Backend,
     },
+    /// The backend is built in but finds no device to run on (no GPU adapter or driver).
+    #[error(
+        "backend {} finds no device on this machine (no GPU adapter or driver it can use); \
+         train on the CPU with --backend flex",
+        format!("{backend:?}").to_lowercase()
+    )]
+    Unavailable {
+        /// The backend asked for.
+        backend: Backend,
+    },
 }
 
 /// A burn backend the host can run on.
@@ -60,6 +70,9 @@ impl Backend {
             #[allow(unreachable_patterns)]
             backend => return Err(BackendError::NotBuiltIn { backend }),
         };
+        if self != Self::Flex && self != Self::Ndarray && !usable(&device) {
+            return Err(BackendError::Unavailable { backend: self });
+        }
         device.seed(seed);
         Ok(device)
     }
@@ -70,6 +83,24 @@ impl Backend {
         device.seed(seed);
         Ok(device)
     }
+}
+
+/// Whether a GPU device answers: burn acquires a GPU backend's device lazily, on a worker thread
+/// that panics when no adapter exists, and the caller then panics on the dropped channel. One
+/// tiny operation, run here with the panic caught (and its message kept off the terminal), turns
+/// that into an answer.
+fn usable(device: &Device) -> bool {
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let ok = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        burn::tensor::Tensor::<1>::zeros([1], device)
+            .into_data()
+            .try_to_vec::<f32>()
+            .is_ok()
+    }))
+    .unwrap_or(false);
+    std::panic::set_hook(hook);
+    ok
 }
 
 /// Whether `x` lives on burn-flex, with or without autodiff (the backend Sinew's CPU kernels and
