@@ -157,11 +157,11 @@ impl<'a> S2dDecoder<'a> {
         for k in 0..levels {
             let (n, len) = (table.at(2 * k), table.at(2 * k + 1));
             // n + 1 (the dummy) must stay representable as a u32 section dimension.
-            let rows = n.checked_add(1).ok_or(FormatError::limit_exceeded(
-                "s2d.levels",
-                n as usize + 1,
-                u32::MAX as usize,
-            ))?;
+            let rows = n.checked_add(1).ok_or(FormatError::LimitExceeded {
+                section: SectionName::new("s2d.levels"),
+                value: u64::from(n) + 1,
+                limit: u64::from(u32::MAX),
+            })?;
             if n == 0 {
                 return Err(FormatError::incompatible_shapes("s2d.levels"));
             }
