@@ -417,7 +417,7 @@ impl fmt::Display for FormatError {
                 limit,
             } => write!(
                 f,
-                "section {section}: {value} exceeds this build's limit of {limit}"
+                "section {section}: a count of {value} exceeds this build's limit of {limit}"
             ),
             Self::UnknownCode {
                 section,

@@ -74,7 +74,7 @@ fn every_format_error_message_reads_as_words_and_names_what_it_carries() {
         ),
         (
             FormatError::limit_exceeded("s2d.levels", 9, 8),
-            &["section s2d.levels", "9 exceeds", "limit of 8"],
+            &["section s2d.levels", "count of 9", "limit of 8"],
         ),
         (
             FormatError::size_overflow("s2d.fc.w", usize::MAX, 2, 1),
@@ -231,6 +231,6 @@ fn in_section_names_the_file_section_in_place_of_the_argument() {
         FormatError::limit_exceeded("layers", 17, 16)
             .in_section("net.b")
             .to_string()
-            .contains("section net.b: 17 exceeds")
+            .contains("section net.b: a count of 17 exceeds")
     );
 }
