@@ -299,10 +299,11 @@ pub enum FormatError {
     LimitExceeded {
         /// The section (or the kernel's argument, or a network's prefix) the count is of.
         section: SectionName,
-        /// The count.
-        value: u64,
-        /// The largest count this build takes.
-        limit: u64,
+        /// The count, saturated at `u32::MAX` (then no more than `limit` when the count is a
+        /// size past this build's `usize`; see [`FormatError::size_overflow`]).
+        value: u32,
+        /// The largest count this build takes, saturated at `u32::MAX`.
+        limit: u32,
     },
     /// A code (an activation, an input normalisation) has a value this version does not know.
     UnknownCode {
@@ -415,9 +416,13 @@ impl fmt::Display for FormatError {
                 section,
                 value,
                 limit,
-            } => write!(
+            } if value > limit => write!(
                 f,
                 "section {section}: a count of {value} exceeds this build's limit of {limit}"
+            ),
+            Self::LimitExceeded { section, limit, .. } => write!(
+                f,
+                "section {section}: a count exceeds this build's limit of {limit}"
             ),
             Self::UnknownCode {
                 section,
@@ -453,6 +458,8 @@ impl FormatError {
     }
 
     /// An [`FormatError::IncompatibleShapes`] naming the section or argument `section`.
+    #[cold]
+    #[inline(never)]
     pub fn incompatible_shapes(section: &str) -> Self {
         Self::IncompatibleShapes {
             section: SectionName::new(section),
@@ -461,27 +468,35 @@ impl FormatError {
 
     /// A [`FormatError::LimitExceeded`]: the section or argument `section` counts `value`, more
     /// than `limit`.
+    #[cold]
+    #[inline(never)]
     pub fn limit_exceeded(section: &str, value: usize, limit: usize) -> Self {
         Self::LimitExceeded {
             section: SectionName::new(section),
-            value: u64::try_from(value).unwrap_or(u64::MAX),
-            limit: u64::try_from(limit).unwrap_or(u64::MAX),
+            value: u32::try_from(value).unwrap_or(u32::MAX),
+            limit: u32::try_from(limit).unwrap_or(u32::MAX),
         }
     }
 
     /// A [`FormatError::LimitExceeded`] for a size that does not fit this build's `usize`:
-    /// `a × b + c`, computed in `u64` (saturating).
+    /// `a × b + c`, computed in `u64`, saturated at `u32::MAX` (the limit, `usize::MAX`, too: on
+    /// a 32-bit target both read `u32::MAX` and the message gives the limit alone).
+    #[cold]
+    #[inline(never)]
     pub fn size_overflow(section: &str, a: usize, b: usize, c: usize) -> Self {
         let wide = |n: usize| u64::try_from(n).unwrap_or(u64::MAX);
+        let narrow = |n: u64| u32::try_from(n).unwrap_or(u32::MAX);
         Self::LimitExceeded {
             section: SectionName::new(section),
-            value: wide(a).saturating_mul(wide(b)).saturating_add(wide(c)),
-            limit: wide(usize::MAX),
+            value: narrow(wide(a).saturating_mul(wide(b)).saturating_add(wide(c))),
+            limit: narrow(wide(usize::MAX)),
         }
     }
 
     /// An [`FormatError::UnknownCode`]: value `index` of the section or argument `section` is
     /// `code`.
+    #[cold]
+    #[inline(never)]
     pub fn unknown_code(section: &str, index: usize, code: u32) -> Self {
         Self::UnknownCode {
             section: SectionName::new(section),

@@ -159,8 +159,8 @@ impl<'a> S2dDecoder<'a> {
             // n + 1 (the dummy) must stay representable as a u32 section dimension.
             let rows = n.checked_add(1).ok_or(FormatError::LimitExceeded {
                 section: SectionName::new("s2d.levels"),
-                value: u64::from(n) + 1,
-                limit: u64::from(u32::MAX),
+                value: n,
+                limit: u32::MAX - 1,
             })?;
             if n == 0 {
                 return Err(FormatError::incompatible_shapes("s2d.levels"));
@@ -225,12 +225,8 @@ impl<'a> S2dDecoder<'a> {
             }
             let w = file.f32_tensor(&wn, &[out, width])?;
             let b = file.f32_tensor(&bn, &[out])?;
-            SpiralConv::new(spirals, w, b, inputs, out as usize, act).map_err(|e| match e {
-                FormatError::IncompatibleShapes { section } if section.as_str() == "bias" => {
-                    e.in_section(&bn)
-                }
-                e => e.in_section(&wn),
-            })
+            // The bias has `out` values (checked above): only the weight's shape can be at fault.
+            SpiralConv::new(spirals, w, b, inputs, out as usize, act).map_err(|e| e.in_section(&wn))
         };
 
         // The stages' activation: ELU (α = 1) as in the reference, or the one the artefact names.
@@ -269,9 +265,6 @@ impl<'a> S2dDecoder<'a> {
             let up = Csr::new(rows, cols, ptr, col, val).map_err(|e| match e {
                 FormatError::IndexOutOfRange { section, .. } if section.as_str() == "col_idx" => {
                     e.in_section(&col_name)
-                }
-                FormatError::IncompatibleShapes { section } if section.as_str() == "values" => {
-                    e.in_section(&val_name)
                 }
                 e => e.in_section(&ptr_name),
             })?;
