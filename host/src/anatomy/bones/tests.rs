@@ -393,3 +393,11 @@ fn too_few_landmarks_names_the_bone_in_words() {
         "only 2 weighted skin landmarks for the jaw; 3 needed"
     );
 }
+
+#[test]
+fn a_template_is_named_as_the_landmark_file_spells_it() {
+    for name in ["jaw", "maxilla", "cranium"] {
+        let t: templates::Template = serde_json::from_str(&format!("{name:?}")).unwrap();
+        assert_eq!(t.name(), name);
+    }
+}
