@@ -115,15 +115,17 @@ impl<'a> AimActor<'a> {
         let (shape, rank) = file.dims_of("cache.e")?;
         let [v, m, three, _] = shape;
         if rank != 3 || three != 3 {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes("cache.e"));
         }
         if m as usize > MAX_SHAPES {
-            return Err(FormatError::LimitExceeded);
+            return Err(FormatError::limit_exceeded(
+                "cache.e", m as usize, MAX_SHAPES,
+            ));
         }
         let template = file.f32_tensor_within("tpl.pos", &[v, 3], Bound::Coordinate)?;
         let (tri_shape, tri_rank) = file.dims_of("tpl.tri")?;
         if tri_rank != 2 {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes("tpl.tri"));
         }
         let tri = file.u32_tensor("tpl.tri", &[tri_shape[0], 3])?;
         let triangles = Triangles::new(tri, v as usize).map_err(|e| e.in_section("tpl.tri"))?;
@@ -155,22 +157,22 @@ impl<'a> AimActor<'a> {
                     None => THICKNESS_IDENTITY,
                     Some(_) => match file.u32_tensor("aim.dact", &[1])?.at(0) {
                         code @ (THICKNESS_IDENTITY | THICKNESS_SOFTPLUS) => code,
-                        _ => return Err(FormatError::UnknownCode),
+                        code => return Err(FormatError::unknown_code("aim.dact", 0, code)),
                     },
                 },
             };
             let outputs = [
-                (&nets.b, 3),
-                (&nets.d, 1),
-                (&nets.n, 3),
-                (&nets.k, 1),
-                (&nets.e, 3 * m as usize),
+                (&nets.b, 3, "net.b"),
+                (&nets.d, 1, "net.d"),
+                (&nets.n, 3, "net.n"),
+                (&nets.k, 1, "net.k"),
+                (&nets.e, 3 * m as usize, "net.e"),
             ];
-            if outputs
+            if let Some((.., prefix)) = outputs
                 .iter()
-                .any(|(mlp, out)| mlp.inputs() != 3 || mlp.outputs() != *out)
+                .find(|(mlp, out, _)| mlp.inputs() != 3 || mlp.outputs() != *out)
             {
-                return Err(FormatError::IncompatibleShapes);
+                return Err(FormatError::incompatible_shapes(prefix));
             }
             // The networks see ĉ = (c − centre) / scale for template points c within ±MAX_COORDINATE.
             let centre = nets.centre.to_array().map(libm::fabsf);

@@ -9,8 +9,9 @@ use crate::layout::{
     NAME_LEN,
 };
 
-/// A section's name carried by an error: up to [`NAME_LEN`] ASCII bytes, `Copy` and without a
-/// lifetime, so that [`FormatError`] stays a small value that outlives the bytes it describes.
+/// A section's name (or a metadata key) carried by an error: up to [`NAME_LEN`] ASCII bytes,
+/// `Copy` and without a lifetime, so that [`FormatError`] stays a small value that outlives the
+/// bytes it describes.
 #[derive(Clone, Copy, PartialEq, Eq)]
 pub struct SectionName {
     bytes: [u8; NAME_LEN],
@@ -250,7 +251,12 @@ pub enum FormatError {
         section: SectionName,
     },
     /// Tensor shapes do not fit together (e.g. a layer's inputs and the previous layer's outputs).
-    IncompatibleShapes,
+    /// A kernel's constructor names its argument (`weight`, `indices`); a loader names the
+    /// section, or a network's prefix ([`FormatError::in_section`]).
+    IncompatibleShapes {
+        /// The section (or the kernel's argument, or a network's prefix) whose shape does not fit.
+        section: SectionName,
+    },
     /// A weight given to a kernel's constructor is NaN or infinite. Files never get here: the
     /// container reports [`FormatError::NonFiniteValue`] first.
     NonFinite,
@@ -289,12 +295,33 @@ pub enum FormatError {
         /// The index's position in it.
         index: u32,
     },
-    /// A count exceeds a limit of this build (layers, widths, vertices).
-    LimitExceeded,
-    /// A code (activation, artefact kind) has a value this version does not know.
-    UnknownCode,
-    /// The metadata section is not UTF-8 `key=value` lines.
-    BadMetadata,
+    /// A count exceeds a limit of this build (layers, widths, vertices, a section name's length).
+    LimitExceeded {
+        /// The section (or the kernel's argument, or a network's prefix) the count is of.
+        section: SectionName,
+        /// The count, saturated at `u32::MAX` (then no more than `limit` when the count is a
+        /// size past this build's `usize`; see [`FormatError::size_overflow`]).
+        value: u32,
+        /// The largest count this build takes, saturated at `u32::MAX`.
+        limit: u32,
+    },
+    /// A code (an activation, an input normalisation) has a value this version does not know.
+    UnknownCode {
+        /// The section (or the kernel's argument) holding the code.
+        section: SectionName,
+        /// The code's position in it.
+        index: u32,
+        /// The code.
+        code: u32,
+    },
+    /// The metadata is not UTF-8 `key=value` lines, or an entry the artefact's kind requires is
+    /// absent or has a value it does not take.
+    BadMetadata {
+        /// The entry's key (`mode`, `content`); empty when the text itself is at fault.
+        key: SectionName,
+        /// The line at fault, counted from 1; 0 when the entry is absent.
+        line: u32,
+    },
     /// The artefact is of another kind than the loader expects.
     WrongKind,
 }
@@ -358,7 +385,12 @@ impl fmt::Display for FormatError {
             Self::WrongDtype { section } => {
                 write!(f, "section {section} has the wrong data type for its role")
             }
-            Self::IncompatibleShapes => write!(f, "tensor shapes do not fit together"),
+            Self::IncompatibleShapes { section } => {
+                write!(
+                    f,
+                    "section {section} has a shape that does not fit with the others"
+                )
+            }
             Self::NonFinite => write!(f, "a weight is NaN or infinite"),
             Self::NonFiniteValue { section, index } => {
                 write!(f, "section {section}: value {index} is NaN or infinite")
@@ -380,9 +412,34 @@ impl fmt::Display for FormatError {
                     "section {section}: value {index} is an index out of range"
                 )
             }
-            Self::LimitExceeded => write!(f, "a count exceeds this build's limits"),
-            Self::UnknownCode => write!(f, "an enumeration code is unknown"),
-            Self::BadMetadata => write!(f, "metadata is not UTF-8 key=value lines"),
+            Self::LimitExceeded {
+                section,
+                value,
+                limit,
+            } if value > limit => write!(
+                f,
+                "section {section}: a count of {value} exceeds this build's limit of {limit}"
+            ),
+            Self::LimitExceeded { section, limit, .. } => write!(
+                f,
+                "section {section}: a count exceeds this build's limit of {limit}"
+            ),
+            Self::UnknownCode {
+                section,
+                index,
+                code,
+            } => write!(
+                f,
+                "section {section}: value {index} is {code}, a code this build does not know"
+            ),
+            Self::BadMetadata { key, line } if key.as_str().is_empty() => {
+                write!(f, "metadata line {line} is not UTF-8 key=value text")
+            }
+            Self::BadMetadata { key, line: 0 } => write!(f, "metadata has no {key} entry"),
+            Self::BadMetadata { key, line } => write!(
+                f,
+                "metadata line {line}: {key} has a value this artefact does not take"
+            ),
             Self::WrongKind => write!(f, "the artefact is of another kind than expected"),
         }
     }
@@ -400,15 +457,76 @@ impl FormatError {
         }
     }
 
+    /// An [`FormatError::IncompatibleShapes`] naming the section or argument `section`.
+    #[cold]
+    #[inline(never)]
+    pub fn incompatible_shapes(section: &str) -> Self {
+        Self::IncompatibleShapes {
+            section: SectionName::new(section),
+        }
+    }
+
+    /// A [`FormatError::LimitExceeded`]: the section or argument `section` counts `value`, more
+    /// than `limit`.
+    #[cold]
+    #[inline(never)]
+    pub fn limit_exceeded(section: &str, value: usize, limit: usize) -> Self {
+        Self::LimitExceeded {
+            section: SectionName::new(section),
+            value: u32::try_from(value).unwrap_or(u32::MAX),
+            limit: u32::try_from(limit).unwrap_or(u32::MAX),
+        }
+    }
+
+    /// A [`FormatError::LimitExceeded`] for a size that does not fit this build's `usize`:
+    /// `a × b + c`, computed in `u64`, saturated at `u32::MAX` (the limit, `usize::MAX`, too: on
+    /// a 32-bit target both read `u32::MAX` and the message gives the limit alone).
+    #[cold]
+    #[inline(never)]
+    pub fn size_overflow(section: &str, a: usize, b: usize, c: usize) -> Self {
+        let wide = |n: usize| u64::try_from(n).unwrap_or(u64::MAX);
+        let narrow = |n: u64| u32::try_from(n).unwrap_or(u32::MAX);
+        Self::LimitExceeded {
+            section: SectionName::new(section),
+            value: narrow(wide(a).saturating_mul(wide(b)).saturating_add(wide(c))),
+            limit: narrow(wide(usize::MAX)),
+        }
+    }
+
+    /// An [`FormatError::UnknownCode`]: value `index` of the section or argument `section` is
+    /// `code`.
+    #[cold]
+    #[inline(never)]
+    pub fn unknown_code(section: &str, index: usize, code: u32) -> Self {
+        Self::UnknownCode {
+            section: SectionName::new(section),
+            index: u32::try_from(index).unwrap_or(u32::MAX),
+            code,
+        }
+    }
+
     /// The error with the file's section name `section` in place of a kernel's argument name
-    /// (of an [`FormatError::IndexOutOfRange`] from a constructor such as
-    /// `Triangles::new`); other errors are returned as they are.
+    /// (of an [`FormatError::IndexOutOfRange`], [`FormatError::IncompatibleShapes`],
+    /// [`FormatError::LimitExceeded`] or [`FormatError::UnknownCode`] from a constructor such as
+    /// `Triangles::new`); other errors, which name no argument, are returned as they are.
     #[must_use]
     pub fn in_section(self, section: &str) -> Self {
+        let name = SectionName::new(section);
         match self {
             Self::IndexOutOfRange { index, .. } => Self::IndexOutOfRange {
-                section: SectionName::new(section),
+                section: name,
                 index,
+            },
+            Self::IncompatibleShapes { .. } => Self::IncompatibleShapes { section: name },
+            Self::LimitExceeded { value, limit, .. } => Self::LimitExceeded {
+                section: name,
+                value,
+                limit,
+            },
+            Self::UnknownCode { index, code, .. } => Self::UnknownCode {
+                section: name,
+                index,
+                code,
             },
             e => e,
         }
@@ -654,118 +772,4 @@ impl From<InputError> for EvalError {
 }
 
 #[cfg(test)]
-mod tests {
-    use std::string::{String, ToString};
-    use std::vec::Vec;
-
-    use super::*;
-
-    /// Every variant's message: none prints a Rust value (`Debug` output, a type's name), each
-    /// reads as a lower-case phrase, and each that carries a section or an index names it.
-    #[test]
-    fn every_format_error_message_reads_as_words_and_names_what_it_carries() {
-        let s = SectionName::new("cache.e");
-        let cases: Vec<(FormatError, &[&str])> = Vec::from([
-            (FormatError::TooShort, &["32-byte header"][..]),
-            (FormatError::BadMagic, &[".sinew"]),
-            (
-                FormatError::UnsupportedMajor { found: 7 },
-                &["7 is newer", "1 to 1"],
-            ),
-            (
-                FormatError::UnsupportedMajor { found: 0 },
-                &["0 is older", "1 to 1"],
-            ),
-            (FormatError::NonZeroReserved, &["reserved"]),
-            (
-                FormatError::LengthMismatch {
-                    header: 100,
-                    actual: 90,
-                },
-                &["100 bytes", "90 bytes"],
-            ),
-            (FormatError::TooManySections, &["4096"]),
-            (FormatError::HeaderChecksum, &["CRC-32"]),
-            (FormatError::TruncatedSection { section: 3 }, &["section 3"]),
-            (FormatError::BadLayout { section: 4 }, &["section 4"]),
-            (FormatError::SectionChecksum { section: 5 }, &["section 5"]),
-            (FormatError::BadName { section: 6 }, &["section 6"]),
-            (FormatError::DuplicateName { section: 7 }, &["section 7"]),
-            (FormatError::UnknownDtype { section: 8 }, &["section 8"]),
-            (FormatError::BadShape { section: 9 }, &["section 9"]),
-            (FormatError::ShapeMismatch { section: 10 }, &["section 10"]),
-            (FormatError::MissingSection { section: s }, &["cache.e"]),
-            (FormatError::WrongDtype { section: s }, &["cache.e"]),
-            (FormatError::IncompatibleShapes, &["shapes"]),
-            (FormatError::NonFinite, &["NaN"]),
-            (
-                FormatError::NonFiniteValue {
-                    section: s,
-                    index: 11,
-                },
-                &["cache.e", "value 11"],
-            ),
-            (
-                FormatError::ValueOutOfRange {
-                    section: s,
-                    index: 12,
-                    bound: Bound::Coordinate,
-                },
-                &["cache.e", "value 12", "±1e5"],
-            ),
-            (
-                FormatError::Unbounded {
-                    section: s,
-                    row: 13,
-                },
-                &["cache.e", "row 13"],
-            ),
-            (
-                FormatError::index_out_of_range("tpl.tri", 14),
-                &["tpl.tri", "value 14"],
-            ),
-            (FormatError::LimitExceeded, &["limits"]),
-            (FormatError::UnknownCode, &["code"]),
-            (FormatError::BadMetadata, &["metadata"]),
-            (FormatError::WrongKind, &["kind"]),
-        ]);
-        for (e, names) in cases {
-            let m = e.to_string();
-            for leak in [
-                "{",
-                "}",
-                "Some(",
-                "None",
-                "Other(",
-                "SectionName",
-                "\"",
-                "::",
-            ] {
-                assert!(!m.contains(leak), "{m:?} shows a Rust value ({leak})");
-            }
-            let first = m.chars().next().unwrap();
-            assert!(!first.is_uppercase() || m.starts_with("CRC"), "{m:?}");
-            // An article before a vowel sound: "a AIM", "a S2D", "a index" are broken English.
-            for bad in [" a A", " a S2D", " a index", " a unknown", " a e"] {
-                assert!(!m.contains(bad), "{m:?} has {bad:?}");
-            }
-            for name in names {
-                assert!(m.contains(name), "{m:?} does not name {name:?}");
-            }
-        }
-        let every_bound = [
-            Bound::Coordinate,
-            Bound::PositiveCoordinate,
-            Bound::Factor,
-            Bound::PositiveFactor,
-            Bound::NonNegativeFactor,
-            Bound::UnitMotion,
-            Bound::Rotation,
-        ];
-        let words: Vec<String> = every_bound.iter().map(ToString::to_string).collect();
-        assert!(
-            words.iter().all(|w| !w.contains('{') && !w.is_empty()),
-            "{words:?}"
-        );
-    }
-}
+mod tests;

@@ -267,6 +267,21 @@ impl<'a> Metadata<'a> {
             .filter_map(|l| l.split_once('='))
     }
 
+    /// [`FormatError::BadMetadata`] for the entry `key`, which the artefact's kind requires:
+    /// naming its line (counted from 1), or line 0 when the metadata has no such entry.
+    pub fn bad_entry(&self, key: &str) -> FormatError {
+        let line = self
+            .text
+            .lines()
+            .position(|l| l.split_once('=').is_some_and(|(k, _)| k == key));
+        FormatError::BadMetadata {
+            key: SectionName::new(key),
+            line: line.map_or(0, |i| {
+                u32::try_from(i).map_or(u32::MAX, |i| i.saturating_add(1))
+            }),
+        }
+    }
+
     /// The whole text.
     pub const fn text(&self) -> &'a str {
         self.text
@@ -467,13 +482,26 @@ impl<'a> SinewFile<'a> {
             }
             match kind {
                 SectionKind::Metadata => {
-                    if metadata_seen || dtype != Dtype::U8 || rank != 1 || e.name != b"meta" {
-                        return Err(FormatError::BadMetadata);
+                    // One `u8 [n]` section called `meta` (a second one repeats its name).
+                    if e.name != b"meta" {
+                        return Err(FormatError::BadName { section });
+                    }
+                    if metadata_seen {
+                        return Err(FormatError::DuplicateName { section });
+                    }
+                    if dtype != Dtype::U8 {
+                        return Err(wrong_dtype("meta"));
+                    }
+                    if rank != 1 {
+                        return Err(FormatError::BadShape { section });
                     }
                     metadata_seen = true;
-                    let text = core::str::from_utf8(data).map_err(|_| FormatError::BadMetadata)?;
-                    if text.lines().any(|l| !l.is_empty() && !l.contains('=')) {
-                        return Err(FormatError::BadMetadata);
+                    let text = core::str::from_utf8(data).map_err(|e| {
+                        let before = data.get(..e.valid_up_to()).unwrap_or(&[]);
+                        bad_line(before.iter().filter(|&&b| b == b'\n').count())
+                    })?;
+                    if let Some(i) = text.lines().position(|l| !l.is_empty() && !l.contains('=')) {
+                        return Err(bad_line(i));
                     }
                 }
                 SectionKind::Tensor if dtype == Dtype::F32 => {
@@ -576,7 +604,7 @@ impl<'a> SinewFile<'a> {
         if s.dims() == dims {
             Ok(v)
         } else {
-            Err(FormatError::IncompatibleShapes)
+            Err(FormatError::incompatible_shapes(name))
         }
     }
 
@@ -603,7 +631,7 @@ impl<'a> SinewFile<'a> {
         if s.dims() == dims {
             Ok(v)
         } else {
-            Err(FormatError::IncompatibleShapes)
+            Err(FormatError::incompatible_shapes(name))
         }
     }
 
@@ -614,7 +642,7 @@ impl<'a> SinewFile<'a> {
         if s.dims() == dims {
             Ok(v)
         } else {
-            Err(FormatError::IncompatibleShapes)
+            Err(FormatError::incompatible_shapes(name))
         }
     }
 
@@ -622,6 +650,14 @@ impl<'a> SinewFile<'a> {
     pub fn dims_of(&self, name: &str) -> Result<([u32; MAX_RANK], u8), FormatError> {
         let s = self.section(name).ok_or_else(|| missing(name))?;
         Ok((s.shape, s.rank))
+    }
+}
+
+/// [`FormatError::BadMetadata`] for the line after the first `i` lines of the metadata text.
+fn bad_line(i: usize) -> FormatError {
+    FormatError::BadMetadata {
+        key: SectionName::new(""),
+        line: u32::try_from(i).map_or(u32::MAX, |i| i.saturating_add(1)),
     }
 }
 

@@ -77,18 +77,18 @@ impl<'a> MotionGenerator<'a> {
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::MotionGenerator)?;
         if file.metadata().get("content") != Some(CONTENT) {
-            return Err(FormatError::BadMetadata);
+            return Err(file.metadata().bad_entry("content"));
         }
         let mlp = load_mlp(&file, "motion.g")?;
         let (shape, rank) = file.dims_of("motion.p")?;
         let [frames, dims, ..] = shape;
         if rank != 2 || frames as usize != FRAMES || dims == 0 || dims % 3 != 0 {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes("motion.p"));
         }
         let p = file.f32_tensor("motion.p", &[frames, dims])?;
         let dims = dims as usize;
         if mlp.inputs() <= LABELS || mlp.outputs() != FRAMES * dims {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes("motion.g"));
         }
         check_bound_within(&mlp, "motion.g", f64::from(NOISE_BOUND), MAX_FACTOR)?;
         if libm::fabsf(squared_norm(&p) - 1.0) > UNIT_TOLERANCE {
@@ -100,7 +100,7 @@ impl<'a> MotionGenerator<'a> {
             (2, n) if n as usize == LABELS => {
                 file.f32_tensor("motion.length", &[LABELS as u32, 2])?
             }
-            _ => return Err(FormatError::IncompatibleShapes),
+            _ => return Err(FormatError::incompatible_shapes("motion.length")),
         };
         check_spreads("motion.length", &lengths, rank == 2)?;
         let reaches = match file.section("motion.reach") {

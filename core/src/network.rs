@@ -29,10 +29,13 @@ fn name(
             digits = [b'0' + (layer / 10) as u8, b'0' + (layer % 10) as u8];
             core::str::from_utf8(&digits).unwrap_or("")
         }
-        _ => return Err(FormatError::LimitExceeded),
+        _ => return Err(FormatError::limit_exceeded(prefix, layer + 1, 100)),
     };
-    for part in [prefix, ".", digit_str, suffix] {
-        s.push_str(part).map_err(|()| FormatError::LimitExceeded)?;
+    let parts = [prefix, ".", digit_str, suffix];
+    let len: usize = parts.iter().map(|p| p.len()).sum();
+    for part in parts {
+        s.push_str(part)
+            .map_err(|()| FormatError::limit_exceeded(prefix, len, crate::format::NAME_LEN))?;
     }
     Ok(s)
 }
@@ -42,17 +45,23 @@ fn simple_name(
     suffix: &str,
 ) -> Result<heapless::String<{ crate::format::NAME_LEN }>, FormatError> {
     let mut s = heapless::String::new();
-    s.push_str(prefix)
-        .map_err(|()| FormatError::LimitExceeded)?;
-    s.push_str(suffix)
-        .map_err(|()| FormatError::LimitExceeded)?;
+    let too_long = |()| {
+        let len = prefix.len() + suffix.len();
+        FormatError::limit_exceeded(prefix, len, crate::format::NAME_LEN)
+    };
+    s.push_str(prefix).map_err(too_long)?;
+    s.push_str(suffix).map_err(too_long)?;
     Ok(s)
 }
 
 /// Loads the MLP stored under `prefix` (see the module documentation), validating every shape.
 pub fn load_mlp<'a>(file: &SinewFile<'a>, prefix: &str) -> Result<Mlp<'a>, FormatError> {
     if prefix.len() > MAX_PREFIX_LEN {
-        return Err(FormatError::LimitExceeded);
+        return Err(FormatError::limit_exceeded(
+            prefix,
+            prefix.len(),
+            MAX_PREFIX_LEN,
+        ));
     }
     let acts_name = simple_name(prefix, ".act")?;
     let acts_section = file
@@ -62,8 +71,11 @@ pub fn load_mlp<'a>(file: &SinewFile<'a>, prefix: &str) -> Result<Mlp<'a>, Forma
         .u32s()
         .ok_or_else(|| crate::format::wrong_dtype(&acts_name))?;
     let layers = acts.len();
-    if layers == 0 || layers > MAX_LAYERS || acts_section.dims().len() != 1 {
-        return Err(FormatError::LimitExceeded);
+    if layers == 0 || acts_section.dims().len() != 1 {
+        return Err(FormatError::incompatible_shapes(&acts_name));
+    }
+    if layers > MAX_LAYERS {
+        return Err(FormatError::limit_exceeded(&acts_name, layers, MAX_LAYERS));
     }
     let params = file.f32_tensor_within(
         &simple_name(prefix, ".par")?,
@@ -76,15 +88,25 @@ pub fn load_mlp<'a>(file: &SinewFile<'a>, prefix: &str) -> Result<Mlp<'a>, Forma
         let (shape, rank) = file.dims_of(&w_name)?;
         let [outputs, inputs, ..] = shape;
         if rank != 2 {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes(&w_name));
         }
         let weight = file.f32_tensor(&w_name, &[outputs, inputs])?;
+        // Each layer takes the previous layer's outputs (named here by the layer's own weight).
+        if dense.last().is_some_and(|l| l.outputs() != inputs as usize) {
+            return Err(FormatError::incompatible_shapes(&w_name));
+        }
         let bias = file.f32_tensor(&name(prefix, i, ".b")?, &[outputs])?;
-        let act = Activation::from_code(acts.at(i), params.at(i))?;
-        let layer = Dense::new(weight, bias, inputs as usize, outputs as usize, act)?;
-        dense.push(layer).map_err(|_| FormatError::LimitExceeded)?;
+        let act = Activation::from_code(acts.at(i), params.at(i)).map_err(|e| match e {
+            FormatError::UnknownCode { code, .. } => FormatError::unknown_code(&acts_name, i, code),
+            e => e,
+        })?;
+        let layer = Dense::new(weight, bias, inputs as usize, outputs as usize, act)
+            .map_err(|e| e.in_section(&w_name))?;
+        dense
+            .push(layer)
+            .map_err(|_| FormatError::limit_exceeded(&acts_name, layers, MAX_LAYERS))?;
     }
-    Mlp::new(&dense)
+    Mlp::new(&dense).map_err(|e| e.in_section(prefix))
 }
 
 /// The worst-case magnitude of the outputs of `mlp`, loaded under `prefix`, for inputs of

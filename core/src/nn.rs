@@ -47,7 +47,8 @@ impl Activation {
     /// Variants without a parameter ignore `param`, which must still be finite.
     ///
     /// # Errors
-    /// [`FormatError::UnknownCode`] for a code above 5; [`FormatError::NonFinite`] if `param` is
+    /// [`FormatError::UnknownCode`] (argument `code`) for a code above 5;
+    /// [`FormatError::NonFinite`] if `param` is
     /// NaN or infinite.
     pub fn from_code(code: u32, param: f32) -> Result<Self, FormatError> {
         let act = match code {
@@ -57,7 +58,7 @@ impl Activation {
             3 => Self::Elu { alpha: param },
             4 => Self::Relu,
             5 => Self::LeakyRelu { slope: param },
-            _ => return Err(FormatError::UnknownCode),
+            _ => return Err(FormatError::unknown_code("code", 0, code)),
         };
         if !param.is_finite() {
             return Err(FormatError::NonFinite);
@@ -141,8 +142,9 @@ impl<'a> Dense<'a> {
     /// Checks and wraps a layer.
     ///
     /// # Errors
-    /// [`FormatError::IncompatibleShapes`] if `inputs` or `outputs` is zero, `weight` does not
-    /// hold `outputs × inputs` values or `bias` does not hold `outputs` values;
+    /// [`FormatError::IncompatibleShapes`] naming `weight` if `inputs` or `outputs` is zero or
+    /// `weight` does not hold `outputs × inputs` values, naming `bias` if `bias` does not hold
+    /// `outputs` values;
     /// [`FormatError::NonFinite`] if a weight, a bias or the activation parameter is NaN or
     /// infinite.
     pub fn new(
@@ -152,11 +154,11 @@ impl<'a> Dense<'a> {
         outputs: usize,
         activation: Activation,
     ) -> Result<Self, FormatError> {
-        if inputs == 0 || outputs == 0 {
-            return Err(FormatError::IncompatibleShapes);
+        if inputs == 0 || outputs == 0 || Some(weight.len()) != outputs.checked_mul(inputs) {
+            return Err(FormatError::incompatible_shapes("weight"));
         }
-        if Some(weight.len()) != outputs.checked_mul(inputs) || bias.len() != outputs {
-            return Err(FormatError::IncompatibleShapes);
+        if bias.len() != outputs {
+            return Err(FormatError::incompatible_shapes("bias"));
         }
         if !all_finite(weight) || !all_finite(bias) || !activation.param().is_finite() {
             return Err(FormatError::NonFinite);
@@ -329,20 +331,20 @@ impl<'a> Mlp<'a> {
     /// Checks that the layers chain (each layer's inputs equal the previous layer's outputs).
     ///
     /// # Errors
-    /// [`FormatError::IncompatibleShapes`] if `layers` is empty or two neighbours do not chain;
-    /// [`FormatError::LimitExceeded`] for more than [`MAX_LAYERS`] layers.
+    /// [`FormatError::IncompatibleShapes`] (argument `layers`) if `layers` is empty or two
+    /// neighbours do not chain; [`FormatError::LimitExceeded`] for more than [`MAX_LAYERS`] layers.
     pub fn new(layers: &[Dense<'a>]) -> Result<Self, FormatError> {
         if layers.is_empty() {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes("layers"));
         }
         let mut v = heapless::Vec::new();
         v.extend_from_slice(layers)
-            .map_err(|()| FormatError::LimitExceeded)?;
+            .map_err(|()| FormatError::limit_exceeded("layers", layers.len(), MAX_LAYERS))?;
         if layers
             .windows(2)
             .any(|w| matches!(w, [a, b] if a.outputs != b.inputs))
         {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes("layers"));
         }
         Ok(Self { layers: v })
     }
@@ -511,7 +513,10 @@ mod tests {
         ] {
             assert_eq!(Activation::from_code(a.code(), a.param()), Ok(a));
         }
-        assert_eq!(Activation::from_code(6, 0.0), Err(FormatError::UnknownCode));
+        assert_eq!(
+            Activation::from_code(6, 0.0),
+            Err(FormatError::unknown_code("code", 0, 6))
+        );
         assert_eq!(
             Activation::from_code(1, f32::NAN),
             Err(FormatError::NonFinite)
@@ -614,22 +619,14 @@ mod tests {
         let b = bytes(&[0.0, 0.0]);
         let id = Activation::Identity;
         assert!(Dense::new(f(&w), f(&b), 3, 2, id).is_ok());
-        assert_eq!(
-            Dense::new(f(&w), f(&b), 2, 2, id),
-            Err(FormatError::IncompatibleShapes)
+        let (weight, bias) = (
+            Err(FormatError::incompatible_shapes("weight")),
+            Err(FormatError::incompatible_shapes("bias")),
         );
-        assert_eq!(
-            Dense::new(f(&w), f(&b[..4]), 3, 2, id),
-            Err(FormatError::IncompatibleShapes)
-        );
-        assert_eq!(
-            Dense::new(F32s::empty(), F32s::empty(), 0, 0, id),
-            Err(FormatError::IncompatibleShapes)
-        );
-        assert_eq!(
-            Dense::new(f(&w), f(&b), usize::MAX, 2, id),
-            Err(FormatError::IncompatibleShapes)
-        );
+        assert_eq!(Dense::new(f(&w), f(&b), 2, 2, id), weight);
+        assert_eq!(Dense::new(f(&w), f(&b[..4]), 3, 2, id), bias);
+        assert_eq!(Dense::new(F32s::empty(), F32s::empty(), 0, 0, id), weight);
+        assert_eq!(Dense::new(f(&w), f(&b), usize::MAX, 2, id), weight);
         let bad = bytes(&[1.0, f32::NAN, 3.0, 4.0, 5.0, 6.0]);
         assert_eq!(
             Dense::new(f(&bad), f(&b), 3, 2, id),
@@ -715,12 +712,17 @@ mod tests {
         let b = bytes(&[0.0; 2]);
         let l = Dense::new(f(&w), f(&b), 2, 2, Activation::Identity).unwrap();
         let l21 = Dense::new(f(&w[..8]), f(&b[..4]), 2, 1, Activation::Identity).unwrap();
-        assert_eq!(Mlp::new(&[]), Err(FormatError::IncompatibleShapes));
-        assert_eq!(Mlp::new(&[l21, l]), Err(FormatError::IncompatibleShapes));
+        let layers = Err(FormatError::incompatible_shapes("layers"));
+        assert_eq!(Mlp::new(&[]), layers);
+        assert_eq!(Mlp::new(&[l21, l]), layers);
         assert!(Mlp::new(&[l; MAX_LAYERS]).is_ok());
         assert_eq!(
             Mlp::new(&[l; MAX_LAYERS + 1]),
-            Err(FormatError::LimitExceeded)
+            Err(FormatError::limit_exceeded(
+                "layers",
+                MAX_LAYERS + 1,
+                MAX_LAYERS
+            ))
         );
     }
 }

@@ -108,7 +108,7 @@ impl<'a> Performance<'a> {
         let (shape, rank) = file.dims_of(POSES)?;
         let frames = shape[0];
         if rank != 2 || frames == 0 || shape[1] as usize != AIM_POSE_LEN {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes(POSES));
         }
         let poses = file.f32_tensor(POSES, &[frames, AIM_POSE_LEN as u32])?;
         check_poses(poses)?;
@@ -116,11 +116,11 @@ impl<'a> Performance<'a> {
             (Some(_), None) => {
                 let (shape, rank) = file.dims_of(WEIGHTS)?;
                 if rank != 2 || shape[0] != frames {
-                    return Err(FormatError::IncompatibleShapes);
+                    return Err(FormatError::incompatible_shapes(WEIGHTS));
                 }
                 let shapes = shape[1] as usize;
                 if shapes > MAX_SHAPES {
-                    return Err(FormatError::LimitExceeded);
+                    return Err(FormatError::limit_exceeded(WEIGHTS, shapes, MAX_SHAPES));
                 }
                 let weights =
                     file.f32_tensor_within(WEIGHTS, &[frames, shape[1]], Bound::Factor)?;
@@ -129,11 +129,11 @@ impl<'a> Performance<'a> {
             (None, Some(_)) => local(&file, frames)?,
             // Exactly one form: neither is a missing section, both do not fit together.
             (None, None) => return Err(crate::format::missing(WEIGHTS)),
-            (Some(_), Some(_)) => return Err(FormatError::IncompatibleShapes),
+            (Some(_), Some(_)) => return Err(FormatError::incompatible_shapes(CODES)),
         };
         if file.section(POINTS).is_some() && !matches!(coefficients, Coefficients::Local { .. }) {
             // A global fit has no per-point coefficients to evaluate anywhere.
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes(POINTS));
         }
         let hashes = match file.section(HASHES) {
             Some(_) => Some(file.u32_tensor(HASHES, &[frames, 2])?),
@@ -346,11 +346,11 @@ impl<'a> Performance<'a> {
 fn local<'a>(file: &SinewFile<'a>, frames: u32) -> Result<(Coefficients<'a>, usize), FormatError> {
     let (shape, rank) = file.dims_of(CODES)?;
     if rank != 2 || shape[0] != frames || shape[1] == 0 {
-        return Err(FormatError::IncompatibleShapes);
+        return Err(FormatError::incompatible_shapes(CODES));
     }
     let code_len = shape[1] as usize;
     if code_len > MAX_CODE {
-        return Err(FormatError::LimitExceeded);
+        return Err(FormatError::limit_exceeded(CODES, code_len, MAX_CODE));
     }
     let codes = file.f32_tensor_within(CODES, &[frames, shape[1]], Bound::Factor)?;
     let bx = file.f32_tensor(BOX, &[4])?;
@@ -368,13 +368,13 @@ fn local<'a>(file: &SinewFile<'a>, frames: u32) -> Result<(Coefficients<'a>, usi
     let fw = load_mlp(file, F_W)?;
     let shapes = fw.outputs();
     if fw.inputs() != code_len + 3 {
-        return Err(FormatError::IncompatibleShapes);
+        return Err(FormatError::incompatible_shapes(F_W));
     }
     let points = match file.section(POINTS) {
         Some(_) => {
             let (shape, rank) = file.dims_of(POINTS)?;
             if rank != 2 || shape[0] == 0 || shape[1] != 3 {
-                return Err(FormatError::IncompatibleShapes);
+                return Err(FormatError::incompatible_shapes(POINTS));
             }
             Some(file.f32_tensor_within(POINTS, &[shape[0], 3], Bound::Coordinate)?)
         }
@@ -387,7 +387,7 @@ fn local<'a>(file: &SinewFile<'a>, frames: u32) -> Result<(Coefficients<'a>, usi
     let input = (f64::from(reach) / f64::from(half)).max(f64::from(code_max));
     check_bound(&fw, F_W, input)?;
     if shapes > MAX_SHAPES {
-        return Err(FormatError::LimitExceeded);
+        return Err(FormatError::limit_exceeded(F_W, shapes, MAX_SHAPES));
     }
     Ok((
         Coefficients::Local {

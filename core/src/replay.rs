@@ -120,18 +120,18 @@ impl<'a> AimReplay<'a> {
             .metadata()
             .get("mode")
             .and_then(Mode::from_name)
-            .ok_or(FormatError::UnknownCode)?;
+            .ok_or_else(|| file.metadata().bad_entry("mode"))?;
         let (shape, rank) = file.dims_of(AIM_INPUTS)?;
         let [frames, width, ..] = shape;
         if rank != 2 || frames == 0 || (width as usize) < AIM_POSE_LEN {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes(AIM_INPUTS));
         }
         let shapes = width as usize - AIM_POSE_LEN;
         if shapes > MAX_SHAPES {
-            return Err(FormatError::LimitExceeded);
+            return Err(FormatError::limit_exceeded(AIM_INPUTS, shapes, MAX_SHAPES));
         }
         Ok(Self {
-            model_hash: word_pair(&model, 0).ok_or(FormatError::IncompatibleShapes)?,
+            model_hash: word_pair(&model, 0).ok_or(FormatError::incompatible_shapes(MODEL_HASH))?,
             mode,
             frames: frames as usize,
             shapes,
@@ -515,25 +515,25 @@ impl<'a> S2dReplay<'a> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::Replay)?;
         let model = file.u32_tensor(MODEL_HASH, &[2])?;
         if file.metadata().get("mode").and_then(Mode::from_name) != Some(Mode::F32) {
-            return Err(FormatError::UnknownCode);
+            return Err(file.metadata().bad_entry("mode"));
         }
         let (shape, rank) = file.dims_of(S2D_INPUTS)?;
         let [frames, width, ..] = shape;
         if rank != 2 || frames == 0 || width == 0 {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes(S2D_INPUTS));
         }
         let neutral = match file.section(S2D_NEUTRAL) {
             None => None,
             Some(_) => {
                 let ([v, three, ..], rank) = file.dims_of(S2D_NEUTRAL)?;
                 if rank != 2 || three != 3 || v == 0 {
-                    return Err(FormatError::IncompatibleShapes);
+                    return Err(FormatError::incompatible_shapes(S2D_NEUTRAL));
                 }
                 Some(file.f32_tensor(S2D_NEUTRAL, &[v, 3])?)
             }
         };
         Ok(Self {
-            model_hash: word_pair(&model, 0).ok_or(FormatError::IncompatibleShapes)?,
+            model_hash: word_pair(&model, 0).ok_or(FormatError::incompatible_shapes(MODEL_HASH))?,
             frames: frames as usize,
             inputs: width as usize,
             data: file.f32_tensor(S2D_INPUTS, &[frames, width])?,

@@ -71,12 +71,28 @@ pub struct S2dDecoder<'a> {
 
 fn name(parts: core::fmt::Arguments<'_>) -> Result<heapless::String<NAME_LEN>, FormatError> {
     let mut s = heapless::String::new();
-    s.write_fmt(parts).map_err(|_| FormatError::LimitExceeded)?;
+    s.write_fmt(parts).map_err(|_| {
+        // What fits names the section; the length is that of the whole name.
+        let mut len = Length(0);
+        let _ = len.write_fmt(parts);
+        FormatError::limit_exceeded(&s, len.0, NAME_LEN)
+    })?;
     Ok(s)
 }
 
-fn to_u32(n: usize) -> Result<u32, FormatError> {
-    u32::try_from(n).map_err(|_| FormatError::LimitExceeded)
+/// Counts the bytes written to it.
+struct Length(usize);
+
+impl Write for Length {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        self.0 = self.0.saturating_add(s.len());
+        Ok(())
+    }
+}
+
+/// `n`, a dimension of the section `section`, as the format's `u32`.
+fn to_u32(section: &str, n: usize) -> Result<u32, FormatError> {
+    u32::try_from(n).map_err(|_| FormatError::limit_exceeded(section, n, u32::MAX as usize))
 }
 
 /// [`FormatError::Unbounded`] for `row` of the section `section`.
@@ -91,7 +107,7 @@ fn unbounded(section: &str, row: usize) -> FormatError {
 fn dims2(file: &SinewFile<'_>, name: &str) -> Result<[u32; 2], FormatError> {
     let ([a, b, ..], rank) = file.dims_of(name)?;
     if rank != 2 {
-        return Err(FormatError::IncompatibleShapes);
+        return Err(FormatError::incompatible_shapes(name));
     }
     Ok([a, b])
 }
@@ -116,55 +132,73 @@ impl<'a> S2dDecoder<'a> {
         let cfg = file.u32_tensor("s2d.cfg", &[3])?;
         let [inputs, fc_features, outputs] = [0, 1, 2].map(|i| cfg.get(i).unwrap_or(0) as usize);
         if inputs == 0 || fc_features == 0 || outputs != 3 || !inputs.is_multiple_of(3) {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes("s2d.cfg"));
         }
         let input_code = file.u32_tensor("s2d.input", &[1])?.at(0);
         if input_code != INPUT_FROBENIUS && input_code != INPUT_NEUTRAL_SCALE {
-            return Err(FormatError::UnknownCode);
+            return Err(FormatError::unknown_code("s2d.input", 0, input_code));
         }
         let [levels, two] = dims2(&file, "s2d.levels")?;
         let levels = levels as usize;
-        if levels == 0 || levels > MAX_LEVELS {
-            return Err(FormatError::LimitExceeded);
+        if levels > MAX_LEVELS {
+            return Err(FormatError::limit_exceeded(
+                "s2d.levels",
+                levels,
+                MAX_LEVELS,
+            ));
         }
-        if two != 2 {
-            return Err(FormatError::IncompatibleShapes);
+        if levels == 0 || two != 2 {
+            return Err(FormatError::incompatible_shapes("s2d.levels"));
         }
-        let table = file.u32_tensor("s2d.levels", &[to_u32(levels)?, 2])?;
+        let table = file.u32_tensor("s2d.levels", &[to_u32("s2d.levels", levels)?, 2])?;
+        let too_many = FormatError::limit_exceeded("s2d.levels", levels, MAX_LEVELS);
         let mut vertices = heapless::Vec::<usize, MAX_LEVELS>::new();
         let mut spirals = heapless::Vec::<Spirals<'a>, MAX_LEVELS>::new();
         for k in 0..levels {
             let (n, len) = (table.at(2 * k), table.at(2 * k + 1));
             // n + 1 (the dummy) must stay representable as a u32 section dimension.
-            let rows = n.checked_add(1).ok_or(FormatError::LimitExceeded)?;
+            let rows = n.checked_add(1).ok_or(FormatError::LimitExceeded {
+                section: SectionName::new("s2d.levels"),
+                value: n,
+                limit: u32::MAX - 1,
+            })?;
             if n == 0 {
-                return Err(FormatError::IncompatibleShapes);
+                return Err(FormatError::incompatible_shapes("s2d.levels"));
             }
             let sp = name(format_args!("s2d.h{k}.spiral"))?;
             let idx = file.u32_tensor(&sp, &[rows, len])?;
             let s = Spirals::new(idx, rows as usize, len as usize, rows as usize)
                 .map_err(|e| e.in_section(&sp))?;
-            vertices
-                .push(n as usize)
-                .map_err(|_| FormatError::LimitExceeded)?;
-            spirals.push(s).map_err(|_| FormatError::LimitExceeded)?;
+            vertices.push(n as usize).map_err(|_| too_many)?;
+            spirals.push(s).map_err(|_| too_many)?;
         }
         let n_at = |k: usize| vertices.get(k).copied().unwrap_or(0);
         let n0 = n_at(0);
         let coarsest = n_at(levels - 1) + 1;
 
-        let neutral = file.f32_tensor_within("s2d.h0.pos", &[to_u32(n0)?, 3], Bound::Coordinate)?;
-        let landmarks = file.u32_tensor("s2d.lmk", &[to_u32(inputs / 3)?])?;
+        let neutral = file.f32_tensor_within(
+            "s2d.h0.pos",
+            &[to_u32("s2d.h0.pos", n0)?, 3],
+            Bound::Coordinate,
+        )?;
+        let landmarks = file.u32_tensor("s2d.lmk", &[to_u32("s2d.lmk", inputs / 3)?])?;
         if let Some(i) = landmarks.iter().position(|i| i as usize >= n0) {
             return Err(FormatError::index_out_of_range("s2d.lmk", i));
         }
 
         let fc_out = coarsest
             .checked_mul(fc_features)
-            .ok_or(FormatError::LimitExceeded)?;
-        let fc_w = file.f32_tensor("s2d.fc.w", &[to_u32(fc_out)?, to_u32(inputs)?])?;
-        let fc_b = file.f32_tensor("s2d.fc.b", &[to_u32(fc_out)?])?;
-        let fc = Dense::new(fc_w, fc_b, inputs, fc_out, Activation::Identity)?;
+            .ok_or(FormatError::size_overflow(
+                "s2d.fc.w",
+                coarsest,
+                fc_features,
+                0,
+            ))?;
+        let fc_rows = to_u32("s2d.fc.w", fc_out)?;
+        let fc_w = file.f32_tensor("s2d.fc.w", &[fc_rows, to_u32("s2d.fc.w", inputs)?])?;
+        let fc_b = file.f32_tensor("s2d.fc.b", &[fc_rows])?;
+        let fc = Dense::new(fc_w, fc_b, inputs, fc_out, Activation::Identity)
+            .map_err(|e| e.in_section("s2d.fc.w"))?;
         // The worst case of every feature map, layer after layer, for inputs within ±MAX_FACTOR.
         let mut bound = fc
             .bound(f64::from(MAX_FACTOR))
@@ -173,7 +207,7 @@ impl<'a> S2dDecoder<'a> {
         let conv_at = |prefix: &str, k: Option<usize>, inputs: usize, act: Activation| {
             let spirals = *spirals
                 .get(k.unwrap_or(0))
-                .ok_or(FormatError::IncompatibleShapes)?;
+                .ok_or(FormatError::incompatible_shapes("s2d.levels"))?;
             let len = spirals.len();
             let (wn, bn) = match k {
                 Some(k) => (
@@ -187,11 +221,12 @@ impl<'a> S2dDecoder<'a> {
             };
             let [out, width] = dims2(&file, &wn)?;
             if Some(width as usize) != len.checked_mul(inputs) {
-                return Err(FormatError::IncompatibleShapes);
+                return Err(FormatError::incompatible_shapes(&wn));
             }
             let w = file.f32_tensor(&wn, &[out, width])?;
             let b = file.f32_tensor(&bn, &[out])?;
-            SpiralConv::new(spirals, w, b, inputs, out as usize, act)
+            // The bias has `out` values (checked above): only the weight's shape can be at fault.
+            SpiralConv::new(spirals, w, b, inputs, out as usize, act).map_err(|e| e.in_section(&wn))
         };
 
         // The stages' activation: ELU (α = 1) as in the reference, or the one the artefact names.
@@ -201,30 +236,32 @@ impl<'a> S2dDecoder<'a> {
                 file.u32_tensor("s2d.act", &[1])?.at(0),
                 file.f32_tensor_within("s2d.par", &[1], Bound::Factor)?
                     .at(0),
-            )?,
+            )
+            .map_err(|e| e.in_section("s2d.act"))?,
         };
 
         let mut half = fc_out;
-        let grow = |half: usize, rows: usize, width: usize| -> Result<usize, FormatError> {
-            let n = rows.checked_mul(width).ok_or(FormatError::LimitExceeded)?;
-            Ok(half.max(n))
+        let grow = |half: usize, rows: usize, width: usize, section: &str| {
+            let n = rows
+                .checked_mul(width)
+                .ok_or(FormatError::size_overflow(section, rows, width, 0))?;
+            Ok::<_, FormatError>(half.max(n))
         };
         let mut ups = heapless::Vec::new();
         let mut convs = heapless::Vec::new();
         let mut width = fc_features;
         for k in (0..levels - 1).rev() {
             let (rows, cols) = (n_at(k) + 1, n_at(k + 1) + 1);
-            let ptr =
-                file.u32_tensor(&name(format_args!("s2d.u{k}.ptr"))?, &[to_u32(rows + 1)?])?;
+            let ptr_name = name(format_args!("s2d.u{k}.ptr"))?;
+            let ptr = file.u32_tensor(&ptr_name, &[to_u32(&ptr_name, rows + 1)?])?;
             let col_name = name(format_args!("s2d.u{k}.col"))?;
             let ([nnz, ..], rank) = file.dims_of(&col_name)?;
             if rank != 1 {
-                return Err(FormatError::IncompatibleShapes);
+                return Err(FormatError::incompatible_shapes(&col_name));
             }
             let col = file.u32_tensor(&col_name, &[nnz])?;
             let val_name = name(format_args!("s2d.u{k}.val"))?;
             let val = file.f32_tensor_within(&val_name, &[nnz], Bound::Factor)?;
-            let ptr_name = name(format_args!("s2d.u{k}.ptr"))?;
             let up = Csr::new(rows, cols, ptr, col, val).map_err(|e| match e {
                 FormatError::IndexOutOfRange { section, .. } if section.as_str() == "col_idx" => {
                     e.in_section(&col_name)
@@ -232,26 +269,24 @@ impl<'a> S2dDecoder<'a> {
                 e => e.in_section(&ptr_name),
             })?;
             bound = up.bound(bound).map_err(|row| unbounded(&val_name, row))?;
-            ups.push(up).map_err(|_| FormatError::LimitExceeded)?;
-            half = grow(half, rows, width)?;
+            ups.push(up).map_err(|_| too_many)?;
+            half = grow(half, rows, width, &ptr_name)?;
             let conv = conv_at("s2d.conv", Some(k), width, stage_act)?;
-            bound = conv.bound(bound).map_err(|row| {
-                unbounded(
-                    &name(format_args!("s2d.conv.{k}.w")).unwrap_or_default(),
-                    row,
-                )
-            })?;
+            let conv_name = name(format_args!("s2d.conv.{k}.w"))?;
+            bound = conv
+                .bound(bound)
+                .map_err(|row| unbounded(&conv_name, row))?;
             width = conv.out_features();
-            half = grow(half, rows, width)?;
-            convs.push(conv).map_err(|_| FormatError::LimitExceeded)?;
+            half = grow(half, rows, width, &conv_name)?;
+            convs.push(conv).map_err(|_| too_many)?;
         }
         let out = conv_at("s2d.out", None, width, Activation::Identity)?;
         if out.out_features() != outputs {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes("s2d.out.w"));
         }
         out.bound(bound)
             .map_err(|row| unbounded("s2d.out.w", row))?;
-        half = grow(half, n0 + 1, outputs)?;
+        half = grow(half, n0 + 1, outputs, "s2d.out.w")?;
         // The largest convolution's repacked weight block (`SpiralConv::scratch_len`).
         let conv_scratch = convs
             .iter()
@@ -261,7 +296,7 @@ impl<'a> S2dDecoder<'a> {
             .unwrap_or(0);
         half.checked_mul(2)
             .and_then(|h| h.checked_add(conv_scratch))
-            .ok_or(FormatError::LimitExceeded)?;
+            .ok_or(FormatError::size_overflow("s2d", half, 2, conv_scratch))?;
         Ok(Self {
             file,
             inputs,

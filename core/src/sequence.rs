@@ -44,8 +44,8 @@ impl<'a> Sequence<'a> {
     /// Pairs `generator` with `decoder`.
     ///
     /// # Errors
-    /// [`FormatError::IncompatibleShapes`] if the generator does not move the decoder's
-    /// landmarks (`3 × landmarks ≠ dims`).
+    /// [`FormatError::IncompatibleShapes`] naming the generator's `motion.p` if the generator does
+    /// not move the decoder's landmarks (`3 × landmarks ≠ dims`).
     pub fn new(
         generator: MotionGenerator<'a>,
         decoder: S2dDecoder<'a>,
@@ -53,7 +53,7 @@ impl<'a> Sequence<'a> {
         if decoder.input_len() != generator.dims()
             || 3 * decoder.landmarks().len() != generator.dims()
         {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes("motion.p"));
         }
         Ok(Self { generator, decoder })
     }

@@ -220,12 +220,13 @@ impl<'a> Triangles<'a> {
     /// Checks a triangle list of `[n_triangles, 3]` indices into `n_vertices` vertices.
     ///
     /// # Errors
-    /// [`FormatError::IncompatibleShapes`] if the number of indices is not a multiple of 3;
+    /// [`FormatError::IncompatibleShapes`] (argument `indices`) if the number of indices is not a
+    /// multiple of 3;
     /// [`FormatError::IndexOutOfRange`] (argument `indices`, the index's position) if an index
     /// is `>= n_vertices`.
     pub fn new(indices: U32s<'a>, n_vertices: usize) -> Result<Self, FormatError> {
         if !indices.len().is_multiple_of(3) {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes("indices"));
         }
         if let Some(at) = indices.iter().position(|i| i as usize >= n_vertices) {
             return Err(FormatError::index_out_of_range("indices", at));
@@ -467,7 +468,7 @@ mod tests {
         );
         assert_eq!(
             Triangles::new(idx.slice(0, 4), 4),
-            Err(FormatError::IncompatibleShapes)
+            Err(FormatError::incompatible_shapes("indices"))
         );
         let t = Triangles::new(idx, 4).unwrap();
         assert_eq!((t.len(), t.n_vertices(), t.is_empty()), (2, 4, false));

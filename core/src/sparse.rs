@@ -25,8 +25,8 @@ impl<'a> Csr<'a> {
     /// Checks and wraps a CSR matrix of `rows × cols`.
     ///
     /// # Errors
-    /// - [`FormatError::IncompatibleShapes`] if `row_ptr` does not hold `rows + 1` values or
-    ///   `col_idx` and `values` differ in length;
+    /// - [`FormatError::IncompatibleShapes`] naming `row_ptr` if it does not hold `rows + 1`
+    ///   values, naming `values` if `col_idx` and `values` differ in length;
     /// - [`FormatError::IndexOutOfRange`] naming `row_ptr` and the pointer's position if
     ///   `row_ptr[0] != 0`, `row_ptr` decreases anywhere or its last value is not `nnz`, or
     ///   naming `col_idx` and the entry if a column index is `>= cols`;
@@ -38,8 +38,11 @@ impl<'a> Csr<'a> {
         col_idx: U32s<'a>,
         values: F32s<'a>,
     ) -> Result<Self, FormatError> {
-        if Some(row_ptr.len()) != rows.checked_add(1) || col_idx.len() != values.len() {
-            return Err(FormatError::IncompatibleShapes);
+        if Some(row_ptr.len()) != rows.checked_add(1) {
+            return Err(FormatError::incompatible_shapes("row_ptr"));
+        }
+        if col_idx.len() != values.len() {
+            return Err(FormatError::incompatible_shapes("values"));
         }
         if row_ptr.get(0) != Some(0) {
             return Err(FormatError::index_out_of_range("row_ptr", 0));
@@ -247,13 +250,11 @@ mod tests {
             .map(|_| ())
         };
         assert_eq!(mk(2, 2, &rp, &ci, &va), Ok(()));
-        assert_eq!(
-            mk(3, 2, &rp, &ci, &va),
-            Err(FormatError::IncompatibleShapes)
-        );
+        let row_ptr = Err(FormatError::incompatible_shapes("row_ptr"));
+        assert_eq!(mk(3, 2, &rp, &ci, &va), row_ptr);
         assert_eq!(
             mk(2, 2, &rp, &ci[..4], &va),
-            Err(FormatError::IncompatibleShapes)
+            Err(FormatError::incompatible_shapes("values"))
         );
         let out_of_range = |what, at| Err(FormatError::index_out_of_range(what, at));
         assert_eq!(
@@ -275,9 +276,6 @@ mod tests {
         );
         // An empty matrix with no rows is valid.
         assert_eq!(mk(0, 5, &u(&[0]), &[], &[]), Ok(()));
-        assert_eq!(
-            mk(0, 5, &[], &[], &[]),
-            Err(FormatError::IncompatibleShapes)
-        );
+        assert_eq!(mk(0, 5, &[], &[], &[]), row_ptr);
     }
 }

@@ -25,8 +25,8 @@ impl<'a> Spirals<'a> {
     /// Checks and wraps spiral indices.
     ///
     /// # Errors
-    /// [`FormatError::IncompatibleShapes`] if `len` is zero or `indices` does not hold
-    /// `n_vertices × len` values; [`FormatError::IndexOutOfRange`] (argument `indices`, the
+    /// [`FormatError::IncompatibleShapes`] (argument `indices`) if `len` is zero or `indices`
+    /// does not hold `n_vertices × len` values; [`FormatError::IndexOutOfRange`] (argument `indices`, the
     /// index's position) if an index is `>= n_source_vertices`.
     pub fn new(
         indices: U32s<'a>,
@@ -35,7 +35,7 @@ impl<'a> Spirals<'a> {
         n_source_vertices: usize,
     ) -> Result<Self, FormatError> {
         if len == 0 || Some(indices.len()) != n_vertices.checked_mul(len) {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes("indices"));
         }
         if let Some(at) = indices.iter().position(|i| i as usize >= n_source_vertices) {
             return Err(FormatError::index_out_of_range("indices", at));
@@ -93,8 +93,9 @@ impl<'a> SpiralConv<'a> {
     /// Checks and wraps a spiral convolution.
     ///
     /// # Errors
-    /// [`FormatError::IncompatibleShapes`] if `in_f` or `out_f` is zero, or `weight`/`bias` do not
-    /// hold `out_f × len × in_f` / `out_f` values; [`FormatError::NonFinite`] if a weight, a bias
+    /// [`FormatError::IncompatibleShapes`] naming `weight` if `in_f` or `out_f` is zero or
+    /// `weight` does not hold `out_f × len × in_f` values, naming `bias` if `bias` does not hold
+    /// `out_f` values; [`FormatError::NonFinite`] if a weight, a bias
     /// or the activation parameter is NaN or infinite.
     pub fn new(
         spirals: Spirals<'a>,
@@ -104,12 +105,13 @@ impl<'a> SpiralConv<'a> {
         out_f: usize,
         activation: Activation,
     ) -> Result<Self, FormatError> {
-        if in_f == 0 || out_f == 0 {
-            return Err(FormatError::IncompatibleShapes);
-        }
         let width = spirals.len.checked_mul(in_f);
-        if Some(weight.len()) != width.and_then(|w| w.checked_mul(out_f)) || bias.len() != out_f {
-            return Err(FormatError::IncompatibleShapes);
+        let weights = width.and_then(|w| w.checked_mul(out_f));
+        if in_f == 0 || out_f == 0 || Some(weight.len()) != weights {
+            return Err(FormatError::incompatible_shapes("weight"));
+        }
+        if bias.len() != out_f {
+            return Err(FormatError::incompatible_shapes("bias"));
         }
         if !all_finite(weight) || !all_finite(bias) || !activation.param().is_finite() {
             return Err(FormatError::NonFinite);
@@ -497,14 +499,9 @@ mod tests {
             Spirals::new(idx, 2, 3, 2),
             Err(FormatError::index_out_of_range("indices", 2))
         );
-        assert_eq!(
-            Spirals::new(idx, 3, 3, 3),
-            Err(FormatError::IncompatibleShapes)
-        );
-        assert_eq!(
-            Spirals::new(U32s::empty(), 2, 0, 3),
-            Err(FormatError::IncompatibleShapes)
-        );
+        let indices = Err(FormatError::incompatible_shapes("indices"));
+        assert_eq!(Spirals::new(idx, 3, 3, 3), indices);
+        assert_eq!(Spirals::new(U32s::empty(), 2, 0, 3), indices);
     }
 
     #[test]
@@ -739,17 +736,12 @@ mod tests {
         let (w, b) = (F32s::new(&wb).unwrap(), F32s::new(&bb).unwrap());
         let id = Activation::Identity;
         assert!(SpiralConv::new(spirals, w, b, 2, 1, id).is_ok());
-        assert_eq!(
-            SpiralConv::new(spirals, w, b, 1, 1, id),
-            Err(FormatError::IncompatibleShapes)
-        );
-        assert_eq!(
-            SpiralConv::new(spirals, w, b, 0, 1, id),
-            Err(FormatError::IncompatibleShapes)
-        );
+        let weight = Err(FormatError::incompatible_shapes("weight"));
+        assert_eq!(SpiralConv::new(spirals, w, b, 1, 1, id), weight);
+        assert_eq!(SpiralConv::new(spirals, w, b, 0, 1, id), weight);
         assert_eq!(
             SpiralConv::new(spirals, w, F32s::empty(), 2, 1, id),
-            Err(FormatError::IncompatibleShapes)
+            Err(FormatError::incompatible_shapes("bias"))
         );
         let nb = fb(&[1.0, 1.0, f32::INFINITY, 1.0]);
         assert_eq!(

@@ -503,7 +503,7 @@ fn the_points_section_is_checked_against_the_actor_and_the_coefficients() {
         .unwrap();
     assert_eq!(
         Performance::from_bytes(&w.to_bytes().unwrap()),
-        Err(FormatError::IncompatibleShapes)
+        Err(FormatError::incompatible_shapes(perf::POINTS))
     );
 }
 

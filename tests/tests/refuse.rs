@@ -432,3 +432,130 @@ fn a_performance_with_a_degenerate_frame_is_refused_at_load() {
         }
     );
 }
+
+/// A copy of the valid `.sinew` file `bytes` with the text `from` replaced by `to` (as long) in
+/// its bytes (e.g. in the metadata), every checksum recomputed.
+fn with_text(bytes: &[u8], from: &[u8], to: &[u8]) -> Vec<u8> {
+    assert_eq!(from.len(), to.len());
+    let at = bytes
+        .windows(from.len())
+        .position(|w| w == from)
+        .unwrap_or_else(|| panic!("no {}", String::from_utf8_lossy(from)));
+    let mut out = bytes.to_vec();
+    out[at..at + to.len()].copy_from_slice(to);
+    sinew_tests::reseal(&mut out);
+    out
+}
+
+/// A copy of the valid `.sinew` file `bytes` with its `f32` section `name` replaced by zeros of
+/// `dims` (moved to the end of the file).
+fn with_zeros(bytes: &[u8], name: &str, dims: &[usize]) -> Vec<u8> {
+    let file = sinew_core::SinewFile::from_bytes(bytes).unwrap();
+    let mut w = sinew_host::SinewWriter::from_file(&file).unwrap();
+    assert_eq!(w.remove_prefixed(name), 1, "{name}");
+    w.f32s(name, dims, &vec![0.0; dims.iter().product()])
+        .unwrap();
+    w.to_bytes().unwrap()
+}
+
+/// Issue #37: a load error names the section (or the metadata line and key) and the value at
+/// fault, in words, never a Rust value: a misshapen section, a count past this build's limit, a
+/// metadata entry a kind requires that is absent or of a value it does not take, and metadata
+/// text that is not `key=value` lines or not UTF-8.
+#[test]
+fn load_errors_name_the_section_line_and_value_at_fault() {
+    let refused = |bytes: &[u8]| AimActor::from_bytes(bytes).unwrap_err();
+    let err = refused(&with_zeros(ACTOR, "jaw.pivot", &[4]));
+    assert_eq!(err, FormatError::incompatible_shapes("jaw.pivot"));
+    assert_eq!(
+        err.to_string(),
+        "section jaw.pivot has a shape that does not fit with the others"
+    );
+    let v = AimActor::from_bytes(ACTOR).unwrap().vertex_count();
+    let err = refused(&with_zeros(ACTOR, "cache.e", &[v, 3]));
+    assert_eq!(err, FormatError::incompatible_shapes("cache.e"));
+    let too_many = sinew_core::aim::MAX_SHAPES + 1;
+    let err = refused(&with_zeros(ACTOR, "cache.e", &[v, too_many, 3]));
+    assert_eq!(
+        err,
+        FormatError::limit_exceeded("cache.e", too_many, sinew_core::aim::MAX_SHAPES)
+    );
+    assert_eq!(
+        err.to_string(),
+        format!(
+            "section cache.e: a count of {too_many} exceeds this build's limit of {}",
+            sinew_core::aim::MAX_SHAPES
+        )
+    );
+
+    // A replay's mode: of a value no replay takes, absent, or one an S2D replay does not take.
+    let replay = include_bytes!("../data/aim-procedural.q16.replay.sinew");
+    let mode = |bytes: &[u8]| sinew_core::replay::AimReplay::from_bytes(bytes).unwrap_err();
+    let err = mode(&with_text(replay, b"mode=q16", b"mode=q64"));
+    assert_eq!(
+        err.to_string(),
+        "metadata line 1: mode has a value this artefact does not take"
+    );
+    let err = mode(&with_text(replay, b"mode=q16", b"node=q16"));
+    assert_eq!(err.to_string(), "metadata has no mode entry");
+    let s2d = include_bytes!("../data/s2d-ict.replay.sinew");
+    let err = sinew_core::replay::S2dReplay::from_bytes(&with_text(s2d, b"mode=f32", b"mode=q16"))
+        .unwrap_err();
+    assert_eq!(
+        err,
+        FormatError::BadMetadata {
+            key: SectionName::new("mode"),
+            line: 1,
+        }
+    );
+    // Text that is not key=value lines, or not UTF-8, fails the container, naming the line.
+    let container = |bytes: &[u8]| sinew_core::SinewFile::from_bytes(bytes).unwrap_err();
+    let err = container(&with_text(replay, b"frames=16", b"frames 16"));
+    assert_eq!(
+        err.to_string(),
+        "metadata line 3 is not UTF-8 key=value text"
+    );
+    let err = container(&with_text(replay, b"model=", b"mo\xFFel="));
+    assert_eq!(
+        err.to_string(),
+        "metadata line 2 is not UTF-8 key=value text"
+    );
+    // A second metadata section is refused by its index, as a name that is not `meta`.
+    let mut w =
+        sinew_host::SinewWriter::from_file(&sinew_core::SinewFile::from_bytes(ACTOR).unwrap())
+            .unwrap();
+    let kind = sinew_core::format::SectionKind::Metadata;
+    w.raw(kind, "notes", b"a=b\n".to_vec()).unwrap();
+    let bytes = w.to_bytes().unwrap();
+    let index = (0..)
+        .find(|&i| {
+            let e = sinew_core::format::HEADER_LEN + i * sinew_core::format::SECTION_ENTRY_LEN;
+            bytes[e + 4..e + 9] == *b"notes"
+        })
+        .unwrap();
+    assert_eq!(
+        container(&bytes),
+        FormatError::BadName {
+            section: index as u16
+        }
+    );
+
+    // A motion generator's content, named by its line.
+    let motion = include_bytes!("../data/motion-ict.sinew");
+    let file = sinew_core::SinewFile::from_bytes(motion).unwrap();
+    let line = 1 + file
+        .metadata()
+        .iter()
+        .position(|(k, _)| k == "content")
+        .unwrap();
+    let mut w = sinew_host::SinewWriter::from_file(&file).unwrap();
+    w.meta("content", "s2d-replay");
+    let err = MotionGenerator::from_bytes(&w.to_bytes().unwrap()).unwrap_err();
+    assert_eq!(
+        err,
+        FormatError::BadMetadata {
+            key: SectionName::new("content"),
+            line: line as u32,
+        }
+    );
+}

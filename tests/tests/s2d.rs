@@ -251,17 +251,17 @@ fn every_shape_and_bound_is_validated() {
         (
             "four outputs",
             Box::new(|t| t.cfg[2] = 4),
-            FormatError::IncompatibleShapes,
+            FormatError::incompatible_shapes("s2d.cfg"),
         ),
         (
             "inputs not whole landmarks",
             Box::new(|t| t.cfg[0] = 4),
-            FormatError::IncompatibleShapes,
+            FormatError::incompatible_shapes("s2d.cfg"),
         ),
         (
             "too many levels",
             Box::new(|t| t.levels = [2, 2].repeat(9)),
-            FormatError::LimitExceeded,
+            FormatError::limit_exceeded("s2d.levels", 9, 8),
         ),
         (
             "a third level without its sections",
@@ -273,12 +273,12 @@ fn every_shape_and_bound_is_validated() {
         (
             "empty level",
             Box::new(|t| t.levels[2] = 0),
-            FormatError::IncompatibleShapes,
+            FormatError::incompatible_shapes("s2d.levels"),
         ),
         (
             "spiral length differs from the table",
             Box::new(|t| t.levels[1] = 3),
-            FormatError::IncompatibleShapes,
+            FormatError::incompatible_shapes("s2d.h0.spiral"),
         ),
         (
             "coarse spiral past the dummy",
@@ -288,12 +288,12 @@ fn every_shape_and_bound_is_validated() {
         (
             "unknown input normalisation",
             Box::new(|t| t.input[0] = 3),
-            FormatError::UnknownCode,
+            FormatError::unknown_code("s2d.input", 0, 3),
         ),
         (
             "unknown stage activation",
             Box::new(|t| t.act = Some((vec![9], vec![0.0]))),
-            FormatError::UnknownCode,
+            FormatError::unknown_code("s2d.act", 0, 9),
         ),
         (
             "non-finite stage activation parameter",
@@ -306,7 +306,7 @@ fn every_shape_and_bound_is_validated() {
         (
             "stage activation without its parameter",
             Box::new(|t| t.act = Some((vec![5], vec![]))),
-            FormatError::IncompatibleShapes,
+            FormatError::incompatible_shapes("s2d.par"),
         ),
         (
             "landmark outside the mesh",
@@ -335,7 +335,7 @@ fn every_shape_and_bound_is_validated() {
                 t.fc_w.extend([0.0; 3]);
                 t.fc_b.push(0.0);
             }),
-            FormatError::IncompatibleShapes,
+            FormatError::incompatible_shapes("s2d.fc.w"),
         ),
         (
             "spiral past the dummy",
@@ -345,7 +345,7 @@ fn every_shape_and_bound_is_validated() {
         (
             "spirals of the wrong count",
             Box::new(|t| t.sp0.truncate(4)),
-            FormatError::IncompatibleShapes,
+            FormatError::incompatible_shapes("s2d.h0.spiral"),
         ),
         (
             "CSR column past the coarse dummy",
@@ -365,12 +365,12 @@ fn every_shape_and_bound_is_validated() {
         (
             "CSR with a row too few",
             Box::new(|t| t.up_ptr.truncate(3)),
-            FormatError::IncompatibleShapes,
+            FormatError::incompatible_shapes("s2d.u0.ptr"),
         ),
         (
             "CSR values and columns differ",
             Box::new(|t| t.up_val.push(1.0)),
-            FormatError::IncompatibleShapes,
+            FormatError::incompatible_shapes("s2d.u0.val"),
         ),
         (
             "non-finite CSR value",
@@ -385,7 +385,7 @@ fn every_shape_and_bound_is_validated() {
             Box::new(|t| {
                 t.conv_w = vec![1.0; 4];
             }),
-            FormatError::IncompatibleShapes,
+            FormatError::incompatible_shapes("s2d.conv.0.w"),
         ),
         (
             "output convolution does not chain",
@@ -393,7 +393,7 @@ fn every_shape_and_bound_is_validated() {
                 t.conv_w = vec![1.0; 4];
                 t.conv_b = vec![0.0; 2];
             }),
-            FormatError::IncompatibleShapes,
+            FormatError::incompatible_shapes("s2d.out.w"),
         ),
         (
             "non-finite output bias",

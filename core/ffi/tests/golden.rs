@@ -10,7 +10,7 @@ use std::ptr::{null, null_mut};
 use sinew::*;
 
 mod common;
-use common::{Model, data, message, new_error};
+use common::{Model, data, message, new_error, reseal, with_text};
 
 struct Replay {
     handle: *mut SinewReplay,
@@ -500,6 +500,49 @@ fn bad_model_bytes_are_named() {
     // Safety: `bytes` lives through the call.
     let status = unsafe { sinew_model_open(bytes.as_ptr(), bytes.len(), null_mut(), null_mut()) };
     assert_eq!(status, SinewStatus::NullPointer);
+}
+
+/// A load error's record names the section or the metadata line at fault, after what was loaded.
+#[test]
+fn load_errors_name_the_section_and_line() {
+    let open_replay = |bytes: &[u8]| {
+        let mut handle = null_mut();
+        let mut err = new_error();
+        // Safety: `bytes` lives through the call; a failed open leaves no handle to free.
+        let status =
+            unsafe { sinew_replay_open(bytes.as_ptr(), bytes.len(), &mut handle, &mut err) };
+        assert!(handle.is_null());
+        (status, message(&err))
+    };
+    let replay = data("aim-procedural.f32.replay.sinew");
+    assert_eq!(
+        open_replay(&with_text(&replay, b"mode=f32", b"mode=f64")),
+        (
+            SinewStatus::InvalidFormat,
+            "AIM replay: metadata line 1: mode has a value this artefact does not take".into()
+        )
+    );
+    assert_eq!(
+        open_replay(&with_text(&replay, b"frames=", b"frames ")),
+        (
+            SinewStatus::InvalidFormat,
+            "replay: metadata line 3 is not UTF-8 key=value text".into()
+        )
+    );
+    // A decoder whose configuration claims one landmark more than its sections hold.
+    let mut s2d = data("s2d-ict.sinew");
+    let file = sinew_core::SinewFile::from_bytes(&s2d).unwrap();
+    let at = file.section("s2d.cfg").unwrap().offset as usize;
+    let inputs = u32::from_le_bytes(s2d[at..at + 4].try_into().unwrap());
+    s2d[at..at + 4].copy_from_slice(&(inputs + 3).to_le_bytes());
+    reseal(&mut s2d);
+    assert_eq!(
+        open_status(s2d.as_ptr(), s2d.len()),
+        (
+            SinewStatus::InvalidFormat,
+            "S2D decoder: section s2d.lmk has a shape that does not fit with the others".into()
+        )
+    );
 }
 
 #[test]

@@ -645,7 +645,11 @@ impl Replay {
             ReplayInner::Aim(c) => c.borrow_dependent().expected(f),
             ReplayInner::S2d(c) => c.borrow_dependent().expected(f),
         };
-        hash.ok_or_else(|| Error::from(sinew_core::FormatError::IncompatibleShapes))
+        hash.ok_or_else(|| {
+            Error::from(sinew_core::FormatError::incompatible_shapes(
+                replay::FRAME_HASHES,
+            ))
+        })
     }
 
     /// Checks that this replay was recorded with `model` ([`replay::check_model`] or

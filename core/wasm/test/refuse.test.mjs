@@ -8,7 +8,7 @@ import { test } from "node:test";
 import assert from "node:assert/strict";
 import { readFileSync } from "node:fs";
 
-import { init, InputError, Model } from "../pkg/sinew.mjs";
+import { init, InputError, Model, Replay } from "../pkg/sinew.mjs";
 
 const data = (name) => readFileSync(new URL(`../../../tests/data/${name}`, import.meta.url));
 
@@ -79,6 +79,23 @@ function crc32(bytes) {
 
 /** A copy of a valid file with value `index` of f32 section `name` set to `value`, its checksums recomputed. */
 function withF32(bytes, name, index, value) {
+  return resealed(bytes, (entry, view, offset) => {
+    if (entry === name) view.setFloat32(offset + 4 * index, value, true);
+  });
+}
+
+/** A copy of a valid file with the text `from` replaced by `to` (as long), its checksums recomputed. */
+function withText(bytes, from, to) {
+  assert.equal(from.length, to.length);
+  const at = Buffer.from(bytes).indexOf(from);
+  assert.ok(at >= 0, `no ${from}`);
+  return resealed(bytes, (entry, view) => {
+    if (entry === "meta") new Uint8Array(view.buffer).set(new TextEncoder().encode(to), at);
+  });
+}
+
+/** A copy of a valid file, `edit(name, view, offset)` called on each section before its checksum is recomputed. */
+function resealed(bytes, edit) {
   const out = new Uint8Array(bytes);
   const view = new DataView(out.buffer);
   const count = view.getUint32(20, true);
@@ -87,7 +104,7 @@ function withF32(bytes, name, index, value) {
     const entry = new TextDecoder().decode(out.subarray(e + 4, e + 36)).replace(/\0+$/, "");
     const offset = view.getUint32(e + 52, true);
     const length = view.getUint32(e + 56, true);
-    if (entry === name) view.setFloat32(offset + 4 * index, value, true);
+    edit(entry, view, offset);
     view.setUint32(e + 60, crc32(out.subarray(offset, offset + length)), true);
   }
   const header = new Uint8Array([...out.subarray(0, 28), ...out.subarray(32, 32 + 64 * count)]);
@@ -108,3 +125,15 @@ test("a file whose checksums are valid but whose cache holds 3.4e38 is refused a
     message: "section cache.s0: value 5 is NaN or infinite",
   });
 });
+
+test("a load error names the metadata line or the section at fault", () => {
+  const replay = data("aim-procedural.f32.replay.sinew");
+  assert.ok(Replay.load(withText(replay, "mode=f32", "mode=f32")));
+  assert.throws(() => Replay.load(withText(replay, "mode=f32", "mode=f64")), {
+    message: "metadata line 1: mode has a value this artefact does not take",
+  });
+  assert.throws(() => Replay.load(withText(replay, "frames=", "frames ")), {
+    message: "metadata line 3 is not UTF-8 key=value text",
+  });
+});
+

@@ -112,11 +112,15 @@ fn take<'a>(rest: &mut &'a mut [u8], n: usize) -> Result<&'a mut [u8], KernelErr
 }
 
 fn f32s(b: &[u8]) -> Result<F32s<'_>, KernelError> {
-    F32s::new(b).ok_or(KernelError::Format(FormatError::IncompatibleShapes))
+    F32s::new(b).ok_or(KernelError::Format(FormatError::incompatible_shapes(
+        "bytes",
+    )))
 }
 
 fn u32s(b: &[u8]) -> Result<U32s<'_>, KernelError> {
-    U32s::new(b).ok_or(KernelError::Format(FormatError::IncompatibleShapes))
+    U32s::new(b).ok_or(KernelError::Format(FormatError::incompatible_shapes(
+        "bytes",
+    )))
 }
 
 fn slot(buf: &mut [f32], n: usize) -> Result<&mut [f32], KernelError> {
@@ -137,7 +141,9 @@ fn mlp(
     let mut parts: [(&[u8], &[u8]); 3] = [(&[], &[]); 3];
     for (part, dims) in parts.iter_mut().zip(widths.windows(2)) {
         let &[i, o] = dims else {
-            return Err(KernelError::Format(FormatError::IncompatibleShapes));
+            return Err(KernelError::Format(FormatError::incompatible_shapes(
+                "widths",
+            )));
         };
         let bound = libm::sqrtf(6.0 / i as f32) / 30.0;
         let w = take(&mut rest, 4 * i * o)?;
@@ -154,12 +160,16 @@ fn mlp(
         .zip(widths.windows(2))
     {
         let &[i, o] = dims else {
-            return Err(KernelError::Format(FormatError::IncompatibleShapes));
+            return Err(KernelError::Format(FormatError::incompatible_shapes(
+                "widths",
+            )));
         };
         *layer = Some(Dense::new(f32s(w)?, f32s(b)?, i, o, *act)?);
     }
     let [Some(l0), Some(l1), Some(l2)] = layers else {
-        return Err(KernelError::Format(FormatError::IncompatibleShapes));
+        return Err(KernelError::Format(FormatError::incompatible_shapes(
+            "layers",
+        )));
     };
     let layers = [l0, l1, l2];
     let net = Mlp::new(&layers)?;

@@ -415,7 +415,9 @@ pub fn phase_costs(
         });
     };
     let Some((head, jaw)) = replay.frame(frame, weights) else {
-        return Err(Error::Replay(FormatError::IncompatibleShapes));
+        return Err(Error::Replay(FormatError::incompatible_shapes(
+            sinew_core::replay::AIM_INPUTS,
+        )));
     };
     let buffer = |e| Error::Playback(ReplayError::Buffer(e));
     let mut costs = PhaseCosts::default();

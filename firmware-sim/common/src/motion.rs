@@ -150,7 +150,9 @@ fn load(golden: &Golden) -> Result<Sequence<'static>, Error> {
     let generator = MotionGenerator::from_bytes(golden.model).map_err(Error::Model)?;
     let decoder = S2D_GOLDENS
         .first()
-        .ok_or(Error::Model(FormatError::IncompatibleShapes))?;
+        .ok_or(Error::Model(FormatError::MissingSection {
+            section: sinew_core::error::SectionName::new("s2d.cfg"),
+        }))?;
     let decoder = S2dDecoder::from_bytes(decoder.model).map_err(Error::Model)?;
     Sequence::new(generator, decoder).map_err(Error::Model)
 }

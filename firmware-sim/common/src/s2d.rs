@@ -158,7 +158,9 @@ pub fn s2d_costs(
         return Err(Error::S2dTooLarge { values });
     };
     if replay.frame(frame, buf.input).is_none() {
-        return Err(Error::Replay(FormatError::IncompatibleShapes));
+        return Err(Error::Replay(FormatError::incompatible_shapes(
+            sinew_core::replay::S2D_INPUTS,
+        )));
     }
     let mut costs = S2dCosts::default();
     let t = now();

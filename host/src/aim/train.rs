@@ -45,7 +45,10 @@ pub enum TrainError {
     #[error(transparent)]
     Template(#[from] MeshError),
     /// The loss became NaN or infinite.
-    #[error("training diverged at step {step} (loss {terms:?}); lower the learning rate")]
+    #[error(
+        "training diverged at step {step} (loss terms {}); lower the learning rate",
+        named_terms(terms)
+    )]
     Diverged {
         /// The step.
         step: usize,
@@ -83,6 +86,16 @@ pub const TERMS: [&str; 6] = [
     "skinning",
     "total",
 ];
+
+/// `terms` named in [`TERMS`] order: "skin 0.1, anatomy NaN, …".
+fn named_terms(terms: &[f32; 6]) -> String {
+    let named: Vec<String> = TERMS
+        .iter()
+        .zip(terms)
+        .map(|(name, v)| format!("{name} {v}"))
+        .collect();
+    named.join(", ")
+}
 
 /// The loss terms at one step.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -621,7 +634,7 @@ pub fn load_checkpoint(
         .from_bytes(burn::tensor::Bytes::from_bytes_vec(opt))
         .map_err(|e| CheckpointError::Record {
             path: optim_path,
-            detail: format!("{e:?}"),
+            detail: e.to_string(),
         })?;
     Ok((net, optim, state))
 }

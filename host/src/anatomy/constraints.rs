@@ -38,6 +38,15 @@ pub enum Bone {
     Jaw,
 }
 
+impl std::fmt::Display for Bone {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Skull => "skull",
+            Self::Jaw => "jaw",
+        })
+    }
+}
+
 /// One bone as a triangle soup: which bone, its positions, its triangles.
 pub type BoneMesh<'a> = (Bone, &'a [[f32; 3]], &'a [[u32; 3]]);
 

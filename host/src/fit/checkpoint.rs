@@ -106,7 +106,7 @@ pub fn load(
         ))
         .map_err(|e| CheckpointError::Record {
             path: optim_path,
-            detail: format!("{e:?}"),
+            detail: e.to_string(),
         })?;
     Ok((net, optim, state))
 }
@@ -127,10 +127,16 @@ fn check(state: &FitState, expected: &FitState) -> Result<(), InvalidState> {
     };
     let mut differences = Vec::new();
     if same != expected.config {
-        differences.push(format!(
-            "settings: {:?} in the checkpoint, {:?} now",
-            state.config, expected.config
-        ));
+        // Named field by field ("settings.lambda: 0.1 in the checkpoint, 0.2 now").
+        if let (Ok(a), Ok(b)) = (
+            serde_json::to_value(&same),
+            serde_json::to_value(&expected.config),
+        ) {
+            checkpoint::differences("settings", &a, &b, &mut differences);
+        }
+        if differences.is_empty() {
+            differences.push("settings: others in the checkpoint than now".into());
+        }
     }
     if state.actor != expected.actor {
         differences.push(format!(

@@ -239,7 +239,7 @@ pub enum ContentError {
     #[error(transparent)]
     Format(FormatError),
     /// The file holds something else (its `content` metadata differs).
-    #[error("not {expected:?} data (metadata content={found:?})")]
+    #[error("not {expected} data ({})", found_content(found))]
     Content {
         /// The `content` this reader takes.
         expected: &'static str,
@@ -310,6 +310,14 @@ pub enum ContentError {
         /// The frame.
         frame: usize,
     },
+}
+
+/// The `content` a file's metadata names, or that it names none.
+fn found_content(found: &Option<String>) -> String {
+    match found {
+        Some(found) => format!("its metadata says content={found}"),
+        None => "its metadata has no content entry".into(),
+    }
 }
 
 /// The manifest `dir/file`, parsed; `what` names the expected content in errors (e.g. "a

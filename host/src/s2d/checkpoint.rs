@@ -238,7 +238,7 @@ pub fn load_checkpoint(
         .from_bytes(burn::tensor::Bytes::from_bytes_vec(opt))
         .map_err(|e| CheckpointError::Record {
             path: optim_path,
-            detail: format!("{e:?}"),
+            detail: e.to_string(),
         })?;
     Ok((decoder, optim, state))
 }

@@ -9,8 +9,9 @@ use burn::tensor::Device;
 pub enum BackendError {
     /// The backend's cargo feature was not enabled when the binary was built.
     #[error(
-        "backend {backend:?} is not built in: rebuild with `--features {}`",
-        format!("{backend:?}").to_lowercase()
+        "backend {} is not built in: rebuild with `--features {}`",
+        backend.name(),
+        backend.name()
     )]
     NotBuiltIn {
         /// The backend asked for.
@@ -54,6 +55,16 @@ pub enum Backend {
 }
 
 impl Backend {
+    /// The backend's name, as `--backend` takes it and as its cargo feature is called.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Flex => "flex",
+            Self::Ndarray => "ndarray",
+            Self::Wgpu => "wgpu",
+            Self::Cuda => "cuda",
+        }
+    }
+
     /// The device for inference (no autodiff), seeded.
     pub fn device(self, seed: u64) -> Result<Device, BackendError> {
         let device = match self {
@@ -136,5 +147,9 @@ mod tests {
                 backend: Backend::Cuda
             }
         ));
+        assert_eq!(
+            err.to_string(),
+            "backend cuda is not built in: rebuild with `--features cuda`"
+        );
     }
 }

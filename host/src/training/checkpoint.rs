@@ -433,11 +433,15 @@ pub fn serialised_differences<T: Serialize>(
 
 /// The error of a `what` (e.g. "decoder") that burn could not serialise for the checkpoint in
 /// `dir`.
-pub fn serialise_error(dir: &Path, what: &'static str, e: impl std::fmt::Debug) -> CheckpointError {
+pub fn serialise_error(
+    dir: &Path,
+    what: &'static str,
+    e: impl std::fmt::Display,
+) -> CheckpointError {
     CheckpointError::Serialise {
         path: dir.to_owned(),
         what,
-        detail: format!("{e:?}"),
+        detail: e.to_string(),
     }
 }
 
@@ -449,7 +453,7 @@ pub fn record_from_bytes(
     burn::store::ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes)).map_err(|e| {
         CheckpointError::Record {
             path: path.to_owned(),
-            detail: format!("{e:?}"),
+            detail: e.to_string(),
         }
     })
 }
@@ -469,7 +473,7 @@ pub fn load_module<M: burn::module::Module>(
         .map_err(|e| CheckpointError::Mismatch {
             path,
             what,
-            detail: format!("{e:?}"),
+            detail: e.to_string(),
         })
 }
 

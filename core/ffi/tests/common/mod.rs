@@ -17,6 +17,40 @@ pub fn data(name: &str) -> Vec<u8> {
     std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
+/// A copy of the valid `.sinew` file `bytes` with the text `from` replaced by `to` (as long), its
+/// checksums recomputed ([`reseal`]).
+pub fn with_text(bytes: &[u8], from: &[u8], to: &[u8]) -> Vec<u8> {
+    assert_eq!(from.len(), to.len());
+    let at = bytes.windows(from.len()).position(|w| w == from).unwrap();
+    let mut out = bytes.to_vec();
+    out[at..at + to.len()].copy_from_slice(to);
+    reseal(&mut out);
+    out
+}
+
+/// Recomputes every section's CRC-32 and then the header's, so that edited data passes the
+/// checksums: a file whose content, not its integrity, is refused.
+pub fn reseal(out: &mut [u8]) {
+    use sinew_core::format::{
+        CRC32, ENTRY_CRC, ENTRY_LENGTH, ENTRY_OFFSET, HEADER_CRC, HEADER_CRC_OFFSET, HEADER_LEN,
+        HEADER_SECTION_COUNT, SECTION_ENTRY_LEN,
+    };
+    let word = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().unwrap());
+    let count = word(out, HEADER_SECTION_COUNT.offset) as usize;
+    for i in 0..count {
+        let e = HEADER_LEN + i * SECTION_ENTRY_LEN;
+        let offset = word(out, e + ENTRY_OFFSET.offset) as usize;
+        let length = word(out, e + ENTRY_LENGTH.offset) as usize;
+        let crc = CRC32.checksum(&out[offset..offset + length]);
+        out[e + ENTRY_CRC.offset..e + ENTRY_CRC.end()].copy_from_slice(&crc.to_le_bytes());
+    }
+    let mut digest = CRC32.digest();
+    digest.update(&out[..HEADER_CRC_OFFSET]);
+    digest.update(&out[HEADER_LEN..HEADER_LEN + count * SECTION_ENTRY_LEN]);
+    let crc = digest.finalize();
+    out[HEADER_CRC.range()].copy_from_slice(&crc.to_le_bytes());
+}
+
 /// An error record before any call.
 pub fn new_error() -> SinewError {
     SinewError {

@@ -303,3 +303,16 @@ fn an_unusable_checkpoint_folder_is_refused_by_name() {
     let err = train(&set, &config, &options).unwrap_err();
     assert!(matches!(err, TrainError::Checkpoint(_)), "{err}");
 }
+
+#[test]
+fn a_diverged_run_names_each_loss_term() {
+    let e = TrainError::Diverged {
+        step: 7,
+        terms: [0.5, f32::NAN, 0.0, 1.0, 2.0, f32::INFINITY],
+    };
+    assert_eq!(
+        e.to_string(),
+        "training diverged at step 7 (loss terms skin 0.5, anatomy NaN, thickness_reg 0, \
+         symmetry 1, skinning 2, total inf); lower the learning rate"
+    );
+}

@@ -143,7 +143,7 @@ pub enum BonesError {
     #[error("degenerate skin landmarks: cannot build the face frame")]
     DegenerateFrame,
     /// Fewer than three weighted skin landmarks for a bone.
-    #[error("only {count} weighted skin landmarks for the {bone:?}; 3 needed")]
+    #[error("only {count} weighted skin landmarks for the {bone}; 3 needed")]
     TooFewLandmarks {
         /// The bone.
         bone: Bone,

@@ -72,6 +72,17 @@ pub(crate) enum Template {
     Cranium,
 }
 
+impl Template {
+    /// The template's name, as the landmark file spells it.
+    pub(crate) const fn name(self) -> &'static str {
+        match self {
+            Self::Jaw => "jaw",
+            Self::Maxilla => "maxilla",
+            Self::Cranium => "cranium",
+        }
+    }
+}
+
 /// How a bone landmark's skin landmark is found from the 68 iBUG landmarks.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
@@ -235,7 +246,7 @@ pub fn load_templates(data_dir: &Path) -> Result<BoneTemplates, BonesError> {
                 .filter(|l| l.template == want)
                 .ok_or_else(|| BonesError::RegistrationPair {
                     name: n.to_string(),
-                    want: format!("{want:?}"),
+                    want: want.name().to_owned(),
                 })?;
             Ok(to64(l.position))
         };

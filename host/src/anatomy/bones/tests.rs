@@ -381,3 +381,23 @@ fn real_ict_fit_places_bones_under_the_skin() {
     }
     assert!(c.fraction() > 0.1, "constraint fraction {}", c.fraction());
 }
+
+#[test]
+fn too_few_landmarks_names_the_bone_in_words() {
+    let e = BonesError::TooFewLandmarks {
+        bone: Bone::Jaw,
+        count: 2,
+    };
+    assert_eq!(
+        e.to_string(),
+        "only 2 weighted skin landmarks for the jaw; 3 needed"
+    );
+}
+
+#[test]
+fn a_template_is_named_as_the_landmark_file_spells_it() {
+    for name in ["jaw", "maxilla", "cranium"] {
+        let t: templates::Template = serde_json::from_str(&format!("{name:?}")).unwrap();
+        assert_eq!(t.name(), name);
+    }
+}

@@ -95,6 +95,13 @@ fn a_set_round_trips_and_each_fault_is_its_variant() {
             if path.ends_with("numbers.sinew") && found == "other"),
         "{e:?}"
     );
+    let DataSetError::Contents { source, .. } = &e else {
+        unreachable!()
+    };
+    assert_eq!(
+        source.to_string(),
+        "not test data (its metadata says content=other)"
+    );
 
     write(dir, &LAYOUT, numbers("test", [0, 1, 3]), &manifest(1)).unwrap();
     let e = read_set(dir, None).unwrap_err();

@@ -69,8 +69,9 @@ pub enum ExperimentError {
     },
     /// A model without `train s2d`'s protocol metadata.
     #[error(
-        "{}: no S2D protocol in the metadata (protocol={protocol:?}); train it with `sinew train s2d`",
-        path.display()
+        "{}: no S2D protocol in the metadata{}; train it with `sinew train s2d`",
+        path.display(),
+        found_protocol(protocol)
     )]
     NoProtocol {
         /// The model.
@@ -181,4 +182,11 @@ pub enum ExperimentError {
     /// Laying out metadata or the report as JSON.
     #[error("laying out JSON")]
     Json(#[from] serde_json::Error),
+}
+
+/// The `protocol` a model's metadata names when it is neither S2D protocol (nothing when absent).
+fn found_protocol(protocol: &Option<String>) -> String {
+    protocol.as_ref().map_or_else(String::new, |p| {
+        format!(" (protocol={p}, neither identity nor expression)")
+    })
 }

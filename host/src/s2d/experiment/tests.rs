@@ -175,6 +175,13 @@ fn eval_refuses_models_of_other_runs_by_variant() {
         matches!(&err, ExperimentError::NoProtocol { path, protocol: None } if *path == actor),
         "{err:?}"
     );
+    assert_eq!(
+        err.to_string(),
+        format!(
+            "{}: no S2D protocol in the metadata; train it with `sinew train s2d`",
+            actor.display()
+        )
+    );
     // The golden decoder was trained on pairs of seed 1; these have seed 3.
     let err = eval_s2d(&golden, &pairs, 1, &report).unwrap_err();
     assert!(
