@@ -470,7 +470,7 @@ fn checkpoint(
     elapsed: f64,
 ) -> Result<(), FitError> {
     let stop = crate::training::interrupt::take_stop_request();
-    if stop || (step + 1) % EVERY == 0 || step + 1 == config.iterations {
+    if stop || (step + 1).is_multiple_of(EVERY) || step + 1 == config.iterations {
         state.steps_done = step + 1;
         state.loss_history = result.loss_history.clone();
         state.error_history = result.error_history.clone();

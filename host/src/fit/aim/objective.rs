@@ -56,7 +56,7 @@ pub(super) fn step_loss(
         let d = z.clone().narrow(0, 1, j - 1) - z.narrow(0, 0, j - 1);
         total = total + d.square().sum_dim(1).mean().mul_scalar(config.lambda_t);
     }
-    if step % 10 == 0 {
+    if step.is_multiple_of(10) {
         let loss = to_vec(total.clone()).first().copied().unwrap_or(f32::NAN);
         loss_history.push((step, f64::from(loss)));
     }
