@@ -8,7 +8,14 @@
 //! rotation + translation, then the `M` corrective coefficients (`[18 + M]`, the layout of a
 //! replay frame). Per frame:
 //!
-//! `x̂ = clamp((x − μ_in) ⊙ s_in, ±MAX_INPUT)`, `y = μ_out + s_out ⊙ F(x̂)`,
+//! `f = features(x)`, `x̂ = clamp((f − μ_in) ⊙ s_in, ±MAX_INPUT)`, `y = μ_out + s_out ⊙ F(x̂)`,
+//!
+//! where a 2D driver's features ([`features`]) separate where the face is and how large it looks
+//! (what the head's translation and depth follow) from its shape: the landmarks centred on the
+//! mean `c` of the steady landmarks (nose and eyes, [`STEADY`]) and divided by their spread `r`
+//! (root mean square distance to `c`), then `c` and `ln r` (`[68 · 2 + 3]`); a 3D driver's are the
+//! landmarks themselves. A camera sees a face of width w at depth z with a spread of about w / z,
+//! so `ln r` is the depth's logarithm up to a constant the network learns.
 //!
 //! then each 6D rotation of `y` is made orthonormal ([`crate::rotation::from_6d`], whose
 //! fallbacks make every value a rotation), each translation is clamped to ±`MAX_COORDINATE` and
@@ -18,12 +25,14 @@
 //! - `drv.model`: `u32 [2]`, the actor's content hash ([`crate::replay::model_hash`]), low word
 //!   first;
 //! - `drv.lmk`: `u32 [68]`, the actor's vertex of each landmark;
-//! - `drv.in`: `f32 [2, D]`, the input's mean `μ_in` and scale `s_in` (D = 136 or 204);
+//! - `drv.in`: `f32 [2, D]`, the features' mean `μ_in` and scale `s_in` (D = 139 or 204);
 //! - `drv.out`: `f32 [2, 18 + M]`, the output's offset `μ_out` and scale `s_out`;
 //! - the MLP `drv.net` ([`crate::network`]), D inputs and `18 + M` outputs.
 
 use crate::aim::{AimActor, MAX_SHAPES};
-use crate::error::{Argument, Bound, BufferError, EvalError, FormatError};
+use crate::error::{
+    Argument, Bound, BufferError, EvalError, FormatError, InputError, InputErrorKind,
+};
 use crate::format::{ArtifactKind, SinewFile, out_of_range};
 use crate::hash::FrameHasher;
 use crate::input::check_values;
@@ -50,6 +59,14 @@ pub const LANDMARKS: usize = 68;
 /// A normalised input value is clamped to ± this (in units of the training spread), so that a
 /// tracker's wild point cannot push the network outside the range it was bounded for.
 pub const MAX_INPUT: f32 = 16.0;
+/// The steady landmarks a 2D driver's features are centred on and scaled by: the nose (27–35)
+/// and the eyes (36–47), which expressions hardly move.
+pub const STEADY: core::ops::Range<usize> = 27..48;
+/// A 2D driver's features beyond the landmarks: the centre's x and y and the spread's logarithm.
+pub const EXTRA_FEATURES: usize = 3;
+/// The smallest spread of the steady landmarks a 2D driver accepts (normalised image units: a
+/// face a thousandth of the focal length across is no face).
+pub const MIN_SPREAD: f32 = 1e-3;
 /// The largest input scale a driver may carry (a landmark coordinate's training spread is at
 /// least 1e-6 of its unit).
 pub const MAX_INPUT_SCALE: f32 = 1e6;
@@ -69,6 +86,14 @@ impl Space {
         match self {
             Self::Image => 2,
             Self::World => 3,
+        }
+    }
+
+    /// Features per frame the network reads ([`features`]): `68 · 2 + 3` or `68 · 3`.
+    pub const fn features(self) -> usize {
+        match self {
+            Self::Image => 2 * LANDMARKS + EXTRA_FEATURES,
+            Self::World => 3 * LANDMARKS,
         }
     }
 
@@ -98,7 +123,7 @@ impl<'a> Driver<'a> {
     ///
     /// # Errors
     /// A [`FormatError`] for a bad container, another kind, a missing or misshapen section, a
-    /// network whose width is neither 136 nor 204 inputs or whose outputs are not `18 + M`
+    /// network whose width is neither 139 nor 204 inputs or whose outputs are not `18 + M`
     /// (`M` up to [`MAX_SHAPES`]), an input mean outside ±`MAX_COORDINATE`, an input scale not
     /// in (0, [`MAX_INPUT_SCALE`]], an output offset outside ±`MAX_COORDINATE`, an output scale
     /// outside ±`MAX_FACTOR`, or a network that can exceed ±`MAX_NETWORK_VALUE` for inputs
@@ -109,8 +134,8 @@ impl<'a> Driver<'a> {
         let vertices = file.u32_tensor(LANDMARK_VERTICES, &[LANDMARKS as u32])?;
         let net = load_mlp(&file, NETWORK)?;
         let space = match net.inputs() {
-            n if n == 2 * LANDMARKS => Space::Image,
-            n if n == 3 * LANDMARKS => Space::World,
+            n if n == Space::Image.features() => Space::Image,
+            n if n == Space::World.features() => Space::World,
             _ => return Err(FormatError::IncompatibleShapes),
         };
         let outputs = net.outputs();
@@ -196,9 +221,9 @@ impl<'a> Driver<'a> {
         &self.net
     }
 
-    /// Scratch values [`Self::drive`] needs: the normalised input and the network's own.
+    /// Scratch values [`Self::drive`] needs: the normalised features and the network's own.
     pub fn scratch_len(&self) -> usize {
-        self.input_len() + self.net.scratch_len()
+        self.space.features() + self.net.scratch_len()
     }
 
     /// Checks that this driver was trained for the actor whose bytes are `model_bytes`.
@@ -242,7 +267,8 @@ impl<'a> Driver<'a> {
     /// # Errors
     /// [`BufferError`] for a wrong length; [`EvalError::Input`] naming
     /// [`Argument::Landmarks`] and the value for a landmark that is NaN, infinite or outside
-    /// ±`MAX_COORDINATE` (nothing is written then).
+    /// ±`MAX_COORDINATE`, or (index 0, `Degenerate`) 2D landmarks whose steady ones spread less
+    /// than [`MIN_SPREAD`] (nothing is written then).
     pub fn drive(
         &self,
         landmarks: &[f32],
@@ -259,10 +285,11 @@ impl<'a> Driver<'a> {
         if scratch.len() < self.scratch_len() {
             return Err(BufferError::Scratch.into());
         }
-        check_values(Argument::Landmarks, landmarks)?;
-        let (x, rest) = scratch.split_at_mut(d);
-        for (i, (x, &l)) in x.iter_mut().zip(landmarks).enumerate() {
-            let v = (l - self.input.at(i)) * self.input.at(d + i);
+        let f = self.space.features();
+        let (x, rest) = scratch.split_at_mut(f);
+        features(self.space, landmarks, x)?;
+        for (i, x) in x.iter_mut().enumerate() {
+            let v = (*x - self.input.at(i)) * self.input.at(f + i);
             *x = v.clamp(-MAX_INPUT, MAX_INPUT);
         }
         self.net.eval(x, pose, rest)?;
@@ -290,6 +317,63 @@ impl<'a> Driver<'a> {
         }
         Ok(())
     }
+}
+
+/// A frame's landmarks (`[68 × dims]`) as a driver of `space` reads them, into `out`
+/// (`[space.features()]`; module documentation): for 2D, `(x − c) / r` per landmark, then `c`
+/// and `ln r`, with `c` the mean and `r` the root mean square distance to it of the [`STEADY`]
+/// landmarks; for 3D, the landmarks. The host trains on exactly these values.
+///
+/// # Errors
+/// [`BufferError`] for a wrong length; [`EvalError::Input`] naming [`Argument::Landmarks`] for
+/// a value that is NaN, infinite or outside ±`MAX_COORDINATE`, or (index 0, `Degenerate`) a
+/// spread below [`MIN_SPREAD`].
+pub fn features(space: Space, landmarks: &[f32], out: &mut [f32]) -> Result<(), EvalError> {
+    if landmarks.len() != LANDMARKS * space.dims() {
+        return Err(BufferError::Input.into());
+    }
+    if out.len() != space.features() {
+        return Err(BufferError::Output.into());
+    }
+    check_values(Argument::Landmarks, landmarks)?;
+    if space == Space::World {
+        out.copy_from_slice(landmarks);
+        return Ok(());
+    }
+    let steady = landmarks
+        .get(2 * STEADY.start..2 * STEADY.end)
+        .unwrap_or(&[]);
+    let n = STEADY.len() as f32;
+    let (mut cx, mut cy) = (0.0f32, 0.0f32);
+    for p in steady.chunks_exact(2) {
+        if let [x, y] = p {
+            cx += *x;
+            cy += *y;
+        }
+    }
+    (cx, cy) = (cx / n, cy / n);
+    let mut sq = 0.0f32;
+    for p in steady.chunks_exact(2) {
+        if let [x, y] = p {
+            sq += (*x - cx) * (*x - cx) + (*y - cy) * (*y - cy);
+        }
+    }
+    let r = libm::sqrtf(sq / n);
+    // Also refuses a NaN spread, which finite landmarks within ±MAX_COORDINATE cannot give.
+    if r.is_nan() || r < MIN_SPREAD {
+        return Err(InputError::new(Argument::Landmarks, 0, InputErrorKind::Degenerate).into());
+    }
+    let (shape, extra) = out.split_at_mut(2 * LANDMARKS);
+    for (o, p) in shape.chunks_exact_mut(2).zip(landmarks.chunks_exact(2)) {
+        if let ([ox, oy], [x, y]) = (o, p) {
+            *ox = (*x - cx) / r;
+            *oy = (*y - cy) / r;
+        }
+    }
+    for (o, v) in extra.iter_mut().zip([cx, cy, libm::logf(r)]) {
+        *o = v;
+    }
+    Ok(())
 }
 
 /// A driven pose made one the actor accepts: both 6D rotations orthonormal, translations within

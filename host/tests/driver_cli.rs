@@ -201,3 +201,104 @@ fn bad_tracks_and_another_actors_driver_are_refused_without_output() {
     ]);
     assert!(e.contains("--intrinsics"), "{e}");
 }
+
+/// A fit that starts where the driver puts the head and jaw: with the performance's own heads
+/// and jaws as the driven poses (a perfect driver), 20 steps end nearer the truth than from
+/// rest (the first step's error is F_T's random first output's as much as the start's); `sinew fit --start driver` needs its driver, binds it to the actor
+/// and records its hash, and a driver without `--start driver` is refused.
+#[test]
+fn a_fit_refines_the_drivers_answer() {
+    use sinew_host::fit::aim::{FitConfig, Mode, Start, fit_from};
+    use sinew_host::fit::performance::{Performance, PerformanceConfig, generate};
+    use sinew_host::training::backend::Backend;
+    let Some(data) = sinew_host::io::data::data_dir() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let actor_path = repo("tests/data/aim-ict.sinew");
+    let perf_dir = dir.path().join("perf");
+    let config = PerformanceConfig {
+        seed: 3,
+        frames: 2,
+        ..PerformanceConfig::default()
+    };
+    generate(
+        &data.join("ict-facekit"),
+        Some(Path::new(&actor_path)),
+        &config,
+        &perf_dir,
+    )
+    .unwrap();
+    let perf = Performance::read(&perf_dir).unwrap();
+    let bytes = std::fs::read(&actor_path).unwrap();
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let truth: Vec<[f32; 18]> = perf
+        .manifest
+        .parameters
+        .iter()
+        .map(|p| std::array::from_fn(|i| if i < 9 { p.head[i] } else { p.jaw[i - 9] }))
+        .collect();
+    let fit = |start, driven: Option<&[[f32; 18]]>| {
+        let config = FitConfig {
+            iterations: 20,
+            mode: Mode::TwoD,
+            start,
+            ..FitConfig::default()
+        };
+        fit_from(&actor, &perf, &config, Backend::Flex, None, driven).unwrap()
+    };
+    let rest = fit(Start::Identity, None);
+    let driven = fit(Start::Driver, Some(&truth));
+    let (r, d) = (rest.mean_error_mm, driven.mean_error_mm);
+    assert!(d < 0.8 * r, "from the driver {d} mm, from rest {r} mm");
+    let config = FitConfig {
+        iterations: 20,
+        mode: Mode::TwoD,
+        start: Start::Driver,
+        ..FitConfig::default()
+    };
+    assert!(
+        fit_from(
+            &actor,
+            &perf,
+            &config,
+            Backend::Flex,
+            None,
+            Some(&truth[..1])
+        )
+        .is_err()
+    );
+
+    let driver = dir.path().join("driver.sinew");
+    let mut train = vec![
+        "train",
+        "driver",
+        "--model",
+        &actor_path,
+        "--out",
+        s(&driver),
+    ];
+    train.extend(TRAIN);
+    ok(&train);
+    let out = dir.path().join("fit.sinew");
+    let report = dir.path().join("fit.json");
+    let mut args = vec!["fit", "--model", &actor_path, "--target", s(&perf_dir)];
+    args.extend(["--out", s(&out), "--report", s(&report), "--mode", "2d"]);
+    args.extend(["--iterations", "5", "--start", "driver"]);
+    let e = err(&args);
+    assert!(e.contains("--start driver needs the driver"), "{e}");
+    let mut with = args.clone();
+    with.extend(["--driver", s(&driver)]);
+    ok(&with);
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let hash = format!(
+        "{:016x}",
+        sinew_core::replay::model_hash(&std::fs::read(&driver).unwrap())
+    );
+    assert_eq!(r["fit"]["config"]["driver"], hash.as_str());
+    let start = args.iter().position(|a| *a == "driver").unwrap();
+    let mut identity = with.clone();
+    identity[start] = "identity";
+    let e = err(&identity);
+    assert!(e.contains("only read with --start driver"), "{e}");
+}

@@ -5,7 +5,8 @@
 use burn::tensor::Device;
 use sinew_core::aim::AimActor;
 use sinew_core::driver::{
-    DriveBuffers, Driver, Intrinsics, LANDMARKS, frame_hash, normalise_pixels,
+    DriveBuffers, Driver, Intrinsics, LANDMARKS, STEADY, Space, features, frame_hash,
+    normalise_pixels,
 };
 use sinew_core::error::{Argument, Bound, InputError, InputErrorKind};
 use sinew_core::replay::{ReplayError, model_hash};
@@ -35,7 +36,7 @@ fn baked(actor: &[u8], edit: impl FnOnce(&mut Normalisation)) -> (Vec<u8>, Sampl
     let device: Device = sinew_host::training::backend::Backend::default()
         .device(3)
         .unwrap();
-    let net = network(2 * LANDMARKS, 16, 18 + a.shape_count(), &device);
+    let net = network(config.input.features(), 16, 18 + a.shape_count(), &device);
     let bytes = bake(
         &net,
         &norm,
@@ -123,6 +124,17 @@ fn non_finite_landmarks_are_refused_and_nothing_is_written() {
         );
         assert!(pose.iter().all(|&x| x == 7.0), "nothing is written");
     }
+    // Landmarks that all coincide have no spread to scale by.
+    pose.fill(7.0);
+    assert_eq!(
+        driver.drive(&[0.01; 136], &mut scratch, &mut pose),
+        Err(EvalError::Input(InputError::new(
+            Argument::Landmarks,
+            0,
+            InputErrorKind::Degenerate
+        )))
+    );
+    assert!(pose.iter().all(|&x| x == 7.0), "nothing is written");
     let mut out = vec![0.0; 136];
     let camera = Intrinsics {
         fx: 0.0,
@@ -138,6 +150,49 @@ fn non_finite_landmarks_are_refused_and_nothing_is_written() {
             InputErrorKind::OutOfRange
         )))
     );
+}
+
+#[test]
+fn the_2d_features_separate_where_the_face_is_and_how_large_it_looks_from_its_shape() {
+    let actor_bytes = actor_bytes();
+    let (_, sampler) = baked(&actor_bytes, |_| {});
+    let input = sampler.sample(&mut Stream::seed_from_u64(2)).input;
+    let mut f = vec![0.0; Space::Image.features()];
+    features(Space::Image, &input, &mut f).unwrap();
+    // The steady landmarks are centred on the origin with unit spread.
+    let steady = &f[2 * STEADY.start..2 * STEADY.end];
+    let n = STEADY.len() as f32;
+    let (cx, cy) = (
+        steady.iter().step_by(2).sum::<f32>() / n,
+        steady.iter().skip(1).step_by(2).sum::<f32>() / n,
+    );
+    assert!(cx.abs() < 1e-5 && cy.abs() < 1e-5, "{cx} {cy}");
+    let spread = (steady.iter().map(|x| x * x).sum::<f32>() / n).sqrt();
+    assert!((spread - 1.0).abs() < 1e-5, "{spread}");
+    // The face twice as large and moved: the same shape, its centre and the spread's
+    // logarithm follow.
+    let moved: Vec<f32> = input
+        .chunks_exact(2)
+        .flat_map(|p| {
+            [
+                f[136] + 2.0 * (p[0] - f[136]) + 0.1,
+                f[137] + 2.0 * (p[1] - f[137]) - 0.05,
+            ]
+        })
+        .collect();
+    let mut g = vec![0.0; Space::Image.features()];
+    features(Space::Image, &moved, &mut g).unwrap();
+    for (a, b) in f[..136].iter().zip(&g[..136]) {
+        assert!((a - b).abs() < 1e-4, "{a} against {b}");
+    }
+    assert!((g[136] - f[136] - 0.1).abs() < 1e-5);
+    assert!((g[137] - f[137] + 0.05).abs() < 1e-5);
+    assert!((g[138] - f[138] - 2f32.ln()).abs() < 1e-5);
+    // 3D landmarks are read as they are.
+    let world: Vec<f32> = (0..204).map(|i| i as f32 * 0.1).collect();
+    let mut w = vec![0.0; 204];
+    features(Space::World, &world, &mut w).unwrap();
+    assert_eq!(w, world);
 }
 
 #[test]
@@ -157,7 +212,7 @@ fn a_driver_refuses_another_actor_and_bad_values() {
         matches!(
             e,
             FormatError::ValueOutOfRange {
-                index: 139,
+                index: 142,
                 bound: Bound::PositiveFactor,
                 ..
             }

@@ -127,7 +127,8 @@ pub(crate) struct FitOptions {
     #[arg(long)]
     fw_omega0: Option<f32>,
     /// Where each frame's head starts: rigid (the rigid alignment of the actor's neutral to the
-    /// frame; a 2d fit starts at the identity) or identity.
+    /// frame; a 2d fit starts at the identity), identity, or driver (`sinew fit` only: where the
+    /// landmark driver given with --driver puts the head and jaw).
     #[arg(long, value_enum, default_value_t = FitConfig::default().start)]
     start: Start,
     /// λ_3D of eq. 20, on squared millimetres (the paper gives no value).
@@ -195,6 +196,10 @@ pub(crate) struct FitArgs {
     /// on Ctrl-C) with the same settings; --iterations may be raised.
     #[arg(long)]
     resume: Option<PathBuf>,
+    /// With --start driver: the landmark driver (`sinew train driver`) whose answer for the
+    /// performance's track the fit refines.
+    #[arg(long)]
+    driver: Option<PathBuf>,
     #[command(flatten)]
     options: FitOptions,
 }
@@ -331,6 +336,7 @@ pub(crate) fn fit(args: FitArgs) -> Result<()> {
         &args.report,
         &config,
         args.resume.as_deref(),
+        args.driver.as_deref(),
         args.options.backend,
     )?;
     println!(

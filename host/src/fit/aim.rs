@@ -13,13 +13,18 @@
 //!
 //! Each step draws `points` template vertices (the same for every frame, seeded by the step)
 //! and constrains every frame there; the reported error uses every vertex.
+//!
+//! `setup` builds the fixed tensors, the variables and the empty result; `objective` is one
+//! step's loss; `checkpoint` saves and stops; `finish` the result after the last step; `posing`
+//! the forward pass; `start` where each frame's head and jaw start (at rest, a rigid alignment,
+//! or a landmark driver's answer, which the fit then refines).
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use burn::module::Param;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
-use burn::tensor::{Device, Distribution, Int, Tensor, TensorData};
+use burn::tensor::{Distribution, Tensor};
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
 
@@ -27,16 +32,20 @@ use sinew_core::replay::model_hash;
 
 pub use crate::fit::setup::{Coefficients, Constrain, FitConfig, FitNet, Mode, Start};
 
-use crate::fit::baseline::{BaselineError, mean_error_mm, performance_unit};
+use crate::fit::baseline::{BaselineError, performance_unit};
 use crate::fit::checkpoint::{CHECKPOINT_FORMAT, Checkpointing, EVERY, FitState, target_crc};
 use crate::fit::performance::Performance;
 use crate::fit::setup::{fw_mlp, gelu_mlp};
-use crate::geometry::align::fit_rigid;
 use crate::training::backend::{Backend, BackendError};
 use crate::training::checkpoint::CheckpointError;
 use crate::training::nn::{LayerWeights, tensor, to_vec};
 use crate::training::random::Stream;
-use crate::training::rotation::rotate_6d;
+
+use objective::{TwoDTargets, step_loss};
+use posing::{Fixed, evaluate};
+#[cfg(test)]
+use start::rigid_start;
+use start::{constrained_vertices, starts};
 
 /// The identity head and jaw, `[6D, t]` twice.
 const IDENTITY_18: [f32; 18] = [
@@ -98,85 +107,6 @@ impl ActorCache {
             half,
             mm: unit_mm,
         }
-    }
-}
-
-/// The fixed tensors of a fit.
-struct Fixed {
-    rest: Tensor<2>,
-    k: Tensor<2>,
-    correctives: Tensor<2>,
-    normalised: Tensor<2>,
-    pivot: Tensor<2>,
-    /// Per frame, the head and jaw that a zero F_T output means, `[J, 18]`.
-    start: Tensor<2>,
-    targets: Tensor<3>,
-    frames: usize,
-    shapes: usize,
-}
-
-/// The fit at vertices `idx` of every frame.
-struct Posed {
-    /// s*, `[J·P, 3]`.
-    skin: Tensor<2>,
-    /// s*_lbs, `[J·P, 3]`.
-    lbs: Tensor<2>,
-    /// w, `[J·P, M]` (local) or `[J, M]` (global); `None` for zero coefficients.
-    weights: Option<Tensor<2>>,
-}
-
-fn pose(net: &FitNet, fx: &Fixed, idx: Tensor<1, Int>, coefficients: Coefficients) -> Posed {
-    let (j, m) = (fx.frames, fx.shapes);
-    let p = idx.dims()[0];
-    let per_frame = |t: Tensor<2>| {
-        let [_, w] = t.dims();
-        t.reshape([1, p, w]).repeat_dim(0, j).reshape([j * p, w])
-    };
-    let per_point = |t: Tensor<2>| {
-        let [_, w] = t.dims();
-        t.reshape([j, 1, w]).repeat_dim(1, p).reshape([j * p, w])
-    };
-    let codes = net.codes.val();
-    // AIM eq. 18: [T_g, T_b] = F_T(z_j), from the frame's start
-    let t = per_point(net.ft.forward(codes.clone()) + fx.start.clone());
-    let (head, jaw) = (t.clone().narrow(1, 0, 9), t.narrow(1, 9, 9));
-    let s0 = per_frame(fx.rest.clone().select(0, idx.clone()));
-    let k = per_frame(fx.k.clone().select(0, idx.clone()));
-    let rel = s0.clone() - fx.pivot.clone();
-    let moved =
-        rotate_6d(jaw.clone().narrow(1, 0, 6), rel) + fx.pivot.clone() + jaw.narrow(1, 6, 3);
-    // LBS(s0, T_b, k) = k T_b(s0) + (1 − k) s0
-    let lbs = moved * k.clone() + s0 * k.neg().add_scalar(1.0);
-    let global =
-        |x: Tensor<2>| rotate_6d(head.clone().narrow(1, 0, 6), x) + head.clone().narrow(1, 6, 3);
-    let (weights, per_row) = match coefficients {
-        Coefficients::Zero => (None, None),
-        // AIM eq. 19: w_j = F_W(z_j, c)
-        Coefficients::Local => {
-            let c = per_frame(fx.normalised.clone().select(0, idx.clone()));
-            let w = net.fw.forward(Tensor::cat(vec![per_point(codes), c], 1));
-            (Some(w.clone()), Some(w))
-        }
-        Coefficients::Global => {
-            let w = net.fw.forward(codes);
-            (Some(w.clone()), Some(per_point(w)))
-        }
-    };
-    let body = match per_row {
-        Some(w) => {
-            let e = per_frame(fx.correctives.clone().select(0, idx)).reshape([j * p, m, 3]);
-            let corr = (w.reshape([j * p, m, 1]) * e)
-                .sum_dim(1)
-                .reshape([j * p, 3]);
-            lbs.clone() + corr
-        }
-        None => lbs.clone(),
-    };
-    // AIM eq. 17: s* = T_g(LBS(s0, T_b, k) + Σ w B_e)
-    Posed {
-        skin: global(body),
-        lbs: global(lbs),
-        weights,
     }
 }
 
@@ -287,6 +217,14 @@ pub enum FitError {
         /// The mean error, mm.
         mean_error_mm: f64,
     },
+    /// A fit asked to start where a driver put the head without one driven pose per frame.
+    #[error("a fit from the driver's poses needs one per frame: {frames} frames, {driven} poses")]
+    DriverStart {
+        /// The performance's frames.
+        frames: usize,
+        /// The driven poses given.
+        driven: usize,
+    },
 }
 
 /// Fits `actor` (its bytes, `unit_mm` millimetres per unit) to every frame of `perf`.
@@ -308,6 +246,114 @@ pub fn fit_resumable(
     backend: Backend,
     checkpoints: Option<Checkpointing<'_>>,
 ) -> Result<FitResult, FitError> {
+    fit_from(actor, perf, config, backend, checkpoints, None)
+}
+
+/// [`fit_resumable`] with, for [`Start::Driver`], each frame's head and jaw as a landmark
+/// driver gave them (`[head 9, jaw 9]`, translations in the actor's units): the fit refines the
+/// driver's answer.
+///
+/// # Errors
+/// As [`fit_resumable`]; [`FitError::DriverStart`] without one driven pose per frame.
+pub fn fit_from(
+    actor: &AimActor<'_>,
+    perf: &Performance,
+    config: &FitConfig,
+    backend: Backend,
+    checkpoints: Option<Checkpointing<'_>>,
+    driven: Option<&[[f32; 18]]>,
+) -> Result<FitResult, FitError> {
+    let Setup {
+        cache,
+        unit,
+        device,
+        subset,
+        starts,
+        fx,
+        mut net,
+        mut optim,
+        mut result,
+        mut state,
+    } = setup(actor, perf, config, backend, driven)?;
+    let mm = cache.mm;
+    let evaluate = |net: &FitNet| -> (Vec<Vec<[f32; 3]>>, Vec<f64>) {
+        evaluate(net, &fx, config.coefficients, perf, unit, mm)
+    };
+    match checkpoints {
+        Some(c) if c.resume => {
+            let (n, o, s) = crate::fit::checkpoint::load(c.dir, net, optim, &state)?;
+            (net, optim) = (n, o);
+            result.loss_history = s.loss_history.clone();
+            result.error_history = s.error_history.clone();
+            state = s;
+            state.config = config.clone();
+        }
+        _ => {
+            let (_, errors) = evaluate(&net);
+            result.error_history.push((0, mean(&errors)));
+        }
+    }
+    let start = Instant::now();
+    let bar = crate::training::progress::bar(config.iterations as u64, true);
+    bar.set_position(state.steps_done as u64);
+    let camera = TwoDTargets::new(perf, config, mm, &device)?;
+    for step in state.steps_done..config.iterations {
+        let total = step_loss(
+            &net,
+            &fx,
+            config,
+            camera.as_ref(),
+            subset.as_deref(),
+            step,
+            &mut result.loss_history,
+        );
+        let grads = GradientsParams::from_grads(total.backward(), &net);
+        net = optim.step(config.lr_at(step), net, grads);
+        bar.inc(1);
+        if step + 1 == config.iterations / 2 && config.iterations >= 2 {
+            let (_, errors) = evaluate(&net);
+            result.error_history.push((step + 1, mean(&errors)));
+        }
+        if let Some(c) = checkpoints {
+            let elapsed = start.elapsed().as_secs_f64();
+            if let Err(e) = checkpoint(c, step, config, &net, &optim, &result, &mut state, elapsed)
+            {
+                bar.finish_and_clear();
+                return Err(e);
+            }
+        }
+    }
+    bar.finish_and_clear();
+    result.seconds_per_frame = (state.seconds + start.elapsed().as_secs_f64()) / fx.frames as f64;
+    let (meshes, errors) = evaluate(&net);
+    finish(
+        result, &net, &fx, &cache, &starts, perf, config, meshes, errors,
+    )
+}
+
+/// What a fit holds from its setup to its end.
+struct Setup {
+    cache: ActorCache,
+    unit: crate::io::units::Unit,
+    device: burn::tensor::Device,
+    subset: Option<Vec<i64>>,
+    starts: Vec<[f32; 18]>,
+    fx: Fixed,
+    net: FitNet,
+    optim: ModuleOptimizer,
+    result: FitResult,
+    state: FitState,
+}
+
+/// Checks the settings and the frames, and builds the fixed tensors, the variables (seeded),
+/// Adam, the empty result and the checkpoint state.
+fn setup(
+    actor: &AimActor<'_>,
+    perf: &Performance,
+    config: &FitConfig,
+    backend: Backend,
+    driven: Option<&[[f32; 18]]>,
+) -> Result<Setup, FitError> {
     if !(config.iterations > 0 && config.points > 0 && config.code > 0 && config.hidden > 0) {
         return Err(FitError::EmptyConfig);
     }
@@ -334,10 +380,7 @@ pub fn fit_resumable(
         .map(|x| x * mm)
         .collect();
     let subset = constrained_vertices(perf, config, &mut step_rng(config.seed, u64::MAX))?;
-    let starts = match config.start {
-        Start::Rigid => rigid_start(&cache, perf, config.mode, subset.as_deref(), mm),
-        Start::Identity => vec![IDENTITY_18; j],
-    };
+    let starts = starts(&cache, perf, config, subset.as_deref(), driven)?;
     let fx = Fixed {
         start: tensor(starts.iter().flatten().copied().collect(), [j, 18], &device),
         rest: tensor(cache.rest.clone(), [v, 3], &device),
@@ -347,13 +390,14 @@ pub fn fit_resumable(
         pivot: tensor(cache.pivot.to_vec(), [1, 3], &device),
         targets: tensor(targets, [j, v, 3], &device),
         frames: j,
+        vertices: v,
         shapes: m,
     };
     let fw_inputs = match config.coefficients {
         Coefficients::Local => config.code + 3,
         _ => config.code,
     };
-    let mut net = FitNet {
+    let net = FitNet {
         codes: Param::from_tensor(Tensor::random(
             [j, config.code],
             Distribution::Normal(0.0, 0.01),
@@ -362,8 +406,8 @@ pub fn fit_resumable(
         ft: gelu_mlp(config.code, config.hidden, 18, &device),
         fw: fw_mlp(config, fw_inputs, m.max(1), &device),
     };
-    let mut optim: ModuleOptimizer = AdamConfig::new().with_epsilon(1e-8).init();
-    let mut result = FitResult {
+    let optim: ModuleOptimizer = AdamConfig::new().with_epsilon(1e-8).init();
+    let result = FitResult {
         config: config.clone(),
         mean_error_mm: 0.0,
         frame_error_mm: Vec::new(),
@@ -386,10 +430,7 @@ pub fn fit_resumable(
             cache.half,
         ],
     };
-    let evaluate = |net: &FitNet| -> (Vec<Vec<[f32; 3]>>, Vec<f64>) {
-        evaluate(net, &fx, config.coefficients, perf, unit, mm)
-    };
-    let mut state = FitState {
+    let state = FitState {
         format: CHECKPOINT_FORMAT.to_owned(),
         config: config.clone(),
         actor: format!("{:016x}", model_hash(actor.file().bytes())),
@@ -400,96 +441,71 @@ pub fn fit_resumable(
         seconds: 0.0,
         files: Default::default(),
     };
-    match checkpoints {
-        Some(c) if c.resume => {
-            let (n, o, s) = crate::fit::checkpoint::load(c.dir, net, optim, &state)?;
-            (net, optim) = (n, o);
-            result.loss_history = s.loss_history.clone();
-            result.error_history = s.error_history.clone();
-            state = s;
-            state.config = config.clone();
-        }
-        _ => {
-            let (_, errors) = evaluate(&net);
-            result.error_history.push((0, mean(&errors)));
+    Ok(Setup {
+        cache,
+        unit,
+        device,
+        subset,
+        starts,
+        fx,
+        net,
+        optim,
+        result,
+        state,
+    })
+}
+
+/// After step `step`: saves a checkpoint every [`EVERY`] steps, after the last and when Ctrl-C
+/// asks to stop (`elapsed`: this invocation's seconds so far), and then stops with
+/// [`FitError::Stopped`].
+#[allow(clippy::too_many_arguments)]
+fn checkpoint(
+    c: Checkpointing<'_>,
+    step: usize,
+    config: &FitConfig,
+    net: &FitNet,
+    optim: &ModuleOptimizer,
+    result: &FitResult,
+    state: &mut FitState,
+    elapsed: f64,
+) -> Result<(), FitError> {
+    let stop = crate::training::interrupt::take_stop_request();
+    if stop || (step + 1).is_multiple_of(EVERY) || step + 1 == config.iterations {
+        state.steps_done = step + 1;
+        state.loss_history = result.loss_history.clone();
+        state.error_history = result.error_history.clone();
+        let saved = FitState {
+            seconds: state.seconds + elapsed,
+            ..state.clone()
+        };
+        crate::fit::checkpoint::save(c.dir, net, optim, saved)?;
+        if stop {
+            return Err(FitError::Stopped {
+                step: step + 1,
+                iterations: config.iterations,
+                dir: c.dir.to_owned(),
+            });
         }
     }
-    let start = Instant::now();
-    let bar = crate::training::progress::bar(config.iterations as u64, true);
-    bar.set_position(state.steps_done as u64);
-    let camera = TwoDTargets::new(perf, config, mm, &device)?;
-    for step in state.steps_done..config.iterations {
-        // Each step's draw is its own (seed, step), so a resumed fit draws what an unbroken one does.
-        let mut rng = step_rng(config.seed, step as u64);
-        let draw: Vec<i64> = match &subset {
-            None => (0..config.points).map(|_| rng.below(v) as i64).collect(),
-            Some(s) if s.len() <= config.points || camera.is_some() => s.clone(),
-            Some(s) => (0..config.points).map(|_| s[rng.below(s.len())]).collect(),
-        };
-        let n = draw.len();
-        let idx = Tensor::<1, Int>::from_data(TensorData::new(draw, [n]), &device);
-        let posed = pose(&net, &fx, idx.clone(), config.coefficients);
-        let mut total = match &camera {
-            None => {
-                let gt = fx.targets.clone().select(1, idx).reshape([j * n, 3]);
-                let sq = |a: Tensor<2>| (a - gt.clone()).square().sum_dim(1).mean();
-                // AIM eq. 20
-                (sq(posed.skin) + sq(posed.lbs)).mul_scalar(config.lambda_3d)
-            }
-            Some(c) => {
-                let sq =
-                    |a: Tensor<2>| (c.project(a) - c.pixels.clone()).square().sum_dim(1).mean();
-                // AIM eq. 21
-                (sq(posed.skin) + sq(posed.lbs)).mul_scalar(config.lambda_2d)
-            }
-        };
-        // AIM eq. 22
-        if let Some(w) = posed.weights {
-            total = total + w.square().sum_dim(1).mean().mul_scalar(config.lambda_w);
-        }
-        // AIM eq. 23
-        if j > 1 {
-            let z = net.codes.val();
-            let d = z.clone().narrow(0, 1, j - 1) - z.narrow(0, 0, j - 1);
-            total = total + d.square().sum_dim(1).mean().mul_scalar(config.lambda_t);
-        }
-        if step % 10 == 0 {
-            let loss = to_vec(total.clone()).first().copied().unwrap_or(f32::NAN);
-            result.loss_history.push((step, f64::from(loss)));
-        }
-        let grads = GradientsParams::from_grads(total.backward(), &net);
-        net = optim.step(config.lr_at(step), net, grads);
-        bar.inc(1);
-        if step + 1 == config.iterations / 2 && config.iterations >= 2 {
-            let (_, errors) = evaluate(&net);
-            result.error_history.push((step + 1, mean(&errors)));
-        }
-        if let Some(c) = checkpoints {
-            let stop = crate::training::interrupt::take_stop_request();
-            if stop || (step + 1) % EVERY == 0 || step + 1 == config.iterations {
-                state.steps_done = step + 1;
-                state.loss_history = result.loss_history.clone();
-                state.error_history = result.error_history.clone();
-                let seconds = state.seconds + start.elapsed().as_secs_f64();
-                let saved = FitState {
-                    seconds,
-                    ..state.clone()
-                };
-                crate::fit::checkpoint::save(c.dir, &net, &optim, saved)?;
-                if stop {
-                    bar.finish_and_clear();
-                    return Err(FitError::Stopped {
-                        step: step + 1,
-                        iterations: config.iterations,
-                        dir: c.dir.to_owned(),
-                    });
-                }
-            }
-        }
-    }
-    bar.finish_and_clear();
-    result.seconds_per_frame = (state.seconds + start.elapsed().as_secs_f64()) / j as f64;
-    let (meshes, errors) = evaluate(&net);
+    Ok(())
+}
+
+/// The result after the last step: every frame's error (`meshes`, `errors`: the fit at every
+/// vertex), the plausibility measures, the head and jaw per frame, the codes, F_W and, for a
+/// global fit, its coefficients.
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    mut result: FitResult,
+    net: &FitNet,
+    fx: &Fixed,
+    cache: &ActorCache,
+    starts: &[[f32; 18]],
+    perf: &Performance,
+    config: &FitConfig,
+    meshes: Vec<Vec<[f32; 3]>>,
+    errors: Vec<f64>,
+) -> Result<FitResult, FitError> {
+    let (mm, m) = (cache.mm, fx.shapes);
     result.mean_error_mm = mean(&errors);
     result
         .error_history
@@ -510,7 +526,7 @@ pub fn fit_resumable(
     result.target_worst_edge_change = worst_edge_change(&perf.polygons, &neutral, &perf.frames);
     result.meshes = meshes;
     let t = to_vec(net.ft.forward(net.codes.val()));
-    for (row, start) in t.chunks_exact(18).zip(&starts) {
+    for (row, start) in t.chunks_exact(18).zip(starts) {
         let add = |o: usize| -> [f32; 9] {
             std::array::from_fn(|i| {
                 let x = row[o + i] + start[o + i];
@@ -528,144 +544,6 @@ pub fn fit_resumable(
         result.weights = Some(w.chunks_exact(m.max(1)).map(<[f32]>::to_vec).collect());
     }
     Ok(result)
-}
-
-/// Per frame, where F_T starts (its zero output): the head at the rigid motion (Horn) that best
-/// takes the actor's neutral s0 to the frame's constrained vertices, and the jaw at rest; the
-/// identity for both in a 2D fit, or when no rigid motion aligns them.
-fn rigid_start(
-    cache: &ActorCache,
-    perf: &Performance,
-    mode: Mode,
-    subset: Option<&[i64]>,
-    mm: f32,
-) -> Vec<[f32; 18]> {
-    if mode == Mode::TwoD {
-        return vec![IDENTITY_18; perf.frames.len()];
-    }
-    let rest: Vec<[f32; 3]> = cache
-        .rest
-        .chunks_exact(3)
-        .map(|p| [p[0], p[1], p[2]])
-        .collect();
-    let chosen: Vec<usize> = match subset {
-        Some(s) => s.iter().map(|&i| i as usize).collect(),
-        None => (0..rest.len()).collect(),
-    };
-    let from: Vec<[f32; 3]> = chosen.iter().map(|&i| rest[i]).collect();
-    perf.frames
-        .iter()
-        .map(|frame| {
-            let to: Vec<[f32; 3]> = chosen.iter().map(|&i| frame[i].map(|x| x * mm)).collect();
-            match fit_rigid(&from, &to) {
-                Some(r) => {
-                    let mut start = IDENTITY_18;
-                    for i in 0..3 {
-                        // 6D: the rotation's first two columns.
-                        start[i] = r.rotation[i][0] as f32;
-                        start[3 + i] = r.rotation[i][1] as f32;
-                        start[6 + i] = r.translation[i] as f32;
-                    }
-                    start
-                }
-                None => IDENTITY_18,
-            }
-        })
-        .collect()
-}
-
-/// The vertices a 3D fit may draw from (`None`: all of them), or the landmark vertices of a 2D
-/// fit; a fraction is drawn once, seeded.
-fn constrained_vertices(
-    perf: &Performance,
-    config: &FitConfig,
-    rng: &mut Stream,
-) -> Result<Option<Vec<i64>>, FitError> {
-    let v = perf.frames.first().map_or(0, Vec::len);
-    let landmarks = || -> Result<Vec<i64>, FitError> {
-        let l = &perf.manifest.landmarks.vertices;
-        if l.is_empty() || !l.iter().all(|&i| (i as usize) < v) {
-            return Err(FitError::Landmarks {
-                path: perf.dir.join("performance.json"),
-            });
-        }
-        Ok(l.iter().map(|&i| i64::from(i)).collect())
-    };
-    Ok(match (config.mode, config.constrain) {
-        (Mode::TwoD, _) | (Mode::ThreeD, Constrain::Landmarks) => Some(landmarks()?),
-        (Mode::ThreeD, Constrain::All) => None,
-        (Mode::ThreeD, Constrain::Fraction(p)) => {
-            let n = ((p * v as f32).round() as usize).clamp(1, v.max(1));
-            // A seeded partial Fisher–Yates shuffle: the first n of a random permutation.
-            let mut all: Vec<i64> = (0..v as i64).collect();
-            for i in 0..n {
-                let r = i + rng.below(v - i);
-                all.swap(i, r);
-            }
-            all.truncate(n);
-            Some(all)
-        }
-    })
-}
-
-/// A 2D fit's targets: the landmarks' pixels per frame and the camera, in mm.
-struct TwoDTargets {
-    /// `[J·L, 2]`, frame-major as `pose` orders its rows.
-    pixels: Tensor<2>,
-    /// Camera centre in mm, `[1, 3]`.
-    position: Tensor<2>,
-    focal: [f32; 2],
-    principal: [f32; 2],
-}
-
-impl TwoDTargets {
-    fn new(
-        perf: &Performance,
-        config: &FitConfig,
-        mm: f32,
-        device: &Device,
-    ) -> Result<Option<Self>, FitError> {
-        if config.mode != Mode::TwoD {
-            return Ok(None);
-        }
-        let m = &perf.manifest;
-        let l = m.landmarks.vertices.len();
-        let pixels: Vec<f32> = m
-            .landmarks
-            .pixels
-            .iter()
-            .flatten()
-            .flatten()
-            .copied()
-            .collect();
-        if !(m.landmarks.pixels.len() == perf.frames.len()
-            && pixels.len() == perf.frames.len() * l * 2)
-        {
-            return Err(FitError::LandmarkTracks {
-                path: perf.dir.join("performance.json"),
-            });
-        }
-        let c = &m.camera;
-        Ok(Some(Self {
-            pixels: tensor(pixels, [perf.frames.len() * l, 2], device),
-            position: tensor(c.position.iter().map(|x| x * mm).collect(), [1, 3], device),
-            focal: [c.fx, c.fy],
-            principal: [c.cx, c.cy],
-        }))
-    }
-
-    /// `Camera::project` on rows of mm positions: `[n, 3]` → `[n, 2]`.
-    fn project(&self, x: Tensor<2>) -> Tensor<2> {
-        let rel = x - self.position.clone();
-        let depth = rel.clone().narrow(1, 2, 1).neg();
-        let u = (rel.clone().narrow(1, 0, 1) / depth.clone())
-            .mul_scalar(self.focal[0])
-            .add_scalar(self.principal[0]);
-        let v = (rel.narrow(1, 1, 1) / depth)
-            .mul_scalar(-self.focal[1])
-            .add_scalar(self.principal[1]);
-        Tensor::cat(vec![u, v], 1)
-    }
 }
 
 /// Mean pixel distance between the landmark vertices of `meshes`, projected by the performance's
@@ -736,39 +614,9 @@ fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len().max(1) as f64
 }
 
-/// Every frame's fitted skin over all vertices (in chunks), in the actor's units, and each
-/// frame's mean error in mm.
-fn evaluate(
-    net: &FitNet,
-    fx: &Fixed,
-    coefficients: Coefficients,
-    perf: &Performance,
-    unit: crate::io::units::Unit,
-    mm: f32,
-) -> (Vec<Vec<[f32; 3]>>, Vec<f64>) {
-    let v = perf.frames.first().map_or(0, Vec::len);
-    let j = fx.frames;
-    let device = fx.rest.device();
-    let mut meshes = vec![Vec::with_capacity(v); j];
-    for start in (0..v).step_by(2048) {
-        let n = 2048.min(v - start);
-        let idx: Vec<i64> = (start..start + n).map(|i| i as i64).collect();
-        let idx = Tensor::<1, Int>::from_data(TensorData::new(idx, [n]), &device);
-        let skin = to_vec(pose(net, fx, idx, coefficients).skin);
-        for (f, rows) in skin.chunks_exact(3 * n).enumerate() {
-            meshes[f].extend(
-                rows.chunks_exact(3)
-                    .map(|p| [p[0] / mm, p[1] / mm, p[2] / mm]),
-            );
-        }
-    }
-    let errors = meshes
-        .iter()
-        .zip(&perf.frames)
-        .map(|(a, b)| mean_error_mm(a, b, unit))
-        .collect();
-    (meshes, errors)
-}
+mod objective;
+mod posing;
+mod start;
 
 #[cfg(test)]
 mod tests;

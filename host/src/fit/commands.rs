@@ -4,11 +4,11 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result, anyhow, bail};
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
 
-use crate::fit::aim::{Coefficients, Constrain, FitConfig, FitResult, Mode, fit, fit_resumable};
+use crate::fit::aim::{Coefficients, Constrain, FitConfig, FitResult, Mode, Start, fit, fit_from};
 use crate::fit::bake::{bake, play};
 use crate::fit::baseline::{Basis, Gbs, PATCH_GRID, Pbs, actor_shape_names, fit_performance};
 use crate::fit::checkpoint::Checkpointing;
@@ -36,7 +36,9 @@ fn read_actor(model: &Path) -> Result<Vec<u8>> {
 /// `sinew fit`: fits the actor to the performance, checkpointing into `OUT.ckpt/` (or
 /// continuing from `resume`); bakes the fit into `out` (a `.sinew` performance, docs/FORMAT.md),
 /// writes the core's playback of it into `OUT_STEM.meshes/` and the report (with per-frame head,
-/// jaw and, for a global fit, coefficients).
+/// jaw and, for a global fit, coefficients). With `driver` (and [`Start::Driver`]), each frame's
+/// head and jaw start where the landmark driver puts them for the performance's own track.
+#[allow(clippy::too_many_arguments)]
 pub fn fit_command(
     model: &Path,
     target: &Path,
@@ -44,6 +46,7 @@ pub fn fit_command(
     report: &Path,
     config: &FitConfig,
     resume: Option<&Path>,
+    driver: Option<&Path>,
     backend: Backend,
 ) -> Result<FitReport> {
     let bytes = read_actor(model)?;
@@ -54,7 +57,30 @@ pub fn fit_command(
         dir: resume.unwrap_or(&own),
         resume: resume.is_some(),
     };
-    let result = fit_resumable(&actor, &perf, config, backend, Some(checkpoints))?;
+    let (config, driven) = match (config.start, driver) {
+        (Start::Driver, Some(path)) => {
+            let (hash, driven) = driven_starts(model, &bytes, path, target)?;
+            let config = FitConfig {
+                driver: Some(hash),
+                ..config.clone()
+            };
+            (config, Some(driven))
+        }
+        (Start::Driver, None) => bail!("--start driver needs the driver (--driver D.sinew)"),
+        (_, Some(path)) => bail!(
+            "{}: a driver is only read with --start driver",
+            path.display()
+        ),
+        (_, None) => (config.clone(), None),
+    };
+    let result = fit_from(
+        &actor,
+        &perf,
+        &config,
+        backend,
+        Some(checkpoints),
+        driven.as_deref(),
+    )?;
     let baked = bake(&bytes, &result)?;
     let (played, _) = play(&bytes, &baked)?;
     let stem = out
@@ -168,6 +194,31 @@ fn aim_rows(config: &FitConfig, constraints: bool) -> Vec<(&'static str, FitConf
     rows
 }
 
+/// The driver at `driver_path` bound to the actor at `model` (its `bytes`) and run over the
+/// performance at `target` (its 2D track, or its meshes' landmarks for a 3D driver): its content
+/// hash (16 hex digits) and each frame's head and jaw.
+fn driven_starts(
+    model: &Path,
+    bytes: &[u8],
+    driver_path: &Path,
+    target: &Path,
+) -> Result<(String, Vec<[f32; 18]>)> {
+    use crate::fit::driver::{drive, track};
+    let driver_bytes = crate::io::container::read(driver_path)?;
+    let bound = drive::bind(model, bytes, driver_path, &driver_bytes)?;
+    let track = track::read(target, bound.driver.space(), None, 0.0)?;
+    let poses = drive::poses(&bound, driver_path, &track, None)
+        .with_context(|| format!("{}: driving", target.display()))?;
+    let starts = poses
+        .iter()
+        .map(|p| std::array::from_fn(|i| p[i]))
+        .collect();
+    Ok((
+        format!("{:016x}", sinew_core::replay::model_hash(&driver_bytes)),
+        starts,
+    ))
+}
+
 /// `sinew eval fit`: GBS, PBS and the global and local AIM fits on one performance; with
 /// `constraints` also the local fit to 10 % of the vertices, to the 68 landmarks, and to the 2D
 /// landmark tracks (AIM Fig. 7, Sec. 4.2.1); with `heatmaps` the four methods' error heatmaps of
@@ -261,6 +312,7 @@ pub fn retarget_command(
                 &path,
                 &out.join("source.json"),
                 config,
+                None,
                 None,
                 *backend,
             )?;

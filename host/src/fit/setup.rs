@@ -46,6 +46,9 @@ pub enum Start {
     Rigid,
     /// At the identity.
     Identity,
+    /// Where a landmark driver put each frame's head and jaw (`sinew fit --start driver
+    /// --driver D.sinew`): the fit refines the driver's answer.
+    Driver,
 }
 
 impl Start {
@@ -122,6 +125,10 @@ pub struct FitConfig {
     /// Where each frame's head starts.
     #[serde(default = "Start::before_rigid")]
     pub start: Start,
+    /// For [`Start::Driver`], the driver's content hash (16 hex digits), so that a fit resumed
+    /// from another driver's answer is refused.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub driver: Option<String>,
     /// Local, global or no coefficients.
     pub coefficients: Coefficients,
     /// 3D meshes or 2D landmarks.
@@ -181,6 +188,7 @@ impl Default for FitConfig {
             lambda_2d: 0.25,
             fw_omega0: None,
             start: Start::Rigid,
+            driver: None,
             coefficients: Coefficients::Local,
             mode: Mode::ThreeD,
             constrain: Constrain::All,

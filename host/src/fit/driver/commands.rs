@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail, ensure};
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
-use sinew_core::driver::{Intrinsics, LANDMARKS};
+use sinew_core::driver::Intrinsics;
 use sinew_core::filter::OneEuro;
 use sinew_core::replay::model_hash;
 
@@ -78,10 +78,13 @@ pub fn train_driver(opts: &TrainDriver) -> Result<TrainDriverReport> {
     let vertices = super::landmark_vertices(&opts.model, &actor)?;
     let sampler = Sampler::new(&actor, &vertices, config);
     let norm = Normalisation::measure(&sampler, config.seed);
+    let g = super::metric::gauss_newton(&actor)
+        .map_err(|e| anyhow!("{}: posing the actor at rest: {e}", opts.model.display()))?;
+    let metric = super::metric::normalised(&g, &norm.output_scale);
     let hash = model_hash(&bytes);
     let actor_hex = format!("{hash:016x}");
     let device = opts.backend.autodiff_device(config.seed)?;
-    let inputs = LANDMARKS * config.input.dims();
+    let inputs = config.input.features();
     let outputs = 18 + actor.shape_count();
     let fresh = Run::new(inputs, outputs, config, &device);
     let (dir, mut run) = match &opts.resume {
@@ -101,6 +104,7 @@ pub fn train_driver(opts: &TrainDriver) -> Result<TrainDriverReport> {
         run = run.advance(
             &sampler,
             &norm,
+            &metric,
             config,
             &device,
             until,

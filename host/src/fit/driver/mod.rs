@@ -10,6 +10,7 @@ pub mod bake;
 pub mod commands;
 pub mod drive;
 pub mod measure;
+pub mod metric;
 pub mod sample;
 pub mod track;
 pub mod train;
@@ -65,6 +66,8 @@ pub struct DriverConfig {
     pub noise_3d: f64,
     /// Chance that a sample loses a run of 3–10 landmarks to the tracker's shape prior.
     pub dropout: f64,
+    /// Weight of the pose's own squared error beside the posed vertices' (both normalised).
+    pub pose_weight: f64,
 }
 
 impl Default for DriverConfig {
@@ -79,7 +82,7 @@ impl Default for DriverConfig {
             seed: 1,
             active: 0.35,
             head_rotation: [0.25, 0.35, 0.15],
-            head_translation: [3.0, 3.0, -25.0, 10.0],
+            head_translation: [3.0, 3.0, -10.0, 10.0],
             jaw_opening: 0.12,
             jaw_yaw: 0.03,
             jaw_translation: 0.05,
@@ -88,6 +91,7 @@ impl Default for DriverConfig {
             noise: 3.0,
             noise_3d: 0.05,
             dropout: 0.2,
+            pose_weight: 0.1,
         }
     }
 }

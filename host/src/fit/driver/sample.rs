@@ -34,11 +34,14 @@ pub struct Sampler {
     config: DriverConfig,
 }
 
-/// One sample: the landmarks as the driver reads them, and the pose that made them.
+/// One sample: the landmarks as a tracker gives them, their features as the driver's network
+/// reads them, and the pose that made them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sample {
     /// `[68 × dims]`.
     pub input: Vec<f32>,
+    /// `[dims' features]`: `sinew_core::driver::features` of `input`.
+    pub features: Vec<f32>,
     /// `[18 + M]`: head, jaw, coefficients.
     pub pose: Vec<f32>,
 }
@@ -90,8 +93,24 @@ impl Sampler {
         }
     }
 
-    /// The sample of `rng`'s next draws.
+    /// The sample of `rng`'s next draws: the first whose landmarks the core accepts (a face
+    /// within the drawn range always is; a refused draw is drawn again, from the same stream).
     pub fn sample(&self, rng: &mut Stream) -> Sample {
+        loop {
+            let (input, pose) = self.draw(rng);
+            let mut features = vec![0.0; self.space.features()];
+            if sinew_core::driver::features(self.space, &input, &mut features).is_ok() {
+                return Sample {
+                    input,
+                    features,
+                    pose,
+                };
+            }
+        }
+    }
+
+    /// One draw: the landmarks and the pose.
+    fn draw(&self, rng: &mut Stream) -> (Vec<f32>, Vec<f32>) {
         let c = &self.config;
         let m = self.shapes;
         let weights: Vec<f32> = (0..m)
@@ -175,7 +194,7 @@ impl Sampler {
                 }
             }
         }
-        Sample { input, pose }
+        (input, pose)
     }
 
     /// The landmarks of the actor in `pose` (`[18 + M]`), through the core's skinning.

@@ -1,6 +1,8 @@
-//! Training a driver: an MLP (three hidden GELU layers) from the normalised landmarks to the
-//! normalised pose, Adam on the mean squared error over fresh samples each step, checkpoints in
-//! the shared layout of `training::checkpoint`.
+//! Training a driver: an MLP (three hidden GELU layers) from the normalised landmark features to
+//! the normalised pose, Adam over fresh samples each step on the posed vertices' squared error
+//! (the Gauss–Newton metric of `metric`) plus a little of the pose's own squared error (which
+//! keeps what no vertex sees, such as a 6D column's length, near its training values),
+//! checkpoints in the shared layout of `training::checkpoint`.
 
 use std::path::Path;
 
@@ -66,7 +68,7 @@ impl Normalisation {
                 sd.iter().map(|&s| s as f32).collect(),
             )
         };
-        let (input_mean, input_sd) = stats(samples.iter().map(|s| &s.input).collect());
+        let (input_mean, input_sd) = stats(samples.iter().map(|s| &s.features).collect());
         let (output_offset, output_scale) = stats(samples.iter().map(|s| &s.pose).collect());
         Self {
             input_mean,
@@ -77,7 +79,7 @@ impl Normalisation {
     }
 
     fn input(&self, s: &Sample) -> Vec<f32> {
-        s.input
+        s.features
             .iter()
             .zip(self.input_mean.iter().zip(&self.input_scale))
             .map(|(x, (m, k))| ((x - m) * k).clamp(-MAX_INPUT, MAX_INPUT))
@@ -141,11 +143,13 @@ impl Run {
     }
 
     /// Steps until `until` are done or `stop` says so after a step; `observe` sees each loss.
+    /// `metric` is the vertex metric on normalised outputs (`metric::normalised`, `[P, P]`).
     #[allow(clippy::too_many_arguments)]
     pub fn advance(
         mut self,
         sampler: &Sampler,
         norm: &Normalisation,
+        metric: &[f32],
         config: &DriverConfig,
         device: &Device,
         until: usize,
@@ -164,8 +168,11 @@ impl Run {
             let p = y.len() / config.batch;
             let x: Tensor<2> = tensor(x, [config.batch, d], device);
             let y: Tensor<2> = tensor(y, [config.batch, p], device);
+            let metric: Tensor<2> = tensor(metric.to_vec(), [p, p], device);
             let diff = self.net.forward(x) - y;
-            let loss = (diff.clone() * diff).mean();
+            // êᵀ M ê per sample, then the mean over the batch and the outputs.
+            let vertices = (diff.clone().matmul(metric) * diff.clone()).mean();
+            let loss = vertices + (diff.clone() * diff).mean().mul_scalar(config.pose_weight);
             let value = to_vec(loss.clone().detach())
                 .first()
                 .copied()
