@@ -136,15 +136,15 @@ impl<'a> Driver<'a> {
         let space = match net.inputs() {
             n if n == Space::Image.features() => Space::Image,
             n if n == Space::World.features() => Space::World,
-            _ => return Err(FormatError::IncompatibleShapes),
+            _ => return Err(FormatError::incompatible_shapes(NETWORK)),
         };
         let outputs = net.outputs();
         if outputs <= AIM_POSE_LEN {
-            return Err(FormatError::IncompatibleShapes);
+            return Err(FormatError::incompatible_shapes(NETWORK));
         }
         let shapes = outputs - AIM_POSE_LEN;
         if shapes > MAX_SHAPES {
-            return Err(FormatError::LimitExceeded);
+            return Err(FormatError::limit_exceeded(NETWORK, shapes, MAX_SHAPES));
         }
         let d = net.inputs();
         let input = file.f32_tensor(INPUT_NORM, &[2, d as u32])?;
