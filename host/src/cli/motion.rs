@@ -151,9 +151,10 @@ pub(crate) struct GenerateArgs {
     /// Seed of the noise.
     #[arg(long, env = "SINEW_SEED", default_value_t = 1)]
     seed: u64,
-    /// The neutral face (.obj or .ply) in the decoder's topology.
+    /// The neutral face (.obj or .ply) in the decoder's topology [default: the decoder's own
+    /// template neutral and triangles; `sinew s2d template` writes it as a mesh].
     #[arg(long)]
-    neutral: PathBuf,
+    neutral: Option<PathBuf>,
     /// Scale of the motion (eq. 5; 1: a length drawn from the label's training motions, or for
     /// interpolate the two labels' mean lengths blended).
     #[arg(long, default_value_t = 1.0)]
