@@ -140,6 +140,7 @@ fn each_label_keeps_its_training_curves_length() {
         seed: 5,
         identities: 2,
         per_class: 3,
+        ..Default::default()
     };
     let set = crate::motion::data::generate(&kit, &config).unwrap();
     let data = TangentData::from_set(&set).unwrap();
