@@ -5,7 +5,7 @@
 //! bad input.
 
 mod common;
-use common::sinew;
+use common::{ok as ok_run, sinew};
 
 use sinew_host::motion::data::{MotionSet, Split};
 
@@ -61,6 +61,34 @@ fn data_motions_writes_a_seeded_split_set() {
             "{file}"
         );
     }
+
+    // How hard the set is: the ground truth's accuracy alone, per label and confused.
+    let gt = dir.path().join("gt.json");
+    let stdout = ok_run(&[
+        "eval",
+        "motion",
+        "--motions",
+        out.to_str().unwrap(),
+        "--report",
+        gt.to_str().unwrap(),
+        "--epochs",
+        "2",
+        "--quiet",
+    ]);
+    assert!(
+        stdout.contains("ground truth (Gen-LM)") && stdout.contains("mouth_side"),
+        "{stdout}"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&gt).unwrap()).unwrap();
+    let confusion = json["confusion"].as_array().unwrap();
+    assert_eq!(confusion.len(), 12);
+    let counted: u64 = confusion
+        .iter()
+        .flat_map(|r| r.as_array().unwrap())
+        .map(|n| n.as_u64().unwrap())
+        .sum();
+    assert_eq!(counted, 12, "one test sequence per label");
+    assert_eq!(json["set"]["variation"]["difficulty"], 1.0);
 
     // A few training steps: the generator, its loss curves, the report and a checkpoint.
     let model = dir.path().join("gen.sinew");
@@ -432,6 +460,45 @@ fn data_motions_names_bad_input() {
     assert!(!run.status.success());
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(stderr.contains("at least 2 sequences"), "{stderr}");
+    // Knobs out of range are refused naming the option, before the kit is read.
+    for (knob, value, says) in [
+        (
+            "--difficulty",
+            "-1",
+            "--difficulty -1: must be a finite number of at least 0",
+        ),
+        ("--mix", "1.5", "--mix 1.5: must be a number from 0 to 1"),
+        ("--coactivation", "NaN", "--coactivation NaN"),
+    ] {
+        let flag = format!("{knob}={value}");
+        let run = sinew(&[
+            "data",
+            "motions",
+            "--data",
+            missing.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            &flag,
+        ]);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success() && stderr.contains(says), "{stderr}");
+    }
+    // The evaluation takes a generator and a decoder together, or neither.
+    let run = sinew(&[
+        "eval",
+        "motion",
+        "--model",
+        "gen.sinew",
+        "--motions",
+        missing.to_str().unwrap(),
+        "--report",
+        dir.path().join("r.json").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("--decoder"),
+        "{stderr}"
+    );
     // Training on a folder that holds no motion set names its manifest.
     let run = sinew(&[
         "train",

@@ -121,7 +121,7 @@ fn sinew_generate_writes_the_pinned_frames() {
     let opts = Generate {
         model: golden_dir().join(GENERATOR),
         decoder: golden_dir().join(DECODER),
-        neutral,
+        neutral: Some(neutral),
         seed: SEED,
         intensity: INTENSITY,
         out: out.clone(),

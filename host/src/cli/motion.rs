@@ -10,6 +10,8 @@ use sinew_host::motion::data::{MotionsConfig, Split, generate_to};
 use sinew_host::motion::evaluate::{EvalMotion, EvalSettings, eval_motion};
 use sinew_host::motion::gan::{GanConfig, Pairing};
 use sinew_host::motion::generate::Generate;
+use sinew_host::motion::ground_truth::GroundTruth;
+use sinew_host::motion::variation::Variation;
 use sinew_host::training::backend::Backend;
 
 /// `sinew data motions`'s options.
@@ -30,6 +32,69 @@ pub(crate) struct MotionsArgs {
     /// Sequences per identity and label; the first of each is a test sequence.
     #[arg(long, default_value_t = MotionsConfig::default().per_class)]
     per_class: usize,
+    #[command(flatten)]
+    variation: VariationArgs,
+}
+
+/// The knobs of what makes sequences of one label differ (docs/MOTION.md, "What makes sequences
+/// differ"); each spread and probability is multiplied by --difficulty.
+#[derive(Debug, Args)]
+pub(crate) struct VariationArgs {
+    /// Scales every knob below (0: each label's fixed pattern, timing and jitter only).
+    #[arg(long, default_value_t = Variation::default().difficulty)]
+    difficulty: f32,
+    /// σ of each part's weight in an identity's style of a label.
+    #[arg(long, default_value_t = Variation::default().style)]
+    style: f32,
+    /// Probability that a style drops a part (never the strongest).
+    #[arg(long, default_value_t = Variation::default().drop)]
+    drop: f32,
+    /// Probability that a style borrows each delta of a neighbouring class.
+    #[arg(long, default_value_t = Variation::default().borrow)]
+    borrow: f32,
+    /// Most a style leans towards a neighbouring class of its family (0 to 1).
+    #[arg(long, default_value_t = Variation::default().lean)]
+    lean: f32,
+    /// σ of a style's left-right asymmetry.
+    #[arg(long, default_value_t = Variation::default().asymmetry)]
+    asymmetry: f32,
+    /// Most a sequence mixes in the identity's style of a neighbouring class (0 to 1).
+    #[arg(long, default_value_t = Variation::default().mix)]
+    mix: f32,
+    /// Probability of each of two co-activations (blink, brow, slight smile, frown) per sequence.
+    #[arg(long, default_value_t = Variation::default().coactivation)]
+    coactivation: f32,
+    /// Probability that a sequence holds its apex and partly releases it.
+    #[arg(long, default_value_t = Variation::default().release)]
+    release: f32,
+    /// Probability that a sequence has two peaks.
+    #[arg(long, default_value_t = Variation::default().two_peaks)]
+    two_peaks: f32,
+    /// Probability that a sequence stops short of its apex.
+    #[arg(long, default_value_t = Variation::default().short)]
+    short: f32,
+    /// σ of the landmarks' per-frame tracking noise, in cm.
+    #[arg(long, default_value_t = Variation::default().tracking_noise)]
+    tracking_noise: f32,
+}
+
+impl VariationArgs {
+    fn variation(&self) -> Variation {
+        Variation {
+            difficulty: self.difficulty,
+            style: self.style,
+            drop: self.drop,
+            borrow: self.borrow,
+            lean: self.lean,
+            asymmetry: self.asymmetry,
+            mix: self.mix,
+            coactivation: self.coactivation,
+            release: self.release,
+            two_peaks: self.two_peaks,
+            short: self.short,
+            tracking_noise: self.tracking_noise,
+        }
+    }
 }
 
 /// `sinew data motions`.
@@ -38,6 +103,7 @@ pub(crate) fn motions(args: MotionsArgs) -> Result<()> {
         seed: args.seed,
         identities: args.identities,
         per_class: args.per_class,
+        variation: args.variation.variation(),
     };
     config.validate()?;
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
@@ -151,9 +217,10 @@ pub(crate) struct GenerateArgs {
     /// Seed of the noise.
     #[arg(long, env = "SINEW_SEED", default_value_t = 1)]
     seed: u64,
-    /// The neutral face (.obj or .ply) in the decoder's topology.
+    /// The neutral face (.obj or .ply) in the decoder's topology [default: the decoder's own
+    /// template neutral and triangles; `sinew s2d template` writes it as a mesh].
     #[arg(long)]
-    neutral: PathBuf,
+    neutral: Option<PathBuf>,
     /// Scale of the motion (eq. 5; 1: a length drawn from the label's training motions, or for
     /// interpolate the two labels' mean lengths blended).
     #[arg(long, default_value_t = 1.0)]
@@ -246,12 +313,13 @@ pub(crate) fn interpolate(args: InterpolateArgs) -> Result<()> {
 /// `sinew eval motion`'s options.
 #[derive(Debug, Args)]
 pub(crate) struct EvalMotionArgs {
-    /// The baked generator (from `sinew train motion`).
-    #[arg(long)]
-    model: PathBuf,
+    /// The baked generator (from `sinew train motion`). Without it and --decoder: only the
+    /// ground truth's accuracy, per label and confused (how hard the set is).
+    #[arg(long, requires = "decoder")]
+    model: Option<PathBuf>,
     /// The baked S2D decoder whose 68 landmarks the generator moves (Det-LM decodes through it).
-    #[arg(long)]
-    decoder: PathBuf,
+    #[arg(long, requires = "model")]
+    decoder: Option<PathBuf>,
     /// Motion set folder (from `sinew data motions`): its training sequences train the
     /// classifier and the LSTM baseline, its test sequences are the ground truth.
     #[arg(long)]
@@ -283,9 +351,18 @@ pub(crate) fn eval(args: EvalMotionArgs) -> Result<()> {
         diversity_seeds: args.diversity_seeds,
         ..EvalSettings::new(args.seed, args.epochs)
     };
+    let (Some(model), Some(decoder)) = (args.model, args.decoder) else {
+        return ground_truth(
+            args.motions,
+            args.report,
+            settings,
+            args.backend,
+            args.quiet,
+        );
+    };
     let r = eval_motion(&EvalMotion {
-        model: args.model,
-        decoder: args.decoder,
+        model,
+        decoder,
         motions: args.motions,
         report: args.report.clone(),
         settings,
@@ -312,5 +389,47 @@ pub(crate) fn eval(args: EvalMotionArgs) -> Result<()> {
         );
     }
     println!("{}: report ({:.1} s)", args.report.display(), r.seconds);
+    Ok(())
+}
+
+/// `sinew eval motion` without a generator: the ground truth's accuracy alone.
+fn ground_truth(
+    motions: PathBuf,
+    report: PathBuf,
+    settings: EvalSettings,
+    backend: Backend,
+    quiet: bool,
+) -> Result<()> {
+    let r = sinew_host::motion::ground_truth::ground_truth(&GroundTruth {
+        motions,
+        report: report.clone(),
+        settings,
+        backend,
+        quiet,
+    })?;
+    println!(
+        "{} test sequences, {} training; ground truth (Gen-LM) {:.1} % (classifier {:.1} % \
+         on its training set)",
+        r.test_sequences,
+        r.train_sequences,
+        100.0 * r.accuracy,
+        100.0 * r.train_accuracy
+    );
+    let labels = sinew_host::motion::classes::LABELS;
+    for (l, acc) in r.per_label_accuracy.iter().enumerate() {
+        let confused: Vec<String> = r.confusion[l]
+            .iter()
+            .enumerate()
+            .filter(|&(p, &n)| p != l && n > 0)
+            .map(|(p, n)| format!("{} {n}", labels[p]))
+            .collect();
+        println!(
+            "  {:<14} {:5.1} %  {}",
+            labels[l],
+            100.0 * acc,
+            confused.join(", ")
+        );
+    }
+    println!("{}: report ({:.1} s)", report.display(), r.seconds);
     Ok(())
 }

@@ -111,6 +111,21 @@ pub(crate) enum S2d {
         #[arg(long, value_delimiter = ',')]
         spiral_lengths: Option<Vec<usize>>,
     },
+    /// The face a decoder decodes onto by default, as a mesh file: its template neutral with
+    /// the template's triangles (a face in the decoder's topology for `sinew generate
+    /// --neutral`, `s2d neutralize`, `s2d transfer`).
+    Template {
+        /// The baked S2D decoder.
+        #[arg(long)]
+        model: PathBuf,
+        /// The pairs folder the decoder was trained on (from `sinew data s2d-pairs`): the
+        /// triangles of a decoder baked without them (from 2026-11-23 to 2026-11-26).
+        #[arg(long)]
+        pairs: Option<PathBuf>,
+        /// Output mesh (.obj, .obj.gz or .ply).
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Expression neutralisation: an expressive face in, its neutral out (the decoder maps the
     /// face's landmarks onto the template's neutral landmarks).
     Neutralize {
@@ -381,6 +396,16 @@ pub(crate) fn run(cmd: S2d) -> Result<()> {
             println!(
                 "{}: vertices per level {sizes:?}, spiral lengths {lens:?}",
                 out.display()
+            );
+        }
+        S2d::Template { model, pairs, out } => {
+            let face = sinew_host::s2d::apply::write_template(&model, pairs.as_deref(), &out)?;
+            println!(
+                "{}: the template of {}, {} vertices, {} triangles",
+                out.display(),
+                model.display(),
+                face.positions.len(),
+                face.polygons.len()
             );
         }
         S2d::Neutralize { model, input, out } => {

@@ -212,6 +212,12 @@ pub enum ManifestProblem {
         /// The sequence.
         entry: Entry,
     },
+    /// A generation setting out of its range (the problem names the option).
+    #[error("settings: {problem}")]
+    Setting {
+        /// What is wrong.
+        problem: String,
+    },
     /// A sequence on the wrong side of the split (repetition 0 and only it is a test sequence).
     #[error(
         "{entry}: repetition {repetition} is on the {side} side; repetition 0 and only it is a \

@@ -1,5 +1,5 @@
 //! Files in and out: meshes (OBJ, PLY), the ICT-FaceKit reader, ARKit captures (Live Link Face CSV), landmark tracks (OpenFace 2.0 CSV), the `.sinew` writer and
-//! inspector, the data-set folders (manifest and numbers), the real-data folder, and atomic outputs. The lowest layer of the host: it imports
+//! inspector, the data-set folders (manifest and numbers), the real-data folder, a baked S2D decoder's template face, and atomic outputs. The lowest layer of the host: it imports
 //! nothing else of the crate.
 
 pub mod arkit;
@@ -7,6 +7,7 @@ pub mod atomic;
 pub mod container;
 pub mod data;
 pub mod dataset;
+pub mod decoder_face;
 pub mod glb;
 pub mod ict;
 pub mod inspect;

@@ -46,7 +46,13 @@ pub fn bake(generator: &Generator, data: &TangentData, config: &GanConfig) -> Re
     if let Some(reaches) = data.reaches_flat() {
         w.f32s("motion.reach", &[LABELS.len(), 2], &reaches)?;
     }
-    Ok(w.to_bytes()?)
+    let bytes = w.to_bytes()?;
+    // The core must take what the host writes: a generator whose weights let the network exceed
+    // the core's value bounds is refused here, before a file that cannot play is written (the
+    // checkpoints stay).
+    sinew_core::motion::MotionGenerator::from_bytes(&bytes)
+        .context("the trained generator does not validate in sinew-core; nothing was baked")?;
+    Ok(bytes)
 }
 
 /// `sinew train motion`'s settings.

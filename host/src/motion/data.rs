@@ -14,6 +14,11 @@
 //! length. The dense frame is `neutral + Σ_j w_j · delta_j` summed in pattern order, and its 68
 //! landmark vertices are the frame's landmarks.
 //!
+//! Version 2 (2026-11-27) adds what makes real sequences of one label differ
+//! ([`super::variation`]): each identity's style of each label, and per sequence an envelope, co-
+//! activations and tracking noise on the landmarks, all set by [`Variation`]'s knobs. A version-1
+//! set (no variation) is still read, as a version-2 set whose variation is none.
+//!
 //! Sequences run identity-major, then label, then repetition; repetition 0 of every (identity,
 //! label) is the test set, the rest trains (the paper's split, section 4.3: "the first
 //! sub-sequence for each subject and expression is used as test set").
@@ -23,6 +28,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::classes::{LABELS, PATTERNS, used_expressions};
+use super::variation::{self, COACTIVATIONS, Envelope, Event, Style, Variation};
 use crate::geometry::identities::{FaceRegion, RegionError};
 use crate::io::dataset::DataSetError;
 use crate::io::ict::{FACE_REGION, IctError, IctFaceKit};
@@ -41,11 +47,15 @@ pub const DATA_FILE: &str = "motions.sinew";
 pub const MANIFEST_FILE: &str = "manifest.json";
 /// `format` field of the manifest.
 pub const MANIFEST_FORMAT: &str = "sinew-motions";
-/// Version of the manifest and of the `motions.` sections.
-pub const MANIFEST_VERSION: u32 = 1;
+/// Version of the manifest and of the `motions.` sections: 2 since 2026-11-27 (styles,
+/// envelopes, co-activations, tracking noise); version-1 sets are read as version 2 without
+/// variation.
+pub const MANIFEST_VERSION: u32 = 2;
+/// The first version, still read.
+pub const FIRST_VERSION: u32 = 1;
 
 /// What to generate.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MotionsConfig {
     /// Seed of every random choice.
@@ -54,6 +64,10 @@ pub struct MotionsConfig {
     pub identities: usize,
     /// Sequences per identity and label (the first of each is a test sequence).
     pub per_class: usize,
+    /// What makes sequences of one label differ (version 2; absent in a version-1 manifest,
+    /// whose sets have none).
+    #[serde(default = "Variation::none")]
+    pub variation: Variation,
 }
 
 impl Default for MotionsConfig {
@@ -63,12 +77,13 @@ impl Default for MotionsConfig {
             // CoMA's 12 subjects; 12 × 12 test sequences, the paper's 144.
             identities: 12,
             per_class: 8,
+            variation: Variation::default(),
         }
     }
 }
 
 /// The rule of [`MotionsConfig`] a configuration breaks.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum InvalidMotionsConfig {
     /// No identities.
@@ -77,6 +92,16 @@ pub enum InvalidMotionsConfig {
     /// Fewer than 2 sequences per class: none would be left to train on.
     #[error("at least 2 sequences per identity and class are needed (the first is a test one)")]
     PerClass,
+    /// A variation knob out of its range.
+    #[error("{option} {value}: must be {rule}")]
+    Knob {
+        /// The command-line option.
+        option: &'static str,
+        /// Its value.
+        value: f32,
+        /// Its range.
+        rule: &'static str,
+    },
 }
 
 impl MotionsConfig {
@@ -87,6 +112,20 @@ impl MotionsConfig {
         }
         if self.per_class < 2 {
             return Err(InvalidMotionsConfig::PerClass);
+        }
+        for (option, value, probability) in self.variation.knobs() {
+            let ok = value.is_finite() && value >= 0.0 && (!probability || value <= 1.0);
+            if !ok {
+                return Err(InvalidMotionsConfig::Knob {
+                    option,
+                    value,
+                    rule: if probability {
+                        "a number from 0 to 1"
+                    } else {
+                        "a finite number of at least 0"
+                    },
+                });
+            }
         }
         Ok(())
     }
@@ -117,6 +156,19 @@ pub enum MotionDataError {
     /// The motion set cannot be written (the error names the file).
     #[error(transparent)]
     Write(#[from] DataSetError),
+    /// More identities than the kit has identity modes.
+    #[error(
+        "--identities {asked}: more than the {modes} identity modes of the kit {}",
+        path.display()
+    )]
+    TooManyIdentities {
+        /// The kit's folder.
+        path: PathBuf,
+        /// The identities asked for.
+        asked: usize,
+        /// The kit's identity modes.
+        modes: usize,
+    },
 }
 
 /// Which side of the split a sequence is on.
@@ -190,8 +242,21 @@ pub struct SequenceSpec {
     pub intensity: f32,
     /// Number of frames, neutral first.
     pub frames: usize,
-    /// The parts, in the pattern's order.
+    /// The parts: the identity's style of the label (the pattern's order, then borrowed and
+    /// leaned-in deltas).
     pub parts: Vec<PartSpec>,
+    /// The neighbouring class this sequence mixes in and how much, μ (version 2).
+    #[serde(default)]
+    pub mix: Option<(String, f32)>,
+    /// How the parts move together (version 2; flat in version 1).
+    #[serde(default = "Envelope::flat")]
+    pub envelope: Envelope,
+    /// Co-activations of deltas outside the class (version 2).
+    #[serde(default)]
+    pub events: Vec<Event>,
+    /// σ of the landmarks' tracking noise (version 2; 0 in version 1).
+    #[serde(default)]
+    pub tracking_noise: f32,
 }
 
 /// `manifest.json`.
@@ -218,6 +283,9 @@ pub struct Manifest {
     pub expressions: Vec<String>,
     /// Each identity's weights, one per identity mode (in standard deviations).
     pub identities: Vec<Vec<f32>>,
+    /// Each identity's style of each label (version 2; empty in version 1).
+    #[serde(default)]
+    pub styles: Vec<Vec<Style>>,
     /// The sequences.
     pub sequences: Vec<SequenceSpec>,
 }
@@ -241,40 +309,71 @@ pub struct MotionSet {
     pub landmarks: Vec<Vec<f32>>,
 }
 
-/// Draws the identities and sequences of `config` over `modes` identity modes, and each
+/// Every delta a motion set stores: those the patterns use and the co-activations', sorted.
+pub fn stored_expressions() -> Vec<&'static str> {
+    let mut names = used_expressions();
+    names.extend(COACTIVATIONS.iter().flat_map(|g| g.iter().copied()));
+    names.sort_unstable();
+    names.dedup();
+    names
+}
+
+/// What [`draw`] draws: identities, their styles, the sequences and their per-frame weights.
+type Drawn = (
+    Vec<Vec<f32>>,
+    Vec<Vec<Style>>,
+    Vec<SequenceSpec>,
+    Vec<Vec<f32>>,
+);
+
+/// Draws the identities, styles and sequences of `config` over `modes` identity modes, and each
 /// sequence's per-frame weights over `expressions` (the stored deltas, by name). Pure: the same
 /// inputs give the same draw.
-fn draw(
-    config: &MotionsConfig,
-    expressions: &[&str],
-    modes: usize,
-) -> (Vec<Vec<f32>>, Vec<SequenceSpec>, Vec<Vec<f32>>) {
+fn draw(config: &MotionsConfig, expressions: &[&str], modes: usize) -> Drawn {
     // PCG-64, as `data s2d-pairs` draws, on a stream of its own.
     let mut rng = Stream::new(
         config.seed,
         0x4d07_1035,
         0x00a0_2bdb_0000_0000_0000_0000_0000_0003,
     );
+    let v = &config.variation;
     let identities: Vec<Vec<f32>> = (0..config.identities)
         .map(|_| (0..modes).map(|_| rng.normal() as f32).collect())
         .collect();
+    let styles: Vec<Vec<Style>> = (0..config.identities)
+        .map(|_| {
+            (0..LABELS.len())
+                .map(|l| variation::style(v, l, &mut rng))
+                .collect()
+        })
+        .collect();
+    let e = expressions.len();
+    let slot = |name: &str| expressions.iter().position(|n| *n == name).unwrap_or(e);
     let mut sequences = Vec::new();
     let mut weights = Vec::new();
-    for identity in 0..config.identities {
-        for (label, variants) in LABELS.iter().zip(PATTERNS) {
+    for (identity, identity_styles) in styles.iter().enumerate() {
+        for (l, (label, variants)) in LABELS.iter().zip(PATTERNS).enumerate() {
             for repetition in 0..config.per_class {
                 let variant = rng.below(variants.len());
                 let intensity = rng.uniform_f32(INTENSITY.0, INTENSITY.1);
                 let frames = FRAMES_RANGE.0 + rng.below(FRAMES_RANGE.1 - FRAMES_RANGE.0 + 1);
-                let parts: Vec<PartSpec> = variants[variant]
+                let (envelope, peaks) = variation::envelope(v, &mut rng);
+                let own = &identity_styles[l].parts[variant];
+                let mix = variation::mix(v, l, &mut rng);
+                let style = match mix {
+                    Some((n, mu)) => variation::mixed(own, &identity_styles[n].parts[0], mu),
+                    None => own.clone(),
+                };
+                let parts: Vec<PartSpec> = style
                     .iter()
-                    .map(|&(shape, weight)| {
+                    .filter(|(_, weight)| *weight > 0.0)
+                    .map(|(shape, weight)| {
                         let apex = (weight * intensity * rng.uniform_f32(0.85, 1.15)).min(1.0);
-                        let onset = rng.uniform_f32(0.0, 0.35);
-                        let peak = rng.uniform_f32(0.65, 1.0);
+                        let onset = rng.uniform_f32(0.0, 0.35f32.min(peaks.0 - 0.1));
+                        let peak = rng.uniform_f32(peaks.0, peaks.1);
                         let easing = Easing::ALL[rng.below(Easing::ALL.len())];
                         PartSpec {
-                            shape: shape.to_owned(),
+                            shape: shape.clone(),
                             apex,
                             onset,
                             peak,
@@ -282,16 +381,24 @@ fn draw(
                         }
                     })
                     .collect();
-                let e = expressions.len();
+                let events = variation::events(v, &mut rng);
                 let mut w = vec![0.0f32; frames * e];
                 for f in 1..frames {
                     let t = f as f32 / (frames - 1) as f32;
+                    let g = envelope.at(t);
                     for p in &parts {
                         let x = ((t - p.onset) / (p.peak - p.onset)).clamp(0.0, 1.0);
                         let noise = NOISE * intensity * rng.normal() as f32;
-                        let k = expressions.iter().position(|n| *n == p.shape).unwrap_or(e);
-                        if let Some(slot) = w.get_mut(f * e + k) {
-                            *slot = (p.apex * p.easing.at(x) + noise).clamp(0.0, 1.0);
+                        if let Some(slot) = w.get_mut(f * e + slot(&p.shape)) {
+                            let rise = p.apex * p.easing.at(x * envelope.reach);
+                            *slot = (rise * g + noise).clamp(0.0, 1.0);
+                        }
+                    }
+                    for ev in &events {
+                        for shape in &ev.shapes {
+                            if let Some(slot) = w.get_mut(f * e + slot(shape)) {
+                                *slot = (*slot + ev.at(t)).clamp(0.0, 1.0);
+                            }
                         }
                     }
                 }
@@ -308,12 +415,16 @@ fn draw(
                     intensity,
                     frames,
                     parts,
+                    mix: mix.map(|(n, mu)| (LABELS[n].to_owned(), mu)),
+                    envelope,
+                    events,
+                    tracking_noise: v.noise(),
                 });
                 weights.push(w);
             }
         }
     }
-    (identities, sequences, weights)
+    (identities, styles, sequences, weights)
 }
 
 impl MotionSet {
@@ -408,10 +519,49 @@ pub(crate) fn frame_of(
     out
 }
 
+/// Sequence `s`'s landmarks, `[frames × K × 3]`: each frame's landmark vertices plus the
+/// sequence's tracking noise ([`variation::tracking_noise`], from `seed` and `s`), frame 0 exact.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn tracked(
+    seed: u64,
+    s: usize,
+    spec: &SequenceSpec,
+    neutral: &[[f32; 3]],
+    deltas: &[Vec<[f32; 3]>],
+    weights: &[f32],
+    e: usize,
+    landmarks: &[u32],
+) -> Vec<f32> {
+    let d = 3 * landmarks.len();
+    let noise = variation::tracking_noise(seed, s, spec.frames, d, spec.tracking_noise);
+    let mut out: Vec<f32> = (0..spec.frames)
+        .flat_map(|f| {
+            frame_of(
+                neutral,
+                deltas,
+                spec.identity,
+                weights,
+                e,
+                f,
+                Some(landmarks),
+            )
+        })
+        .flatten()
+        .collect();
+    // Frame 0 is left alone (the neutral, exactly), and so is every frame of a sequence without
+    // noise (adding 0 would turn -0.0 into 0.0).
+    if spec.tracking_noise != 0.0 {
+        for (x, n) in out.iter_mut().zip(&noise).skip(d) {
+            *x += n;
+        }
+    }
+    out
+}
+
 /// Generates a motion set from the ICT-FaceKit in `kit`.
 pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet, MotionDataError> {
     config.validate()?;
-    let expressions = used_expressions();
+    let expressions = stored_expressions();
     let available = kit.expression_names();
     if let Some(missing) = expressions
         .iter()
@@ -423,7 +573,14 @@ pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet, M
         });
     }
     let modes = kit.identity_count();
-    let (identities, sequences, weights) = draw(config, &expressions, modes);
+    if config.identities > modes {
+        return Err(MotionDataError::TooManyIdentities {
+            path: kit.dir().to_owned(),
+            asked: config.identities,
+            modes,
+        });
+    }
+    let (identities, styles, sequences, weights) = draw(config, &expressions, modes);
     let face = FaceRegion::of(kit, &expressions, modes)?;
     let neutrals: Vec<Vec<[f32; 3]>> = identities.iter().map(|w| face.neutral(w)).collect();
     let deltas = face.transferred(&neutrals)?;
@@ -431,21 +588,18 @@ pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet, M
     let landmark_seqs: Vec<Vec<f32>> = sequences
         .iter()
         .zip(&weights)
-        .map(|(spec, w)| {
-            (0..spec.frames)
-                .flat_map(|f| {
-                    frame_of(
-                        &neutrals[spec.identity],
-                        &deltas,
-                        spec.identity,
-                        w,
-                        e,
-                        f,
-                        Some(&face.landmarks),
-                    )
-                })
-                .flatten()
-                .collect()
+        .enumerate()
+        .map(|(s, (spec, w))| {
+            tracked(
+                config.seed,
+                s,
+                spec,
+                &neutrals[spec.identity],
+                &deltas,
+                w,
+                e,
+                &face.landmarks,
+            )
         })
         .collect();
     let manifest = Manifest {
@@ -465,6 +619,7 @@ pub fn generate(kit: &IctFaceKit, config: &MotionsConfig) -> Result<MotionSet, M
         labels: LABELS.iter().map(|l| (*l).to_owned()).collect(),
         expressions: expressions.iter().map(|n| (*n).to_owned()).collect(),
         identities,
+        styles,
         sequences,
     };
     Ok(MotionSet {

@@ -373,7 +373,8 @@ impl<'a> Redetector<'a> {
     }
 }
 
-fn features(seqs: &[Vec<Vec<f32>>], what: &str) -> Result<Vec<Vec<f32>>, EvalError> {
+/// Each sequence's classifier features ([`sequence_features`]); `what` names the set in errors.
+pub(crate) fn features(seqs: &[Vec<Vec<f32>>], what: &str) -> Result<Vec<Vec<f32>>, EvalError> {
     seqs.par_iter()
         .enumerate()
         .map(|(i, s)| {

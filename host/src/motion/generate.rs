@@ -18,6 +18,7 @@ use sinew_core::srvf::{FRAMES, decode};
 use super::srvf::{self, SrvfError};
 use crate::figures::render::{Image, View, render};
 use crate::io::container::ContainerError;
+use crate::io::decoder_face::DecoderFaceError;
 use crate::io::mesh::{Mesh, MeshError};
 
 /// A generation or interpolation that was refused or failed; each names the file concerned.
@@ -93,6 +94,10 @@ pub enum MotionGenerateError {
     /// A neutral or frame mesh that cannot be read or written (the error names the file).
     #[error(transparent)]
     Mesh(#[from] MeshError),
+    /// No `--neutral`, and the decoder's own template face cannot be made (the error names the
+    /// decoder and says what to do).
+    #[error(transparent)]
+    Template(#[from] DecoderFaceError),
     /// A neutral of another vertex count than the decoder's template.
     #[error(
         "{}: {found} vertices, the decoder's template has {expected} (the neutral must share \
@@ -160,8 +165,9 @@ pub struct Generate {
     pub model: PathBuf,
     /// The baked S2D decoder.
     pub decoder: PathBuf,
-    /// The neutral face (the decoder's topology).
-    pub neutral: PathBuf,
+    /// The neutral face (the decoder's topology); `None`: the decoder's own template neutral
+    /// with the triangles it carries (`io::decoder_face::template`).
+    pub neutral: Option<PathBuf>,
     /// The seed of the noise.
     pub seed: u64,
     /// Scale of the motion (1: a length drawn from the label's training curves; interpolation
@@ -243,15 +249,21 @@ fn load<'a>(
     }
     let (generator, labels) = open_generator(&opts.model, gen_bytes)?;
     let decoder = open_decoder(&opts.decoder, dec_bytes, &generator, &opts.model)?;
-    let neutral = Mesh::read(&opts.neutral)?;
-    let n = decoder.vertex_count();
-    if neutral.positions.len() != n {
-        return Err(MotionGenerateError::NeutralVertices {
-            path: opts.neutral.clone(),
-            found: neutral.positions.len(),
-            expected: n,
-        });
-    }
+    let neutral = match &opts.neutral {
+        Some(path) => {
+            let neutral = Mesh::read(path)?;
+            let n = decoder.vertex_count();
+            if neutral.positions.len() != n {
+                return Err(MotionGenerateError::NeutralVertices {
+                    path: path.clone(),
+                    found: neutral.positions.len(),
+                    expected: n,
+                });
+            }
+            neutral
+        }
+        None => crate::io::decoder_face::template(&opts.decoder, dec_bytes)?,
+    };
     let neutral_lmk = decoder
         .landmarks()
         .iter()
@@ -441,7 +453,7 @@ mod tests {
         let opts = |model: PathBuf, intensity: f32| Generate {
             model,
             decoder: golden("s2d-ict.sinew"),
-            neutral: dir.path().join("neutral.obj"),
+            neutral: Some(dir.path().join("neutral.obj")),
             seed: 0,
             intensity,
             out: dir.path().join("out"),

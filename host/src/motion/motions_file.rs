@@ -11,8 +11,8 @@ use std::path::Path;
 use sinew_core::ArtifactKind;
 
 use super::data::{
-    DATA_FILE, MANIFEST_FILE, MANIFEST_FORMAT, MANIFEST_VERSION, Manifest, MotionSet, Split,
-    frame_of,
+    DATA_FILE, FIRST_VERSION, MANIFEST_FILE, MANIFEST_FORMAT, MANIFEST_VERSION, Manifest,
+    MotionSet, Split, tracked,
 };
 use crate::io::container::{SinewWriter, WriterError};
 use crate::io::dataset::{
@@ -33,7 +33,14 @@ const LAYOUT: Layout = Layout {
 
 impl Versioned for Manifest {
     fn format_version(&self) -> (&str, u32) {
-        (&self.format, self.version)
+        // A version-1 set is a version-2 set without variation: its manifest has no styles,
+        // envelopes, events or noise, which read as none.
+        let version = if self.version == FIRST_VERSION {
+            MANIFEST_VERSION
+        } else {
+            self.version
+        };
+        (&self.format, version)
     }
 }
 
@@ -114,29 +121,27 @@ impl MotionSet {
             let w = all_weights[at_w..at_w + spec.frames * e].to_vec();
             let l = all_landmarks[at_l..at_l + spec.frames * d].to_vec();
             (at_w, at_l) = (at_w + spec.frames * e, at_l + spec.frames * d);
-            for fr in 0..spec.frames {
-                let expected = frame_of(
-                    &neutrals[spec.identity],
-                    &deltas,
-                    spec.identity,
-                    &w,
-                    e,
-                    fr,
-                    Some(&lmk),
-                );
-                let stored = &l[fr * d..(fr + 1) * d];
-                if !expected
+            let expected = tracked(
+                manifest.config.seed,
+                s,
+                spec,
+                &neutrals[spec.identity],
+                &deltas,
+                &w,
+                e,
+                &lmk,
+            );
+            if let Some(fr) = (0..spec.frames).find(|&fr| {
+                expected[fr * d..(fr + 1) * d]
                     .iter()
-                    .flatten()
-                    .zip(stored)
-                    .all(|(a, b)| a.to_bits() == b.to_bits())
-                {
-                    return Err(ContentError::Frame {
-                        name: "motions.landmarks".into(),
-                        entry: Entry::Sequence(s),
-                        frame: fr,
-                    });
-                }
+                    .zip(&l[fr * d..(fr + 1) * d])
+                    .any(|(a, b)| a.to_bits() != b.to_bits())
+            }) {
+                return Err(ContentError::Frame {
+                    name: "motions.landmarks".into(),
+                    entry: Entry::Sequence(s),
+                    frame: fr,
+                });
             }
             weights.push(w);
             landmarks.push(l);
@@ -152,8 +157,11 @@ impl MotionSet {
     }
 }
 
-/// The manifest's own rules: labels, landmarks, identities, the split and frame counts.
+/// The manifest's own rules: settings, labels, landmarks, identities, the split and frame counts.
 fn check_manifest(m: &Manifest) -> Result<(), ManifestProblem> {
+    m.config.validate().map_err(|e| ManifestProblem::Setting {
+        problem: e.to_string(),
+    })?;
     if !m
         .labels
         .iter()

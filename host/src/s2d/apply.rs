@@ -74,6 +74,32 @@ pub enum ApplyError {
         /// The folder.
         path: PathBuf,
     },
+    /// The decoder's template face cannot be made (the error names the file and the cure).
+    #[error(transparent)]
+    Template(#[from] crate::io::decoder_face::DecoderFaceError),
+    /// A pairs folder that cannot be read (the error names the file).
+    #[error(transparent)]
+    Pairs(#[from] crate::io::dataset::DataSetError),
+}
+
+/// `sinew s2d template`: the face a decoder decodes onto by default, its template neutral with
+/// its triangles, written to `out` (atomically). The triangles come from the decoder
+/// (`s2d.h0.tri`); a decoder baked without them takes them from `pairs`, the pairs folder it was
+/// trained on, whose template must have the decoder's vertices bit for bit. With the template's
+/// triangles in the decoder, `pairs` is not read.
+pub fn write_template(model: &Path, pairs: Option<&Path>, out: &Path) -> Result<Mesh, ApplyError> {
+    use crate::io::decoder_face::{self, DecoderFaceError};
+    let bytes = crate::io::container::read(model)?;
+    let face = match (decoder_face::template(model, &bytes), pairs) {
+        (Err(DecoderFaceError::NoTriangles { .. }), Some(dir)) => {
+            let set = super::data::PairSet::read(dir)?;
+            let file = dir.join(super::data::DATA_FILE);
+            decoder_face::template_like(model, &bytes, &file, &set.template)?
+        }
+        (face, _) => face?,
+    };
+    face.write(out)?;
+    Ok(face)
 }
 
 /// The step of decoding that the core refused.

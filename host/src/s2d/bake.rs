@@ -158,18 +158,28 @@ mod tests {
         assert_eq!(core.level_sizes(), &[30, 12, 5]);
         assert_eq!(core.landmarks().iter().collect::<Vec<_>>(), [3, 17]);
         assert_eq!(core.file().metadata().get("units"), Some("m"));
-        // Only what playback reads: no triangles, coarse positions or down-samplings.
+        // What playback reads and the template's triangles (the default face of `sinew
+        // generate`); no coarse positions or triangles, no down-samplings.
         let names: Vec<&str> = core.file().sections().map(|s| s.name()).collect();
         assert!(
-            names.contains(&"s2d.h0.pos") && names.contains(&"s2d.u1.val"),
+            names.contains(&"s2d.h0.pos")
+                && names.contains(&"s2d.h0.tri")
+                && names.contains(&"s2d.u1.val"),
             "{names:?}"
         );
         assert!(
             !names
                 .iter()
-                .any(|n| n.ends_with(".tri") || n.starts_with("s2d.d") || *n == "s2d.h1.pos"),
+                .any(|n| (n.ends_with(".tri") && *n != "s2d.h0.tri")
+                    || n.starts_with("s2d.d")
+                    || *n == "s2d.h1.pos"),
             "{names:?}"
         );
+        let face =
+            crate::io::decoder_face::template(std::path::Path::new("d.sinew"), &bytes).unwrap();
+        assert_eq!(face.positions, h.levels[0].positions);
+        let tri: Vec<Vec<u32>> = h.levels[0].triangles.iter().map(|t| t.to_vec()).collect();
+        assert_eq!(face.polygons, tri);
         assert!(matches!(
             bake(&dec, &h, &[3], &meta),
             Err(S2dBakeError::Landmarks {

@@ -382,8 +382,10 @@ pub enum Sections {
     /// Everything [`read_sections`] reads back (hierarchy files and the cache).
     All,
     /// What `sinew_core::s2d::S2dDecoder` reads (a baked decoder): `p.levels`, `p.h0.pos`,
-    /// every `p.h<i>.spiral` and `p.u<i>.*`, not the triangles, the coarser levels' positions
-    /// or the down-samplings.
+    /// every `p.h<i>.spiral` and `p.u<i>.*`, and the template's triangles `p.h0.tri` (which the
+    /// core ignores: the face `sinew generate` decodes onto by default,
+    /// `io::decoder_face`); not the coarser levels' positions and triangles or the
+    /// down-samplings.
     Playback,
 }
 
@@ -409,8 +411,6 @@ pub fn write_sections(
         if all || i == 0 {
             let pos: Vec<f32> = l.positions.iter().flatten().copied().collect();
             w.f32s(&format!("{prefix}.h{i}.pos"), &[n, 3], &pos)?;
-        }
-        if all {
             let tri: Vec<u32> = l.triangles.iter().flatten().copied().collect();
             w.u32s(&format!("{prefix}.h{i}.tri"), &[l.triangles.len(), 3], &tri)?;
         }

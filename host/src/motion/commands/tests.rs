@@ -305,6 +305,19 @@ fn generator_file(
 }
 
 #[test]
+fn a_generator_the_core_refuses_is_not_baked() {
+    let (mut data, config) = (toy(), config());
+    let device = Backend::Flex.autodiff_device(config.seed).unwrap();
+    let run = run_to(&data, &config, Run::new(&data, &config, &device), 1);
+    data.lengths[0] = [-1.0, 0.0];
+    let e = bake(&run.generator, &data, &config).unwrap_err();
+    assert!(
+        format!("{e:#}").contains("does not validate in sinew-core"),
+        "{e:#}"
+    );
+}
+
+#[test]
 fn the_length_is_drawn_from_the_labels_training_lengths() {
     let (mut data, config) = (toy(), config());
     data.lengths[0] = [0.2, 0.05];
