@@ -1,6 +1,6 @@
 //! Performance retargeting (AIM Sec. 5.4, Fig. 8): a performance fitted on a source actor, played
 //! on a target actor: in vertex correspondence, or of another topology and other shapes through
-//! the built-in face template and the shapes' names ([`plan`]).
+//! the built-in face template and the shapes' names ([`Plan`]).
 //!
 //! The fit's per-frame head and jaw transforms `T_g`, `T_b` and coefficients `w` are the
 //! target's inputs as they are; only the actor changes, so the target moves as the source did

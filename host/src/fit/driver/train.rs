@@ -40,7 +40,7 @@ pub struct Normalisation {
 }
 
 impl Normalisation {
-    /// Measured on [`NORMALISATION_SAMPLES`] samples.
+    /// Measured on `NORMALISATION_SAMPLES` samples.
     pub fn measure(sampler: &Sampler, seed: u64) -> Self {
         let mut rng = step_stream(seed, u64::MAX);
         let samples: Vec<Sample> = (0..NORMALISATION_SAMPLES)
