@@ -319,7 +319,7 @@ pub fn retarget_planned(
             // F_W sees the points it was fitted at: the source's own, or those a retargeted
             // source performance already carries, at each target vertex's place on the source.
             let at = points.unwrap_or_else(|| src.template());
-            let values = plan.points(&src, at);
+            let values = plan.points(at);
             w.f32s(perf::POINTS, &[values.len() / 3, 3], &values)
                 .map_err(layout)?;
             if !in_order {

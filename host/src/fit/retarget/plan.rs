@@ -15,20 +15,46 @@ use sinew_core::tensor::F32s;
 use super::{Input, RetargetError};
 use crate::fit::baseline::actor_shape_names;
 use crate::geometry::surface::Surface;
-use crate::geometry::vec3::{V3, add, sub, to64};
+use crate::geometry::vec3::{V3, add, scale, sub, to64};
 use crate::io::arkit::comparable;
 use crate::rig::correspond::{carry, register_face};
+
+/// Where a target vertex sits on the source's rest shape: at a triangle's barycentric weights (or
+/// a vertex, off any triangle), with its offset from that place.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Anchor {
+    /// On triangle `triangle` at `weights`, plus `offset`.
+    Triangle {
+        /// The source triangle.
+        triangle: u32,
+        /// Its corners' barycentric weights.
+        weights: V3,
+        /// From that point to the carried vertex (cm).
+        offset: V3,
+    },
+    /// At source vertex `vertex`, plus `offset`.
+    Vertex {
+        /// The source vertex.
+        vertex: usize,
+        /// From it to the carried vertex (cm).
+        offset: V3,
+    },
+    /// Nowhere on the source (it has no vertices): the carried point itself.
+    Free(V3),
+}
 
 /// How the target's vertices and shapes take the source's.
 #[derive(Clone, Debug)]
 pub struct Plan {
     /// Per target vertex, the corresponding point on the source's rest shape (face frame, cm);
     /// `None` when the actors are in vertex correspondence.
-    pub(super) on_source: Option<Vec<V3>>,
+    pub(super) on_source: Option<Vec<Anchor>>,
     /// Per target shape, the source shapes it plays (their mean); empty: none, at rest.
     pub(super) shapes: Vec<Vec<usize>>,
     /// The target's shapes that no source shape plays, by name.
     pub unmatched: Vec<String>,
+    /// The source's triangles, which the anchors' triangles index (across topologies).
+    source_triangles: Vec<[u32; 3]>,
 }
 
 impl Plan {
@@ -49,21 +75,39 @@ impl Plan {
                 .indices()
                 .iter()
                 .eq(dst.triangles().indices().iter());
-        let on_source = if same_topology {
-            None
+        let (on_source, source_surface) = if same_topology {
+            (None, None)
         } else {
             let register = |input: Input<'_>, actor: &AimActor<'_>| {
                 let (points, triangles) = rest_shape(actor);
                 register_face(input.path, &points, &triangles)
-                    .map(|r| (r, points))
+                    .map(|r| (r, points, triangles))
                     .map_err(|e| RetargetError::Correspondence {
                         path: input.path.to_owned(),
                         source: Box::new(e),
                     })
             };
-            let (from, _) = register(source, src)?;
-            let (to, points) = register(target, dst)?;
-            Some(carry(&from, &to, &points))
+            let (from, points, triangles) = register(source, src)?;
+            let (to, target_points, _) = register(target, dst)?;
+            // Each carried vertex placed once on the source's surface: `points` then only
+            // interpolates whatever the source's F_W points are.
+            let surface = Surface::new(points, triangles);
+            let anchors = carry(&from, &to, &target_points)
+                .into_iter()
+                .map(|q| match surface.closest(q) {
+                    Some((hit, _)) if hit.triangle != u32::MAX => Anchor::Triangle {
+                        triangle: hit.triangle,
+                        weights: hit.weights,
+                        offset: sub(q, hit.position),
+                    },
+                    Some((_, vertex)) => Anchor::Vertex {
+                        vertex,
+                        offset: sub(q, surface.points[vertex]),
+                    },
+                    None => Anchor::Free(q),
+                })
+                .collect();
+            (Some(anchors), Some(surface))
         };
         let names =
             |input: Input<'_>, actor: &AimActor<'_>| -> Result<Vec<String>, RetargetError> {
@@ -84,6 +128,7 @@ impl Plan {
                         .collect()
                 })
             };
+        let source_triangles = source_surface.map(|s| s.triangles).unwrap_or_default();
         let (from, to) = (names(source, src)?, names(target, dst)?);
         let shapes = match_shapes(&from, &to);
         let unmatched: Vec<String> = to
@@ -106,12 +151,14 @@ impl Plan {
                 on_source,
                 shapes: (0..to.len()).map(|i| vec![i]).collect(),
                 unmatched: Vec::new(),
+                source_triangles,
             });
         }
         Ok(Self {
             on_source,
             shapes,
             unmatched,
+            source_triangles,
         })
     }
 
@@ -151,7 +198,7 @@ impl Plan {
     /// The points `F_W` is evaluated at for each target vertex: `at` (one per source vertex:
     /// the source's template, or the points a retargeted source performance carries) carried to
     /// the target's vertices.
-    pub(super) fn points(&self, src: &AimActor<'_>, at: F32s<'_>) -> Vec<f32> {
+    pub(super) fn points(&self, at: F32s<'_>) -> Vec<f32> {
         let at: Vec<V3> = at
             .iter()
             .collect::<Vec<f32>>()
@@ -161,18 +208,25 @@ impl Plan {
         let Some(on_source) = &self.on_source else {
             return at.iter().flat_map(|p| p.map(|v| v as f32)).collect();
         };
-        let (points, triangles) = rest_shape(src);
-        let surface = Surface::new(points, triangles);
         on_source
             .iter()
-            .flat_map(|&q| {
-                let p = match surface.closest(q) {
-                    Some((hit, _)) if hit.triangle != u32::MAX => add(
-                        surface.at(&at, hit.triangle, hit.weights),
-                        sub(q, hit.position),
-                    ),
-                    Some((_, v)) => add(at[v], sub(q, surface.points[v])),
-                    None => q,
+            .flat_map(|anchor| {
+                let p = match *anchor {
+                    Anchor::Triangle {
+                        triangle,
+                        weights,
+                        offset,
+                    } => {
+                        let [a, b, c] =
+                            self.source_triangles[triangle as usize].map(|i| at[i as usize]);
+                        let on = add(
+                            add(scale(a, weights[0]), scale(b, weights[1])),
+                            scale(c, weights[2]),
+                        );
+                        add(on, offset)
+                    }
+                    Anchor::Vertex { vertex, offset } => add(at[vertex], offset),
+                    Anchor::Free(q) => q,
                 };
                 p.map(|v| v as f32)
             })
