@@ -211,6 +211,15 @@ const HEAD_CHANNELS: [&str; 3] = ["HeadYaw", "HeadPitch", "HeadRoll"];
 /// Shapes whose learned jaw transform moves the jaw when they play.
 const JAW_SHAPES: [&str; 4] = ["jawOpen", "jawLeft", "jawRight", "jawForward"];
 
+/// The indices of `shapes` whose channel also moves the jaw (ARKit's `jawOpen`, `jawLeft`,
+/// `jawRight`, `jawForward`, however spelled), in that order.
+pub fn jaw_shapes(shapes: &[String]) -> Vec<usize> {
+    JAW_SHAPES
+        .iter()
+        .filter_map(|n| shapes.iter().position(|s| comparable(s) == comparable(n)))
+        .collect()
+}
+
 /// Reads a Live Link Face capture and maps it onto `actor`.
 pub fn playback(actor: &AimActor<'_>, capture_path: &Path) -> Result<Playback, ArkitError> {
     let capture = Capture::read(capture_path)?;
@@ -228,9 +237,8 @@ pub fn playback_of(
     // The learned jaw transforms, when the artefact records them (every trained actor does).
     let poses = crate::aim::eval::training_poses(actor).ok();
     let jaw: Vec<(usize, [f32; 9])> = match &poses {
-        Some(p) => JAW_SHAPES
-            .iter()
-            .filter_map(|n| shapes.iter().position(|s| comparable(s) == comparable(n)))
+        Some(p) => jaw_shapes(&shapes)
+            .into_iter()
             .filter(|s| mapping.routes.iter().any(|r| r.1 == *s))
             .map(|s| (s, p[s + 1]))
             .collect(),

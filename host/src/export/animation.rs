@@ -48,8 +48,8 @@ fn continuous(q: [f32; 4], before: Option<&[f32]>) -> [f32; 4] {
 
 /// Adds the animation over `frames` (keyed at i / fps; the first again at N / fps when
 /// `looped`); each keyframe's morph weights are the frame's, then `extra` zeros for targets the
-/// animation does not drive. A frame whose head or jaw the core refuses is returned with its
-/// index.
+/// animation does not drive, then the frame's `compensation` weights (`super::jaw`; one list
+/// per frame, or none). A frame whose head or jaw the core refuses is returned with its index.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn animate(
     b: &mut Builder,
@@ -58,6 +58,7 @@ pub(crate) fn animate(
     fps: f32,
     looped: bool,
     extra: usize,
+    compensation: &[Vec<f32>],
     place: &Place,
     pivot_m: [f32; 3],
     nodes: &Animated,
@@ -73,6 +74,9 @@ pub(crate) fn animate(
         let frame = key % frames.len();
         weights.extend_from_slice(&f.weights);
         weights.extend(std::iter::repeat_n(0.0, extra));
+        if let Some(c) = compensation.get(frame) {
+            weights.extend_from_slice(c);
+        }
         let pose = actor
             .pose_from_9d(&f.jaw, &f.head)
             .map_err(|source| (frame, source))?;

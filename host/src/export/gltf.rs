@@ -17,9 +17,12 @@
 //! Coordinates are in metres (glTF's unit) from the artefact's `units`; the axes (x to the
 //! actor's left, y up, z forward) are glTF's already.
 //!
+//! - With frames, up to [`MAX_JAW_COMPENSATION`] more morph targets (`jawCompensation1`, …)
+//!   keyed by the animation, counted in the mesh's `extras.sinewCompensationTargets`.
+//!
 //! glTF morphs before it skins, where AIM eq. 17 adds the correctives after the jaw's LBS, and
-//! glTF's skin weights lie in [0, 1] where the learned k may stray outside; docs/ENGINES.md and
-//! `training::tolerance::GLTF_RIG` give the difference both make.
+//! glTF's skin weights lie in [0, 1] where the learned k may stray outside: `super::jaw` makes up
+//! for both, and `training::tolerance::GLTF_RIG` gives what is left.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -33,14 +36,19 @@ use sinew_core::replay::ReplayError;
 
 pub use super::animation::quaternion;
 use super::animation::{Animated, animate};
+use super::jaw::{Compensation, Skin, compensate, shape_deltas};
+pub use super::jaw::{
+    MAX_TARGETS as MAX_JAW_COMPENSATION, TOLERANCE_M as JAW_COMPENSATION_TOLERANCE_M, joint_weight,
+};
 pub use super::names::{Names, Targets};
 use super::place::{Place, PlaceError};
-use crate::aim::arkit::ArkitError;
+use crate::aim::arkit::{ArkitError, jaw_shapes};
 use crate::aim::play::{Frame, PoseFile, PoseFileError, corrective_names};
 use crate::geometry::uv::UvError;
 use crate::io::atomic::AtomicWriteError;
 use crate::io::container::ContainerError;
 use crate::io::glb::{Builder, GlbError};
+use crate::io::rig::COMPENSATION_KEY;
 use crate::io::units::UnknownUnit;
 
 /// Why `sinew export gltf` failed; every variant names the file.
@@ -138,6 +146,15 @@ pub enum GltfError {
         #[source]
         source: FormatError,
     },
+    /// The core refused the jaw transform learned for a shape (`train.jaw`).
+    #[error("the jaw transform learned for {shape}")]
+    LearnedJaw {
+        /// The shape.
+        shape: String,
+        /// What the core said.
+        #[source]
+        source: sinew_core::InputError,
+    },
     /// The core refused a frame's head or jaw (a degenerate or out-of-range transform).
     #[error("frame {frame}")]
     Frame {
@@ -231,6 +248,11 @@ pub struct Summary {
     pub clamped_weights: usize,
     /// Largest |k − clamp(k)|.
     pub max_clamp: f32,
+    /// Morph targets that make the animation's frames pose as in the core despite glTF's
+    /// morphing before skinning (`jawCompensation1`, …; `super::jaw`).
+    pub jaw_compensation_targets: usize,
+    /// The largest displacement, in mm, that they leave uncompensated in any frame and vertex.
+    pub jaw_compensation_residual_mm: f64,
     /// Metres per model unit.
     pub metres_per_unit: f32,
     /// Capture channels the actor cannot play (ARKit frames only).
@@ -323,11 +345,6 @@ pub fn metres_per_unit(actor: &AimActor<'_>) -> Result<f32, UnknownUnit> {
     }
 }
 
-/// The glTF skin weight of a learned k: clamped into [0, 1], since glTF's weights are convex.
-pub fn joint_weight(k: f32) -> f32 {
-    k.clamp(0.0, 1.0)
-}
-
 fn node(name: &str) -> json::Node {
     json::Node {
         name: Some(name.to_string()),
@@ -377,6 +394,26 @@ pub fn glb(
     let (v32, m32) = (v as u32, m as u32);
     let correctives = section("cache.e", &[v32, m32, 3])?;
     let rest: Vec<f32> = actor.rest().iter().collect();
+    let skin = Skin::of(actor, &correctives);
+    let shape_names = corrective_names(actor);
+    let learned: Vec<(usize, [f32; 9])> = match crate::aim::eval::training_poses(actor) {
+        Ok(poses) => jaw_shapes(&shape_names)
+            .into_iter()
+            .map(|s| (s, poses[s + 1]))
+            .collect(),
+        Err(_) => Vec::new(),
+    };
+    let deltas =
+        shape_deltas(actor, &skin, &learned).map_err(|(s, source)| GltfError::LearnedJaw {
+            shape: shape_names[s].clone(),
+            source,
+        })?;
+    let compensation = if frames.is_empty() {
+        Compensation::default()
+    } else {
+        compensate(actor, &skin, &deltas, frames, f64::from(scale))
+            .map_err(|(frame, source)| GltfError::Frame { frame, source })?
+    };
     let mut b = Builder::new();
 
     // Base mesh.
@@ -427,9 +464,10 @@ pub fn glb(
         Some(ArrayBuffer),
     );
 
-    // Morph targets: each corrective's displacement and the normal change it makes, then each
-    // combined ARKit target's (the sum of its shapes' correctives).
-    let named = Targets::of(&corrective_names(actor), options.names);
+    // Morph targets: each shape's displacement (its corrective, a jaw shape's compensated for
+    // its jaw, `super::jaw`) and the normal change it makes, then each combined ARKit target's
+    // (the sum of its shapes'), then the animation's jaw compensation.
+    let named = Targets::of(&shape_names, options.names);
     let sums: Vec<Vec<usize>> = (0..m)
         .map(|j| vec![j])
         .chain(named.combined.iter().map(|(_, shapes)| shapes.clone()))
@@ -439,12 +477,7 @@ pub fn glb(
     for shapes in &sums {
         let delta: Vec<f32> = (0..v)
             .flat_map(|i| (0..3).map(move |c| (i, c)))
-            .map(|(i, c)| {
-                shapes
-                    .iter()
-                    .map(|&j| correctives.at((i * m + j) * 3 + c))
-                    .sum()
-            })
+            .map(|(i, c)| shapes.iter().map(|&j| deltas[(i * m + j) * 3 + c]).sum())
             .collect();
         for ((s, r), d) in shaped.iter_mut().zip(&rest).zip(&delta) {
             *s = r + d;
@@ -458,7 +491,20 @@ pub fn glb(
             tangents: None,
         });
     }
-    let names = named.all_names();
+    // The compensation moves positions only: its normal change is far below shading's notice.
+    if !compensation.targets.is_empty() {
+        let zeros = b.floats(&vec![0.0; 3 * v_out], Type::Vec3, false, Some(ArrayBuffer));
+        for t in &compensation.targets {
+            let dp = place.offsets(&place.spread(t, 3));
+            targets.push(json::mesh::MorphTarget {
+                positions: Some(b.floats(&dp, Type::Vec3, true, Some(ArrayBuffer))),
+                normals: Some(zeros),
+                tangents: None,
+            });
+        }
+    }
+    let mut names = named.all_names();
+    names.extend((0..compensation.targets.len()).map(super::jaw::target_name));
     let primitive = |attributes: BTreeMap<_, _>, targets| json::mesh::Primitive {
         attributes,
         extensions: None,
@@ -476,18 +522,21 @@ pub fn glb(
             (Valid(json::mesh::Semantic::Weights(0)), skin_weights),
         ])
     };
+    let targets_len = targets.len();
     let mut face_attributes = skinned(pos, nrm);
     if let Some(uv) = uvs {
         face_attributes.insert(Valid(json::mesh::Semantic::TexCoords(0)), uv);
     }
+    let mut extras = serde_json::json!({ "targetNames": names });
+    if !compensation.targets.is_empty() {
+        extras[COMPENSATION_KEY] = compensation.targets.len().into();
+    }
     let face = b.root.push(json::Mesh {
         extensions: None,
-        extras: Some(serde_json::value::to_raw_value(
-            &serde_json::json!({ "targetNames": names }),
-        )?),
+        extras: Some(serde_json::value::to_raw_value(&extras)?),
         name: Some("face".into()),
         primitives: vec![primitive(face_attributes, Some(targets))],
-        weights: Some(vec![0.0; sums.len()]),
+        weights: Some(vec![0.0; targets_len]),
     });
 
     // Joints: head (root) and jaw at the pivot.
@@ -567,6 +616,7 @@ pub fn glb(
             options.fps,
             options.looped,
             named.combined.len(),
+            &compensation.weights,
             &place,
             pivot_m,
             &nodes,
@@ -585,12 +635,14 @@ pub fn glb(
         vertices: v_out,
         seam_copies: place.seam_copies(),
         texture_coordinates: uvs.is_some(),
-        morph_targets: sums.len(),
+        morph_targets: targets_len,
         combined_targets: named.combined.iter().map(|(n, _)| n.clone()).collect(),
         frames: frames.len(),
         keyframes: super::animation::keyframes(frames, options.looped).len(),
         clamped_weights: clamped,
         max_clamp,
+        jaw_compensation_targets: compensation.targets.len(),
+        jaw_compensation_residual_mm: compensation.residual_m * 1000.0,
         metres_per_unit: scale,
         unplayable: Vec::new(),
         bytes: glb.len(),

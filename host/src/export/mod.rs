@@ -4,5 +4,6 @@
 
 mod animation;
 pub mod gltf;
+mod jaw;
 pub mod names;
 mod place;

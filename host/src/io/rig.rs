@@ -14,6 +14,7 @@ use crate::io::units::Unit;
 mod gltf;
 mod obj;
 mod write;
+pub use gltf::COMPENSATION_KEY;
 pub use write::RigWriteError;
 
 /// Which kind of file a rig came from.

@@ -222,6 +222,12 @@ pub fn apply(m: &M4, p: [f64; 3]) -> [f64; 3] {
 
 /// Every frame of the face mesh posed by glTF's rules, in metres, `[frames][V·3]`.
 pub fn pose_gltf(g: &Gltf) -> Vec<Vec<f64>> {
+    pose_gltf_keeping(g, usize::MAX)
+}
+
+/// [`pose_gltf`] with the morph weights of targets `keep..` held at 0, as an engine that drives
+/// only the first `keep` targets by name poses it.
+pub fn pose_gltf_keeping(g: &Gltf, keep: usize) -> Vec<Vec<f64>> {
     let face = g
         .root
         .nodes
@@ -251,7 +257,10 @@ pub fn pose_gltf(g: &Gltf) -> Vec<Vec<f64>> {
     times
         .iter()
         .map(|&t| {
-            let w = g.morph_weights(face, t, targets.len());
+            let mut w = g.morph_weights(face, t, targets.len());
+            for x in w.iter_mut().skip(keep) {
+                *x = 0.0;
+            }
             let jm: Vec<M4> = skin
                 .joints
                 .iter()

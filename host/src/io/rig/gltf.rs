@@ -3,7 +3,8 @@
 //! their order; target names from `mesh.extras.targetNames` (Blender's, three.js's and most
 //! exporters' convention), else `target_N`; sparse accessors as the crate reads them; the node
 //! transforms above the mesh multiplied out (skinned meshes sit in their bind pose, where the
-//! spec ignores the node's transform). Other meshes (eyes, teeth) are not read.
+//! spec ignores the node's transform). Other meshes (eyes, teeth) are not read, nor the targets a
+//! Sinew export adds to compensate its animation (`extras.sinewCompensationTargets`, the last N).
 
 use std::path::Path;
 
@@ -226,7 +227,12 @@ pub(super) fn read(path: &Path, wanted: Option<&str>) -> Result<RigFile, RigRead
         positions.extend(points);
     }
 
-    let shape_names = target_names(mesh.extras(), target_count);
+    let mut shape_names = target_names(mesh.extras(), target_count);
+    // A Sinew export's last targets compensate its animation for glTF's order of operations
+    // (docs/ENGINES.md); they are no shapes of the face.
+    let kept = target_count - compensation_targets(mesh.extras()).min(target_count);
+    shape_names.truncate(kept);
+    deltas.truncate(kept);
     let mut neutral = Mesh::new(positions, polygons);
     if all_uvs {
         neutral.uvs = uvs;
@@ -257,6 +263,19 @@ fn target_names(extras: &gltf::json::Extras, count: usize) -> Vec<String> {
         .filter(|names| names.len() == count);
     named.unwrap_or_else(|| (0..count).map(|k| format!("target_{k}")).collect())
 }
+
+/// `extras.sinewCompensationTargets`: how many of the last targets a Sinew export added to
+/// compensate its animation (0 when absent).
+fn compensation_targets(extras: &gltf::json::Extras) -> usize {
+    extras
+        .as_ref()
+        .and_then(|raw| serde_json::from_str::<serde_json::Value>(raw.get()).ok())
+        .and_then(|v| v.get(COMPENSATION_KEY)?.as_u64())
+        .map_or(0, |n| usize::try_from(n).unwrap_or(usize::MAX))
+}
+
+/// The mesh `extras` key under which a Sinew export counts its compensation targets.
+pub const COMPENSATION_KEY: &str = "sinewCompensationTargets";
 
 /// Each buffer's bytes: the `.glb`'s binary chunk, a `data:` URI or a file beside the glTF.
 fn load_buffers(
