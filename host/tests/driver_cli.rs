@@ -42,6 +42,7 @@ fn track(frames: usize) -> Vec<OpenFaceFrame> {
                     .chunks_exact(2)
                     .flat_map(|p| [320.0 + 1000.0 * p[0], 240.0 + 1000.0 * p[1]])
                     .collect(),
+                world: Vec::new(),
                 confidence: 0.98,
                 success: true,
             }
@@ -301,4 +302,111 @@ fn a_fit_refines_the_drivers_answer() {
     identity[start] = "identity";
     let e = err(&identity);
     assert!(e.contains("only read with --start driver"), "{e}");
+}
+
+/// The `v` lines of an OBJ, flattened.
+fn obj_positions(path: &Path) -> Vec<f32> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .flat_map(|l| l.split_whitespace().map(|x| x.parse::<f32>().unwrap()))
+        .collect()
+}
+
+/// A 3D driver drives an OpenFace CSV's 3D landmarks (millimetres, the camera's axes) wherever
+/// the camera saw the head: the same track seen from 60 cm ahead and from 90 cm ahead and aside
+/// plays the same frames, and they move.
+#[test]
+fn a_three_d_driver_drives_openface_millimetres_wherever_the_camera_stood() {
+    let dir = tempfile::tempdir().unwrap();
+    let actor = repo("tests/data/aim-ict.sinew");
+    let out = dir.path().join("driver3d.sinew");
+    let mut args = vec!["train", "driver", "--model", &actor, "--out", s(&out)];
+    args.extend(["--input", "3d"]);
+    args.extend(TRAIN);
+    ok(&args);
+
+    let bytes = std::fs::read(&actor).unwrap();
+    let golden = AimActor::from_bytes(&bytes).unwrap();
+    let vertices = landmark_vertices(Path::new("aim-ict.sinew"), &golden).unwrap();
+    let config = DriverConfig {
+        input: sinew_core::driver::Space::World,
+        ..DriverConfig::default()
+    };
+    let sampler = Sampler::new(&golden, &vertices, &config);
+    let mut rng = Stream::seed_from_u64(11);
+    let faces: Vec<Vec<f32>> = (0..4).map(|_| sampler.sample(&mut rng).input).collect();
+    let mut played = Vec::new();
+    for (name, [dx, dy, dz]) in [
+        ("ahead", [0.0, 0.0, 600.0]),
+        ("aside", [150.0, -40.0, 900.0]),
+    ] {
+        // The actor's centimetres as OpenFace's camera sees them: mm, y down, z away.
+        let rows: Vec<OpenFaceFrame> = faces
+            .iter()
+            .map(|p| OpenFaceFrame {
+                pixels: Vec::new(),
+                world: p
+                    .chunks_exact(3)
+                    .flat_map(|q| [10.0 * q[0] + dx, dy - 10.0 * q[1], dz - 10.0 * q[2]])
+                    .collect(),
+                confidence: 0.97,
+                success: true,
+            })
+            .collect();
+        let csv = dir.path().join(format!("{name}.csv"));
+        std::fs::write(&csv, write_csv(&rows)).unwrap();
+        let frames = dir.path().join(name);
+        ok(&[
+            "drive",
+            "--model",
+            &actor,
+            "--driver",
+            s(&out),
+            "--landmarks",
+            s(&csv),
+            "--out",
+            s(&frames),
+        ]);
+        played.push(
+            (0..4)
+                .map(|f| obj_positions(&frames.join(format!("frame_{f:05}.obj"))))
+                .collect::<Vec<_>>(),
+        );
+    }
+    let apart = |a: &[f32], b: &[f32]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f32::max)
+    };
+    for (f, (ahead, aside)) in played[0].iter().zip(&played[1]).enumerate() {
+        let d = apart(ahead, aside);
+        assert!(d < 1e-3, "frame {f}: {d} cm between the two cameras");
+    }
+    assert!(
+        apart(&played[0][0], &played[0][3]) > 0.01,
+        "the frames move"
+    );
+    // A 2D driver cannot read a CSV of 3D landmarks only.
+    let two_d = dir.path().join("driver2d.sinew");
+    let mut args = vec!["train", "driver", "--model", &actor, "--out", s(&two_d)];
+    args.extend(TRAIN);
+    ok(&args);
+    let e = err(&[
+        "drive",
+        "--model",
+        &actor,
+        "--driver",
+        s(&two_d),
+        "--landmarks",
+        s(&dir.path().join("ahead.csv")),
+        "--out",
+        s(&dir.path().join("none")),
+        "--intrinsics",
+        "1000,1000,320,240",
+    ]);
+    assert!(e.contains("x_0 … y_67"), "{e}");
+    assert!(!dir.path().join("none").exists());
 }

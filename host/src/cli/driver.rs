@@ -122,8 +122,9 @@ pub(crate) struct DriveArgs {
     /// Its driver (from `sinew train driver`).
     #[arg(long)]
     driver: PathBuf,
-    /// The track: an OpenFace 2.0 CSV (x_0…x_67, y_0…y_67, confidence, success) or a
-    /// performance folder (its 2D track, or its meshes' landmarks for a 3D driver).
+    /// The track: an OpenFace 2.0 CSV (x_0…x_67, y_0…y_67 pixels, or for a 3D driver
+    /// X_0…Z_67 millimetres, with confidence and success) or a performance folder (its 2D
+    /// track, or its meshes' landmarks for a 3D driver).
     #[arg(long)]
     landmarks: PathBuf,
     /// Output folder: frame_00000.obj, … and strip.png.

@@ -206,7 +206,8 @@ fn driven_starts(
     use crate::fit::driver::{drive, track};
     let driver_bytes = crate::io::container::read(driver_path)?;
     let bound = drive::bind(model, bytes, driver_path, &driver_bytes)?;
-    let track = track::read(target, bound.driver.space(), None, 0.0)?;
+    let placement = track::Placement::of(model, &bound.actor, &bound.driver)?;
+    let track = track::read(target, bound.driver.space(), None, 0.0, placement)?;
     let poses = drive::poses(&bound, driver_path, &track, None)
         .with_context(|| format!("{}: driving", target.display()))?;
     let starts = poses

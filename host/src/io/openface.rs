@@ -1,8 +1,11 @@
 //! OpenFace 2.0's landmark CSV (`FeatureExtraction` output): one row per frame, the 68 iBUG
-//! landmarks' pixels in the columns `x_0 … x_67`, `y_0 … y_67`, the tracker's `confidence` in
-//! [0, 1] and `success` (0: the face was lost in that frame). Column names may carry the spaces
-//! OpenFace writes after each comma; other columns are ignored. Every value read must be a
-//! finite number; every error names the file, the row (1-based, the header is row 1) and the
+//! landmarks' pixels in the columns `x_0 … x_67`, `y_0 … y_67` (`-2Dfp`), their 3D positions in
+//! millimetres in the camera's frame (x right, y down, z away from the camera) in `X_0 … X_67`,
+//! `Y_0 … Y_67`, `Z_0 … Z_67` (`-3Dfp`), the tracker's `confidence` in [0, 1] and `success` (0:
+//! the face was lost in that frame). A file holds the 2D or the 3D landmarks or both; a set whose
+//! columns are partly there is an error naming the first missing one. Column names may carry the
+//! spaces OpenFace writes after each comma; other columns are ignored. Every value read must be
+//! a finite number; every error names the file, the row (1-based, the header is row 1) and the
 //! column.
 
 use std::path::{Path, PathBuf};
@@ -17,8 +20,12 @@ pub const MAX_FRAMES: usize = 500_000;
 /// One frame of the track.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OpenFaceFrame {
-    /// `[68, 2]`: each landmark's `[u, v]` in pixels (v down).
+    /// `[68, 2]`: each landmark's `[u, v]` in pixels (v down); empty where the file has no 2D
+    /// landmarks.
     pub pixels: Vec<f32>,
+    /// `[68, 3]`: each landmark's `[x, y, z]` in millimetres in the camera's frame; empty where
+    /// the file has no 3D landmarks.
+    pub world: Vec<f32>,
     /// The tracker's confidence, [0, 1].
     pub confidence: f32,
     /// Whether the tracker found the face.
@@ -153,10 +160,20 @@ pub fn parse(path: &Path, text: &str) -> Result<Vec<OpenFaceFrame>, OpenFaceErro
                 column: name.to_owned(),
             })
     };
-    let mut wanted = Vec::with_capacity(2 * LANDMARKS + 2);
-    for l in 0..LANDMARKS {
-        wanted.push(column(&format!("x_{l}"))?);
-        wanted.push(column(&format!("y_{l}"))?);
+    // Each landmark set's columns, landmark-major, where the header has its first column.
+    let set = |axes: &[&str]| -> Result<Vec<usize>, OpenFaceError> {
+        if !names.contains(&format!("{}_0", axes[0]).as_str()) {
+            return Ok(Vec::new());
+        }
+        (0..LANDMARKS)
+            .flat_map(|l| axes.iter().map(move |a| format!("{a}_{l}")))
+            .map(|name| column(&name))
+            .collect()
+    };
+    let planar = set(&["x", "y"])?;
+    let spatial = set(&["X", "Y", "Z"])?;
+    if planar.is_empty() && spatial.is_empty() {
+        column("x_0")?;
     }
     let confidence = column("confidence")?;
     let success = column("success")?;
@@ -197,12 +214,15 @@ pub fn parse(path: &Path, text: &str) -> Result<Vec<OpenFaceFrame>, OpenFaceErro
                 })
             }
         };
-        let pixels = wanted
-            .iter()
-            .map(|&c| value(c))
-            .collect::<Result<Vec<_>, _>>()?;
+        let values = |columns: &[usize]| {
+            columns
+                .iter()
+                .map(|&c| value(c))
+                .collect::<Result<Vec<_>, _>>()
+        };
         frames.push(OpenFaceFrame {
-            pixels,
+            pixels: values(&planar)?,
+            world: values(&spatial)?,
             confidence: value(confidence)?,
             success: value(success)? != 0.0,
         });
@@ -215,13 +235,29 @@ pub fn parse(path: &Path, text: &str) -> Result<Vec<OpenFaceFrame>, OpenFaceErro
     Ok(frames)
 }
 
-/// An OpenFace 2.0 CSV of `frames` (each `[68, 2]` pixels, with its confidence and success),
-/// with the columns OpenFace writes before the landmarks, as tests and examples need one.
+/// One landmark set of a frame: its pixels or its 3D positions.
+type LandmarkSet = fn(&OpenFaceFrame) -> &[f32];
+
+/// An OpenFace 2.0 CSV of `frames` (each with its pixels `[68, 2]` and 3D landmarks `[68, 3]`
+/// where the first frame has them, its confidence and success), with the columns OpenFace
+/// writes before the landmarks, as tests and examples need one.
 pub fn write_csv(frames: &[OpenFaceFrame]) -> String {
     let mut s = String::from("frame, face_id, timestamp, confidence, success");
-    for axis in ["x", "y"] {
-        for l in 0..LANDMARKS {
-            s.push_str(&format!(", {axis}_{l}"));
+    let first = frames.first();
+    let planar = first.is_some_and(|f| !f.pixels.is_empty());
+    let spatial = first.is_some_and(|f| !f.world.is_empty());
+    let mut sets: Vec<(&[&str], LandmarkSet)> = Vec::new();
+    if planar {
+        sets.push((&["x", "y"], |f| f.pixels.as_slice()));
+    }
+    if spatial {
+        sets.push((&["X", "Y", "Z"], |f| f.world.as_slice()));
+    }
+    for (axes, _) in &sets {
+        for axis in *axes {
+            for l in 0..LANDMARKS {
+                s.push_str(&format!(", {axis}_{l}"));
+            }
         }
     }
     s.push('\n');
@@ -233,9 +269,12 @@ pub fn write_csv(frames: &[OpenFaceFrame]) -> String {
             frame.confidence,
             u8::from(frame.success)
         ));
-        for axis in 0..2 {
-            for l in 0..LANDMARKS {
-                s.push_str(&format!(", {}", frame.pixels[2 * l + axis]));
+        for (axes, values) in &sets {
+            let values = values(frame);
+            for axis in 0..axes.len() {
+                for l in 0..LANDMARKS {
+                    s.push_str(&format!(", {}", values[axes.len() * l + axis]));
+                }
             }
         }
         s.push('\n');
@@ -250,6 +289,7 @@ mod tests {
     fn frame(k: f32) -> OpenFaceFrame {
         OpenFaceFrame {
             pixels: (0..2 * LANDMARKS).map(|i| 100.0 + i as f32 + k).collect(),
+            world: Vec::new(),
             confidence: 0.9,
             success: true,
         }
@@ -261,6 +301,33 @@ mod tests {
         frames[1].success = false;
         let csv = write_csv(&frames);
         assert_eq!(parse(Path::new("t.csv"), &csv).unwrap(), frames);
+    }
+
+    #[test]
+    fn three_d_landmarks_read_back_with_or_without_the_pixels() {
+        let mut frames = vec![frame(0.0), frame(2.0)];
+        for (f, frame) in frames.iter_mut().enumerate() {
+            frame.world = (0..3 * LANDMARKS)
+                .map(|i| -40.0 + i as f32 * 0.5 + f as f32)
+                .collect();
+        }
+        let both = parse(Path::new("t.csv"), &write_csv(&frames)).unwrap();
+        assert_eq!(both, frames);
+        // The landmark-major order: landmark 1's X, Y, Z follow landmark 0's.
+        assert_eq!(both[0].world[3..6], [-38.5, -38.0, -37.5]);
+        for f in &mut frames {
+            f.pixels.clear();
+        }
+        let csv = write_csv(&frames);
+        assert!(!csv.contains(" x_0") && csv.contains(" Z_67"));
+        assert_eq!(parse(Path::new("t.csv"), &csv).unwrap(), frames);
+        // A set partly there names its first missing column.
+        let cut = csv.replacen(", Y_5,", ", Q_5,", 1);
+        let e = parse(Path::new("t.csv"), &cut).unwrap_err();
+        assert!(
+            matches!(&e, OpenFaceError::MissingColumn { column, .. } if column == "Y_5"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -201,11 +201,13 @@ pub fn drive_command(opts: &DriveCommand) -> Result<usize> {
     let actor_bytes = read_actor(&opts.model)?;
     let driver_bytes = crate::io::container::read(&opts.driver)?;
     let bound = bind(&opts.model, &actor_bytes, &opts.driver, &driver_bytes)?;
+    let placement = super::track::Placement::of(&opts.model, &bound.actor, &bound.driver)?;
     let track = super::track::read(
         &opts.landmarks,
         bound.driver.space(),
         opts.intrinsics,
         opts.min_confidence,
+        placement,
     )?;
     let poses = poses(&bound, &opts.driver, &track, opts.filter.as_ref())
         .with_context(|| format!("{}: driving", opts.landmarks.display()))?;
@@ -225,7 +227,8 @@ pub fn eval_driver(model: &Path, driver: &Path, target: &Path) -> Result<DriverM
         perf.manifest.vertices,
         bound.actor.vertex_count()
     );
-    let track = super::track::read(target, bound.driver.space(), None, 0.0)?;
+    let placement = super::track::Placement::of(model, &bound.actor, &bound.driver)?;
+    let track = super::track::read(target, bound.driver.space(), None, 0.0, placement)?;
     let unit = crate::fit::baseline::performance_unit(&perf)?;
     Ok(measure(&bound, driver, &track, &perf, unit.mm())?)
 }
