@@ -216,8 +216,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Vec<OpenFaceFrame>, OpenFaceErro
 }
 
 /// An OpenFace 2.0 CSV of `frames` (each `[68, 2]` pixels, with its confidence and success),
-/// with the columns OpenFace writes before the landmarks, as tests and examples need one.
-pub fn write_csv(frames: &[OpenFaceFrame]) -> String {
+/// taken at `fps` frames per second, with the columns OpenFace writes before the landmarks
+/// (`frame` from 1, `face_id`, `timestamp` in seconds to the millisecond as OpenFace rounds it,
+/// `confidence`, `success`). Pixels are written in Rust's shortest form, which reads back to the
+/// same `f32` bits ([`parse`], C's `strtof`).
+pub fn write_csv(frames: &[OpenFaceFrame], fps: f32) -> String {
     let mut s = String::from("frame, face_id, timestamp, confidence, success");
     for axis in ["x", "y"] {
         for l in 0..LANDMARKS {
@@ -229,7 +232,7 @@ pub fn write_csv(frames: &[OpenFaceFrame]) -> String {
         s.push_str(&format!(
             "{}, 0, {:.3}, {}, {}",
             f + 1,
-            f as f32 / 30.0,
+            f as f32 / fps,
             frame.confidence,
             u8::from(frame.success)
         ));
@@ -259,14 +262,14 @@ mod tests {
     fn a_written_track_reads_back() {
         let mut frames = vec![frame(0.0), frame(1.5)];
         frames[1].success = false;
-        let csv = write_csv(&frames);
+        let csv = write_csv(&frames, 30.0);
         assert_eq!(parse(Path::new("t.csv"), &csv).unwrap(), frames);
     }
 
     #[test]
     fn bad_tracks_name_the_row_and_column() {
         let path = Path::new("track.csv");
-        let csv = write_csv(&[frame(0.0), frame(1.0)]);
+        let csv = write_csv(&[frame(0.0), frame(1.0)], 30.0);
         let mut lines: Vec<String> = csv.lines().map(str::to_owned).collect();
         let short = format!("{}\n{}\n", lines[0], "1, 0, 0.0, 0.9, 1, 5");
         let e = parse(path, &short).unwrap_err();
