@@ -281,9 +281,10 @@ enum SinewStatus sinew_driver_info(const struct SinewDriver *driver,
 
 // A tracker's pixels (`pixels`: 68 × `[u, v]`, v down, 136 floats) as a 2D driver reads them,
 // into `landmarks` (136 floats): `((u − cx) / fx, (v − cy) / fy)`
-// (`sinew_core::driver::normalise_pixels`). `SINEW_STATUS_INVALID_INPUT` for a pixel that is
-// NaN, infinite or outside ±1e5 (`landmarks[i]`), or for intrinsics that are not finite or a
-// focal length that is not positive (`landmarks[136 + i]`, i: fx, fy, cx, cy).
+// (`sinew_core::driver::normalise_pixels`). `SINEW_STATUS_INVALID_INPUT` naming `pixels[i]` for
+// a pixel that is NaN, infinite or outside ±1e5, or the field (`intrinsics.fx`) for intrinsics
+// that are not finite or within ±1e5, or a focal length that is not positive; nothing is
+// written then.
 //
 // # Safety
 // `pixels` points to `pixels_len` floats, `intrinsics` to a `SinewIntrinsics`, `landmarks` to
