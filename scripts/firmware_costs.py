@@ -37,6 +37,10 @@ MOTION_HEADER = re.compile(
 )
 # The firmware's shared frame arena (firmware-sim/common/src/lib.rs, `ARENA`), in f32 values.
 ARENA = 6 * 5120 + 2560
+DRIVER_COST = re.compile(r"^driver cost (\S+) frame (\d+) \(instructions\): (.*)$")
+DRIVER_HEADER = re.compile(
+    r"^sinew-firmware-sim(?:-riscv)?: [^,]+, (\S+): (\d+) vertices, (\d+) shapes, (\d+) landmarks, (\d+) frames"
+)
 STACK = re.compile(r"^stack high-water (\d+) bytes")
 
 
@@ -58,7 +62,17 @@ def parse(text: str):
     costs, frames, sizes, stack = {}, {}, {}, None
     current = None
     for line in text.splitlines():
-        if m := S2D_HEADER.match(line):
+        if m := DRIVER_HEADER.match(line):
+            # Four checks a row of two kinds: its phases are measured apart (driver_costs), and
+            # its checks are kept out of the whole-frame table.
+            current = "driver:" + m.group(1)
+            sizes[current] = (int(m.group(2)), int(m.group(3)), int(m.group(4)), int(m.group(5)))
+            frames[current] = []
+        elif m := DRIVER_COST.match(line):
+            costs["driver:" + m.group(1).rsplit(".", 1)[0]] = dict(
+                kv.split("=") for kv in m.group(3).split()
+            )
+        elif m := S2D_HEADER.match(line):
             current = m.group(1)
             sizes[current] = (int(m.group(2)), int(m.group(3)), int(m.group(4)))
             frames[current] = []
@@ -116,7 +130,7 @@ def main() -> None:
     arm_costs, arm_frames, sizes, stack = parse(arm)
     rv_costs, rv_frames, _, _ = parse(rv)
     s2d_values = max((s[2] for s in sizes.values() if len(s) == 3), default=0)
-    motion_values = max((s[3] for s in sizes.values() if len(s) == 4), default=0)
+    motion_values = max((s[3] for s in sizes.values() if len(s) == 4 and s[0] == "motion"), default=0)
     sec, flash, ram = footprint(TARGET / "thumbv7em-none-eabihf/release/sinew-firmware-sim")
     lines = [START, ""]
     lines += [
@@ -165,6 +179,21 @@ def main() -> None:
                 f"| {name} (generated sequence, {k} landmarks → {v:,} vertices) | {label} | "
                 f"{mil(int(arm_costs[key][phase]))} | {mil(int(rv_costs[key][phase]))} |"
             )
+    driver_names = {
+        "drive": "one driver evaluation: pixels through the camera, features, MLP, pose made whole",
+        "filter": "One Euro filter step on the pose (optional)",
+        "pose": "pose the actor with it, f32 (eq. 17)",
+        "normals": "vertex normals, f32 (libm)",
+        "hash": "frame hash (golden check only)",
+    }
+    for key in (a for a in arm_costs if a.startswith("driver:")):
+        name = key.removeprefix("driver:")
+        v, m, k, _ = sizes[f"driver:{name}.f32"]
+        for phase, label in driver_names.items():
+            lines.append(
+                f"| {name} (live driver, {k} landmarks → {v:,} vertices, {m} correctives) | {label} | "
+                f"{mil(int(arm_costs[key][phase]))} | {mil(int(rv_costs[key][phase]))} |"
+            )
     lines += [
         "",
         "Whole frames as the replays run them (f32 and fast: pose + normals + hash; q16: pose +",
@@ -176,13 +205,14 @@ def main() -> None:
         "| replay | Cortex-M4F | RISC-V |",
         "|---|---|---|",
     ]
-    for name in arm_frames:
+    for name in (n for n in arm_frames if not n.startswith("driver:")):
         a, r = arm_frames[name], rv_frames.get(name, [])
         lines.append(f"| {name} | {mil(sum(a) / len(a))} | {mil(sum(r) / len(r))} |")
     lines += [
         "",
         "Cortex-M4F image (`firmware-sim/cortex-m`, release; both golden actors in flash, the ICT one",
-        "with its Q16.16 cache, the golden S2D decoder and the golden motion generator; the S2D replay",
+        "with its Q16.16 cache, the golden S2D decoder, the golden motion generator and the golden",
+        "landmark driver with its track; the S2D replay",
         f"decodes in the shared frame arena, {s2d_values:,} of its {ARENA:,} values, the generated",
         f"sequence uses {motion_values:,} of them):",
         "",

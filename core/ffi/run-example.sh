@@ -4,7 +4,8 @@
 # performance fit-ict on aim-ict, the generated sequence motion-ict through s2d-ict) and diffs
 # the printed hash lists against tests/data/*.hashes. Exits non-zero on a build error, a
 # warning, a failed call, a frame that differs from its recording, or any line that differs from
-# the golden list.
+# the golden list; then drives the golden actor from the golden OpenFace track with the golden
+# landmark driver (examples/drive.c) and diffs its hashes, unfiltered and filtered.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -17,6 +18,9 @@ cargo build -p sinew-ffi --release --locked
 "$CC" -std=c11 -Wall -Wextra -Werror -pedantic -O2 -Icore/ffi/include \
   core/ffi/examples/replay.c "$CARGO_TARGET_DIR/release/libsinew.a" \
   -lm -lpthread -ldl -o "$out/replay"
+"$CC" -std=c11 -Wall -Wextra -Werror -pedantic -O2 -Icore/ffi/include \
+  core/ffi/examples/drive.c "$CARGO_TARGET_DIR/release/libsinew.a" \
+  -lm -lpthread -ldl -o "$out/drive"
 
 for name in aim-procedural aim-ict s2d-ict; do
   "$out/replay" tests/data "$name" >"$out/$name.hashes"
@@ -32,3 +36,8 @@ for pair in "fit-ict aim-ict" "motion-ict s2d-ict"; do
   diff -u <(grep -v '^#' "tests/data/$name.hashes") <(grep -v '^#' "$out/$name.hashes")
   echo "$name on $model: $(grep -vc '^#' "$out/$name.hashes") lines match tests/data/$name.hashes"
 done
+
+# The live driver: the track and the filter its hash list names, every pose and frame hash.
+"$out/drive" tests/data driver-ict aim-ict >"$out/driver-ict.hashes"
+diff -u <(grep -v '^#' tests/data/driver-ict.hashes) "$out/driver-ict.hashes"
+echo "driver-ict on aim-ict: $(grep -vc '^#' "$out/driver-ict.hashes") lines match tests/data/driver-ict.hashes"

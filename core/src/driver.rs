@@ -33,6 +33,7 @@ use crate::aim::{AimActor, MAX_SHAPES};
 use crate::error::{
     Argument, Bound, BufferError, EvalError, FormatError, InputError, InputErrorKind,
 };
+use crate::filter::OneEuro;
 use crate::format::{ArtifactKind, SinewFile, out_of_range};
 use crate::hash::FrameHasher;
 use crate::input::check_values;
@@ -486,12 +487,55 @@ pub fn frame_hash(
     buf: &mut DriveBuffers<'_>,
 ) -> Result<u64, EvalError> {
     driver.drive(landmarks, buf.scratch, buf.pose)?;
-    play(actor, buf.pose, buf.positions)?;
-    actor.normals(buf.positions, buf.normals)?;
+    pose_hash(actor, buf.pose, buf.positions, buf.normals)
+}
+
+/// Poses `actor` with a driven `pose` ([`play`]) into `positions`, computes its `normals` and
+/// returns their f32 hash (positions then normals, an f32 replay frame's hash).
+///
+/// # Errors
+/// As [`play`] and [`AimActor::normals`].
+pub fn pose_hash(
+    actor: &AimActor<'_>,
+    pose: &[f32],
+    positions: &mut [f32],
+    normals: &mut [f32],
+) -> Result<u64, EvalError> {
+    play(actor, pose, positions)?;
+    actor.normals(positions, normals)?;
     let mut h = FrameHasher::new();
-    h.write_f32s(buf.positions);
-    h.write_f32s(buf.normals);
+    h.write_f32s(positions);
+    h.write_f32s(normals);
     Ok(h.finish())
+}
+
+/// Smooths a driven `pose` (`[18 + M]`, [`Driver::drive`]'s) taken at `time` seconds with the
+/// One Euro `filter` ([`OneEuro::apply_at`], `state` of
+/// [`OneEuro::timed_state_len`]`(18 + M)`, zeros to reset), then makes it a pose the actor
+/// accepts again ([`finish_pose`]: the filtered 6D rotations made orthonormal).
+///
+/// # Errors
+/// [`BufferError::Input`] for a pose shorter than 18 values; [`EvalError::Input`] naming
+/// [`Argument::Head`], [`Argument::Jaw`] or [`Argument::Weights`] and the value for a pose value
+/// that is NaN, infinite or out of the range posing accepts (a driven pose never is); as
+/// [`OneEuro::apply_at`]: a state of another length, or a time stamp refused. Nothing changes
+/// then.
+pub fn filter_pose(
+    filter: &OneEuro,
+    state: &mut [f32],
+    time: f32,
+    pose: &mut [f32],
+) -> Result<(), EvalError> {
+    let (head_jaw, weights) = pose
+        .split_at_checked(AIM_POSE_LEN)
+        .ok_or(BufferError::Input)?;
+    let (head, jaw) = head_jaw.split_at(9);
+    check_values(Argument::Head, head)?;
+    check_values(Argument::Jaw, jaw)?;
+    check_values(Argument::Weights, weights)?;
+    filter.apply_at(state, time, pose)?;
+    finish_pose(pose);
+    Ok(())
 }
 
 /// Poses `actor` with a driven pose (`[18 + M]`: head, jaw, coefficients) into `out` (`[V, 3]`).

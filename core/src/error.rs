@@ -601,6 +601,9 @@ pub enum Argument {
     /// A temporal filter's settings: minimum cutoff (Hz), speed coefficient, derivative cutoff
     /// (Hz) and frame rate (Hz), each within `[0, MAX_FACTOR]`, the cutoffs and the rate above 0.
     Filter,
+    /// A frame's time stamp in seconds (a time-stamped filter step), within ±`MAX_COORDINATE` and
+    /// at least `1 / MAX_FACTOR` after the last one the filter saw.
+    Time,
 }
 
 impl Argument {
@@ -624,6 +627,7 @@ impl Argument {
             Self::Curve => "curve",
             Self::Landmarks => "landmarks",
             Self::Filter => "filter",
+            Self::Time => "time",
         }
     }
 
@@ -719,6 +723,11 @@ impl fmt::Display for InputError {
                 "{argument}[3..6], the 6D rotation's second column, is shorter than {} or \
                  parallel to the first",
                 Magnitude(MIN_ROTATION_COLUMN)
+            ),
+            InputErrorKind::Degenerate if matches!(argument, Argument::Time) => write!(
+                f,
+                "{argument}[{index}] is not at least {} s after the last frame's time stamp",
+                Magnitude(1.0 / MAX_FACTOR)
             ),
             InputErrorKind::Degenerate => write!(
                 f,

@@ -4,11 +4,13 @@
 //! does not lag. Off by default; a driver's caller applies it to each driven pose
 //! ([`crate::driver`]), then makes the pose whole again with [`crate::driver::finish_pose`].
 //!
-//! Deterministic: a fixed frame rate (no clock), the state in the caller's buffer, only
-//! additions, multiplications, divisions and `libm::fabsf`, in index order.
+//! Deterministic: a fixed frame rate ([`OneEuro::apply`]) or the caller's time stamps
+//! ([`OneEuro::apply_at`]), never a clock; the state in the caller's buffer; only additions,
+//! multiplications, divisions and `libm::fabsf`, in index order.
 
-use crate::error::{Argument, BufferError, InputError, InputErrorKind};
+use crate::error::{Argument, BufferError, EvalError, InputError, InputErrorKind};
 use crate::input::check_value;
+use crate::layout::MAX_FACTOR;
 
 /// The filter's settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -51,33 +53,94 @@ impl OneEuro {
         1 + 2 * n
     }
 
-    /// The smoothing factor of a low-pass at `cutoff` Hz: `1 / (1 + τ · rate)`,
-    /// `τ = 1 / (2π cutoff)`.
-    fn alpha(&self, cutoff: f32) -> f32 {
+    /// The state values for `n` values filtered at time stamps ([`Self::apply_at`]): a started
+    /// flag, the last time stamp, then the last filtered value and the last filtered speed of
+    /// each. A state of zeros is a filter that has seen nothing (a reset).
+    pub const fn timed_state_len(n: usize) -> usize {
+        2 + 2 * n
+    }
+
+    /// The smoothing factor of a low-pass at `cutoff` Hz for frames at `rate` Hz:
+    /// `1 / (1 + τ · rate)`, `τ = 1 / (2π cutoff)`.
+    fn alpha(cutoff: f32, rate: f32) -> f32 {
         let tau = 1.0 / (2.0 * core::f32::consts::PI * cutoff);
-        1.0 / (1.0 + tau * self.rate)
+        1.0 / (1.0 + tau * rate)
     }
 
     /// Filters one frame's `values` in place, updating `state` (length
-    /// [`Self::state_len`]`(values.len())`). The first frame passes through.
+    /// [`Self::state_len`]`(values.len())`), at the settings' fixed frame rate. The first frame
+    /// passes through.
     ///
     /// # Errors
-    /// [`BufferError::Scratch`] for a state of another length ( nothing changes then).
+    /// [`BufferError::Scratch`] for a state of another length (nothing changes then).
     pub fn apply(&self, state: &mut [f32], values: &mut [f32]) -> Result<(), BufferError> {
         let n = values.len();
         if state.len() != Self::state_len(n) {
             return Err(BufferError::Scratch);
         }
         let (flag, rest) = state.split_at_mut(1);
-        let (last, speed) = rest.split_at_mut(n);
         let started = flag.first().is_some_and(|&f| f != 0.0);
-        let a_d = self.alpha(self.d_cutoff);
+        self.step(started, self.rate, rest, values);
+        if let Some(f) = flag.first_mut() {
+            *f = 1.0;
+        }
+        Ok(())
+    }
+
+    /// Filters one frame's `values` taken at `time` seconds in place, updating `state` (length
+    /// [`Self::timed_state_len`]`(values.len())`): the frame rate of each step is
+    /// `1 / (time − the last frame's time)`, as in the paper, for frames that arrive unevenly
+    /// (the settings' own rate is not used). The first frame after a reset passes through.
+    /// Time stamps are best counted from the track's start: an `f32` of seconds resolves a
+    /// millisecond up to about 2 hours.
+    ///
+    /// # Errors
+    /// [`BufferError::Scratch`] for a state of another length; [`InputError`] naming
+    /// [`Argument::Time`] for a time stamp that is not finite or outside ±`MAX_COORDINATE`,
+    /// or (`Degenerate`) less than `1 / MAX_FACTOR` (1 ms) after the last one. Nothing changes
+    /// then.
+    pub fn apply_at(
+        &self,
+        state: &mut [f32],
+        time: f32,
+        values: &mut [f32],
+    ) -> Result<(), EvalError> {
+        let n = values.len();
+        if state.len() != Self::timed_state_len(n) {
+            return Err(BufferError::Scratch.into());
+        }
+        check_value(Argument::Time, 0, time)?;
+        let (head, rest) = state.split_at_mut(2);
+        let (started, last) = match head {
+            [flag, last] => (*flag != 0.0, *last),
+            _ => (false, 0.0),
+        };
+        let mut rate = self.rate;
+        if started {
+            let dt = time - last;
+            // Also refuses a NaN difference, which finite stamps within range cannot give.
+            if dt.is_nan() || dt < 1.0 / MAX_FACTOR {
+                return Err(InputError::new(Argument::Time, 0, InputErrorKind::Degenerate).into());
+            }
+            rate = 1.0 / dt;
+        }
+        self.step(started, rate, rest, values);
+        if let [flag, last] = head {
+            (*flag, *last) = (1.0, time);
+        }
+        Ok(())
+    }
+
+    /// One step at `rate` Hz over `memory` (the last filtered values, then their speeds).
+    fn step(&self, started: bool, rate: f32, memory: &mut [f32], values: &mut [f32]) {
+        let (last, speed) = memory.split_at_mut(values.len());
+        let a_d = Self::alpha(self.d_cutoff, rate);
         for ((x, l), s) in values.iter_mut().zip(last.iter_mut()).zip(speed.iter_mut()) {
             if started {
                 // 1€ filter, Casiez et al. 2012, Algorithm 1.
-                let dx = (*x - *l) * self.rate;
+                let dx = (*x - *l) * rate;
                 let ds = a_d * dx + (1.0 - a_d) * *s;
-                let a = self.alpha(self.min_cutoff + self.beta * libm::fabsf(ds));
+                let a = Self::alpha(self.min_cutoff + self.beta * libm::fabsf(ds), rate);
                 *x = a * *x + (1.0 - a) * *l;
                 *s = ds;
             } else {
@@ -85,10 +148,6 @@ impl OneEuro {
             }
             *l = *x;
         }
-        if let Some(f) = flag.first_mut() {
-            *f = 1.0;
-        }
-        Ok(())
     }
 }
 
@@ -158,5 +217,62 @@ mod tests {
         );
         let mut short = [0.0f32; 2];
         assert_eq!(f.apply(&mut short, &mut [1.0]), Err(BufferError::Scratch));
+    }
+
+    #[test]
+    fn time_stamps_set_each_steps_rate_and_bad_ones_are_refused() {
+        // Frames 1/32 s apart (exact in f32): the time-stamped filter is the fixed-rate one.
+        let f = OneEuro::new(1.0, 0.5, 1.0, 32.0).unwrap();
+        let (mut fixed, mut timed) = ([0.0f32; 5], [0.0f32; 6]);
+        for k in 0..12 {
+            let input = [libm::sinf(k as f32), 3.0 + libm::cosf(k as f32)];
+            let (mut a, mut b) = (input, input);
+            f.apply(&mut fixed, &mut a).unwrap();
+            f.apply_at(&mut timed, k as f32 / 32.0, &mut b).unwrap();
+            assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits), "frame {k}");
+        }
+        // A late frame is smoothed less than one on time: its rate is lower.
+        let follow = |dt: f32| {
+            let mut s = [0.0f32; 4];
+            f.apply_at(&mut s, 0.0, &mut [0.0]).unwrap();
+            let mut v = [1.0f32];
+            f.apply_at(&mut s, dt, &mut v).unwrap();
+            v[0]
+        };
+        assert!(
+            follow(0.5) > follow(1.0 / 30.0),
+            "{} {}",
+            follow(0.5),
+            follow(1.0 / 30.0)
+        );
+        // A stamp not 1 ms after the last, or not finite, is refused and changes nothing.
+        let before = timed;
+        let mut v = [9.0f32, 9.0];
+        let time = |kind| EvalError::Input(InputError::new(Argument::Time, 0, kind));
+        for (t, kind) in [
+            (11.0 / 32.0, InputErrorKind::Degenerate),
+            (11.0 / 32.0 + 1e-4, InputErrorKind::Degenerate),
+            (f32::NAN, InputErrorKind::NonFinite),
+            (1e9, InputErrorKind::OutOfRange),
+        ] {
+            assert_eq!(f.apply_at(&mut timed, t, &mut v), Err(time(kind)), "{t}");
+        }
+        assert_eq!((timed, v), (before, [9.0, 9.0]));
+        assert_eq!(
+            f.apply_at(&mut [0.0; 5], 1.0, &mut v),
+            Err(EvalError::Buffer(BufferError::Scratch))
+        );
+        assert_eq!(
+            alloc_free_message(time(InputErrorKind::Degenerate)),
+            "time[0] is not at least 1e-3 s after the last frame's time stamp"
+        );
+    }
+
+    /// The error's message, through a fixed buffer (the core has no `alloc`).
+    fn alloc_free_message(e: EvalError) -> heapless::String<96> {
+        use core::fmt::Write;
+        let mut s = heapless::String::new();
+        write!(s, "{e}").unwrap();
+        s
     }
 }

@@ -99,3 +99,18 @@ console.log(
 if (motion !== 0 || motionBad !== 0 || motionFrames.length === 0) {
   process.exit(1);
 }
+// The driven track: four checks a row (reported as frames 5:0…).
+const driverStart = frames.length;
+const driver = instance.exports.sinew_replay_driver() >>> 0;
+if (driver === LOAD_ERROR) {
+  console.error("sinew-firmware-wasm: the driven track could not load the driver, the actor, the track or the hash list");
+  process.exit(1);
+}
+const driverChecks = frames.slice(driverStart);
+const driverBad = driverChecks.filter((f) => !f.ok).length;
+console.log(
+  `sinew-firmware-wasm: ${driverChecks.length - driverBad}/${driverChecks.length} driven-track checks bit-identical to the host`,
+);
+if (driver !== 0 || driverBad !== 0 || driverChecks.length === 0) {
+  process.exit(1);
+}

@@ -82,7 +82,7 @@ fn a_driver_trains_resumes_and_drives_a_track_holding_lost_frames() {
     frames[2].success = false;
     frames[3].confidence = 0.1;
     let csv = dir.path().join("track.csv");
-    std::fs::write(&csv, write_csv(&frames)).unwrap();
+    std::fs::write(&csv, write_csv(&frames, 30.0)).unwrap();
     let played = dir.path().join("played");
     let drive = [
         "drive",
@@ -123,7 +123,7 @@ fn bad_tracks_and_another_actors_driver_are_refused_without_output() {
     args.extend(TRAIN);
     args[5 + 2] = "2"; // two steps are enough to have a driver
     ok(&args);
-    let good = write_csv(&track(3));
+    let good = write_csv(&track(3), 30.0);
     let lines: Vec<&str> = good.lines().collect();
     let cases = [
         (
@@ -356,7 +356,7 @@ fn a_three_d_driver_drives_openface_millimetres_wherever_the_camera_stood() {
             })
             .collect();
         let csv = dir.path().join(format!("{name}.csv"));
-        std::fs::write(&csv, write_csv(&rows)).unwrap();
+        std::fs::write(&csv, write_csv(&rows, 30.0)).unwrap();
         let frames = dir.path().join(name);
         ok(&[
             "drive",

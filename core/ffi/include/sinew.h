@@ -73,6 +73,11 @@ typedef enum SinewMode {
   SINEW_MODE_FAST = 2,
 } SinewMode;
 
+// An opened landmark driver (opaque to C), checked against the actor it was opened with. It
+// borrows the bytes it was opened from: they must stay valid and unchanged until
+// [`sinew_driver_free`]. It does not keep the model's handle.
+typedef struct SinewDriver SinewDriver;
+
 // An opened model (opaque to C). It borrows the bytes it was opened from: they must stay
 // valid and unchanged until [`sinew_model_free`].
 typedef struct SinewModel SinewModel;
@@ -98,6 +103,51 @@ typedef struct SinewError {
   // A NUL-terminated UTF-8 sentence naming the problem.
   char message[SINEW_MESSAGE_LEN];
 } SinewError;
+
+// A driver's sizes, from [`sinew_driver_info`].
+typedef struct SinewDriverInfo {
+  // Landmarks per frame (68, the iBUG points of OpenFace, dlib, OpenSeeFace).
+  size_t landmark_count;
+  // Coordinates per landmark: 2 (a 2D driver: pixels through `sinew_driver_pixels`) or 3 (a
+  // 3D driver: the actor's unit and frame).
+  size_t landmark_dims;
+  // Floats of one frame's `landmarks`: `landmark_count * landmark_dims`.
+  size_t input_len;
+  // The actor's corrective coefficients M.
+  size_t shape_count;
+  // Floats of a pose: head (9: 6D rotation, translation), jaw (9), then M coefficients.
+  size_t pose_len;
+  // Vertices V of the actor; `positions` and `normals` hold `3 * V` floats.
+  size_t vertex_count;
+  // The content hash of the actor the driver was trained for (`sinew_model_content_hash`).
+  uint64_t model_hash;
+  // Floats of scratch `sinew_driver_pose` needs.
+  size_t scratch_floats;
+  // Floats of the One Euro filter's state (`sinew_driver_filter`): `2 + 2 * pose_len`.
+  size_t filter_state_floats;
+} SinewDriverInfo;
+
+// A pinhole camera's intrinsics in pixels, for `sinew_driver_pixels`.
+typedef struct SinewIntrinsics {
+  // Focal length along u.
+  float fx;
+  // Focal length along v.
+  float fy;
+  // Principal point u.
+  float cx;
+  // Principal point v.
+  float cy;
+} SinewIntrinsics;
+
+// The One Euro filter's settings (Casiez et al. 2012), for `sinew_driver_filter`.
+typedef struct SinewFilter {
+  // The cutoff of a still signal, Hz (above 0): lower smooths more.
+  float min_cutoff;
+  // How fast the cutoff rises with the speed (0 or more): higher lags less.
+  float beta;
+  // The cutoff of the speed's own low-pass, Hz (above 0; 1 is usual).
+  float d_cutoff;
+} SinewFilter;
 
 // A model's sizes, from [`sinew_model_info`]. Counts that do not apply to the kind are 0.
 typedef struct SinewModelInfo {
@@ -195,6 +245,130 @@ typedef struct SinewFormatVersions {
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+// Opens a landmark driver (`sinew train driver`, `len` bytes at `bytes`, validated
+// completely) for `model`, the AIM actor it was trained for. On success `*out` is a new handle,
+// to be released with `sinew_driver_free`; on failure `*out` is set to NULL.
+// `SINEW_STATUS_WRONG_KIND` if `model` is an S2D decoder or the bytes another kind of artefact;
+// `SINEW_STATUS_MODEL_MISMATCH` if the driver was trained for another actor (its content hash),
+// poses another number of coefficients, or names a landmark vertex the actor lacks.
+//
+// # Safety
+// `bytes` must point to `len` readable bytes that stay valid and unchanged until the handle is
+// freed (the handle borrows them); `model` is a live handle (it may be freed first). `out` must
+// point to writable memory for one pointer; `err` is NULL or points to a writable `SinewError`.
+enum SinewStatus sinew_driver_open(const uint8_t *bytes,
+                                   size_t len,
+                                   const struct SinewModel *model,
+                                   struct SinewDriver **out,
+                                   struct SinewError *err);
+
+// Releases a handle from `sinew_driver_open`. NULL is ignored.
+//
+// # Safety
+// `driver` is NULL or a handle from `sinew_driver_open` not yet freed; no other call may be using
+// it, and it must not be used afterwards.
+void sinew_driver_free(struct SinewDriver *driver);
+
+// Writes the driver's sizes to `*out`.
+//
+// # Safety
+// `driver` is a live handle; `out` points to a writable `SinewDriverInfo`; `err` is NULL or
+// points to a writable `SinewError`.
+enum SinewStatus sinew_driver_info(const struct SinewDriver *driver,
+                                   struct SinewDriverInfo *out,
+                                   struct SinewError *err);
+
+// A tracker's pixels (`pixels`: 68 × `[u, v]`, v down, 136 floats) as a 2D driver reads them,
+// into `landmarks` (136 floats): `((u − cx) / fx, (v − cy) / fy)`
+// (`sinew_core::driver::normalise_pixels`). `SINEW_STATUS_INVALID_INPUT` naming `pixels[i]` for
+// a pixel that is NaN, infinite or outside ±1e5, or the field (`intrinsics.fx`) for intrinsics
+// that are not finite or within ±1e5, or a focal length that is not positive; nothing is
+// written then.
+//
+// # Safety
+// `pixels` points to `pixels_len` floats, `intrinsics` to a `SinewIntrinsics`, `landmarks` to
+// `landmarks_len` writable floats overlapping neither; `err` is NULL or points to a writable
+// `SinewError`.
+enum SinewStatus sinew_driver_pixels(const float *pixels,
+                                     size_t pixels_len,
+                                     const struct SinewIntrinsics *intrinsics,
+                                     float *landmarks,
+                                     size_t landmarks_len,
+                                     struct SinewError *err);
+
+// One frame's `landmarks` (`input_len` floats) to the actor's pose in `pose` (`pose_len`
+// floats: head 6D rotation and translation, jaw the same, then the coefficients), exactly
+// `sinew_core::driver::Driver::drive`. `SINEW_STATUS_INVALID_INPUT` naming `landmarks[i]` for a
+// landmark that is NaN, infinite or outside ±1e5, or (`landmarks[0]`) 2D landmarks whose nose
+// and eyes all but coincide; nothing is written then.
+//
+// # Safety
+// `driver` is a live handle; `landmarks` points to `landmarks_len` floats; `scratch` and `pose`
+// point to the stated number of writable floats, overlapping no other argument; `err` is NULL
+// or points to a writable `SinewError`.
+enum SinewStatus sinew_driver_pose(const struct SinewDriver *driver,
+                                   const float *landmarks,
+                                   size_t landmarks_len,
+                                   float *scratch,
+                                   size_t scratch_len,
+                                   float *pose,
+                                   size_t pose_len,
+                                   struct SinewError *err);
+
+// Sets a filter state (`filter_state_floats` floats) to a filter that has seen nothing: the
+// next `sinew_driver_filter` passes its frame through. Zeroing the floats does the same.
+//
+// # Safety
+// `state` points to `state_len` writable floats; `err` is NULL or points to a writable
+// `SinewError`.
+enum SinewStatus sinew_driver_filter_reset(float *state, size_t state_len, struct SinewError *err);
+
+// Smooths a driven `pose` (`pose_len` floats, from `sinew_driver_pose`) taken at `time`
+// seconds in place with the One Euro filter `filter`, updating `state` (`filter_state_floats`
+// floats; zeros or `sinew_driver_filter_reset` to start), then makes its rotations orthonormal
+// again (`sinew_core::driver::filter_pose`). Each step's rate is `1 / (time − the last
+// frame's time)`; the first frame after a reset passes through. Count time from the track's
+// start. `SINEW_STATUS_INVALID_INPUT` naming `filter[i]` for a setting that is not finite, out
+// of `[0, 1e3]` or a cutoff of 0; `time[0]` for a time stamp that is not finite, outside ±1e5 or
+// less than 1 ms after the last; `head[i]`, `jaw[i]` or `weights[i]` for a pose value posing
+// would refuse. Nothing changes then.
+//
+// # Safety
+// `driver` is a live handle; `filter` points to a `SinewFilter`; `state` and `pose` point to the
+// stated number of writable floats, not overlapping; `err` is NULL or points to a writable
+// `SinewError`.
+enum SinewStatus sinew_driver_filter(const struct SinewDriver *driver,
+                                     const struct SinewFilter *filter,
+                                     float time,
+                                     float *state,
+                                     size_t state_len,
+                                     float *pose,
+                                     size_t pose_len,
+                                     struct SinewError *err);
+
+// Poses `model`, the driver's actor (checked at every call), with a driven `pose` (`pose_len`
+// floats) in f32 (`sinew_core::driver::play`): writes `positions` (`3 * vertex_count`) and,
+// when `normals` is not NULL, the area-weighted vertex normals; when `hash` is not NULL too, the
+// frame's hash (positions then normals, `sinew_core::driver::pose_hash`, the `frame` hashes of
+// `tests/data/driver-ict.hashes`). A `hash` without `normals` is `SINEW_STATUS_NULL_POINTER`:
+// the hash covers the normals. `SINEW_STATUS_INVALID_INPUT` naming `head[i]`, `jaw[i]` or
+// `weights[i]` for a pose value posing refuses.
+//
+// # Safety
+// `driver` and `model` are live handles; every non-NULL pointer points to the stated number of
+// elements, output buffers overlapping no other argument; `hash` is NULL or points to a writable
+// `uint64_t`; `err` is NULL or points to a writable `SinewError`.
+enum SinewStatus sinew_driver_play(const struct SinewDriver *driver,
+                                   const struct SinewModel *model,
+                                   const float *pose,
+                                   size_t pose_len,
+                                   float *positions,
+                                   size_t positions_len,
+                                   float *normals,
+                                   size_t normals_len,
+                                   uint64_t *hash,
+                                   struct SinewError *err);
 
 // Writes the content hash of the model's bytes (xxh64, `sinew_core::replay::model_hash`) to
 // `*hash`: the hash that replays and fitted performances name, and `sinew inspect` reports.

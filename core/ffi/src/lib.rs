@@ -13,6 +13,7 @@
 #![deny(missing_docs)]
 
 mod abi;
+mod driver;
 mod meta;
 mod model;
 mod performance;
@@ -24,6 +25,11 @@ mod status;
 mod version;
 
 pub use abi::SINEW_ABI_VERSION;
+pub use driver::{
+    SinewDriver, SinewDriverInfo, SinewFilter, SinewIntrinsics, sinew_driver_filter,
+    sinew_driver_filter_reset, sinew_driver_free, sinew_driver_info, sinew_driver_open,
+    sinew_driver_pixels, sinew_driver_play, sinew_driver_pose,
+};
 pub use meta::{
     sinew_model_content_hash, sinew_model_meta, sinew_model_metadata, sinew_model_shape_name,
 };

@@ -25,7 +25,7 @@ export function init(source?: string | URL | Response | Bytes | WebAssembly.Modu
  */
 export class InputError extends Error {
   readonly name: "InputError";
-  /** The parameter's name in this API: `head`, `jaw`, `coefficients`, `positions`, `input`, `neutral`, `neutralLandmarks`, `landmarks`. */
+  /** The parameter's name in this API: `head`, `jaw`, `coefficients`, `positions`, `input`, `neutral`, `neutralLandmarks`, `landmarks`, `pixels`, `camera`, `filter`, `time`. */
   readonly argument: string;
   /** The value's index in it; for a degenerate 6D rotation its column's first index (0 or 3). */
   readonly index: number;
@@ -164,6 +164,65 @@ export class Performance {
   frameHash(model: Model, f: number): string;
   /** The hash baked for frame `f`, 16 hex digits, or null when the file carries none. */
   expected(f: number): string | null;
+  free(): void;
+}
+
+/** A pinhole camera's intrinsics in pixels. */
+export interface Intrinsics {
+  fx: number;
+  fy: number;
+  cx: number;
+  cy: number;
+}
+
+/** The One Euro filter's settings (Casiez et al. 2012). */
+export interface FilterSettings {
+  /** The cutoff of a still signal, Hz (above 0): lower smooths more. */
+  minCutoff: number;
+  /** How fast the cutoff rises with the speed (0 or more): higher lags less. */
+  beta: number;
+  /** The cutoff of the speed's low-pass, Hz (above 0); 1 by default. */
+  dCutoff?: number;
+}
+
+/** The One Euro filter's state over one driver's poses. */
+export interface DriverFilter {
+  /**
+   * `pose` smoothed at `time` seconds (a new array; each step's rate is 1 / the time since the
+   * last step; the first step after a reset passes through). Throws an `InputError` naming
+   * `time` for a stamp less than 1 ms after the last, `filter` for a bad setting.
+   */
+  step(pose: Floats, time: number): Float32Array;
+  /** Forgets every frame seen. */
+  reset(): void;
+}
+
+/**
+ * A validated landmark driver (`sinew train driver`) bound to the AIM actor it was trained for:
+ * one frame of a tracker's 68 landmarks to the actor's pose, sinew-core's `Driver::drive`.
+ */
+export class Driver {
+  private constructor();
+  /** Validates a `.sinew` landmark driver for `model`, the actor it was trained for (content hash). */
+  static load(bytes: Bytes, model: Model): Driver;
+  /** `[136]` a tracker's 68 `[u, v]` pixels through the camera: a 2D driver's landmarks. */
+  static pixels(pixels: Floats, camera: Intrinsics): Float32Array;
+  readonly space: "2d" | "3d";
+  /** Values of one frame's landmarks: 136 (2D) or 204 (3D). */
+  readonly inputLength: number;
+  /** Values of a pose: head 9 (6D rotation, translation), jaw 9, then shapeCount coefficients. */
+  readonly poseLength: number;
+  readonly shapeCount: number;
+  /** Content hash of the actor it was trained for, 16 hex digits. */
+  readonly modelHash: string;
+  /** `[poseLength]` the pose of one frame's landmarks; an `InputError` naming `landmarks` for a NaN. */
+  pose(landmarks: Floats): Float32Array;
+  /** A One Euro filter over this driver's poses. */
+  filter(settings: FilterSettings): DriverFilter;
+  /** `[vertexCount * 3]` `model` (the driver's actor) posed by `pose`. */
+  play(model: Model, pose: Floats): Float32Array;
+  /** The frame hash of `model` posed by `pose`: positions then normals (sinew-core's `driver::pose_hash`). */
+  frameHash(model: Model, pose: Floats): string;
   free(): void;
 }
 

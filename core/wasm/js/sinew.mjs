@@ -135,7 +135,7 @@ class Handle {
   #handle;
 
   constructor(key, handle) {
-    if (key !== token) throw new TypeError("sinew: use Model.load, Replay.load, Performance.load or Motion.load");
+    if (key !== token) throw new TypeError("sinew: use Model.load, Replay.load, Performance.load, Motion.load or Driver.load");
     this.#handle = handle;
     finalizer.register(this, handle, this);
   }
@@ -524,8 +524,116 @@ function seedOf(seed) {
   throw new RangeError(`sinew: a seed is an integer from 0 below 2^64 (a BigInt above 2^53), got ${seed}`);
 }
 
+/**
+ * A validated landmark driver (`sinew train driver`) bound to the AIM actor it was trained for:
+ * one frame of a tracker's 68 landmarks becomes the actor's pose (head 9, jaw 9, coefficients),
+ * the same bits as sinew-core computes on every target.
+ */
+export class Driver extends Handle {
+  #info;
+
+  /** Validates a `.sinew` landmark driver for `model`, the actor it was trained for; throws otherwise. */
+  static load(bytes, model) {
+    const m = modelHandle(model);
+    return new Driver(token, load(bytes, (w) => w.sinew_driver_load(m)));
+  }
+
+  constructor(key, handle) {
+    super(key, handle);
+    this.#info = keyValues(takeText(exports().sinew_info(handle)));
+  }
+
+  /** "2d" (pixels through `Driver.pixels`) or "3d" (landmarks in the actor's unit and frame). */
+  get space() {
+    return this.#info.space;
+  }
+  /** Values of one frame's landmarks: 68 × 2 or 68 × 3. */
+  get inputLength() {
+    return Number(this.#info.inputs);
+  }
+  /** Values of a pose: head (9), jaw (9), then `shapeCount` coefficients. */
+  get poseLength() {
+    return Number(this.#info.pose);
+  }
+  /** The actor's coefficients. */
+  get shapeCount() {
+    return Number(this.#info.shapes);
+  }
+  /** The content hash of the actor it was trained for (16 hex digits). */
+  get modelHash() {
+    return this.#info.model;
+  }
+
+  /**
+   * A tracker's 68 `[u, v]` pixels (136 values, v down) through the camera's intrinsics
+   * `{ fx, fy, cx, cy }` (pixels): the landmarks a 2D driver reads.
+   */
+  static pixels(pixels, camera) {
+    const k = Float32Array.of(camera.fx, camera.fy, camera.cx, camera.cy);
+    const p = floats(pixels, "pixels");
+    put(f32Bytes(p), f32Bytes(k));
+    return takeF32(exports().sinew_driver_pixels(p.length));
+  }
+
+  /** One frame's landmarks (`inputLength` values) to the pose (`poseLength` values). */
+  pose(landmarks) {
+    put(f32Bytes(floats(landmarks, "landmarks")));
+    return takeF32(exports().sinew_driver_pose(this._h));
+  }
+
+  /**
+   * A One Euro filter over this driver's poses, `{ minCutoff, beta, dCutoff }` (Hz, a speed
+   * coefficient, Hz; dCutoff 1 by default): `step(pose, time)` gives the pose smoothed at `time`
+   * seconds, `reset()` starts again (the next step passes its frame through).
+   */
+  filter({ minCutoff, beta, dCutoff = 1 }) {
+    return new DriverFilter(this, Float32Array.of(minCutoff, beta, dCutoff), Number(this.#info.state));
+  }
+
+  /** `model` (the driver's actor) posed by `pose`: positions, x y z per vertex. */
+  play(model, pose) {
+    const m = modelHandle(model);
+    put(f32Bytes(floats(pose, "pose")));
+    return takeF32(exports().sinew_driver_play(this._h, m));
+  }
+
+  /** The frame hash of `model` posed by `pose` (positions then normals), computed in the module. */
+  frameHash(model, pose) {
+    const m = modelHandle(model);
+    put(f32Bytes(floats(pose, "pose")));
+    return takeText(exports().sinew_driver_hash(this._h, m));
+  }
+}
+
+/** The One Euro filter's state over one driver's poses (`Driver.filter`). */
+class DriverFilter {
+  #driver;
+  #settings;
+  #state;
+
+  constructor(driver, settings, stateLength) {
+    this.#driver = driver;
+    this.#settings = settings;
+    this.#state = new Float32Array(stateLength);
+  }
+
+  /** `pose` smoothed at `time` seconds (each step's rate from the time stamps); a new array. */
+  step(pose, time) {
+    const p = floats(pose, "pose");
+    put(f32Bytes(this.#settings), f32Bytes(p), f32Bytes(this.#state));
+    const out = takeF32(exports().sinew_driver_filter(this.#driver._h, time, p.length));
+    this.#state = out.slice(p.length);
+    return out.slice(0, p.length);
+  }
+
+  /** Forgets every frame seen: the next step passes its frame through. */
+  reset() {
+    this.#state.fill(0);
+  }
+}
+
 function modelHandle(model) {
-  if (!(model instanceof Model)) throw new TypeError("sinew: a performance or a motion plays on a Model");
+  if (!(model instanceof Model)) throw new TypeError("sinew: a performance, a motion or a driver plays on a Model");
   return model._h;
 }
 

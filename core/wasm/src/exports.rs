@@ -21,7 +21,9 @@
 
 use std::cell::{Cell, RefCell};
 
-use crate::{Error, FrameInputs, Model, Motion, Performance, Refused, Replay};
+use crate::{Driver, Error, FrameInputs, Model, Motion, Performance, Refused, Replay};
+
+mod driver;
 
 #[derive(Debug)]
 enum Object {
@@ -29,6 +31,7 @@ enum Object {
     Replay(Replay),
     Performance(Performance),
     Motion(Motion),
+    Driver(Driver),
 }
 
 impl Object {
@@ -39,6 +42,7 @@ impl Object {
             Self::Replay(_) => "a replay",
             Self::Performance(_) => "a performance",
             Self::Motion(_) => "a motion generator",
+            Self::Driver(_) => "a landmark driver",
         }
     }
 }
@@ -111,7 +115,7 @@ fn slot(handle: i32) -> Option<usize> {
 
 fn stale(handle: i32) -> Error {
     Error::new(format!(
-        "handle {handle} is not a live model, replay, performance or motion generator"
+        "handle {handle} is not a live model, replay, performance, motion generator or driver"
     ))
 }
 
@@ -272,7 +276,8 @@ pub extern "C" fn sinew_free(handle: i32) {
 /// `frames`, `model` (the model's hash) and `neutral` (1 if it carries one); for a performance
 /// `kind=performance`, `form` (`global` or `local`), `frames`, `shapes`, `model` and `hashes` (1
 /// if it carries its frames' hashes); for a motion generator `kind=motion`, `labels`, `frames`,
-/// `landmarks` and `noise`.
+/// `landmarks` and `noise`; for a landmark driver `kind=driver`, `space` (`2d` or `3d`),
+/// `inputs`, `pose`, `shapes`, `model` and `state` (the filter state's length).
 // Safety: exported under its own name; no other symbol in the module is called so.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
@@ -313,6 +318,15 @@ pub extern "C" fn sinew_info(handle: i32) -> i32 {
                 m.frame_count(),
                 m.landmark_count(),
                 m.noise_len()
+            )),
+            Some(Object::Driver(d)) => Ok(format!(
+                "kind=driver\nspace={}\ninputs={}\npose={}\nshapes={}\nmodel={:016x}\nstate={}\n",
+                d.space(),
+                d.input_len(),
+                d.pose_len(),
+                d.shape_count(),
+                d.model_hash(),
+                d.filter_state_len()
             )),
             None => Err(stale(handle)),
         }

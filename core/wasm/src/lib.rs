@@ -22,11 +22,13 @@ use sinew_core::hash::FrameHasher;
 use sinew_core::replay::{self, AimReplay, S2D_INPUTS, S2dReplay};
 use sinew_core::s2d::S2dDecoder;
 
+mod driver;
 pub mod exports;
 mod modes;
 mod motion;
 mod performance;
 
+pub use driver::Driver;
 pub use modes::frame_hash_q16;
 pub use motion::Motion;
 pub use performance::{Performance, PerformanceFrame};

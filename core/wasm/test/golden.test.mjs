@@ -192,7 +192,7 @@ test("a freed model refuses further calls", () => {
   const aim = Model.load(data("aim-procedural.sinew"));
   aim.free();
   aim.free();
-  assert.throws(() => aim.normals([]), { message: "handle 0 is not a live model, replay, performance or motion generator" });
+  assert.throws(() => aim.normals([]), { message: "handle 0 is not a live model, replay, performance, motion generator or driver" });
 });
 
 test("frameHash is xxh64 of the f32 bits, NaN canonicalised", () => {

@@ -129,6 +129,6 @@ test("generators, labels, seeds and frames are checked", () => {
   assert.throws(() => motion.frame("s2d-ict.sinew", curve, 1), TypeError);
   motion.free();
   assert.throws(() => motion.curve(decoder, 0, 1), {
-    message: "handle 0 is not a live model, replay, performance or motion generator",
+    message: "handle 0 is not a live model, replay, performance, motion generator or driver",
   });
 });

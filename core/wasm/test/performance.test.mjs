@@ -91,7 +91,7 @@ test("frame indices, handles and argument types are checked", () => {
   const replay = Replay.load(data("aim-ict.f32.replay.sinew"));
   assert.throws(() => perf.check(replay), TypeError);
   model.free();
-  assert.throws(() => perf.pose(model, 0), { message: "handle 0 is not a live model, replay, performance or motion generator" });
+  assert.throws(() => perf.pose(model, 0), { message: "handle 0 is not a live model, replay, performance, motion generator or driver" });
   perf.free();
-  assert.throws(() => perf.frame(0), { message: "handle 0 is not a live model, replay, performance or motion generator" });
+  assert.throws(() => perf.frame(0), { message: "handle 0 is not a live model, replay, performance, motion generator or driver" });
 });

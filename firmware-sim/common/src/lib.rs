@@ -39,6 +39,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod driver;
 pub mod kernels;
 pub mod motion;
 pub mod performance;
@@ -137,7 +138,8 @@ pub struct Scratch {
     positions_q16: [Q16; 3 * MAX_VERTICES],
     weights: [f32; MAX_SHAPES],
     weights_q16: [Q16; MAX_SHAPES],
-    /// A fitted performance's coefficients, F_W's input and scratch.
+    /// A fitted performance's coefficients, F_W's input and scratch; a driver's landmarks,
+    /// poses, filter state and network scratch (one golden plays at a time).
     performance: [f32; performance::PERFORMANCE_SCRATCH],
 }
 
@@ -206,8 +208,14 @@ pub enum Error {
         values: usize,
     },
     /// The pinned hash list of a generated sequence is not UTF-8 or lacks its `sequence` line
-    /// (label, seed, intensity).
+    /// (label, seed, intensity); a driver's lacks its `track` or `filter` line.
     HashList,
+    /// The driver's OpenFace track is not UTF-8, lacks a column (row 0: the header) or has a
+    /// row that is missing or not numbers.
+    Track {
+        /// The row (1-based after the header; 0: the header).
+        row: usize,
+    },
 }
 
 impl fmt::Display for Error {
@@ -235,7 +243,16 @@ impl fmt::Display for Error {
             ),
             Self::HashList => write!(
                 f,
-                "golden hash list: not UTF-8, or no `sequence LABEL-NAME LABEL SEED INTENSITY` line"
+                "golden hash list: not UTF-8, or no `sequence LABEL-NAME LABEL SEED INTENSITY` \
+                 line (a driver's: no `track FILE FX FY CX CY` or `filter A B C` line)"
+            ),
+            Self::Track { row: 0 } => write!(
+                f,
+                "golden track: not UTF-8, or no timestamp, x_0 … x_67 and y_0 … y_67 columns"
+            ),
+            Self::Track { row } => write!(
+                f,
+                "golden track: row {row} is missing, or a value of it is not a number"
             ),
         }
     }

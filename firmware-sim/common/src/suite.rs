@@ -1,11 +1,12 @@
 //! Every golden a target plays, as suites a firmware loops over in one way: the AIM replays
 //! ([`Replay`]), the S2D replay ([`S2dRun`]), the fitted performance ([`PerformanceRun`]) and
-//! the generated sequence ([`MotionRun`]),
+//! the generated sequence ([`MotionRun`]) and the driven track ([`DriverRun`]),
 //! each started with [`Run::new`], described for the log by its `Display` and played frame by
 //! frame as an iterator.
 
 use core::fmt;
 
+use crate::driver::{DRIVER_GOLDENS, DriverRun};
 use crate::motion::{MOTION_GOLDENS, MotionRun};
 use crate::performance::{PERFORMANCE_GOLDENS, PerformanceRun};
 use crate::{Error, FrameCheck, GOLDENS, Golden, Replay, S2D_GOLDENS, S2dRun, Scratch};
@@ -21,11 +22,19 @@ pub enum Suite {
     Performance,
     /// The generated sequence ([`MOTION_GOLDENS`]).
     Motion,
+    /// The live driver's track ([`DRIVER_GOLDENS`]).
+    Driver,
 }
 
 impl Suite {
     /// Every suite, in the order the targets play them.
-    pub const ALL: [Self; 4] = [Self::Aim, Self::S2d, Self::Performance, Self::Motion];
+    pub const ALL: [Self; 5] = [
+        Self::Aim,
+        Self::S2d,
+        Self::Performance,
+        Self::Motion,
+        Self::Driver,
+    ];
 
     /// The suite's goldens.
     pub const fn goldens(self) -> &'static [Golden] {
@@ -34,6 +43,7 @@ impl Suite {
             Self::S2d => &S2D_GOLDENS,
             Self::Performance => &PERFORMANCE_GOLDENS,
             Self::Motion => &MOTION_GOLDENS,
+            Self::Driver => &DRIVER_GOLDENS,
         }
     }
 
@@ -44,6 +54,7 @@ impl Suite {
             Self::S2d => "S2D frames",
             Self::Performance => "fitted-performance frames",
             Self::Motion => "generated-sequence frames",
+            Self::Driver => "driven-track checks",
         }
     }
 }
@@ -61,6 +72,8 @@ pub enum Run<'s> {
     Performance(PerformanceRun<'s>),
     /// A generated sequence.
     Motion(MotionRun<'s>),
+    /// A driven track.
+    Driver(DriverRun<'s>),
 }
 
 impl<'s> Run<'s> {
@@ -71,6 +84,7 @@ impl<'s> Run<'s> {
             Suite::S2d => Self::S2d(S2dRun::new(golden, scratch)?),
             Suite::Performance => Self::Performance(PerformanceRun::new(golden, scratch)?),
             Suite::Motion => Self::Motion(MotionRun::new(golden, scratch)?),
+            Suite::Driver => Self::Driver(DriverRun::new(golden, scratch)?),
         })
     }
 }
@@ -111,6 +125,15 @@ impl fmt::Display for Run<'_> {
                 r.hashes().label,
                 r.hashes().seed
             ),
+            Self::Driver(r) => write!(
+                f,
+                "{} vertices, {} shapes, {} landmarks, {} frames, 4 checks a frame (pose, frame, \
+                 filtered-pose, filtered-frame)",
+                r.actor().vertex_count(),
+                r.actor().shape_count(),
+                sinew_core::driver::LANDMARKS,
+                r.rows()
+            ),
         }
     }
 }
@@ -124,6 +147,7 @@ impl Iterator for Run<'_> {
             Self::S2d(r) => r.next(),
             Self::Performance(r) => r.next(),
             Self::Motion(r) => r.next(),
+            Self::Driver(r) => r.next(),
         }
     }
 }

@@ -13,6 +13,7 @@ use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::{ExceptionFrame, entry, exception};
 use cortex_m_semihosting::{debug, heprintln, hprintln};
 use panic_semihosting as _;
+use sinew_firmware_common::driver::{DRIVER_GOLDENS, driver_costs};
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
 use sinew_firmware_common::motion::{MOTION_GOLDENS, motion_costs};
 use sinew_firmware_common::suite::{Run, Suite};
@@ -183,8 +184,8 @@ fn run() -> bool {
             return false;
         }
     }
-    // The AIM replays, the S2D replay, the fitted performance and the generated sequence, in the
-    // same frame buffers.
+    // The AIM replays, the S2D replay, the fitted performance, the generated sequence and the
+    // driven track, in the same frame buffers.
     let mut passed = true;
     for suite in Suite::ALL {
         let mut summary = Summary::default();
@@ -243,6 +244,19 @@ fn run() -> bool {
         };
         match motion_costs(golden, 8, scratch, || clock.now()) {
             Ok(c) => hprintln!("motion cost {} frame 8 (instructions): {}", golden.name, c),
+            Err(e) => {
+                heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
+                return false;
+            }
+        }
+    }
+    for golden in &DRIVER_GOLDENS {
+        let mut clock = Clock {
+            last: SYST::get_current(),
+            total: 0,
+        };
+        match driver_costs(golden, 8, scratch, || clock.now()) {
+            Ok(c) => hprintln!("driver cost {} frame 8 (instructions): {}", golden.name, c),
             Err(e) => {
                 heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
                 return false;

@@ -10,6 +10,7 @@
 
 use riscv::register::{mcause, mepc, minstret, mtval};
 use semihosting::{eprintln, println, process};
+use sinew_firmware_common::driver::{DRIVER_GOLDENS, driver_costs};
 use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
 use sinew_firmware_common::motion::{MOTION_GOLDENS, motion_costs};
 use sinew_firmware_common::suite::{Run, Suite};
@@ -136,6 +137,15 @@ fn run() -> bool {
     for golden in &MOTION_GOLDENS {
         match motion_costs(golden, 8, scratch, minstret::read64) {
             Ok(c) => println!("motion cost {} frame 8 (instructions): {c}", golden.name),
+            Err(e) => {
+                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
+                return false;
+            }
+        }
+    }
+    for golden in &DRIVER_GOLDENS {
+        match driver_costs(golden, 8, scratch, minstret::read64) {
+            Ok(c) => println!("driver cost {} frame 8 (instructions): {c}", golden.name),
             Err(e) => {
                 eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
                 return false;

@@ -104,6 +104,16 @@ pub extern "C" fn sinew_replay_motion() -> u32 {
     play(Suite::Motion, |_| 6000)
 }
 
+/// Plays the golden driver's track (four checks a row); returns the number of mismatching checks,
+/// or [`LOAD_ERROR`]. Checks are reported with 5000 added to the row number.
+// Safety: `no_mangle` exports the function under its own name; no other symbol in the module
+// is called `sinew_replay_driver`.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_replay_driver() -> u32 {
+    play(Suite::Driver, |_| 5000)
+}
+
 /// Runs the core kernel suite on seeded weights; returns the number of cases whose hash differs
 /// from the one pinned on the host, or [`LOAD_ERROR`]. Each case is reported through
 /// `sinew.report` with frame number 9000 + its index.

@@ -11,6 +11,8 @@
 //!
 //! # Folder
 //! - `frame_00000.obj` … one mesh per frame (cm);
+//! - `openface.csv`: the 2D landmark track in OpenFace 2.0's CSV layout (what a webcam tracker
+//!   gives `sinew drive`);
 //! - `performance.json` ([`Manifest`]), written last: seed, frames, the ground-truth parameters
 //!   per frame, the kit vertex of each mesh vertex, the camera and the 2D landmark tracks.
 
@@ -33,6 +35,9 @@ pub use error::{GenerateError, InvalidPerformanceConfig};
 
 /// The manifest's file name.
 pub const MANIFEST: &str = "performance.json";
+/// The folder's 2D track as an OpenFace 2.0 CSV (`sinew drive --landmarks` with the camera's
+/// intrinsics), written before the manifest.
+pub const OPENFACE_CSV: &str = "openface.csv";
 /// The manifest's `format` value.
 pub const FORMAT: &str = "sinew-performance";
 /// The manifest's version.
@@ -513,6 +518,16 @@ pub fn generate(
         path: out.join(MANIFEST),
         source,
     })?;
+    let track: Vec<_> = (manifest.landmarks.pixels.iter())
+        .map(|p| crate::io::openface::OpenFaceFrame {
+            pixels: p.iter().flatten().copied().collect(),
+            world: Vec::new(),
+            confidence: 1.0,
+            success: true,
+        })
+        .collect();
+    let csv = crate::io::openface::write_csv(&track, config.fps);
+    crate::io::atomic::write(&out.join(OPENFACE_CSV), csv.as_bytes())?;
     crate::io::atomic::write(&out.join(MANIFEST), &json)?;
     Ok(manifest)
 }

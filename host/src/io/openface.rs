@@ -239,9 +239,12 @@ pub fn parse(path: &Path, text: &str) -> Result<Vec<OpenFaceFrame>, OpenFaceErro
 type LandmarkSet = fn(&OpenFaceFrame) -> &[f32];
 
 /// An OpenFace 2.0 CSV of `frames` (each with its pixels `[68, 2]` and 3D landmarks `[68, 3]`
-/// where the first frame has them, its confidence and success), with the columns OpenFace
-/// writes before the landmarks, as tests and examples need one.
-pub fn write_csv(frames: &[OpenFaceFrame]) -> String {
+/// where the first frame has them, its confidence and success), taken at `fps` frames per
+/// second, with the columns OpenFace writes before the landmarks (`frame` from 1, `face_id`,
+/// `timestamp` in seconds to the millisecond as OpenFace rounds it, `confidence`, `success`).
+/// Values are written in Rust's shortest form, which reads back to the same `f32` bits
+/// ([`parse`], C's `strtof`).
+pub fn write_csv(frames: &[OpenFaceFrame], fps: f32) -> String {
     let mut s = String::from("frame, face_id, timestamp, confidence, success");
     let first = frames.first();
     let planar = first.is_some_and(|f| !f.pixels.is_empty());
@@ -265,7 +268,7 @@ pub fn write_csv(frames: &[OpenFaceFrame]) -> String {
         s.push_str(&format!(
             "{}, 0, {:.3}, {}, {}",
             f + 1,
-            f as f32 / 30.0,
+            f as f32 / fps,
             frame.confidence,
             u8::from(frame.success)
         ));
@@ -299,7 +302,7 @@ mod tests {
     fn a_written_track_reads_back() {
         let mut frames = vec![frame(0.0), frame(1.5)];
         frames[1].success = false;
-        let csv = write_csv(&frames);
+        let csv = write_csv(&frames, 30.0);
         assert_eq!(parse(Path::new("t.csv"), &csv).unwrap(), frames);
     }
 
@@ -311,14 +314,14 @@ mod tests {
                 .map(|i| -40.0 + i as f32 * 0.5 + f as f32)
                 .collect();
         }
-        let both = parse(Path::new("t.csv"), &write_csv(&frames)).unwrap();
+        let both = parse(Path::new("t.csv"), &write_csv(&frames, 30.0)).unwrap();
         assert_eq!(both, frames);
         // The landmark-major order: landmark 1's X, Y, Z follow landmark 0's.
         assert_eq!(both[0].world[3..6], [-38.5, -38.0, -37.5]);
         for f in &mut frames {
             f.pixels.clear();
         }
-        let csv = write_csv(&frames);
+        let csv = write_csv(&frames, 30.0);
         assert!(!csv.contains(" x_0") && csv.contains(" Z_67"));
         assert_eq!(parse(Path::new("t.csv"), &csv).unwrap(), frames);
         // A set partly there names its first missing column.
@@ -333,7 +336,7 @@ mod tests {
     #[test]
     fn bad_tracks_name_the_row_and_column() {
         let path = Path::new("track.csv");
-        let csv = write_csv(&[frame(0.0), frame(1.0)]);
+        let csv = write_csv(&[frame(0.0), frame(1.0)], 30.0);
         let mut lines: Vec<String> = csv.lines().map(str::to_owned).collect();
         let short = format!("{}\n{}\n", lines[0], "1, 0, 0.0, 0.9, 1, 5");
         let e = parse(path, &short).unwrap_err();

@@ -319,7 +319,7 @@ mod tests {
             .collect();
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("track.csv");
-        std::fs::write(&path, write_csv(&rows)).unwrap();
+        std::fs::write(&path, write_csv(&rows, 30.0)).unwrap();
         let placement = Placement {
             mm_per_unit: 10.0,
             rest_centroid: [0.5, 1.0, 9.0],
@@ -350,7 +350,7 @@ mod tests {
                 ..r.clone()
             })
             .collect();
-        std::fs::write(&path, write_csv(&flat)).unwrap();
+        std::fs::write(&path, write_csv(&flat, 30.0)).unwrap();
         let e = read(&path, Space::World, None, 0.5, placement).unwrap_err();
         assert!(e.to_string().contains("X_0 … Z_67"), "{e}");
     }
