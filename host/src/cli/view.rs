@@ -30,6 +30,21 @@ pub(crate) struct ViewArgs {
     /// polygons (without it, the track's neutral or the decoder's template, drawn as points).
     #[arg(long)]
     neutral: Option<PathBuf>,
+    /// A landmark driver of this actor (`sinew train driver`): the page plays `--landmarks`
+    /// through it, in the core compiled to WebAssembly.
+    #[arg(long, requires = "landmarks")]
+    driver: Option<PathBuf>,
+    /// The driver's track: an OpenFace 2.0 CSV (2D pixels through `--intrinsics`, or 3D
+    /// landmarks for a 3D driver) or a performance folder, as `sinew drive` reads it; a lost
+    /// frame holds the last pose.
+    #[arg(long, requires = "driver")]
+    landmarks: Option<PathBuf>,
+    /// The CSV's camera: focal lengths and principal point in pixels, FX,FY,CX,CY.
+    #[arg(long, value_delimiter = ',', requires = "driver")]
+    intrinsics: Option<Vec<f32>>,
+    /// A CSV row whose confidence is below this is a lost frame.
+    #[arg(long, default_value_t = 0.5)]
+    min_confidence: f32,
     /// Port on 127.0.0.1; 0 takes any free port.
     #[arg(long, env = "SINEW_VIEW_PORT", default_value_t = 8123)]
     port: u16,
@@ -41,6 +56,23 @@ pub(crate) struct ViewArgs {
 
 /// `sinew view`.
 pub(crate) fn run(args: ViewArgs) -> Result<()> {
+    let intrinsics = match args.intrinsics.as_deref() {
+        None => None,
+        Some(&[fx, fy, cx, cy]) => Some(sinew_core::driver::Intrinsics { fx, fy, cx, cy }),
+        Some(other) => anyhow::bail!(
+            "--intrinsics: expected FX,FY,CX,CY, got {} values",
+            other.len()
+        ),
+    };
+    let driver = match (&args.driver, &args.landmarks) {
+        (Some(driver), Some(landmarks)) => Some(sinew_host::view::DriverInputs {
+            driver,
+            landmarks,
+            intrinsics,
+            min_confidence: args.min_confidence,
+        }),
+        _ => None,
+    };
     let inputs = sinew_host::view::Inputs {
         model: &args.model,
         replay: args.replay.as_deref(),
@@ -48,6 +80,7 @@ pub(crate) fn run(args: ViewArgs) -> Result<()> {
         performance: args.performance.as_deref(),
         track: args.track.as_deref(),
         neutral: args.neutral.as_deref(),
+        driver,
     };
     Ok(sinew_host::view::view(
         inputs,

@@ -13,6 +13,7 @@ use sinew_core::replay::{AimReplay, check_model};
 
 use super::error::ViewError;
 use crate::aim::play::PoseFile;
+use crate::fit::driver::track::{self, Placement};
 
 /// The page, its script and style, and the core's JavaScript binding (core/wasm/js).
 const INDEX_HTML: &str = include_str!("web/index.html");
@@ -50,6 +51,7 @@ struct Config<'a> {
     replay: Option<Described<'a>>,
     poses: Option<Described<'a>>,
     performance: Option<Described<'a>>,
+    driver: Option<DriverConfig<'a>>,
 }
 
 #[derive(Debug, Serialize)]
@@ -96,6 +98,39 @@ pub struct Inputs<'a> {
     pub track: Option<&'a Path>,
     /// A face in an S2D decoder's topology (.obj or .ply) to decode onto and draw.
     pub neutral: Option<&'a Path>,
+    /// A landmark driver of the actor and the track it plays.
+    pub driver: Option<DriverInputs<'a>>,
+}
+
+/// A landmark driver and its track, as `sinew drive` reads them (docs/FIT.md, "Live driver").
+#[derive(Clone, Copy, Debug)]
+pub struct DriverInputs<'a> {
+    /// The driver (.sinew, `sinew train driver`).
+    pub driver: &'a Path,
+    /// The track: an OpenFace 2.0 CSV or a performance folder.
+    pub landmarks: &'a Path,
+    /// A CSV's camera, for a 2D driver.
+    pub intrinsics: Option<sinew_core::driver::Intrinsics>,
+    /// A CSV row below this confidence is a lost frame.
+    pub min_confidence: f32,
+}
+
+/// The landmarks `/landmarks.json` serves: per frame the driver's input (`null` where the tracker
+/// lost the face), already normalised by the camera or placed in the actor's frame.
+#[derive(Debug, Serialize)]
+struct Landmarks {
+    space: &'static str,
+    frames: Vec<Option<Vec<f32>>>,
+}
+
+/// What the page learns of the driver and its track.
+#[derive(Debug, Serialize)]
+struct DriverConfig<'a> {
+    name: &'a str,
+    landmarks: &'a str,
+    frames: usize,
+    lost: usize,
+    space: &'static str,
 }
 
 /// The file name of `path`, for the page.
@@ -177,6 +212,41 @@ impl Site {
             performance = Some((described, bytes));
         }
 
+        let mut driven = None;
+        if let Some(d) = inputs.driver {
+            let bytes = crate::io::container::read(d.driver)?;
+            let bound = crate::fit::driver::drive::bind(inputs.model, &model, d.driver, &bytes)?;
+            let placement = Placement::of(inputs.model, &bound.actor, &bound.driver)?;
+            let space = bound.driver.space();
+            let track = track::read(
+                d.landmarks,
+                space,
+                d.intrinsics,
+                d.min_confidence,
+                placement,
+            )?;
+            drop(bound);
+            let counts = (
+                track.frames.len(),
+                track.frames.iter().filter(|f| f.is_none()).count(),
+            );
+            let json = serde_json::to_vec(&Landmarks {
+                space: space.name(),
+                frames: track.frames,
+            })
+            .map_err(|source| ViewError::Serialise {
+                path: d.landmarks.to_path_buf(),
+                source,
+            })?;
+            driven = Some((
+                file_name(d.driver),
+                file_name(d.landmarks),
+                space.name(),
+                counts,
+                bytes,
+                json,
+            ));
+        }
         let config = serde_json::to_vec(&Config {
             model: &model_name,
             kind: "aim",
@@ -194,6 +264,17 @@ impl Site {
                     hashes: Some(*hashes),
                     ..Described::new(name, *frames)
                 }),
+            driver: driven
+                .as_ref()
+                .map(
+                    |(name, landmarks, space, (frames, lost), _, _)| DriverConfig {
+                        name,
+                        landmarks,
+                        frames: *frames,
+                        lost: *lost,
+                        space,
+                    },
+                ),
         })
         .map_err(ViewError::Json)?;
 
@@ -217,6 +298,18 @@ impl Site {
                 path: "/performance.sinew",
                 content_type: "application/octet-stream",
                 body: bytes.into(),
+            });
+        }
+        if let Some((_, _, _, _, bytes, json)) = driven {
+            entries.push(Entry {
+                path: "/driver.sinew",
+                content_type: "application/octet-stream",
+                body: bytes.into(),
+            });
+            entries.push(Entry {
+                path: "/landmarks.json",
+                content_type: "application/json",
+                body: json.into(),
             });
         }
         Self::new(entries)

@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 use sinew_core::format::{ArtifactKind, SinewFile};
 
 pub use error::ViewError;
-pub use files::{Inputs, Site};
+pub use files::{DriverInputs, Inputs, Site};
 pub use server::Viewer;
 
 impl Site {
@@ -87,6 +87,7 @@ mod tests {
             performance: None,
             track: None,
             neutral: None,
+            driver: None,
         })
         .unwrap()
     }
@@ -208,6 +209,7 @@ mod tests {
             performance: None,
             track: None,
             neutral: None,
+            driver: None,
         })
         .unwrap();
         let config: serde_json::Value =
@@ -236,6 +238,7 @@ mod tests {
             performance: None,
             track: None,
             neutral: None,
+            driver: None,
         });
         assert!(
             matches!(&e, ViewError::NotViewable { path, .. } if *path == other),
@@ -251,6 +254,7 @@ mod tests {
             performance: None,
             track: Some(&track),
             neutral: None,
+            driver: None,
         });
         assert!(
             matches!(&e, ViewError::S2dFileForActor { path, flag: "--track", .. } if *path == track),
@@ -263,6 +267,7 @@ mod tests {
             performance: None,
             track: None,
             neutral: None,
+            driver: None,
         });
         assert!(
             matches!(&e, ViewError::DoesNotPlay { path, model: m, .. } if *path == other && *m == model),
@@ -275,6 +280,7 @@ mod tests {
             performance: None,
             track: None,
             neutral: None,
+            driver: None,
         });
         assert!(matches!(e, ViewError::NotAnAimReplay { .. }), "{e}");
         let dir = tempfile::tempdir().unwrap();
@@ -287,6 +293,7 @@ mod tests {
             performance: None,
             track: None,
             neutral: None,
+            driver: None,
         });
         assert!(
             matches!(&e, ViewError::Poses(crate::aim::play::PoseFileError::WeightCount { path, .. }) if *path == poses),
@@ -300,6 +307,7 @@ mod tests {
             performance: None,
             track: None,
             neutral: None,
+            driver: None,
         });
         assert!(
             matches!(&e, ViewError::Container(crate::io::container::ContainerError::Read { path, .. }) if *path == missing),
@@ -315,6 +323,7 @@ mod tests {
             performance: None,
             track: None,
             neutral: None,
+            driver: None,
         });
         assert!(
             matches!(&e, ViewError::Container(crate::io::container::ContainerError::Invalid { path, .. }) if *path == damaged),
@@ -331,6 +340,7 @@ mod tests {
             performance: Some(&data("fit-ict.sinew")),
             track: None,
             neutral: None,
+            driver: None,
         })
         .unwrap();
         let config: serde_json::Value =
@@ -348,6 +358,81 @@ mod tests {
         assert_eq!(get(&self::site(), "/performance.sinew").status, 404);
     }
 
+    /// The golden driver and its OpenFace track: served as the driver's bytes and its input per
+    /// frame (normalised by the camera), described in the configuration; a driver of another
+    /// actor, a track without the camera or a broken row are refused naming the file.
+    #[test]
+    fn serves_a_driver_and_its_track() {
+        let camera = sinew_core::driver::Intrinsics {
+            fx: 1200.0,
+            fy: 1200.0,
+            cx: 320.0,
+            cy: 240.0,
+        };
+        let load = |model: &str, track: &Path, intrinsics| {
+            Site::load(Inputs {
+                model: &data(model),
+                replay: None,
+                poses: None,
+                performance: None,
+                track: None,
+                neutral: None,
+                driver: Some(DriverInputs {
+                    driver: &data("driver-ict.sinew"),
+                    landmarks: track,
+                    intrinsics,
+                    min_confidence: 0.5,
+                }),
+            })
+        };
+        let csv = data("driver-ict.csv");
+        let site = load("aim-ict.sinew", &csv, Some(camera)).unwrap();
+        let config: serde_json::Value =
+            serde_json::from_slice(&get(&site, "/config.json").body).unwrap();
+        assert_eq!(config["driver"]["name"], "driver-ict.sinew");
+        assert_eq!(config["driver"]["landmarks"], "driver-ict.csv");
+        assert_eq!(config["driver"]["frames"], 20);
+        assert_eq!(config["driver"]["lost"], 0);
+        assert_eq!(config["driver"]["space"], "2d");
+        let driver = std::fs::read(data("driver-ict.sinew")).unwrap();
+        assert_eq!(get(&site, "/driver.sinew").body, &driver[..]);
+        let served: serde_json::Value =
+            serde_json::from_slice(&get(&site, "/landmarks.json").body).unwrap();
+        // Each frame is the track's pixels through the camera, as `sinew drive` reads them.
+        let rows = crate::io::openface::read(&csv).unwrap();
+        let mut want = vec![0.0f32; 136];
+        sinew_core::driver::normalise_pixels(&rows[3].pixels, &camera, &mut want).unwrap();
+        let got: Vec<f32> = serde_json::from_value(served["frames"][3].clone()).unwrap();
+        assert_eq!(got, want);
+
+        let e = load("aim-procedural.sinew", &csv, Some(camera)).unwrap_err();
+        assert!(e.to_string().contains("driver-ict.sinew"), "{e}");
+        let e = load("aim-ict.sinew", &csv, None).unwrap_err();
+        assert!(e.to_string().contains("--intrinsics"), "{e}");
+        let dir = tempfile::tempdir().unwrap();
+        let broken = dir.path().join("broken.csv");
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let mut lines: Vec<&str> = text.lines().collect();
+        lines.truncate(3);
+        let bad = lines[2].replacen(", 1, ", ", 1, x", 1);
+        lines[2] = &bad;
+        std::fs::write(&broken, lines.join("\n")).unwrap();
+        let e = load("aim-ict.sinew", &broken, Some(camera)).unwrap_err();
+        assert!(e.to_string().contains("broken.csv: row 3"), "{e}");
+        // An S2D decoder has no use for a driver.
+        let e = load("s2d-ict.sinew", &csv, Some(camera)).unwrap_err();
+        assert!(
+            matches!(
+                &e,
+                ViewError::ActorFileForS2d {
+                    flag: "--driver",
+                    ..
+                }
+            ),
+            "{e}"
+        );
+    }
+
     #[test]
     fn refuses_a_performance_of_another_actor_naming_it() {
         let err = |model: &str, performance: &str| {
@@ -358,6 +443,7 @@ mod tests {
                 performance: Some(&data(performance)),
                 track: None,
                 neutral: None,
+                driver: None,
             })
             .unwrap_err()
         };

@@ -60,6 +60,7 @@ pub(super) fn load(inputs: Inputs<'_>, model: Vec<u8>) -> Result<Site, ViewError
         ("--replay", inputs.replay),
         ("--poses", inputs.poses),
         ("--performance", inputs.performance),
+        ("--driver", inputs.driver.map(|d| d.driver)),
     ] {
         if let Some(path) = path {
             return Err(ViewError::ActorFileForS2d {
@@ -168,6 +169,7 @@ mod tests {
             performance: None,
             track: None,
             neutral: None,
+            driver: None,
         }
     }
 
@@ -238,6 +240,7 @@ mod tests {
         let site = Site::load(Inputs {
             track: Some(&track),
             neutral: Some(&face),
+            driver: None,
             ..inputs(&model)
         })
         .unwrap();
@@ -311,6 +314,7 @@ mod tests {
         let (face, _) = template_mesh(dir.path(), 5);
         let e = err(Inputs {
             neutral: Some(&face),
+            driver: None,
             ..inputs(&model)
         });
         assert!(
@@ -321,6 +325,7 @@ mod tests {
         let missing = dir.path().join("missing.obj");
         let e = err(Inputs {
             neutral: Some(&missing),
+            driver: None,
             ..inputs(&model)
         });
         assert!(

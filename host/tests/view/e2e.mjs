@@ -1,9 +1,9 @@
 // Browser end-to-end test of `sinew view` (docs/VIEW.md): starts the viewer on the ICT actor, its
-// golden f32 replay, a pose file made here and the golden fitted performance, loads the page in
-// Debian's headless chromium (WebGL2 on SwiftShader, no GPU needed) through playwright-core, plays
-// all three and requires every frame's hash computed in the page to equal
-// tests/data/aim-ict.hashes (f32), the host's hashes of the pose file and
-// tests/data/fit-ict.hashes; then the golden S2D decoder with its replay as landmark track,
+// golden f32 replay, a pose file made here, the golden fitted performance and the golden landmark
+// driver with its OpenFace track, loads the page in Debian's headless chromium (WebGL2 on
+// SwiftShader, no GPU needed) through playwright-core, plays all four and requires every frame's
+// hash computed in the page to equal tests/data/aim-ict.hashes (f32), the host's hashes of the
+// pose file, tests/data/fit-ict.hashes and the frames of tests/data/driver-ict.hashes; then the golden S2D decoder with its replay as landmark track,
 // every decoded frame's hash equal to tests/data/s2d-ict.hashes and the landmarks drawn; moves the sliders and the camera, checks a screenshot is not blank, checks the
 // server's refusals, then stops the server with Ctrl-C (SIGINT).
 //
@@ -92,6 +92,15 @@ try {
     .map((m) => m[2]);
   check(hostHashes.length === 3, "the host hashes the pose file's 3 frames");
 
+  // The golden driver's track and camera, and the frames it drives (tests/data/driver-ict.hashes).
+  const driverList = readFileSync(join(data, "driver-ict.hashes"), "utf8").split("\n");
+  const driverCamera = driverList.find((l) => l.startsWith("track ")).split(" ").slice(2);
+  const driverHashes = driverList
+    .map((l) => /^frame (\d+) ([0-9a-f]{16})$/.exec(l))
+    .filter(Boolean)
+    .map((m) => m[2]);
+  check(driverCamera.length === 4 && driverHashes.length > 0, `the golden driver's list names its camera and ${driverHashes.length} frames`);
+
   server = spawn(
     bin,
     [
@@ -103,6 +112,12 @@ try {
       poses,
       "--performance",
       join(data, "fit-ict.sinew"),
+      "--driver",
+      join(data, "driver-ict.sinew"),
+      "--landmarks",
+      join(data, "driver-ict.csv"),
+      "--intrinsics",
+      driverCamera.join(","),
       "--port",
       "0",
       // A safety net only: the test stops it with SIGINT below.
@@ -158,7 +173,7 @@ try {
   check(/16\/16 frames match the recording/.test(status), `the page reports the match (${status})`);
 
   // The pose file, chosen in the source menu and played: the host's hashes, frame for frame.
-  check(ready.sources.length === 3 && ready.sources[1].count === 3, "the pose file is the second source");
+  check(ready.sources.length === 4 && ready.sources[1].count === 3, "the pose file is the second source");
   await page.selectOption("#source", "1");
   await page.click("#play");
   await page.waitForFunction(() => window.sinewTest.playedHashes(1).every((h) => h !== null), null, {
@@ -188,6 +203,18 @@ try {
     new RegExp(`${fitHashes.length}/${fitHashes.length} frames match the recording`).test(fitStatus),
     `the page reports the performance's match with its baked hashes (${fitStatus})`,
   );
+
+  // The golden driver on its track, the fourth source: landmarks through the driver in the core
+  // compiled to WebAssembly, every frame's hash as tests/data/driver-ict.hashes records it.
+  check(ready.sources[3].count === driverHashes.length, `the driver is the fourth source (${ready.sources[3].count} frames)`);
+  await page.selectOption("#source", "3");
+  await page.click("#play");
+  await page.waitForFunction(() => window.sinewTest.playedHashes(3).every((h) => h !== null), null, {
+    timeout: 30_000,
+  });
+  await page.click("#play");
+  const drivenPlayed = await page.evaluate(() => window.sinewTest.playedHashes(3));
+  check(JSON.stringify(drivenPlayed) === JSON.stringify(driverHashes), "every driven frame's hash equals driver-ict.hashes");
   await page.selectOption("#source", "0");
 
   // The sliders move the geometry, and moving back restores it bit for bit.

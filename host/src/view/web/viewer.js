@@ -6,7 +6,7 @@
 // For tests, `window.sinewTest` exposes the hashes of the frames played, the hash of what is
 // shown and the per-frame times (host/tests/view/e2e.mjs).
 
-import { init, Model, Performance, Replay, frameHash } from "./sinew.mjs";
+import { init, Driver, Model, Performance, Replay, frameHash } from "./sinew.mjs";
 import { FaceView, vertexNormals } from "./face.js";
 
 const $ = (id) => document.getElementById(id);
@@ -111,6 +111,29 @@ async function main() {
       // The core's Performance::pose: a global frame's coefficients, or F_W per vertex.
       positions: (f) => perf.pose(model, f),
       expected: perf.hasHashes ? (f) => perf.expected(f) : null,
+    });
+  }
+
+  if (config.driver) {
+    // Every frame's landmarks through the driver once, as `sinew drive` does: a lost frame
+    // (null) holds the last pose, the rest pose before the first found one.
+    const driver = Driver.load(await bytes("driver.sinew"), model);
+    const track = await (await fetch("landmarks.json")).json();
+    let last = Float32Array.from([...IDENTITY_9D, ...IDENTITY_9D, ...new Array(model.shapeCount).fill(0)]);
+    const poses = track.frames.map((landmarks) => {
+      if (landmarks) last = driver.pose(Float32Array.from(landmarks));
+      return last;
+    });
+    sources.push({
+      name: `driver ${config.driver.name} on ${config.driver.landmarks} (${config.driver.space})`,
+      count: poses.length,
+      frame: (f) => ({
+        head: poses[f].slice(0, 9),
+        jaw: poses[f].slice(9, 18),
+        coefficients: poses[f].slice(18),
+      }),
+      positions: (f) => driver.play(model, poses[f]),
+      expected: null,
     });
   }
 
