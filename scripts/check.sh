@@ -101,7 +101,7 @@ fi
 bash core/wasm/build.sh
 node --test core/wasm/test/*.test.mjs
 
-step "sinew view: the page in headless chromium plays the golden replay, performance and S2D track (host/tests/view/e2e.mjs)"
+step "sinew view: the page in headless chromium plays the golden replay, performance, live driver and S2D track (host/tests/view/e2e.mjs)"
 for tool in chromium npm; do
   if ! command -v "$tool" >/dev/null; then
     apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$tool" >/dev/null
