@@ -130,6 +130,35 @@ impl fmt::Display for Bound {
 /// firmware image or WebAssembly module.
 struct Magnitude(f32);
 
+/// The limit a network's values must stay within ([`FormatError::Unbounded`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum NetworkLimit {
+    /// ±[`MAX_NETWORK_VALUE`], for the values of every layer: evaluation cannot overflow `f32`.
+    Values,
+    /// ±[`crate::layout::MAX_FACTOR`], for the outputs of a network whose outputs are factors
+    /// (the motion generator's tangent vectors).
+    FactorOutputs,
+}
+
+impl NetworkLimit {
+    /// The limit.
+    pub const fn value(self) -> f32 {
+        match self {
+            Self::Values => MAX_NETWORK_VALUE,
+            Self::FactorOutputs => crate::layout::MAX_FACTOR,
+        }
+    }
+
+    /// What it limits, for messages.
+    const fn what(self) -> &'static str {
+        match self {
+            Self::Values => "values",
+            Self::FactorOutputs => "outputs",
+        }
+    }
+}
+
 impl fmt::Display for Magnitude {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let v = f64::from(self.0);
@@ -277,13 +306,16 @@ pub enum FormatError {
         /// The rule it breaks.
         bound: Bound,
     },
-    /// A network's weights let it reach beyond ±[`MAX_NETWORK_VALUE`] for inputs within their
-    /// bounds (docs/FORMAT.md, "Value bounds"): evaluating it could overflow `f32`.
+    /// A network's weights let it reach beyond its [`NetworkLimit`] for inputs within their
+    /// bounds (docs/FORMAT.md, "Value bounds"): ±[`MAX_NETWORK_VALUE`] for any layer, where
+    /// evaluating it could overflow `f32`, or a tighter limit its outputs are held to.
     Unbounded {
         /// The weight section of the layer where the bound is passed.
         section: SectionName,
         /// The layer's output (the weight row) whose bound is passed.
         row: u32,
+        /// The limit it passes.
+        limit: NetworkLimit,
     },
     /// An index points outside the array it indexes (or, in a sparse matrix's row pointers,
     /// does not rise from 0 to the entry count). A kernel's constructor, which sees no file,
@@ -400,11 +432,16 @@ impl fmt::Display for FormatError {
                 index,
                 bound,
             } => write!(f, "section {section}: value {index} is {bound}"),
-            Self::Unbounded { section, row } => write!(
+            Self::Unbounded {
+                section,
+                row,
+                limit,
+            } => write!(
                 f,
-                "section {section}: row {row} lets the network exceed ±{} for inputs within their \
-                 bounds",
-                Magnitude(MAX_NETWORK_VALUE)
+                "section {section}: row {row} lets the network's {} exceed ±{} for inputs within \
+                 their bounds",
+                limit.what(),
+                Magnitude(limit.value())
             ),
             Self::IndexOutOfRange { section, index } => {
                 write!(

@@ -116,6 +116,6 @@ pub mod spiral;
 pub mod srvf;
 pub mod tensor;
 
-pub use error::{BufferError, EvalError, FormatError, InputError};
+pub use error::{BufferError, EvalError, FormatError, InputError, NetworkLimit};
 pub use format::{ArtifactKind, Dtype, Section, SinewFile};
 pub use tensor::{F32s, I32s, U32s};

@@ -15,7 +15,7 @@ use rand_core::{RngCore, SeedableRng};
 use crate::error::{Argument, Bound, BufferError, EvalError, FormatError};
 use crate::format::{ArtifactKind, SinewFile, out_of_range};
 use crate::input::check_values;
-use crate::layout::{MAX_FACTOR, UNIT_TOLERANCE};
+use crate::layout::UNIT_TOLERANCE;
 use crate::network::{check_bound_within, load_mlp};
 use crate::nn::Mlp;
 use crate::srvf::{FRAMES, decode, exp_map, length_for_reach, project_tangent};
@@ -70,10 +70,10 @@ impl<'a> MotionGenerator<'a> {
     /// spread, all finite; and, if present, `motion.reach` `[LABELS, 2]`, per label a positive
     /// mean and a non-negative spread, all finite. Every value is bounded so that any seed,
     /// label, neutral within ±[`crate::layout::MAX_COORDINATE`] and intensity within
-    /// ±[`MAX_FACTOR`] give a finite curve (docs/FORMAT.md, "Value bounds"): the generator's
-    /// outputs within ±[`MAX_FACTOR`] for noise within ±[`NOISE_BOUND`], `motion.p` of unit
+    /// ±[`MAX_FACTOR`](crate::layout::MAX_FACTOR) give a finite curve (docs/FORMAT.md, "Value bounds"): the generator's
+    /// outputs within ±[`MAX_FACTOR`](crate::layout::MAX_FACTOR) for noise within ±[`NOISE_BOUND`], `motion.p` of unit
     /// norm within [`UNIT_TOLERANCE`], means positive and spreads non-negative, all at most
-    /// [`MAX_FACTOR`].
+    /// [`MAX_FACTOR`](crate::layout::MAX_FACTOR).
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::MotionGenerator)?;
         if file.metadata().get("content") != Some(CONTENT) {
@@ -90,7 +90,12 @@ impl<'a> MotionGenerator<'a> {
         if mlp.inputs() <= LABELS || mlp.outputs() != FRAMES * dims {
             return Err(FormatError::incompatible_shapes("motion.g"));
         }
-        check_bound_within(&mlp, "motion.g", f64::from(NOISE_BOUND), MAX_FACTOR)?;
+        check_bound_within(
+            &mlp,
+            "motion.g",
+            f64::from(NOISE_BOUND),
+            crate::error::NetworkLimit::FactorOutputs,
+        )?;
         if libm::fabsf(squared_norm(&p) - 1.0) > UNIT_TOLERANCE {
             return Err(out_of_range("motion.p", 0, Bound::UnitMotion));
         }
@@ -248,7 +253,7 @@ impl<'a> MotionGenerator<'a> {
     /// # Errors
     /// [`BufferError::Input`] for a label not below [`LABELS`] or a neutral of another length;
     /// [`BufferError::Output`], [`BufferError::Scratch`] for wrong buffer lengths;
-    /// [`EvalError::Input`] for an intensity outside ±[`MAX_FACTOR`] or a neutral coordinate
+    /// [`EvalError::Input`] for an intensity outside ±[`MAX_FACTOR`](crate::layout::MAX_FACTOR) or a neutral coordinate
     /// outside ±[`crate::layout::MAX_COORDINATE`] (or either not finite).
     pub fn landmarks(
         &self,
@@ -328,7 +333,7 @@ fn squared_norm(p: &F32s<'_>) -> f32 {
 }
 
 /// Checks section `name`'s `values` as (mean, spread) pairs (`pairs`) or single means: each mean
-/// positive, each spread non-negative, all at most [`MAX_FACTOR`].
+/// positive, each spread non-negative, all at most [`MAX_FACTOR`](crate::layout::MAX_FACTOR).
 fn check_spreads(name: &str, values: &F32s<'_>, pairs: bool) -> Result<(), FormatError> {
     for (i, v) in values.iter().enumerate() {
         let bound = if pairs && i % 2 == 1 {

@@ -6,7 +6,7 @@
 //! - `p.<i>.w`: `f32 [out, in]`, layer `i`'s weight, row-major (one row per output);
 //! - `p.<i>.b`: `f32 [out]`, layer `i`'s bias.
 
-use crate::error::{Bound, FormatError, SectionName};
+use crate::error::{Bound, FormatError, NetworkLimit, SectionName};
 use crate::format::SinewFile;
 use crate::nn::{Activation, Dense, MAX_LAYERS, Mlp};
 
@@ -116,25 +116,31 @@ pub fn load_mlp<'a>(file: &SinewFile<'a>, prefix: &str) -> Result<Mlp<'a>, Forma
 /// # Errors
 /// [`FormatError::Unbounded`] naming the layer's weight section `prefix.<i>.w` and the row.
 pub fn check_bound(mlp: &Mlp<'_>, prefix: &str, input: f64) -> Result<f64, FormatError> {
-    check_bound_within(mlp, prefix, input, crate::layout::MAX_NETWORK_VALUE)
+    check_bound_within(mlp, prefix, input, NetworkLimit::Values)
 }
 
-/// [`check_bound`] with the network's outputs held to `output_limit` as well
+/// [`check_bound`] with the network's outputs held to `outputs` as well
 /// ([`Mlp::bound_within`]).
 ///
 /// # Errors
-/// As [`check_bound`].
+/// As [`check_bound`], the error naming `outputs` where the last layer passes it.
 pub fn check_bound_within(
     mlp: &Mlp<'_>,
     prefix: &str,
     input: f64,
-    output_limit: f32,
+    outputs: NetworkLimit,
 ) -> Result<f64, FormatError> {
-    mlp.bound_within(input, output_limit)
+    let last = mlp.layers().len().saturating_sub(1);
+    mlp.bound_within(input, outputs.value())
         .map_err(|(layer, row)| FormatError::Unbounded {
             section: name(prefix, layer, ".w")
                 .map_or_else(|_| SectionName::new(prefix), |n| SectionName::new(&n)),
             row: u32::try_from(row).unwrap_or(u32::MAX),
+            limit: if layer == last {
+                outputs
+            } else {
+                NetworkLimit::Values
+            },
         })
 }
 

@@ -100,6 +100,7 @@ fn unbounded(section: &str, row: usize) -> FormatError {
     FormatError::Unbounded {
         section: SectionName::new(section),
         row: u32::try_from(row).unwrap_or(u32::MAX),
+        limit: crate::error::NetworkLimit::Values,
     }
 }
 

@@ -1,7 +1,7 @@
 //! The core's S2D decoder on hand-written artefacts: a tiny network whose output is computed by
 //! hand, and the validation of every section's shape and bounds.
 
-use sinew_core::error::{Bound, SectionName};
+use sinew_core::error::{Bound, NetworkLimit, SectionName};
 use sinew_core::s2d::S2dDecoder;
 use sinew_core::{ArtifactKind, BufferError, FormatError};
 use sinew_host::SinewWriter;
@@ -437,6 +437,7 @@ fn every_shape_and_bound_is_validated() {
             FormatError::Unbounded {
                 section: SectionName::new("s2d.fc.w"),
                 row: 1,
+                limit: NetworkLimit::Values,
             },
         ),
         (
@@ -446,6 +447,7 @@ fn every_shape_and_bound_is_validated() {
             FormatError::Unbounded {
                 section: SectionName::new("s2d.conv.0.w"),
                 row: 0,
+                limit: NetworkLimit::Values,
             },
         ),
     ];

@@ -65,8 +65,17 @@ fn every_format_error_message_reads_as_words_and_names_what_it_carries() {
             FormatError::Unbounded {
                 section: s,
                 row: 13,
+                limit: NetworkLimit::Values,
             },
-            &["cache.e", "row 13"],
+            &["cache.e", "row 13", "values exceed ±1e20"],
+        ),
+        (
+            FormatError::Unbounded {
+                section: s,
+                row: 2,
+                limit: NetworkLimit::FactorOutputs,
+            },
+            &["cache.e", "row 2", "outputs exceed ±1e3"],
         ),
         (
             FormatError::index_out_of_range("tpl.tri", 14),
