@@ -5,8 +5,7 @@
 use core::fmt;
 
 use crate::layout::{
-    MAX_COORDINATE, MAX_FACTOR, MAX_NETWORK_VALUE, MAX_ROTATION_ENTRY, MIN_ROTATION_COLUMN,
-    NAME_LEN,
+    MAX_COORDINATE, MAX_FACTOR, MAX_ROTATION_ENTRY, MIN_ROTATION_COLUMN, NAME_LEN,
 };
 
 /// A section's name (or a metadata key) carried by an error: up to [`NAME_LEN`] ASCII bytes,
@@ -129,35 +128,6 @@ impl fmt::Display for Bound {
 /// integer formatting: formatting an `f32` would add the float printer's tens of kilobytes to a
 /// firmware image or WebAssembly module.
 struct Magnitude(f32);
-
-/// The limit a network's values must stay within ([`FormatError::Unbounded`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum NetworkLimit {
-    /// ±[`MAX_NETWORK_VALUE`], for the values of every layer: evaluation cannot overflow `f32`.
-    Values,
-    /// ±[`crate::layout::MAX_FACTOR`], for the outputs of a network whose outputs are factors
-    /// (the motion generator's tangent vectors).
-    FactorOutputs,
-}
-
-impl NetworkLimit {
-    /// The limit.
-    pub const fn value(self) -> f32 {
-        match self {
-            Self::Values => MAX_NETWORK_VALUE,
-            Self::FactorOutputs => crate::layout::MAX_FACTOR,
-        }
-    }
-
-    /// What it limits, for messages.
-    const fn what(self) -> &'static str {
-        match self {
-            Self::Values => "values",
-            Self::FactorOutputs => "outputs",
-        }
-    }
-}
 
 impl fmt::Display for Magnitude {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -307,7 +277,7 @@ pub enum FormatError {
         bound: Bound,
     },
     /// A network's weights let it reach beyond its [`NetworkLimit`] for inputs within their
-    /// bounds (docs/FORMAT.md, "Value bounds"): ±[`MAX_NETWORK_VALUE`] for any layer, where
+    /// bounds (docs/FORMAT.md, "Value bounds"): ±[`MAX_NETWORK_VALUE`](crate::layout::MAX_NETWORK_VALUE) for any layer, where
     /// evaluating it could overflow `f32`, or a tighter limit its outputs are held to.
     Unbounded {
         /// The weight section of the layer where the bound is passed.
@@ -816,6 +786,9 @@ impl From<InputError> for EvalError {
         Self::Input(e)
     }
 }
+
+mod limit;
+pub use limit::NetworkLimit;
 
 #[cfg(test)]
 mod tests;
