@@ -141,16 +141,21 @@ pub(crate) struct DriveArgs {
     filter: Option<Vec<f32>>,
 }
 
-/// `sinew drive`.
-pub(crate) fn drive(args: DriveArgs) -> Result<()> {
-    let intrinsics = match args.intrinsics.as_deref() {
+/// `--intrinsics FX,FY,CX,CY` as the camera it names (`sinew drive`, `sinew view`).
+pub(crate) fn intrinsics(values: Option<&[f32]>) -> Result<Option<Intrinsics>> {
+    Ok(match values {
         None => None,
         Some(&[fx, fy, cx, cy]) => Some(Intrinsics { fx, fy, cx, cy }),
         Some(other) => bail!(
             "--intrinsics: expected FX,FY,CX,CY, got {} values",
             other.len()
         ),
-    };
+    })
+}
+
+/// `sinew drive`.
+pub(crate) fn drive(args: DriveArgs) -> Result<()> {
+    let intrinsics = intrinsics(args.intrinsics.as_deref())?;
     let filter = match args.filter.as_deref() {
         None => None,
         Some(&[min_cutoff, beta, rate]) => Some(

@@ -56,14 +56,7 @@ pub(crate) struct ViewArgs {
 
 /// `sinew view`.
 pub(crate) fn run(args: ViewArgs) -> Result<()> {
-    let intrinsics = match args.intrinsics.as_deref() {
-        None => None,
-        Some(&[fx, fy, cx, cy]) => Some(sinew_core::driver::Intrinsics { fx, fy, cx, cy }),
-        Some(other) => anyhow::bail!(
-            "--intrinsics: expected FX,FY,CX,CY, got {} values",
-            other.len()
-        ),
-    };
+    let intrinsics = super::driver::intrinsics(args.intrinsics.as_deref())?;
     let driver = match (&args.driver, &args.landmarks) {
         (Some(driver), Some(landmarks)) => Some(sinew_host::view::DriverInputs {
             driver,

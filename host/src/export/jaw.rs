@@ -118,7 +118,7 @@ pub(crate) fn shape_deltas(
     let mut out: Vec<f32> = skin
         .correctives
         .iter()
-        .flat_map(|e| e.iter().map(|x| *x as f32).collect::<Vec<_>>())
+        .flat_map(|e| [e.x as f32, e.y as f32, e.z as f32])
         .collect();
     for (j, learned) in jaw {
         let pose = actor
