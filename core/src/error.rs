@@ -50,79 +50,6 @@ impl fmt::Debug for SectionName {
     }
 }
 
-/// The rule a value of a file broke ([`FormatError::ValueOutOfRange`]); each names its limit, a
-/// `pub const` of [`crate::layout`] (docs/FORMAT.md, "Value bounds").
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum Bound {
-    /// A length in the model's unit: within ±[`MAX_COORDINATE`].
-    Coordinate,
-    /// A positive length: above 0, at most [`MAX_COORDINATE`].
-    PositiveCoordinate,
-    /// A dimensionless factor: within ±[`MAX_FACTOR`].
-    Factor,
-    /// A positive factor: above 0, at most [`MAX_FACTOR`].
-    PositiveFactor,
-    /// A spread: at least 0, at most [`MAX_FACTOR`].
-    NonNegativeFactor,
-    /// A motion that must be a unit SRVF: `⟨p, p⟩` within 1 ± [`crate::layout::UNIT_TOLERANCE`]
-    /// (the index is 0: the rule is about the whole motion).
-    UnitMotion,
-    /// The first value of a 6D rotation that is not usable: the six values within
-    /// ±[`MAX_ROTATION_ENTRY`], each column at least [`MIN_ROTATION_COLUMN`] long, the columns
-    /// not parallel (as a caller's rotation, [`InputError`]).
-    Rotation,
-}
-
-impl Bound {
-    /// Whether `v` keeps the rule (always true for [`Bound::Rotation`] and [`Bound::UnitMotion`],
-    /// which are about values together: see [`crate::rotation::try_from_6d`]). NaN keeps none.
-    pub fn contains(self, v: f32) -> bool {
-        match self {
-            Self::Coordinate => (-MAX_COORDINATE..=MAX_COORDINATE).contains(&v),
-            Self::PositiveCoordinate => v > 0.0 && v <= MAX_COORDINATE,
-            Self::Factor => (-MAX_FACTOR..=MAX_FACTOR).contains(&v),
-            Self::PositiveFactor => v > 0.0 && v <= MAX_FACTOR,
-            Self::NonNegativeFactor => (0.0..=MAX_FACTOR).contains(&v),
-            Self::Rotation | Self::UnitMotion => true,
-        }
-    }
-}
-
-impl fmt::Display for Bound {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::Coordinate => write!(
-                f,
-                "outside ±{}, the limit of a length",
-                Magnitude(MAX_COORDINATE)
-            ),
-            Self::PositiveCoordinate => write!(
-                f,
-                "not a positive length of at most {}",
-                Magnitude(MAX_COORDINATE)
-            ),
-            Self::Factor => write!(
-                f,
-                "outside ±{}, the limit of a factor",
-                Magnitude(MAX_FACTOR)
-            ),
-            Self::PositiveFactor => {
-                write!(f, "not positive and at most {}", Magnitude(MAX_FACTOR))
-            }
-            Self::NonNegativeFactor => {
-                write!(f, "negative or above {}", Magnitude(MAX_FACTOR))
-            }
-            Self::Rotation => write!(f, "{}", RotationRule),
-            Self::UnitMotion => write!(
-                f,
-                "part of a motion that is not of unit norm (⟨p, p⟩ must lie within 1 ± {})",
-                Magnitude(crate::layout::UNIT_TOLERANCE)
-            ),
-        }
-    }
-}
-
 /// Writes a limit the way the documents do: `1e5`, `1e-6`, and `0` or `1` plainly. Every limit
 /// of [`crate::layout`] is a power of ten (or zero), so only the exponent is printed, with
 /// integer formatting: formatting an `f32` would add the float printer's tens of kilobytes to a
@@ -408,10 +335,8 @@ impl fmt::Display for FormatError {
                 limit,
             } => write!(
                 f,
-                "section {section}: row {row} lets the network's {} exceed ±{} for inputs within \
-                 their bounds",
-                limit.what(),
-                Magnitude(limit.value())
+                "section {section}: row {row} lets the network's {limit} for inputs within their \
+                 bounds"
             ),
             Self::IndexOutOfRange { section, index } => {
                 write!(
@@ -787,7 +712,9 @@ impl From<InputError> for EvalError {
     }
 }
 
+mod bound;
 mod limit;
+pub use bound::Bound;
 pub use limit::NetworkLimit;
 
 #[cfg(test)]

@@ -55,6 +55,11 @@ pub const UNIT_TOLERANCE: f32 = 1e-3;
 /// any input within its bounds, as validation bounds it from the file's weights: far below
 /// `f32`'s 3.4e38, so that every sum downstream stays finite.
 pub const MAX_NETWORK_VALUE: f32 = 1e20;
+/// The longest a motion generator's tangent vector may be, in Euclidean length: its squared
+/// length, 1e36, stays below `f32`'s 3.4e38 with the margin the roundings of its sums need. A
+/// generator of `n` outputs is held to ±`MAX_TANGENT_NORM / n` per output
+/// ([`crate::NetworkLimit::Tangent`]), so its vector is at most `MAX_TANGENT_NORM / √n` long.
+pub const MAX_TANGENT_NORM: f32 = 1e18;
 
 /// A fixed-size field of the header or of a section-table entry: where it starts and how many
 /// bytes it takes. All numbers in it are little-endian.
@@ -284,12 +289,13 @@ mod tests {
 
     /// The value limits, by the name of their constant, as `docs/FORMAT.md` ("Value bounds")
     /// must state them.
-    const VALUE_LIMITS: [(&str, f32); 6] = [
+    const VALUE_LIMITS: [(&str, f32); 7] = [
         ("MAX_COORDINATE", MAX_COORDINATE),
         ("MAX_FACTOR", MAX_FACTOR),
         ("MAX_ROTATION_ENTRY", MAX_ROTATION_ENTRY),
         ("MIN_ROTATION_COLUMN", MIN_ROTATION_COLUMN),
         ("MAX_NETWORK_VALUE", MAX_NETWORK_VALUE),
+        ("MAX_TANGENT_NORM", MAX_TANGENT_NORM),
         ("UNIT_TOLERANCE", UNIT_TOLERANCE),
     ];
 

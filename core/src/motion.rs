@@ -44,6 +44,45 @@ pub fn gaussian_noise(seed: u64, out: &mut [f32]) {
 /// (`u1` is at least 2⁻²⁴, and the cosine at most 1). The one-hot label's values are 0 and 1.
 pub const NOISE_BOUND: f32 = 5.8;
 
+/// Per label, how the reach of a motion (its apex's distance from the neutral) is drawn from the
+/// seed's Gaussian value g, `[LABELS, 2]` (mean, spread) pairs.
+#[derive(Clone, Debug)]
+enum Reaches<'a> {
+    /// `motion.log_reach` (files baked since 2026-11-28): of the logarithm of the training
+    /// motions' reaches, so a reach is `exp(mean + spread · g)`, always positive.
+    LogNormal(F32s<'a>),
+    /// `motion.reach` (files baked 2026-11-27): of the reaches themselves, so a reach is
+    /// `max(0, mean + spread · g)`, 0 (a still face) for seeds far below the mean.
+    Normal(F32s<'a>),
+}
+
+impl Reaches<'_> {
+    /// (mean, spread) of `label` (below [`LABELS`]).
+    fn of(&self, label: usize) -> (f32, f32) {
+        let (Self::LogNormal(r) | Self::Normal(r)) = self;
+        (r.at(2 * label), r.at(2 * label + 1))
+    }
+
+    /// The reach `label`'s draw `g` gives.
+    fn drawn(&self, label: usize, g: f32) -> f32 {
+        let (mean, spread) = self.of(label);
+        match self {
+            Self::LogNormal(_) => libm::expf(mean + spread * g),
+            Self::Normal(_) => (mean + spread * g).max(0.0),
+        }
+    }
+
+    /// The typical reach of `label`: the median `exp(mean)` of a log-normal draw, the mean of
+    /// a normal one.
+    fn typical(&self, label: usize) -> f32 {
+        let (mean, _) = self.of(label);
+        match self {
+            Self::LogNormal(_) => libm::expf(mean),
+            Self::Normal(_) => mean,
+        }
+    }
+}
+
 /// A validated generator.
 #[derive(Clone, Debug)]
 pub struct MotionGenerator<'a> {
@@ -52,10 +91,9 @@ pub struct MotionGenerator<'a> {
     /// `motion.length`: one length for every label (`[1]`), or per label its mean and spread
     /// (`[LABELS, 2]`).
     lengths: F32s<'a>,
-    /// `motion.reach`, per label the mean and spread of the training motions' reach
-    /// (`[LABELS, 2]`), in files baked since 2026-11-27; without it a motion is decoded at its
-    /// drawn arc length.
-    reaches: Option<F32s<'a>>,
+    /// How a motion's reach is drawn: from `motion.log_reach` or `motion.reach`; without
+    /// either a motion is decoded at its drawn arc length.
+    reaches: Option<Reaches<'a>>,
     noise: usize,
     dims: usize,
     /// The metadata `labels`: the labels' names, comma-separated, if the file records them.
@@ -94,7 +132,9 @@ impl<'a> MotionGenerator<'a> {
             &mlp,
             "motion.g",
             f64::from(NOISE_BOUND),
-            crate::error::NetworkLimit::FactorOutputs,
+            crate::error::NetworkLimit::Tangent {
+                outputs: u32::try_from(mlp.outputs()).unwrap_or(u32::MAX),
+            },
         )?;
         if libm::fabsf(squared_norm(&p) - 1.0) > UNIT_TOLERANCE {
             return Err(out_of_range("motion.p", 0, Bound::UnitMotion));
@@ -108,13 +148,16 @@ impl<'a> MotionGenerator<'a> {
             _ => return Err(FormatError::incompatible_shapes("motion.length")),
         };
         check_spreads("motion.length", &lengths, rank == 2)?;
-        let reaches = match file.section("motion.reach") {
-            None => None,
-            Some(_) => {
-                let reaches = file.f32_tensor("motion.reach", &[LABELS as u32, 2])?;
-                check_spreads("motion.reach", &reaches, true)?;
-                Some(reaches)
-            }
+        let reaches = if file.section("motion.log_reach").is_some() {
+            let reaches = file.f32_tensor("motion.log_reach", &[LABELS as u32, 2])?;
+            check_log_spreads("motion.log_reach", &reaches)?;
+            Some(Reaches::LogNormal(reaches))
+        } else if file.section("motion.reach").is_some() {
+            let reaches = file.f32_tensor("motion.reach", &[LABELS as u32, 2])?;
+            check_spreads("motion.reach", &reaches, true)?;
+            Some(Reaches::Normal(reaches))
+        } else {
+            None
         };
         let labels = file
             .metadata()
@@ -171,16 +214,18 @@ impl<'a> MotionGenerator<'a> {
         self.length_of(label).1
     }
 
-    /// The mean reach of `label`'s training motions (the distance of the apex from the
-    /// neutral, in units of the per-frame normalised landmarks), if the file has reaches; `None`
-    /// otherwise or for a label not below [`LABELS`].
+    /// The typical reach of `label`'s training motions (the distance of the apex from the
+    /// neutral, in units of the per-frame normalised landmarks): their median `exp(mean)` where
+    /// the file draws reaches log-normally (`motion.log_reach`), their mean where it draws them
+    /// normally (`motion.reach`); `None` without reaches or for a label not below [`LABELS`].
     pub fn reach(&self, label: usize) -> Option<f32> {
-        self.reach_of(label).map(|(mean, _)| mean)
+        let reaches = self.reaches.as_ref().filter(|_| label < LABELS)?;
+        Some(reaches.typical(label))
     }
 
     /// The length `q` (a motion of `label`, `[FRAMES × dims]`) decodes with at intensity 1 and
-    /// the label's mean: [`crate::srvf::length_for_reach`] of the mean reach where the file has
-    /// reaches, the mean arc length otherwise.
+    /// the label's typical draw: [`crate::srvf::length_for_reach`] of
+    /// [`MotionGenerator::reach`] where the file has reaches, the mean arc length otherwise.
     ///
     /// # Errors
     /// [`BufferError::Input`] for a label not below [`LABELS`] or a `q` of another length.
@@ -188,16 +233,10 @@ impl<'a> MotionGenerator<'a> {
         if label >= LABELS || q.len() != self.motion_len() {
             return Err(BufferError::Input);
         }
-        match self.reach_of(label) {
-            Some((reach, _)) => length_for_reach(q, self.dims, reach),
+        match self.reach(label) {
+            Some(reach) => length_for_reach(q, self.dims, reach),
             None => Ok(self.length(label)),
         }
-    }
-
-    /// (mean, spread) of `label`'s reach, if the file has reaches.
-    fn reach_of(&self, label: usize) -> Option<(f32, f32)> {
-        let r = self.reaches.as_ref().filter(|_| label < LABELS)?;
-        Some((r.at(2 * label), r.at(2 * label + 1)))
     }
 
     /// (mean, spread) of `label`'s arc length.
@@ -277,8 +316,8 @@ impl<'a> MotionGenerator<'a> {
         // The motion itself lives in the first motion-sized part of the scratch.
         let (q, rest) = scratch.split_at_mut(self.motion_len());
         let g = self.motion_into(label, seed, rest, q)?;
-        let length = match self.reach_of(label) {
-            Some((mean, spread)) => length_for_reach(q, self.dims, (mean + spread * g).max(0.0))?,
+        let length = match &self.reaches {
+            Some(reaches) => length_for_reach(q, self.dims, reaches.drawn(label, g))?,
             None => {
                 let (mean, spread) = self.length_of(label);
                 (mean + spread * g).max(0.0)
@@ -343,6 +382,28 @@ fn check_spreads(name: &str, values: &F32s<'_>, pairs: bool) -> Result<(), Forma
         };
         if !bound.contains(v) {
             return Err(out_of_range(name, i, bound));
+        }
+    }
+    Ok(())
+}
+
+/// Checks section `name`'s `values` as (mean, spread) pairs of a logarithm: each mean within
+/// ±[`MAX_FACTOR`](crate::layout::MAX_FACTOR), each spread non-negative and at most
+/// [`MAX_FACTOR`](crate::layout::MAX_FACTOR), and every draw `exp(mean + spread · g)`, for
+/// `|g|` up to [`NOISE_BOUND`], at most [`MAX_FACTOR`](crate::layout::MAX_FACTOR)
+/// ([`Bound::LogNormalFactor`], naming the spread): the reaches a normal draw may reach too.
+fn check_log_spreads(name: &str, values: &F32s<'_>) -> Result<(), FormatError> {
+    let largest = libm::logf(crate::layout::MAX_FACTOR);
+    for i in 0..values.iter().len() / 2 {
+        let (mean, spread) = (values.at(2 * i), values.at(2 * i + 1));
+        if !Bound::Factor.contains(mean) {
+            return Err(out_of_range(name, 2 * i, Bound::Factor));
+        }
+        if !Bound::NonNegativeFactor.contains(spread) {
+            return Err(out_of_range(name, 2 * i + 1, Bound::NonNegativeFactor));
+        }
+        if mean + NOISE_BOUND * spread > largest {
+            return Err(out_of_range(name, 2 * i + 1, Bound::LogNormalFactor));
         }
     }
     Ok(())

@@ -73,9 +73,9 @@ fn every_format_error_message_reads_as_words_and_names_what_it_carries() {
             FormatError::Unbounded {
                 section: s,
                 row: 2,
-                limit: NetworkLimit::FactorOutputs,
+                limit: NetworkLimit::Tangent { outputs: 6120 },
             },
-            &["cache.e", "row 2", "outputs exceed ±1e3"],
+            &["cache.e", "row 2", "outputs exceed ±1e18 / 6120"],
         ),
         (
             FormatError::index_out_of_range("tpl.tri", 14),
@@ -158,6 +158,7 @@ fn every_format_error_message_reads_as_words_and_names_what_it_carries() {
         Bound::NonNegativeFactor,
         Bound::UnitMotion,
         Bound::Rotation,
+        Bound::LogNormalFactor,
     ];
     let words: Vec<String> = every_bound.iter().map(ToString::to_string).collect();
     assert!(

@@ -24,8 +24,8 @@ pub const CONTENT: &str = "motion-generator";
 
 /// The baked generator: kind `MotionGenerator`, the generator's MLP under `motion.g`, the
 /// reference motion `motion.p`, per label the mean and spread of the arc length,
-/// `motion.length` `[LABELS, 2]`, and, for motions with curves, of the reach, `motion.reach`
-/// `[LABELS, 2]`.
+/// `motion.length` `[LABELS, 2]`, and, for motions with curves, of the reach's logarithm,
+/// `motion.log_reach` `[LABELS, 2]`.
 pub fn bake(generator: &Generator, data: &TangentData, config: &GanConfig) -> Result<Vec<u8>> {
     let d = data.dims() / FRAMES;
     let mut w = SinewWriter::new(ArtifactKind::MotionGenerator);
@@ -43,8 +43,8 @@ pub fn bake(generator: &Generator, data: &TangentData, config: &GanConfig) -> Re
     generator.mlp.export(&mut w, "motion.g")?;
     w.f32s("motion.p", &[FRAMES, d], &data.p)?;
     w.f32s("motion.length", &[LABELS.len(), 2], &data.lengths_flat())?;
-    if let Some(reaches) = data.reaches_flat() {
-        w.f32s("motion.reach", &[LABELS.len(), 2], &reaches)?;
+    if let Some(reaches) = data.log_reaches_flat() {
+        w.f32s("motion.log_reach", &[LABELS.len(), 2], &reaches)?;
     }
     let bytes = w.to_bytes()?;
     // The core must take what the host writes: a generator whose weights let the network exceed

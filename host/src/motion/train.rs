@@ -60,10 +60,11 @@ pub struct TangentData {
     /// length a decoded motion of intensity 1 draws from; SRVFs are scale-free). A label without
     /// training curves takes every curve's.
     pub lengths: Vec<[f32; 2]>,
-    /// Per label, the mean and the standard deviation of its training curves' reach (the apex's
-    /// distance from the neutral), as `lengths`; `None` for motions without curves
+    /// Per label, the mean and the standard deviation of the logarithm of its training curves'
+    /// reach (the apex's distance from the neutral; [`log_reach`]), as `lengths`: a motion's
+    /// reach is drawn log-normally, always positive; `None` for motions without curves
     /// ([`TangentData::from_motions`]), which decode at their `lengths`.
-    pub reaches: Option<Vec<[f32; 2]>>,
+    pub log_reaches: Option<Vec<[f32; 2]>>,
 }
 
 impl TangentData {
@@ -86,13 +87,13 @@ impl TangentData {
                     source,
                 })?;
             lengths.push(f64::from(e.length));
-            reaches.push(f64::from(e.reach));
+            reaches.push(log_reach(e.reach));
             qs.push(e.q);
         }
         let labels: Vec<usize> = train.iter().map(|&s| set.label(s)).collect();
         let mut data = Self::from_motions(&qs, labels)?;
         data.lengths = per_label(&lengths, &data.labels);
-        data.reaches = Some(per_label(&reaches, &data.labels));
+        data.log_reaches = Some(per_label(&reaches, &data.labels));
         Ok(data)
     }
 
@@ -130,7 +131,7 @@ impl TangentData {
             tangents,
             labels,
             lengths: vec![[1.0, 0.0]; LABELS.len()],
-            reaches: None,
+            log_reaches: None,
         })
     }
 
@@ -139,9 +140,22 @@ impl TangentData {
         self.lengths.iter().flatten().copied().collect()
     }
 
-    /// `reaches` flattened, `[LABELS × 2]`, as `motion.reach` stores them.
-    pub fn reaches_flat(&self) -> Option<Vec<f32>> {
-        Some(self.reaches.as_ref()?.iter().flatten().copied().collect())
+    /// `log_reaches` flattened, `[LABELS × 2]`, as `motion.log_reach` stores them, each spread
+    /// at most what keeps every draw within the core's factors: `exp(mean + NOISE_BOUND ·
+    /// spread)` at most `MAX_FACTOR` (a normalised landmark curve reaches about 0.2; only a set
+    /// of wildly different reaches comes near it).
+    pub fn log_reaches_flat(&self) -> Option<Vec<f32>> {
+        let largest = f64::from(sinew_core::layout::MAX_FACTOR).ln() * (1.0 - 1e-6);
+        let noise = f64::from(sinew_core::motion::NOISE_BOUND);
+        let pairs = self
+            .log_reaches
+            .as_ref()?
+            .iter()
+            .flat_map(|&[mean, spread]| {
+                let most = ((largest - f64::from(mean)) / noise).max(0.0) as f32;
+                [mean, spread.min(most)]
+            });
+        Some(pairs.collect())
     }
 
     /// Coordinates of one tangent vector (`FRAMES × dims`).
@@ -330,6 +344,15 @@ fn per_label(values: &[f64], labels: &[usize]) -> Vec<[f32; 2]> {
             }
         })
         .collect()
+}
+
+/// The smallest reach whose logarithm a label's statistics take: a training curve that ends
+/// where it starts counts as this close, so that its logarithm stays finite.
+pub const MIN_REACH: f32 = 1e-6;
+
+/// `ln(max(reach, MIN_REACH))`, what `motion.log_reach` keeps the statistics of.
+pub fn log_reach(reach: f32) -> f64 {
+    f64::from(reach.max(MIN_REACH)).ln()
 }
 
 /// The mean and the population standard deviation of `xs` (not empty), in f32.

@@ -1,6 +1,7 @@
 use super::*;
 use crate::motion::train::TangentData;
 use crate::training::checkpoint::{CheckpointError, InvalidState, STATE_FILE};
+use sinew_core::error::Bound;
 
 /// Unit motions of two labels with 6 coordinates (2 landmarks) per frame.
 fn toy() -> TangentData {
@@ -286,20 +287,20 @@ fn drawn(seed: u64, noise: usize, [m, s]: [f32; 2], intensity: f32) -> f32 {
 }
 
 /// A generator file of `run`'s generator and `data`'s reference motion (6 coordinates a frame)
-/// with the given `motion.length` and, if any, `motion.reach` (shape, values), unchecked.
+/// with the given `motion.length` and, if any, reaches (section name, shape, values), unchecked.
 fn generator_file(
     run: &Run,
     data: &TangentData,
     length: (&[usize], &[f32]),
-    reach: Option<(&[usize], &[f32])>,
+    reach: Option<(&str, &[usize], &[f32])>,
 ) -> Vec<u8> {
     let mut w = SinewWriter::new(ArtifactKind::MotionGenerator);
     w.meta("content", CONTENT);
     run.generator.mlp.export(&mut w, "motion.g").unwrap();
     w.f32s("motion.p", &[FRAMES, 6], &data.p).unwrap();
     w.f32s("motion.length", length.0, length.1).unwrap();
-    if let Some((shape, values)) = reach {
-        w.f32s("motion.reach", shape, values).unwrap();
+    if let Some((name, shape, values)) = reach {
+        w.f32s(name, shape, values).unwrap();
     }
     w.to_bytes().unwrap()
 }
@@ -385,15 +386,114 @@ fn the_length_is_drawn_from_the_labels_training_lengths() {
 #[test]
 fn the_reach_is_drawn_from_the_labels_training_reaches() {
     let (mut data, config) = (toy(), config());
-    let mut reaches = vec![[0.3f32, 0.0]; LABELS.len()];
-    reaches[0] = [0.2, 0.05];
-    data.reaches = Some(reaches.clone());
+    let mut log_reaches = vec![[0.3f32.ln(), 0.0]; LABELS.len()];
+    log_reaches[0] = [0.2f32.ln(), 0.25];
+    data.log_reaches = Some(log_reaches.clone());
     let device = Backend::Flex.autodiff_device(config.seed).unwrap();
     let run = run_to(&data, &config, Run::new(&data, &config, &device), 1);
     let bytes = bake(&run.generator, &data, &config).unwrap();
     let core = sinew_core::motion::MotionGenerator::from_bytes(&bytes).unwrap();
-    assert_eq!((core.reach(0), core.reach(1)), (Some(0.2), Some(0.3)));
+    let typical = |label| (core.reach(label).unwrap() - [0.2, 0.3][label]).abs();
+    assert!(typical(0) < 1e-6 && typical(1) < 1e-6);
+    // A reach drawn log-normally: exp(m + s · g), times the intensity.
+    let log_normal = |seed, [m, s]: [f32; 2], intensity| {
+        intensity * (m + s * drawn(seed, config.noise, [0.0, 1.0], 1.0)).exp()
+    };
+    let apexes = check_apexes(&core, &log_reaches, &log_normal);
+    // Label 0's reaches differ by seed.
+    assert!(apexes.windows(2).all(|w| w[0] != w[1]), "{apexes:?}");
+    // Never 0, even for a spread as wide as the mean, where a normal draw gives still faces.
+    let mut z = vec![0.0f32; config.noise + 1];
+    let (mut still, mut zero) = (0, 0);
+    for seed in 0..400u64 {
+        sinew_core::motion::gaussian_noise(seed, &mut z);
+        still += usize::from((0.2 + 0.2 * z[config.noise]).max(0.0) == 0.0);
+        zero += usize::from((0.2f32.ln() + 1.0 * z[config.noise]).exp() == 0.0);
+    }
+    assert!(still > 0 && zero == 0, "{still} {zero}");
 
+    // Generators baked 2026-11-27 draw the reach normally from `motion.reach`, as before.
+    let reaches = vec![[0.2f32, 0.05]; LABELS.len()];
+    let flat: Vec<f32> = reaches.iter().flatten().copied().collect();
+    let old = generator_file(
+        &run,
+        &data,
+        (&[1], &[0.3]),
+        Some(("motion.reach", &[LABELS.len(), 2], &flat)),
+    );
+    let core = sinew_core::motion::MotionGenerator::from_bytes(&old).unwrap();
+    assert_eq!(core.reach(0), Some(0.2));
+    check_apexes(&core, &reaches, &|seed, pair, intensity| {
+        drawn(seed, config.noise, pair, intensity)
+    });
+
+    // Broken reaches are refused.
+    let with = |name: &str, shape: &[usize], values: &[f32]| {
+        let bytes = generator_file(&run, &data, (&[1], &[0.3]), Some((name, shape, values)));
+        sinew_core::motion::MotionGenerator::from_bytes(&bytes).err()
+    };
+    let good = data.log_reaches_flat().unwrap();
+    assert_eq!(with("motion.log_reach", &[LABELS.len(), 2], &good), None);
+    let mut negative = good.clone();
+    negative[3] = -0.1;
+    let mut wide = good.clone();
+    // exp(0 + 5.8 · 1.5) passes 1e3.
+    (wide[4], wide[5]) = (0.0, 1.5);
+    let mut zero = flat.clone();
+    zero[2] = 0.0;
+    for (name, shape, values, index, bound) in [
+        (
+            "motion.log_reach",
+            vec![LABELS.len(), 2],
+            negative,
+            3,
+            Bound::NonNegativeFactor,
+        ),
+        (
+            "motion.log_reach",
+            vec![LABELS.len(), 2],
+            wide,
+            5,
+            Bound::LogNormalFactor,
+        ),
+        (
+            "motion.reach",
+            vec![LABELS.len(), 2],
+            zero,
+            2,
+            Bound::PositiveFactor,
+        ),
+    ] {
+        let e = with(name, &shape, &values);
+        assert!(
+            matches!(
+                e,
+                Some(sinew_core::FormatError::ValueOutOfRange { section, index: i, bound: b })
+                    if section.as_str() == name && i == index && b == bound
+            ),
+            "{name}: {e:?}"
+        );
+    }
+    for name in ["motion.log_reach", "motion.reach"] {
+        for shape in [vec![1], vec![LABELS.len(), 3]] {
+            let values = vec![0.3; shape.iter().product()];
+            assert!(with(name, &shape, &values).is_some(), "{name} {shape:?}");
+        }
+    }
+    // The host keeps every draw of a wide spread within the core's bound.
+    data.log_reaches = Some(vec![[0.0, 3.0]; LABELS.len()]);
+    assert!(bake(&run.generator, &data, &config).is_ok());
+}
+
+/// For seeds 3 to 5, labels 0 and 1 and intensities 1 and 0.5, that the apex of the core's curve
+/// on a small neutral lies the reach `draw(seed, reaches[label], intensity)` (times the neutral's
+/// size) from the neutral, and that the label's mean length is that of its typical reach; the
+/// apex distances of label 0 at intensity 1.
+fn check_apexes(
+    core: &sinew_core::motion::MotionGenerator<'_>,
+    reaches: &[[f32; 2]],
+    draw: &dyn Fn(u64, [f32; 2], f32) -> f32,
+) -> Vec<f32> {
     let neutral = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0];
     let size = sinew_core::srvf::landmark_size(&neutral);
     let mut scratch = vec![0.0f32; core.scratch_len()];
@@ -404,9 +504,7 @@ fn the_reach_is_drawn_from_the_labels_training_reaches() {
         for (label, intensity) in [(0usize, 1.0f32), (0, 0.5), (1, 1.0)] {
             core.landmarks(label, seed, intensity, &neutral, &mut scratch, &mut curve)
                 .unwrap();
-            // The apex lies the drawn reach (times the neutral's size) from the neutral.
-            let reach = drawn(seed, config.noise, reaches[label], intensity);
-            let m = reaches[label][0];
+            let reach = draw(seed, reaches[label], intensity);
             let apex = &curve[FRAMES * 6..];
             let d = apex
                 .iter()
@@ -416,43 +514,77 @@ fn the_reach_is_drawn_from_the_labels_training_reaches() {
                 .sqrt();
             assert!(
                 (d - reach * size).abs() < 1e-4,
-                "label {label}, seed {seed}: {d}"
+                "label {label}, seed {seed}: {d} against {}",
+                reach * size
             );
-            // At the label's mean, the motion decodes at `mean_length`.
             core.motion(label, seed, &mut scratch, &mut q).unwrap();
-            let at_mean = sinew_core::srvf::length_for_reach(&q, 6, m).unwrap();
-            assert_eq!(core.mean_length(label, &q).unwrap(), at_mean);
+            let typical = core.reach(label).unwrap();
+            let at_typical = sinew_core::srvf::length_for_reach(&q, 6, typical).unwrap();
+            assert_eq!(core.mean_length(label, &q).unwrap(), at_typical);
             if label == 0 && intensity == 1.0 {
                 apexes.push(d);
             }
         }
     }
-    // Label 0's reaches differ by seed.
-    assert!(apexes.windows(2).all(|w| w[0] != w[1]), "{apexes:?}");
+    apexes
+}
 
-    // Broken reaches are refused.
-    let with_reaches = |shape: &[usize], values: &[f32]| {
-        generator_file(&run, &data, (&[1], &[0.3]), Some((shape, values)))
+/// A generator file whose one identity layer outputs `bias` everywhere, whatever the noise and
+/// label, on `data`'s reference motion.
+fn constant_generator(data: &TangentData, noise: usize, bias: f32) -> Vec<u8> {
+    let (inputs, outputs) = (noise + LABELS.len(), FRAMES * 6);
+    let mut w = SinewWriter::new(ArtifactKind::MotionGenerator);
+    w.meta("content", CONTENT);
+    let layer = crate::training::nn::LayerWeights {
+        weight: vec![0.0; outputs * inputs],
+        bias: vec![bias; outputs],
+        inputs,
+        outputs,
+        activation: sinew_core::nn::Activation::Identity,
     };
-    let good = data.reaches_flat().unwrap();
-    assert!(
-        sinew_core::motion::MotionGenerator::from_bytes(&with_reaches(&[LABELS.len(), 2], &good))
-            .is_ok()
-    );
-    let mut negative = good.clone();
-    negative[4] = -0.1;
-    let mut zero = good.clone();
-    zero[2] = 0.0;
-    for (shape, values) in [
-        (vec![LABELS.len(), 2], negative),
-        (vec![LABELS.len(), 2], zero),
-        (vec![1], vec![0.3]),
-        (vec![LABELS.len(), 3], vec![0.3; 3 * LABELS.len()]),
-    ] {
-        assert!(
-            sinew_core::motion::MotionGenerator::from_bytes(&with_reaches(&shape, &values))
-                .is_err(),
-            "{shape:?}"
-        );
+    crate::training::nn::write_mlp(&mut w, "motion.g", &[layer]).unwrap();
+    w.f32s("motion.p", &[FRAMES, 6], &data.p).unwrap();
+    w.f32s("motion.length", &[1], &[0.5]).unwrap();
+    w.to_bytes().unwrap()
+}
+
+/// The generator's outputs are held to what the exponential map needs, ±1e18 / outputs (here
+/// 180 outputs): just inside it every motion is a finite unit motion, just outside it the file is
+/// refused, naming the limit.
+#[test]
+fn a_generator_is_held_to_the_limit_its_exponential_map_needs() {
+    let data = toy();
+    let limit = sinew_core::NetworkLimit::Tangent {
+        outputs: (FRAMES * 6) as u32,
     }
+    .value();
+    assert!(limit > 1e15, "{limit}");
+    // The bound adds the roundings of a sum of `inputs + 2` terms to the bias.
+    let inside = constant_generator(&data, 4, limit * 0.999);
+    let core = sinew_core::motion::MotionGenerator::from_bytes(&inside).unwrap();
+    let mut scratch = vec![0.0f32; core.scratch_len()];
+    let mut q = vec![0.0f32; core.motion_len()];
+    for seed in [1u64, 2] {
+        core.motion(3, seed, &mut scratch, &mut q).unwrap();
+        assert!(q.iter().all(|x| x.is_finite()), "seed {seed}");
+        let n = sinew_core::srvf::norm(&q).unwrap();
+        assert!((n - 1.0).abs() < 1e-3, "seed {seed}: norm {n}");
+    }
+    let outside = constant_generator(&data, 4, limit * 1.001);
+    let e = sinew_core::motion::MotionGenerator::from_bytes(&outside).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            sinew_core::FormatError::Unbounded {
+                limit: sinew_core::NetworkLimit::Tangent { outputs: 180 },
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(
+        e.to_string()
+            .contains("outputs exceed ±1e18 / 180, the limit of a tangent vector"),
+        "{e}"
+    );
 }

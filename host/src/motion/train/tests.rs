@@ -126,8 +126,14 @@ fn same_mean_and_spread([mean, spread]: [f32; 2], xs: &[f64], label: usize) {
     let n = xs.len() as f64;
     let m = xs.iter().sum::<f64>() / n;
     let sd = (xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n).sqrt();
-    assert!((f64::from(mean) - m).abs() < 1e-6 * m, "label {label}");
-    assert!((f64::from(spread) - sd).abs() < 1e-6 * m, "label {label}");
+    assert!(
+        (f64::from(mean) - m).abs() < 1e-6 * m.abs(),
+        "label {label}"
+    );
+    assert!(
+        (f64::from(spread) - sd).abs() < 1e-6 * m.abs(),
+        "label {label}"
+    );
 }
 
 #[test]
@@ -158,9 +164,9 @@ fn each_label_keeps_its_training_curves_length() {
             "label {label}: random apex intensities spread the lengths"
         );
     }
-    // Each label's reach: its training curves' apex distances from the neutral, never more
-    // than their lengths.
-    let reaches = data.reaches.as_ref().unwrap();
+    // Each label's reach: the logarithm of its training curves' apex distances from the
+    // neutral, never more than their lengths.
+    let reaches = data.log_reaches.as_ref().unwrap();
     for (label, &[mean, spread]) in reaches.iter().enumerate() {
         let mine: Vec<f64> = train
             .iter()
@@ -179,15 +185,15 @@ fn each_label_keeps_its_training_curves_length() {
                     .sqrt();
                 let reach = f64::from(srvf::encode(&frames).unwrap().reach);
                 assert!((reach - d).abs() < 1e-6 * d, "{reach} {d}");
-                d
+                d.ln()
             })
             .collect();
         same_mean_and_spread([mean, spread], &mine, label);
-        assert!(mean < data.lengths[label][0], "label {label}");
+        assert!(mean.exp() < data.lengths[label][0], "label {label}");
     }
     // The classes reach different distances (eyebrow little, mouth_extreme much). Their arc
     // lengths differ less: every class's wanders by the same tracking noise.
-    let means: Vec<f32> = reaches.iter().map(|l| l[0]).collect();
+    let means: Vec<f32> = reaches.iter().map(|l| l[0].exp()).collect();
     let (lo, hi) = means
         .iter()
         .fold((f32::MAX, 0.0f32), |(lo, hi), &m| (lo.min(m), hi.max(m)));
