@@ -152,6 +152,16 @@ fn data_motions_writes_a_seeded_split_set() {
             && stderr.contains("0.01 now"),
         "{stderr}"
     );
+    // A learning rate or an L_r weight that is no number for training is refused, naming it.
+    for (option, value) in [("--lr", "-1"), ("--lr", "NaN"), ("--rec-weight", "-0.5")] {
+        let run = train(&[&format!("{option}={value}")]);
+        assert!(!run.status.success(), "{option} {value}");
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(
+            stderr.contains(option) && stderr.contains(value),
+            "{stderr}"
+        );
+    }
 
     generate_and_interpolate(dir.path(), &model);
     eval_motion(dir.path(), &out, &model);

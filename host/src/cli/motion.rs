@@ -153,6 +153,9 @@ pub(crate) struct TrainMotionArgs {
     /// Hidden widths of the generator and the critic, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = GanConfig::default().hidden)]
     hidden: Vec<usize>,
+    /// α2, the weight of the reconstruction loss L_r beside the adversarial loss's 1.
+    #[arg(long, default_value_t = GanConfig::default().alpha_rec)]
+    rec_weight: f32,
     /// The real motion L_r compares each generated one with: the batch's motion in the same row
     /// (batch, the reference's) or the batch's motion of the same label nearest to it (nearest).
     #[arg(long, value_enum, default_value_t = GanConfig::default().pairing)]
@@ -177,6 +180,7 @@ pub(crate) fn train(args: TrainMotionArgs) -> Result<()> {
         lr: args.lr,
         hidden: args.hidden,
         pairing: args.pairing,
+        alpha_rec: args.rec_weight,
         ..GanConfig::default()
     };
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);

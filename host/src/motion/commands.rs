@@ -106,6 +106,16 @@ pub fn train_motion(opts: &TrainMotion) -> Result<TrainReport> {
             && opts.checkpoint_every > 0,
         "steps, batch, critic steps and the checkpoint interval must be positive"
     );
+    ensure!(
+        config.lr.is_finite() && config.lr > 0.0,
+        "--lr must be a positive number, not {}",
+        config.lr
+    );
+    ensure!(
+        config.alpha_rec.is_finite() && config.alpha_rec >= 0.0,
+        "--rec-weight must be a number of at least 0, not {}",
+        config.alpha_rec
+    );
     let device: Device = opts.backend.autodiff_device(config.seed)?;
     let fresh = Run::new(&data, config, &device);
     let (dir, mut run) = match &opts.resume {

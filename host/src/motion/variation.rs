@@ -91,7 +91,7 @@ impl Default for Variation {
             release: 0.3,
             two_peaks: 0.2,
             short: 0.25,
-            tracking_noise: 0.015,
+            tracking_noise: 0.001,
         }
     }
 }
