@@ -156,6 +156,10 @@ pub(crate) struct TrainMotionArgs {
     /// α2, the weight of the reconstruction loss L_r beside the adversarial loss's 1.
     #[arg(long, default_value_t = GanConfig::default().alpha_rec)]
     rec_weight: f32,
+    /// λ_div, the weight of the diversity term: minus the mean geodesic distance between two
+    /// motions of one label from different noise (0: none, as the paper).
+    #[arg(long, default_value_t = GanConfig::default().diversity)]
+    diversity_weight: f32,
     /// The real motion L_r compares each generated one with: the batch's motion in the same row
     /// (batch, the reference's) or the batch's motion of the same label nearest to it (nearest).
     #[arg(long, value_enum, default_value_t = GanConfig::default().pairing)]
@@ -181,6 +185,7 @@ pub(crate) fn train(args: TrainMotionArgs) -> Result<()> {
         hidden: args.hidden,
         pairing: args.pairing,
         alpha_rec: args.rec_weight,
+        diversity: args.diversity_weight,
         ..GanConfig::default()
     };
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);

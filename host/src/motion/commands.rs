@@ -116,6 +116,11 @@ pub fn train_motion(opts: &TrainMotion) -> Result<TrainReport> {
         "--rec-weight must be a number of at least 0, not {}",
         config.alpha_rec
     );
+    ensure!(
+        config.diversity.is_finite() && config.diversity >= 0.0,
+        "--diversity-weight must be a number of at least 0, not {}",
+        config.diversity
+    );
     let device: Device = opts.backend.autodiff_device(config.seed)?;
     let fresh = Run::new(&data, config, &device);
     let (dir, mut run) = match &opts.resume {

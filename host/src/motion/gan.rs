@@ -59,6 +59,10 @@ pub struct GanConfig {
     /// Checkpoints written before the setting existed trained with [`Pairing::Batch`].
     #[serde(default = "Pairing::batch")]
     pub pairing: Pairing,
+    /// λ_div, the weight of the diversity term ([`diversity_term`]; 0: none, as the paper).
+    /// Checkpoints written before the setting existed trained without it.
+    #[serde(default)]
+    pub diversity: f32,
 }
 
 /// The real motion L_r (eq. 4) compares a generated one with; both are of the same label.
@@ -105,6 +109,7 @@ impl Default for GanConfig {
             hidden: vec![512, 512],
             slope: 0.2,
             pairing: Pairing::Chamfer,
+            diversity: 0.0,
         }
     }
 }
@@ -354,6 +359,21 @@ pub fn paired_reconstruction(
     (to_real + to_fake).mul_scalar(0.5)
 }
 
+/// The diversity term, a difference from the paper (mode seeking, Mao et al., "Mode Seeking
+/// Generative Adversarial Networks for Diverse and Faithful Image Synthesis", CVPR 2019): minus
+/// the mean geodesic distance on the sphere between the motions `a` and `b` generated for the
+/// same labels from different noise. Weighted by λ_div and added to the generator's loss, it
+/// rewards motions that differ by their noise, which L_r's pull towards the nearest real motions
+/// does not.
+///
+/// # Shapes
+/// - a, b: `[n, d]` tangent vectors at p: `[1, d]` → `[1]`
+pub fn diversity_term(a: Tensor<2>, b: Tensor<2>, p: &Tensor<2>) -> Tensor<1> {
+    geodesic_rows(exp_rows(a, p.clone()), exp_rows(b, p.clone()))
+        .mean()
+        .neg()
+}
+
 /// Adam with the reference's β = (0.5, 0.9).
 pub fn optimizer() -> ModuleOptimizer {
     AdamConfig::new().with_beta_1(0.5).with_beta_2(0.9).init()
@@ -458,9 +478,24 @@ pub fn generator_step(
         .forward(Tensor::cat(vec![fake.clone(), batch.labels.clone()], 1))
         .mean()
         .neg();
-    let rec = paired_reconstruction(fake, &batch.real, &batch.labels, p, config.pairing);
-    let loss =
+    let rec = paired_reconstruction(fake.clone(), &batch.real, &batch.labels, p, config.pairing);
+    let mut loss =
         adv.mul_scalar(config.alpha_adv as f64) + rec.clone().mul_scalar(config.alpha_rec as f64);
+    if config.diversity > 0.0 {
+        // The same labels with each row's noise taken from the next row (the last from the
+        // first): other noise, no other draw, so a step's randomness stays the batch's.
+        let n = batch.noise.dims()[0];
+        let other = Tensor::cat(
+            vec![
+                batch.noise.clone().narrow(0, 1, n - 1),
+                batch.noise.clone().narrow(0, 0, 1),
+            ],
+            0,
+        );
+        let again = generator.forward(Tensor::cat(vec![other, batch.labels.clone()], 1), p.clone());
+        let div = diversity_term(fake, again, p);
+        loss = loss + div.mul_scalar(config.diversity as f64);
+    }
     let losses = StepLosses {
         generator: scalar(loss.clone().detach()),
         reconstruction: scalar(rec.detach()),

@@ -126,10 +126,21 @@ fn the_reconstruction_loss_measures_the_geodesic_on_the_sphere() {
     // It vanishes where the two motions meet.
     let same = to_vec(reconstruction(
         tensor(a.clone(), [1, d], &dev),
-        tensor(a, [1, d], &dev),
+        tensor(a.clone(), [1, d], &dev),
         &pt,
     ))[0];
     assert!(same.abs() < 1e-5, "{same}");
+    // The diversity term is minus the geodesic distance between the two motions: 0 for one
+    // motion twice.
+    let div = |x: &[f32], y: &[f32]| {
+        to_vec(diversity_term(
+            tensor(x.to_vec(), [1, d], &dev),
+            tensor(y.to_vec(), [1, d], &dev),
+            &pt,
+        ))[0]
+    };
+    assert!((div(&a, &b) + want).abs() < 1e-4, "{} {want}", div(&a, &b));
+    assert!(div(&a, &a).abs() < 1e-5);
 }
 
 #[test]
@@ -250,8 +261,10 @@ fn settings_saved_before_the_pairing_existed_read_as_the_batch_pairing() {
     let mut json = serde_json::to_value(GanConfig::default()).unwrap();
     assert_eq!(json["pairing"], "chamfer");
     json.as_object_mut().unwrap().remove("pairing");
+    json.as_object_mut().unwrap().remove("diversity");
     let old: GanConfig = serde_json::from_value(json).unwrap();
     assert_eq!(old.pairing, Pairing::Batch);
+    assert_eq!(old.diversity, 0.0);
     assert_eq!(
         GanConfig {
             pairing: Pairing::Chamfer,
