@@ -6,7 +6,7 @@ use core::fmt;
 use super::{Magnitude, RotationRule};
 use crate::layout::{MAX_COORDINATE, MAX_FACTOR};
 
-/// The rule a value of a file broke ([`FormatError::ValueOutOfRange`]); each names its limit, a
+/// The rule a value of a file broke ([`super::FormatError::ValueOutOfRange`]); each names its limit, a
 /// `pub const` of [`crate::layout`] (docs/FORMAT.md, "Value bounds").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
@@ -29,8 +29,8 @@ pub enum Bound {
     /// Gaussian value a seed draws ([`crate::motion::NOISE_BOUND`]; the index is the spread's).
     LogNormalFactor,
     /// The first value of a 6D rotation that is not usable: the six values within
-    /// ±[`MAX_ROTATION_ENTRY`], each column at least [`MIN_ROTATION_COLUMN`] long, the columns
-    /// not parallel (as a caller's rotation, [`InputError`]).
+    /// ±[`crate::layout::MAX_ROTATION_ENTRY`], each column at least [`crate::layout::MIN_ROTATION_COLUMN`] long, the columns
+    /// not parallel (as a caller's rotation, [`super::InputError`]).
     Rotation,
 }
 
