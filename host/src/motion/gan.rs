@@ -96,8 +96,8 @@ impl Default for GanConfig {
     fn default() -> Self {
         Self {
             seed: 1,
-            // About 20 minutes on 2 idle cores (docs/MOTION.md, "Training time"): the budget for
-            // the default run is 30.
+            // 10 to 22 minutes on 2 cores (docs/MOTION.md, "Training time"): the budget for the
+            // default run is 30.
             steps: 1500,
             batch: 64,
             critic_steps: 4,
