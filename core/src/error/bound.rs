@@ -79,12 +79,18 @@ impl fmt::Display for Bound {
                 "part of a motion that is not of unit norm (⟨p, p⟩ must lie within 1 ± {})",
                 Magnitude(crate::layout::UNIT_TOLERANCE)
             ),
-            Self::LogNormalFactor => write!(
-                f,
-                "a spread that lets exp(mean + {} × spread), a drawn factor, pass {}",
-                crate::motion::NOISE_BOUND,
-                Magnitude(MAX_FACTOR)
-            ),
+            Self::LogNormalFactor => {
+                // In tenths and with integers only: formatting an f32 would put `core`'s float
+                // formatting (about 19 KiB) into every firmware image.
+                let tenths = (crate::motion::NOISE_BOUND * 10.0) as u32;
+                write!(
+                    f,
+                    "a spread that lets exp(mean + {}.{} × spread), a drawn factor, pass {}",
+                    tenths / 10,
+                    tenths % 10,
+                    Magnitude(MAX_FACTOR)
+                )
+            }
         }
     }
 }
