@@ -484,10 +484,11 @@ pub fn generator_step(
     let rec = paired_reconstruction(fake.clone(), &batch.real, &batch.labels, p, config.pairing);
     let mut loss =
         adv.mul_scalar(config.alpha_adv as f64) + rec.clone().mul_scalar(config.alpha_rec as f64);
-    if config.diversity > 0.0 {
+    let n = batch.noise.dims()[0];
+    // A batch of one row has no other noise to pair with.
+    if config.diversity > 0.0 && n > 1 {
         // The same labels with each row's noise taken from the next row (the last from the
         // first): other noise, no other draw, so a step's randomness stays the batch's.
-        let n = batch.noise.dims()[0];
         let other = Tensor::cat(
             vec![
                 batch.noise.clone().narrow(0, 1, n - 1),
