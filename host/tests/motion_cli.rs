@@ -132,6 +132,9 @@ fn data_motions_writes_a_seeded_split_set() {
     assert!(dir.path().join("gen.losses.png").is_file());
     let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
     assert_eq!(json["history"].as_array().unwrap().len(), 3);
+    // The label guide is on by default: its cross-entropy is in every step's losses.
+    let classes = json["history"][0]["classes"].as_f64().unwrap();
+    assert!(classes > 0.0 && classes.is_finite(), "{classes}");
     // Resuming the finished run's checkpoint bakes the same generator.
     let ckpt = dir.path().join("gen.ckpt");
     let run = train(&["--resume", ckpt.to_str().unwrap()]);
@@ -152,8 +155,15 @@ fn data_motions_writes_a_seeded_split_set() {
             && stderr.contains("0.01 now"),
         "{stderr}"
     );
-    // A learning rate or an L_r weight that is no number for training is refused, naming it.
-    for (option, value) in [("--lr", "-1"), ("--lr", "NaN"), ("--rec-weight", "-0.5")] {
+    // A learning rate or a loss weight that is no number for training is refused, naming it.
+    for (option, value) in [
+        ("--lr", "-1"),
+        ("--lr", "NaN"),
+        ("--rec-weight", "-0.5"),
+        ("--diversity-weight", "-1"),
+        ("--class-weight", "NaN"),
+        ("--class-weight", "-2"),
+    ] {
         let run = train(&[&format!("{option}={value}")]);
         assert!(!run.status.success(), "{option} {value}");
         let stderr = String::from_utf8_lossy(&run.stderr);

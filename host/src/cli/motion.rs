@@ -160,6 +160,11 @@ pub(crate) struct TrainMotionArgs {
     /// motions of one label from different noise (0: none, as the paper).
     #[arg(long, default_value_t = GanConfig::default().diversity)]
     diversity_weight: f32,
+    /// λ_cls, the weight of the label guide's cross-entropy on the generated motions: a
+    /// classifier of the training motions that rewards motions that look like their label
+    /// (0: none, as the paper).
+    #[arg(long, default_value_t = GanConfig::default().class_weight)]
+    class_weight: f32,
     /// The real motion L_r compares each generated one with: the batch's motion in the same row
     /// (batch, the reference's) or the batch's motion of the same label nearest to it (nearest).
     #[arg(long, value_enum, default_value_t = GanConfig::default().pairing)]
@@ -186,6 +191,7 @@ pub(crate) fn train(args: TrainMotionArgs) -> Result<()> {
         pairing: args.pairing,
         alpha_rec: args.rec_weight,
         diversity: args.diversity_weight,
+        class_weight: args.class_weight,
         ..GanConfig::default()
     };
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);

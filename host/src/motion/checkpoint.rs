@@ -156,6 +156,7 @@ pub fn load_checkpoint(
         c_optim: load(run.c_optim, c)?,
         step: state.steps_done,
         history: state.history,
+        guide: run.guide,
     })
 }
 

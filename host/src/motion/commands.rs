@@ -14,6 +14,7 @@ use super::checkpoint::{load_checkpoint, save_checkpoint};
 use super::classes::LABELS;
 use super::data::MotionSet;
 use super::gan::{GanConfig, Generator, StepLosses};
+use super::guide::LabelGuide;
 use super::train::{Run, TangentData};
 use crate::io::container::SinewWriter;
 use crate::training::backend::Backend;
@@ -121,7 +122,22 @@ pub fn train_motion(opts: &TrainMotion) -> Result<TrainReport> {
         "--diversity-weight must be a number of at least 0, not {}",
         config.diversity
     );
+    ensure!(
+        config.class_weight.is_finite() && config.class_weight >= 0.0,
+        "--class-weight must be a number of at least 0, not {}",
+        config.class_weight
+    );
     let device: Device = opts.backend.autodiff_device(config.seed)?;
+    if config.class_weight > 0.0 {
+        LabelGuide::new(&data.tangents, &data.labels, LABELS.len(), &device).with_context(
+            || {
+                format!(
+                    "{}: the label guide of --class-weight",
+                    opts.motions.display()
+                )
+            },
+        )?;
+    }
     let fresh = Run::new(&data, config, &device);
     let (dir, mut run) = match &opts.resume {
         Some(dir) => (dir.clone(), load_checkpoint(dir, fresh, config, &data)?),

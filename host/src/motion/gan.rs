@@ -27,6 +27,7 @@ use serde::{Deserialize, Serialize};
 use sinew_core::nn::Activation;
 use sinew_core::srvf::FRAMES;
 
+use super::guide::LabelGuide;
 use crate::training::nn::{Mlp, pytorch_linear, tensor, to_vec};
 
 /// The training settings (the paper's where it gives them, section 4.2).
@@ -59,10 +60,15 @@ pub struct GanConfig {
     /// Checkpoints written before the setting existed trained with [`Pairing::Batch`].
     #[serde(default = "Pairing::batch")]
     pub pairing: Pairing,
-    /// λ_div, the weight of the diversity term ([`diversity_term`]; 0: none, as the paper).
+    /// λ_div, the weight of the diversity term ([`diversity_term`]; 1; 0: none, as the paper).
     /// Checkpoints written before the setting existed trained without it.
     #[serde(default)]
     pub diversity: f32,
+    /// λ_cls, the weight of the label guide's cross-entropy on the generated motions
+    /// ([`super::guide`]; 10; 0: no guide, as the paper). Checkpoints written before the setting
+    /// existed trained without it.
+    #[serde(default)]
+    pub class_weight: f32,
 }
 
 /// The real motion L_r (eq. 4) compares a generated one with; both are of the same label.
@@ -112,7 +118,11 @@ impl Default for GanConfig {
             hidden: vec![512, 512],
             slope: 0.2,
             pairing: Pairing::Chamfer,
-            diversity: 0.0,
+            // The label guide and the diversity term together: the motions are labelled more
+            // often than the real ones and are more varied than with neither (docs/MOTION.md,
+            // "Table 3 on the default (version-2) set").
+            diversity: 1.0,
+            class_weight: 10.0,
         }
     }
 }
@@ -419,6 +429,10 @@ pub struct StepLosses {
     /// L_r: the mean absolute difference from the real tangent vectors plus the mean geodesic
     /// distance from the real motions ([`reconstruction`]).
     pub reconstruction: f32,
+    /// The label guide's cross-entropy on the generated motions (0 without a guide; histories
+    /// written before the guide existed read 0).
+    #[serde(default)]
+    pub classes: f32,
 }
 
 fn scalar(t: Tensor<1>) -> f32 {
@@ -463,11 +477,13 @@ pub fn critic_step(
     (optim.step(config.lr, critic, grads), losses)
 }
 
-/// One generator step (`L_M = α1 L_adv + α2 L_r`, eq. 2, 4): returns the generator and its
+/// One generator step (`L_M = α1 L_adv + α2 L_r`, eq. 2, 4, plus λ_div times the diversity term
+/// and λ_cls times the `guide`'s cross-entropy where they are on): returns the generator and its
 /// losses.
 pub fn generator_step(
     generator: Generator,
     critic: &Critic,
+    guide: Option<&LabelGuide>,
     optim: &mut ModuleOptimizer,
     batch: &Batch,
     p: &Tensor<2>,
@@ -484,6 +500,12 @@ pub fn generator_step(
     let rec = paired_reconstruction(fake.clone(), &batch.real, &batch.labels, p, config.pairing);
     let mut loss =
         adv.mul_scalar(config.alpha_adv as f64) + rec.clone().mul_scalar(config.alpha_rec as f64);
+    let mut classes = 0.0;
+    if let Some(guide) = guide.filter(|_| config.class_weight > 0.0) {
+        let ce = guide.cross_entropy(fake.clone(), batch.labels.clone());
+        classes = scalar(ce.clone().detach());
+        loss = loss + ce.mul_scalar(config.class_weight as f64);
+    }
     let n = batch.noise.dims()[0];
     // A batch of one row has no other noise to pair with.
     if config.diversity > 0.0 && n > 1 {
@@ -503,6 +525,7 @@ pub fn generator_step(
     let losses = StepLosses {
         generator: scalar(loss.clone().detach()),
         reconstruction: scalar(rec.detach()),
+        classes,
         ..StepLosses::default()
     };
     let grads = GradientsParams::from_grads(loss.backward(), &generator);

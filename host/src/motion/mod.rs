@@ -13,6 +13,7 @@ pub mod frechet;
 pub mod gan;
 pub mod generate;
 pub mod ground_truth;
+pub mod guide;
 pub mod lstm_baseline;
 pub mod motions_file;
 pub mod srvf;

@@ -12,6 +12,7 @@ use super::gan::{
     Batch, Critic, GanConfig, Generator, StepLosses, critic_step, generator_step, one_hot,
     optimizer,
 };
+use super::guide::LabelGuide;
 use super::srvf::{self, SrvfError};
 use crate::training::nn::tensor;
 use crate::training::random::Stream;
@@ -234,6 +235,9 @@ pub struct Run {
     pub step: usize,
     /// Per generator step: the last critic step's losses with the generator's.
     pub history: Vec<StepLosses>,
+    /// The label guide, where the settings weigh it ([`GanConfig::class_weight`]): made from
+    /// the training motions when the run is made, never saved.
+    pub guide: Option<LabelGuide>,
 }
 
 impl std::fmt::Debug for Run {
@@ -262,6 +266,11 @@ impl Run {
             c_optim: optimizer(),
             step: 0,
             history: Vec::new(),
+            // A set whose motions do not vary within their labels has no guide:
+            // `train_motion` refuses it first, naming the set.
+            guide: (config.class_weight > 0.0)
+                .then(|| LabelGuide::new(&data.tangents, &data.labels, LABELS.len(), device).ok())
+                .flatten(),
         }
     }
 
@@ -297,6 +306,7 @@ impl Run {
             let (g, l) = generator_step(
                 self.generator,
                 &self.critic,
+                self.guide.as_ref(),
                 &mut self.g_optim,
                 &b,
                 &p,
@@ -305,6 +315,7 @@ impl Run {
             self.generator = g;
             losses.generator = l.generator;
             losses.reconstruction = l.reconstruction;
+            losses.classes = l.classes;
             observer.step(step, &losses);
             self.history.push(losses);
             self.step += 1;

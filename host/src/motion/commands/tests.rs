@@ -5,8 +5,13 @@ use sinew_core::error::Bound;
 
 /// Unit motions of two labels with 6 coordinates (2 landmarks) per frame.
 fn toy() -> TangentData {
+    TangentData::from_motions(&toy_motions(), (0..12).map(|k| k % 2).collect()).unwrap()
+}
+
+/// The unit motions of [`toy`], the even ones of one kind and the odd ones of another.
+fn toy_motions() -> Vec<Vec<f32>> {
     let d = FRAMES * 6;
-    let qs: Vec<Vec<f32>> = (0..12)
+    (0..12)
         .map(|k| {
             let v: Vec<f32> = (0..d)
                 .map(|i| ((i * (k % 2 + 1)) as f32 * 0.1 + k as f32 * 0.01).cos() + 0.5)
@@ -14,8 +19,7 @@ fn toy() -> TangentData {
             let n = sinew_core::srvf::norm(&v).unwrap();
             v.into_iter().map(|x| x / n).collect()
         })
-        .collect();
-    TangentData::from_motions(&qs, (0..12).map(|k| k % 2).collect()).unwrap()
+        .collect()
 }
 
 fn config() -> GanConfig {
@@ -26,6 +30,9 @@ fn config() -> GanConfig {
         lr: 1e-3,
         noise: 4,
         hidden: vec![16],
+        // The paper's losses: each test that wants a term of its own turns it on.
+        diversity: 0.0,
+        class_weight: 0.0,
         ..GanConfig::default()
     }
 }
@@ -619,6 +626,84 @@ fn the_diversity_term_lowers_the_generator_loss_and_resumes_bit_for_bit() {
         bake(&straight.generator, &data, &with).unwrap()
     );
     // A checkpoint of a run without the term is another run's.
+    assert!(
+        load_checkpoint(
+            dir.path(),
+            Run::new(&data, &config(), &device),
+            &config(),
+            &data
+        )
+        .is_err()
+    );
+}
+
+#[test]
+fn the_label_guide_pulls_the_generator_towards_its_labels_and_resumes_bit_for_bit() {
+    // The toy motions with two of them labelled the other way: each label is mostly one kind
+    // of motion and a little of the other, as classes that overlap are.
+    let labels = (0..12)
+        .map(|k| if k < 2 { 1 - k % 2 } else { k % 2 })
+        .collect();
+    let data = TangentData::from_motions(&toy_motions(), labels).unwrap();
+    let device = Backend::Flex.autodiff_device(config().seed).unwrap();
+    let with = GanConfig {
+        class_weight: 5.0,
+        ..config()
+    };
+    let plain = run_to(&data, &config(), Run::new(&data, &config(), &device), 1);
+    let guided = run_to(&data, &with, Run::new(&data, &with, &device), 1);
+    assert!(plain.guide.is_none());
+    let (a, b) = (plain.history[0], guided.history[0]);
+    // The guide moves the generator only: the first step's critic and L_r are the plain run's,
+    // and its loss is the plain loss plus λ_cls times the guide's cross-entropy.
+    assert_eq!(a.critic.to_bits(), b.critic.to_bits());
+    assert_eq!(a.reconstruction.to_bits(), b.reconstruction.to_bits());
+    assert_eq!(a.classes, 0.0);
+    assert!(b.classes > 0.0 && b.classes.is_finite(), "{}", b.classes);
+    let expected = a.generator + with.class_weight * b.classes;
+    assert!(
+        (b.generator - expected).abs() < 1e-4 * expected.abs().max(1.0),
+        "{b:?} {a:?}"
+    );
+
+    // After some steps the guided generator's motions look more like their labels to the guide.
+    let guide = guided.guide.clone().unwrap();
+    let ce = |run: &Run| {
+        let labels: Vec<usize> = (0..32).map(|k| k % 2).collect();
+        let mut rng = crate::training::random::Stream::seed_from_u64(4);
+        let z: Vec<f32> = (0..32 * with.noise).map(|_| rng.normal() as f32).collect();
+        let onehot = crate::motion::gan::one_hot(&labels, LABELS.len(), &device);
+        let input = burn::tensor::Tensor::cat(
+            vec![
+                crate::training::nn::tensor(z, [32, with.noise], &device),
+                onehot.clone(),
+            ],
+            1,
+        );
+        let p = crate::training::nn::tensor(data.p.clone(), [1, data.dims()], &device);
+        let fake = run.generator.forward(input, p);
+        crate::training::nn::to_vec(guide.cross_entropy(fake, onehot))[0]
+    };
+    let plain_later = run_to(&data, &config(), plain, 100);
+    let dir = tempfile::tempdir().unwrap();
+    save_checkpoint(dir.path(), &guided, &with, &data).unwrap();
+    let guided_later = run_to(&data, &with, guided, 100);
+    assert!(
+        ce(&guided_later) < 0.5 * ce(&plain_later),
+        "{} {}",
+        ce(&guided_later),
+        ce(&plain_later)
+    );
+
+    // The guide is rebuilt, not saved: a resumed run is the same run.
+    let loaded =
+        load_checkpoint(dir.path(), Run::new(&data, &with, &device), &with, &data).unwrap();
+    let resumed = run_to(&data, &with, loaded, 100);
+    assert_eq!(
+        bake(&resumed.generator, &data, &with).unwrap(),
+        bake(&guided_later.generator, &data, &with).unwrap()
+    );
+    // A checkpoint of a guided run is another run's for a run without the guide.
     assert!(
         load_checkpoint(
             dir.path(),

@@ -257,17 +257,21 @@ fn chamfer_pairing_counts_the_real_motions_no_generated_one_covers() {
 }
 
 #[test]
-fn settings_saved_before_the_pairing_existed_read_as_the_batch_pairing() {
+fn settings_saved_before_the_pairing_and_the_guide_existed_read_as_the_batch_pairing_unguided() {
     let mut json = serde_json::to_value(GanConfig::default()).unwrap();
     assert_eq!(json["pairing"], "chamfer");
     json.as_object_mut().unwrap().remove("pairing");
     json.as_object_mut().unwrap().remove("diversity");
+    json.as_object_mut().unwrap().remove("class_weight");
     let old: GanConfig = serde_json::from_value(json).unwrap();
     assert_eq!(old.pairing, Pairing::Batch);
     assert_eq!(old.diversity, 0.0);
+    assert_eq!(old.class_weight, 0.0);
     assert_eq!(
         GanConfig {
             pairing: Pairing::Chamfer,
+            diversity: GanConfig::default().diversity,
+            class_weight: GanConfig::default().class_weight,
             ..old
         },
         GanConfig::default()

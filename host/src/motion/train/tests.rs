@@ -67,6 +67,9 @@ fn a_short_run_generates_each_label_nearer_its_own_class() {
         lr: 1e-3,
         noise: 8,
         hidden: vec![32],
+        // The paper's losses alone.
+        diversity: 0.0,
+        class_weight: 0.0,
         ..GanConfig::default()
     };
     eprintln!("seed {}", config.seed);
