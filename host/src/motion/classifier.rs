@@ -130,7 +130,14 @@ impl Classifier {
             let k = scores.dims()[1];
             let h = f.dims()[1];
             let s = to_vec(scores.detach());
-            classes.extend(best_of_rows(&s, k));
+            classes.extend(s.chunks_exact(k).map(|row| {
+                row.iter()
+                    .enumerate()
+                    .fold((0, f32::NEG_INFINITY), |(bi, bv), (i, &v)| {
+                        if v > bv { (i, v) } else { (bi, bv) }
+                    })
+                    .0
+            }));
             features.extend(to_vec(f.detach()).chunks_exact(h).map(<[f32]>::to_vec));
         }
         (classes, features)
@@ -229,21 +236,6 @@ pub fn train(
         on_epoch(epoch, mean);
     }
     Ok((model, losses))
-}
-
-/// For each row of `k` scores in `scores`, the index of its highest (the first of equals).
-pub fn best_of_rows(scores: &[f32], k: usize) -> Vec<usize> {
-    scores
-        .chunks_exact(k.max(1))
-        .map(|row| {
-            row.iter()
-                .enumerate()
-                .fold((0, f32::NEG_INFINITY), |(bi, bv), (i, &v)| {
-                    if v > bv { (i, v) } else { (bi, bv) }
-                })
-                .0
-        })
-        .collect()
 }
 
 /// The fraction of `predicted` equal to `labels`.

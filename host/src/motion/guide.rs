@@ -158,7 +158,17 @@ impl LabelGuide {
     pub fn predict(&self, x: Tensor<2>) -> Vec<usize> {
         let scores = self.scores(x).detach();
         let k = scores.dims()[1];
-        super::classifier::best_of_rows(&to_vec(scores), k)
+        to_vec(scores)
+            .chunks_exact(k)
+            .map(|row| {
+                row.iter()
+                    .enumerate()
+                    .fold((0, f32::NEG_INFINITY), |(bi, bv), (i, &v)| {
+                        if v > bv { (i, v) } else { (bi, bv) }
+                    })
+                    .0
+            })
+            .collect()
     }
 }
 
