@@ -2,6 +2,7 @@ use super::*;
 use crate::motion::train::TangentData;
 use crate::training::checkpoint::{CheckpointError, InvalidState, STATE_FILE};
 use sinew_core::error::Bound;
+use std::path::Path;
 
 /// Unit motions of two labels with 6 coordinates (2 landmarks) per frame.
 fn toy() -> TangentData {
@@ -618,23 +619,21 @@ fn the_diversity_term_lowers_the_generator_loss_and_resumes_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();
     save_checkpoint(dir.path(), &diverse, &with, &data).unwrap();
     let straight = run_to(&data, &with, diverse, 3);
-    let loaded =
-        load_checkpoint(dir.path(), Run::new(&data, &with, &device), &with, &data).unwrap();
-    let resumed = run_to(&data, &with, loaded, 3);
+    resumes_as(dir.path(), &data, &with, &straight, 3);
+}
+
+/// Checks that the checkpoint in `dir`, of a run with the settings `with`, resumes to `straight`
+/// (the same run carried on uninterrupted to `until` steps) bit for bit, and that a run with the
+/// paper's losses ([`config`]) refuses it as another run's.
+fn resumes_as(dir: &Path, data: &TangentData, with: &GanConfig, straight: &Run, until: usize) {
+    let device = Backend::Flex.autodiff_device(with.seed).unwrap();
+    let loaded = load_checkpoint(dir, Run::new(data, with, &device), with, data).unwrap();
+    let resumed = run_to(data, with, loaded, until);
     assert_eq!(
-        bake(&resumed.generator, &data, &with).unwrap(),
-        bake(&straight.generator, &data, &with).unwrap()
+        bake(&resumed.generator, data, with).unwrap(),
+        bake(&straight.generator, data, with).unwrap()
     );
-    // A checkpoint of a run without the term is another run's.
-    assert!(
-        load_checkpoint(
-            dir.path(),
-            Run::new(&data, &config(), &device),
-            &config(),
-            &data
-        )
-        .is_err()
-    );
+    assert!(load_checkpoint(dir, Run::new(data, &config(), &device), &config(), data).is_err());
 }
 
 #[test]
@@ -695,22 +694,7 @@ fn the_label_guide_pulls_the_generator_towards_its_labels_and_resumes_bit_for_bi
         ce(&plain_later)
     );
 
-    // The guide is rebuilt, not saved: a resumed run is the same run.
-    let loaded =
-        load_checkpoint(dir.path(), Run::new(&data, &with, &device), &with, &data).unwrap();
-    let resumed = run_to(&data, &with, loaded, 100);
-    assert_eq!(
-        bake(&resumed.generator, &data, &with).unwrap(),
-        bake(&guided_later.generator, &data, &with).unwrap()
-    );
-    // A checkpoint of a guided run is another run's for a run without the guide.
-    assert!(
-        load_checkpoint(
-            dir.path(),
-            Run::new(&data, &config(), &device),
-            &config(),
-            &data
-        )
-        .is_err()
-    );
+    // The guide is rebuilt, not saved: a resumed run is the same run, and another run's for a
+    // run without the guide.
+    resumes_as(dir.path(), &data, &with, &guided_later, 100);
 }
