@@ -31,7 +31,7 @@ fn bench(c: &mut Criterion) {
     let device = Backend::Flex
         .autodiff_device(config.seed)
         .expect("flex backend");
-    let mut run = Some(Run::new(&data, &config, &device));
+    let mut run = Some(Run::new(&data, &config, &device).unwrap());
 
     let mut group = c.benchmark_group("motion");
     group.sample_size(10);

@@ -17,6 +17,7 @@ use burn::tensor::{Device, Tensor};
 use serde::{Deserialize, Serialize};
 use sinew_core::srvf::FRAMES;
 
+use super::labels::best_labels;
 use super::srvf::{SrvfError, normalised_curve};
 use crate::training::nn::{pytorch_linear, tensor, to_vec};
 use crate::training::random::Stream;
@@ -130,14 +131,7 @@ impl Classifier {
             let k = scores.dims()[1];
             let h = f.dims()[1];
             let s = to_vec(scores.detach());
-            classes.extend(s.chunks_exact(k).map(|row| {
-                row.iter()
-                    .enumerate()
-                    .fold((0, f32::NEG_INFINITY), |(bi, bv), (i, &v)| {
-                        if v > bv { (i, v) } else { (bi, bv) }
-                    })
-                    .0
-            }));
+            classes.extend(best_labels(&s, k));
             features.extend(to_vec(f.detach()).chunks_exact(h).map(<[f32]>::to_vec));
         }
         (classes, features)
@@ -222,7 +216,7 @@ pub fn train(
         for rows in batches(seqs.len(), config.batch, config.seed, epoch) {
             let x = stack(seqs, &rows, FRAMES, device);
             let picked: Vec<usize> = rows.iter().map(|&r| labels[r]).collect();
-            let target = super::gan::one_hot(&picked, classes, device);
+            let target = super::labels::one_hot(&picked, classes, device);
             let (scores, _) = model.forward(x);
             let loss = (log_softmax(scores, 1) * target).sum_dim(1).mean().neg();
             let value = to_vec(loss.clone().detach()).first().copied();

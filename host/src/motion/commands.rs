@@ -14,7 +14,6 @@ use super::checkpoint::{load_checkpoint, save_checkpoint};
 use super::classes::LABELS;
 use super::data::MotionSet;
 use super::gan::{GanConfig, Generator, StepLosses};
-use super::guide::LabelGuide;
 use super::train::{Run, TangentData};
 use crate::io::container::SinewWriter;
 use crate::training::backend::Backend;
@@ -128,17 +127,12 @@ pub fn train_motion(opts: &TrainMotion) -> Result<TrainReport> {
         config.class_weight
     );
     let device: Device = opts.backend.autodiff_device(config.seed)?;
-    if config.class_weight > 0.0 {
-        LabelGuide::new(&data.tangents, &data.labels, LABELS.len(), &device).with_context(
-            || {
-                format!(
-                    "{}: the label guide of --class-weight",
-                    opts.motions.display()
-                )
-            },
-        )?;
-    }
-    let fresh = Run::new(&data, config, &device);
+    let fresh = Run::new(&data, config, &device).with_context(|| {
+        format!(
+            "{}: the label guide of --class-weight",
+            opts.motions.display()
+        )
+    })?;
     let (dir, mut run) = match &opts.resume {
         Some(dir) => (dir.clone(), load_checkpoint(dir, fresh, config, &data)?),
         None => (checkpoint::checkpoint_dir_for(&opts.out), fresh),

@@ -406,15 +406,6 @@ pub struct Batch {
     pub tau: Tensor<2>,
 }
 
-/// One-hot rows of `labels` over `classes`.
-pub fn one_hot(labels: &[usize], classes: usize, device: &Device) -> Tensor<2> {
-    let mut v = vec![0.0f32; labels.len() * classes];
-    for (row, &l) in labels.iter().enumerate() {
-        v[row * classes + l] = 1.0;
-    }
-    tensor(v, [labels.len(), classes], device)
-}
-
 /// The losses of one step, detached.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct StepLosses {

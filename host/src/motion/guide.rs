@@ -23,6 +23,7 @@ use burn::tensor::activation::log_softmax;
 use burn::tensor::{Device, Tensor};
 use sinew_core::srvf::FRAMES;
 
+use super::labels::best_labels;
 use crate::training::nn::{tensor, to_vec};
 
 /// The guide: each label's mean tangent vector and the temperature.
@@ -158,24 +159,14 @@ impl LabelGuide {
     pub fn predict(&self, x: Tensor<2>) -> Vec<usize> {
         let scores = self.scores(x).detach();
         let k = scores.dims()[1];
-        to_vec(scores)
-            .chunks_exact(k)
-            .map(|row| {
-                row.iter()
-                    .enumerate()
-                    .fold((0, f32::NEG_INFINITY), |(bi, bv), (i, &v)| {
-                        if v > bv { (i, v) } else { (bi, bv) }
-                    })
-                    .0
-            })
-            .collect()
+        best_labels(&to_vec(scores), k)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::gan::one_hot;
+    use crate::motion::labels::one_hot;
     use crate::training::backend::Backend;
 
     fn rows(ts: &[Vec<f32>], device: &Device) -> Tensor<2> {

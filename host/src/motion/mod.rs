@@ -14,6 +14,7 @@ pub mod gan;
 pub mod generate;
 pub mod ground_truth;
 pub mod guide;
+pub mod labels;
 pub mod lstm_baseline;
 pub mod motions_file;
 pub mod srvf;

@@ -9,10 +9,10 @@ use sinew_core::srvf::FRAMES;
 use super::classes::LABELS;
 use super::data::{MotionSet, Split};
 use super::gan::{
-    Batch, Critic, GanConfig, Generator, StepLosses, critic_step, generator_step, one_hot,
-    optimizer,
+    Batch, Critic, GanConfig, Generator, StepLosses, critic_step, generator_step, optimizer,
 };
-use super::guide::LabelGuide;
+use super::guide::{GuideError, LabelGuide};
+use super::labels::one_hot;
 use super::srvf::{self, SrvfError};
 use crate::training::nn::tensor;
 use crate::training::random::Stream;
@@ -250,9 +250,19 @@ impl std::fmt::Debug for Run {
 
 impl Run {
     /// A fresh run for `data` on the autodiff `device` (seed the device first).
-    pub fn new(data: &TangentData, config: &GanConfig, device: &Device) -> Self {
+    ///
+    /// # Errors
+    /// Where the settings weigh the label guide and `data` cannot have one ([`GuideError`]).
+    pub fn new(
+        data: &TangentData,
+        config: &GanConfig,
+        device: &Device,
+    ) -> Result<Self, GuideError> {
         let d = data.dims();
-        Self {
+        let guide = (config.class_weight > 0.0)
+            .then(|| LabelGuide::new(&data.tangents, &data.labels, LABELS.len(), device))
+            .transpose()?;
+        Ok(Self {
             generator: Generator::new(
                 config.noise,
                 LABELS.len(),
@@ -266,12 +276,8 @@ impl Run {
             c_optim: optimizer(),
             step: 0,
             history: Vec::new(),
-            // A set whose motions do not vary within their labels has no guide:
-            // `train_motion` refuses it first, naming the set.
-            guide: (config.class_weight > 0.0)
-                .then(|| LabelGuide::new(&data.tangents, &data.labels, LABELS.len(), device).ok())
-                .flatten(),
-        }
+            guide,
+        })
     }
 
     /// Runs generator steps (each after `critic_steps` critic steps) until `until` steps are

@@ -55,14 +55,19 @@ fn a_resumed_run_continues_bit_for_bit() {
     eprintln!("seed {}", config().seed);
     let (data, config) = (toy(), config());
     let device = Backend::Flex.autodiff_device(config.seed).unwrap();
-    let half = run_to(&data, &config, Run::new(&data, &config, &device), 3);
+    let half = run_to(
+        &data,
+        &config,
+        Run::new(&data, &config, &device).unwrap(),
+        3,
+    );
     let dir = tempfile::tempdir().unwrap();
     save_checkpoint(dir.path(), &half, &config, &data).unwrap();
     let straight = run_to(&data, &config, half, 6);
 
     let loaded = load_checkpoint(
         dir.path(),
-        Run::new(&data, &config, &device),
+        Run::new(&data, &config, &device).unwrap(),
         &config,
         &data,
     )
@@ -87,8 +92,13 @@ fn a_resumed_run_continues_bit_for_bit() {
         lr: 2e-3,
         ..config.clone()
     };
-    let e =
-        load_checkpoint(dir.path(), Run::new(&data, &other, &device), &other, &data).unwrap_err();
+    let e = load_checkpoint(
+        dir.path(),
+        Run::new(&data, &other, &device).unwrap(),
+        &other,
+        &data,
+    )
+    .unwrap_err();
     assert!(
         matches!(&e, CheckpointError::Invalid { path, source: InvalidState::OtherRun { differences } }
             if path.ends_with(STATE_FILE)
@@ -101,7 +111,7 @@ fn a_resumed_run_continues_bit_for_bit() {
     moved.p[0] += 1.0;
     let e = load_checkpoint(
         dir.path(),
-        Run::new(&moved, &config, &device),
+        Run::new(&moved, &config, &device).unwrap(),
         &config,
         &moved,
     )
@@ -118,7 +128,7 @@ fn a_resumed_run_continues_bit_for_bit() {
     std::fs::write(&path, serde_json::to_vec(&state).unwrap()).unwrap();
     let e = load_checkpoint(
         dir.path(),
-        Run::new(&data, &config, &device),
+        Run::new(&data, &config, &device).unwrap(),
         &config,
         &data,
     )
@@ -142,7 +152,12 @@ fn a_resumed_run_continues_bit_for_bit() {
 fn the_baked_generator_is_a_motion_generator_the_core_reads() {
     let (data, config) = (toy(), config());
     let device = Backend::Flex.autodiff_device(config.seed).unwrap();
-    let run = run_to(&data, &config, Run::new(&data, &config, &device), 1);
+    let run = run_to(
+        &data,
+        &config,
+        Run::new(&data, &config, &device).unwrap(),
+        1,
+    );
     let bytes = bake(&run.generator, &data, &config).unwrap();
     let file =
         sinew_core::SinewFile::from_bytes_of_kind(&bytes, ArtifactKind::MotionGenerator).unwrap();
@@ -169,7 +184,7 @@ fn the_baked_generator_is_a_motion_generator_the_core_reads() {
         let input = burn::tensor::Tensor::cat(
             vec![
                 crate::training::nn::tensor(z, [1, config.noise], &device),
-                crate::motion::gan::one_hot(&[label], LABELS.len(), &device),
+                crate::motion::labels::one_hot(&[label], LABELS.len(), &device),
             ],
             1,
         );
@@ -246,7 +261,12 @@ fn the_baked_generator_is_a_motion_generator_the_core_reads() {
 fn a_damaged_optimiser_file_is_named() {
     let (data, config) = (toy(), config());
     let device = Backend::Flex.autodiff_device(config.seed).unwrap();
-    let run = run_to(&data, &config, Run::new(&data, &config, &device), 1);
+    let run = run_to(
+        &data,
+        &config,
+        Run::new(&data, &config, &device).unwrap(),
+        1,
+    );
     let dir = tempfile::tempdir().unwrap();
     save_checkpoint(dir.path(), &run, &config, &data).unwrap();
     let state_path = dir.path().join(STATE_FILE);
@@ -263,7 +283,7 @@ fn a_damaged_optimiser_file_is_named() {
         std::fs::write(&state_path, serde_json::to_vec(&state).unwrap()).unwrap();
         load_checkpoint(
             dir.path(),
-            Run::new(&data, &config, &device),
+            Run::new(&data, &config, &device).unwrap(),
             &config,
             &data,
         )
@@ -317,7 +337,12 @@ fn generator_file(
 fn a_generator_the_core_refuses_is_not_baked() {
     let (mut data, config) = (toy(), config());
     let device = Backend::Flex.autodiff_device(config.seed).unwrap();
-    let run = run_to(&data, &config, Run::new(&data, &config, &device), 1);
+    let run = run_to(
+        &data,
+        &config,
+        Run::new(&data, &config, &device).unwrap(),
+        1,
+    );
     data.lengths[0] = [-1.0, 0.0];
     let e = bake(&run.generator, &data, &config).unwrap_err();
     assert!(
@@ -332,7 +357,12 @@ fn the_length_is_drawn_from_the_labels_training_lengths() {
     data.lengths[0] = [0.2, 0.05];
     data.lengths[1] = [0.5, 0.0];
     let device = Backend::Flex.autodiff_device(config.seed).unwrap();
-    let run = run_to(&data, &config, Run::new(&data, &config, &device), 1);
+    let run = run_to(
+        &data,
+        &config,
+        Run::new(&data, &config, &device).unwrap(),
+        1,
+    );
     let bytes = bake(&run.generator, &data, &config).unwrap();
     let core = sinew_core::motion::MotionGenerator::from_bytes(&bytes).unwrap();
     assert_eq!((core.length(0), core.length_spread(0)), (0.2, 0.05));
@@ -398,7 +428,12 @@ fn the_reach_is_drawn_from_the_labels_training_reaches() {
     log_reaches[0] = [0.2f32.ln(), 0.25];
     data.log_reaches = Some(log_reaches.clone());
     let device = Backend::Flex.autodiff_device(config.seed).unwrap();
-    let run = run_to(&data, &config, Run::new(&data, &config, &device), 1);
+    let run = run_to(
+        &data,
+        &config,
+        Run::new(&data, &config, &device).unwrap(),
+        1,
+    );
     let bytes = bake(&run.generator, &data, &config).unwrap();
     let core = sinew_core::motion::MotionGenerator::from_bytes(&bytes).unwrap();
     let typical = |label| (core.reach(label).unwrap() - [0.2, 0.3][label]).abs();
@@ -608,8 +643,13 @@ fn the_diversity_term_lowers_the_generator_loss_and_resumes_bit_for_bit() {
         diversity: 1.0,
         ..config()
     };
-    let plain = run_to(&data, &config(), Run::new(&data, &config(), &device), 1);
-    let diverse = run_to(&data, &with, Run::new(&data, &with, &device), 1);
+    let plain = run_to(
+        &data,
+        &config(),
+        Run::new(&data, &config(), &device).unwrap(),
+        1,
+    );
+    let diverse = run_to(&data, &with, Run::new(&data, &with, &device).unwrap(), 1);
     let (a, b) = (plain.history[0], diverse.history[0]);
     assert_eq!(a.critic.to_bits(), b.critic.to_bits());
     assert_eq!(a.reconstruction.to_bits(), b.reconstruction.to_bits());
@@ -627,13 +667,21 @@ fn the_diversity_term_lowers_the_generator_loss_and_resumes_bit_for_bit() {
 /// paper's losses ([`config`]) refuses it as another run's.
 fn resumes_as(dir: &Path, data: &TangentData, with: &GanConfig, straight: &Run, until: usize) {
     let device = Backend::Flex.autodiff_device(with.seed).unwrap();
-    let loaded = load_checkpoint(dir, Run::new(data, with, &device), with, data).unwrap();
+    let loaded = load_checkpoint(dir, Run::new(data, with, &device).unwrap(), with, data).unwrap();
     let resumed = run_to(data, with, loaded, until);
     assert_eq!(
         bake(&resumed.generator, data, with).unwrap(),
         bake(&straight.generator, data, with).unwrap()
     );
-    assert!(load_checkpoint(dir, Run::new(data, &config(), &device), &config(), data).is_err());
+    assert!(
+        load_checkpoint(
+            dir,
+            Run::new(data, &config(), &device).unwrap(),
+            &config(),
+            data
+        )
+        .is_err()
+    );
 }
 
 #[test]
@@ -649,8 +697,13 @@ fn the_label_guide_pulls_the_generator_towards_its_labels_and_resumes_bit_for_bi
         class_weight: 5.0,
         ..config()
     };
-    let plain = run_to(&data, &config(), Run::new(&data, &config(), &device), 1);
-    let guided = run_to(&data, &with, Run::new(&data, &with, &device), 1);
+    let plain = run_to(
+        &data,
+        &config(),
+        Run::new(&data, &config(), &device).unwrap(),
+        1,
+    );
+    let guided = run_to(&data, &with, Run::new(&data, &with, &device).unwrap(), 1);
     assert!(plain.guide.is_none());
     let (a, b) = (plain.history[0], guided.history[0]);
     // The guide moves the generator only: the first step's critic and L_r are the plain run's,
@@ -671,7 +724,7 @@ fn the_label_guide_pulls_the_generator_towards_its_labels_and_resumes_bit_for_bi
         let labels: Vec<usize> = (0..32).map(|k| k % 2).collect();
         let mut rng = crate::training::random::Stream::seed_from_u64(4);
         let z: Vec<f32> = (0..32 * with.noise).map(|_| rng.normal() as f32).collect();
-        let onehot = crate::motion::gan::one_hot(&labels, LABELS.len(), &device);
+        let onehot = crate::motion::labels::one_hot(&labels, LABELS.len(), &device);
         let input = burn::tensor::Tensor::cat(
             vec![
                 crate::training::nn::tensor(z, [32, with.noise], &device),

@@ -1,6 +1,7 @@
 use burn::tensor::{Device, Distribution, Tensor};
 
 use super::*;
+use crate::motion::labels::one_hot;
 use crate::training::backend::Backend;
 
 fn device(seed: u64) -> Device {

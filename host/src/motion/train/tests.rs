@@ -76,7 +76,7 @@ fn a_short_run_generates_each_label_nearer_its_own_class() {
     let data = toy(2);
     let device = Backend::Flex.autodiff_device(config.seed).unwrap();
     let mut last = StepLosses::default();
-    let trained = Run::new(&data, &config, &device).advance(
+    let trained = Run::new(&data, &config, &device).unwrap().advance(
         &data,
         &config,
         &device,
