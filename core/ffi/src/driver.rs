@@ -193,7 +193,7 @@ pub unsafe extern "C" fn sinew_driver_open(
         let model = ptr::handle(model, "model")?;
         let bytes = ptr::slice(bytes, len, "bytes")?;
         let driver = open(bytes, model)?;
-        ptr::write(out, Box::into_raw(Box::new(driver)), "out")
+        ptr::hand_out(out, driver, "out")
     })
 }
 
@@ -205,14 +205,8 @@ pub unsafe extern "C" fn sinew_driver_open(
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn sinew_driver_free(driver: *mut SinewDriver) {
-    if driver.is_null() {
-        return;
-    }
-    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        // Safety: `driver` came from `Box::into_raw` in `sinew_driver_open` and is freed once
-        // (the caller's promise above).
-        drop(unsafe { Box::from_raw(driver) });
-    }));
+    // Safety: the caller's promise above is `release`'s.
+    unsafe { ptr::release(driver) }
 }
 
 /// Writes the driver's sizes to `*out`.

@@ -205,7 +205,7 @@ pub unsafe extern "C" fn sinew_model_open(
         ptr::write(out, std::ptr::null_mut(), "out")?;
         let bytes = ptr::slice(bytes, len, "bytes")?;
         let model = open(bytes)?;
-        ptr::write(out, Box::into_raw(Box::new(model)), "out")
+        ptr::hand_out(out, model, "out")
     })
 }
 
@@ -217,16 +217,8 @@ pub unsafe extern "C" fn sinew_model_open(
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn sinew_model_free(model: *mut SinewModel) {
-    if model.is_null() {
-        return;
-    }
-    // Dropping a handle runs no code of ours that could panic, but a panic must never unwind
-    // into C, so it is caught all the same (and the handle leaked).
-    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        // Safety: `model` came from `Box::into_raw` in `sinew_model_open` and is freed once (the
-        // caller's promise above).
-        drop(unsafe { Box::from_raw(model) });
-    }));
+    // Safety: the caller's promise above is `release`'s.
+    unsafe { ptr::release(model) }
 }
 
 /// Writes the model's kind and sizes to `*out`.

@@ -126,7 +126,7 @@ pub unsafe extern "C" fn sinew_performance_open(
         ptr::write(out, std::ptr::null_mut(), "out")?;
         let bytes = ptr::slice(bytes, len, "bytes")?;
         let perf = open(bytes)?;
-        ptr::write(out, Box::into_raw(Box::new(perf)), "out")
+        ptr::hand_out(out, perf, "out")
     })
 }
 
@@ -138,14 +138,8 @@ pub unsafe extern "C" fn sinew_performance_open(
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn sinew_performance_free(perf: *mut SinewPerformance) {
-    if perf.is_null() {
-        return;
-    }
-    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        // Safety: `perf` came from `Box::into_raw` in `sinew_performance_open` and is freed once
-        // (the caller's promise above).
-        drop(unsafe { Box::from_raw(perf) });
-    }));
+    // Safety: the caller's promise above is `release`'s.
+    unsafe { ptr::release(perf) }
 }
 
 /// Writes the performance's frames, coefficient count, form and sizes to `*out`.

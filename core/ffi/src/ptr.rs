@@ -95,6 +95,33 @@ pub(crate) fn write<T: Copy>(ptr: *mut T, value: T, what: &str) -> Result<()> {
     Ok(())
 }
 
+/// Hands `value` to the caller as a new handle in `*out`, to be released with [`release`] by the
+/// type's `_free` entry point. `out` is checked before the handle is made, so a bad `out` leaks
+/// nothing.
+pub(crate) fn hand_out<T>(out: *mut *mut T, value: T, what: &str) -> Result<()> {
+    check(out, 1, what)?;
+    write(out, Box::into_raw(Box::new(value)), what)
+}
+
+/// Releases a handle made by [`hand_out`]; NULL is ignored. Dropping a handle runs no code of
+/// ours that could panic, but a panic must never unwind into C, so it is caught all the same
+/// (and the handle leaked).
+///
+/// # Safety
+/// `handle` is NULL or a handle of this `T` from [`hand_out`] not yet released; no other call may
+/// be using it, and it must not be used afterwards.
+#[allow(unsafe_code)]
+pub(crate) unsafe fn release<T>(handle: *mut T) {
+    if handle.is_null() {
+        return;
+    }
+    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        // Safety: `handle` came from `Box::into_raw` in `hand_out` and is released once (the
+        // caller's promise above).
+        drop(unsafe { Box::from_raw(handle) });
+    }));
+}
+
 /// The caller's handle at `ptr`, shared.
 pub(crate) fn handle<'a, T>(ptr: *const T, what: &str) -> Result<&'a T> {
     slice(ptr, 1, what).map(|s| &s[0])

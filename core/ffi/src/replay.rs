@@ -159,7 +159,7 @@ pub unsafe extern "C" fn sinew_replay_open(
         ptr::write(out, std::ptr::null_mut(), "out")?;
         let bytes = ptr::slice(bytes, len, "bytes")?;
         let replay = open(bytes)?;
-        ptr::write(out, Box::into_raw(Box::new(replay)), "out")
+        ptr::hand_out(out, replay, "out")
     })
 }
 
@@ -171,14 +171,8 @@ pub unsafe extern "C" fn sinew_replay_open(
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn sinew_replay_free(replay: *mut SinewReplay) {
-    if replay.is_null() {
-        return;
-    }
-    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        // Safety: `replay` came from `Box::into_raw` in `sinew_replay_open` and is freed once
-        // (the caller's promise above).
-        drop(unsafe { Box::from_raw(replay) });
-    }));
+    // Safety: the caller's promise above is `release`'s.
+    unsafe { ptr::release(replay) }
 }
 
 /// Writes the replay's kind, mode and sizes to `*out`.

@@ -134,7 +134,7 @@ pub unsafe extern "C" fn sinew_sequence_open(
         let decoder = ptr::handle(decoder, "decoder")?;
         let bytes = ptr::slice(bytes, len, "bytes")?;
         let sequence = open(bytes, decoder)?;
-        ptr::write(out, Box::into_raw(Box::new(sequence)), "out")
+        ptr::hand_out(out, sequence, "out")
     })
 }
 
@@ -146,14 +146,8 @@ pub unsafe extern "C" fn sinew_sequence_open(
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn sinew_sequence_free(sequence: *mut SinewSequence) {
-    if sequence.is_null() {
-        return;
-    }
-    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        // Safety: `sequence` came from `Box::into_raw` in `sinew_sequence_open` and is freed once
-        // (the caller's promise above).
-        drop(unsafe { Box::from_raw(sequence) });
-    }));
+    // Safety: the caller's promise above is `release`'s.
+    unsafe { ptr::release(sequence) }
 }
 
 /// Writes the sequence's labels, frames and buffer sizes to `*out`.
