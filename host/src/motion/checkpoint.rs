@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::gan::{Critic, GanConfig, Generator, StepLosses};
 use super::train::{Run, TangentData};
-use crate::training::checkpoint::{self, CheckpointError, InvalidState, STATE_FILE, WeightFiles};
+use crate::training::checkpoint::{self, CheckpointError, WeightFiles};
 
 /// `format` of a checkpoint's `state.json`.
 pub const CHECKPOINT_FORMAT: &str = "sinew-motion-checkpoint";
@@ -168,47 +168,19 @@ fn check(
     config: &GanConfig,
     data_crc: &str,
 ) -> Result<(), CheckpointError> {
-    let invalid = |reason| checkpoint::invalid(dir, reason);
-    if state.format != CHECKPOINT_FORMAT {
-        return Err(invalid(InvalidState::Format {
-            found: state.format.clone(),
-            expected: CHECKPOINT_FORMAT,
-        }));
-    }
-    state.files.validate().map_err(invalid)?;
-    let mut differences = Vec::new();
-    checkpoint::serialised_differences("settings", &state.config, config, &mut differences)
-        .map_err(|source| CheckpointError::EncodeState {
-            path: dir.join(STATE_FILE),
-            source,
-        })?;
-    if differences.is_empty() && state.config != *config {
-        // Settings that differ yet write the same JSON: named whole.
-        differences.push(format!(
-            "settings: {:?} in the checkpoint, {config:?} now",
-            state.config
-        ));
-    }
+    let mut other = Vec::new();
     if state.data_crc != data_crc {
-        differences.push(format!(
+        other.push(format!(
             "training motions (data CRC): {} in the checkpoint, {data_crc} now",
             state.data_crc
         ));
     }
-    if !differences.is_empty() {
-        return Err(invalid(InvalidState::OtherRun { differences }));
-    }
-    if state.history.len() != state.steps_done {
-        return Err(invalid(InvalidState::History {
-            recorded: state.history.len(),
-            done: state.steps_done,
-        }));
-    }
-    if state.steps_done > config.steps {
-        return Err(invalid(InvalidState::StepsDone {
-            done: state.steps_done,
-            asked: config.steps,
-        }));
-    }
-    Ok(())
+    let run = checkpoint::StepRunState {
+        format: &state.format,
+        files: &state.files,
+        config: &state.config,
+        steps_done: state.steps_done,
+        history: state.history.len(),
+    };
+    checkpoint::check_step_run(dir, &run, CHECKPOINT_FORMAT, config, config.steps, other)
 }

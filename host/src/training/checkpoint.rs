@@ -1,8 +1,9 @@
-//! The files of a training checkpoint folder, shared by AIM and S2D training: the model's burn
-//! record and the optimiser's state, named by the step they were taken at, and a `state.json`
-//! written after them that names them with their CRCs. Every file is written atomically and
-//! `state.json` last, so an interruption at any moment leaves the previous checkpoint whole;
-//! earlier weight files are removed only once the new `state.json` is in place.
+//! The files of a training checkpoint folder, shared by every training (AIM, S2D, the driver,
+//! Motion3DGAN): the model's burn record and the optimiser's state, named by the step they were
+//! taken at, and a `state.json` written after them that names them with their CRCs. Every file
+//! is written atomically and `state.json` last, so an interruption at any moment leaves the
+//! previous checkpoint whole; earlier weight files are removed only once the new `state.json` is
+//! in place.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -361,6 +362,76 @@ pub fn invalid(dir: &Path, reason: InvalidState) -> CheckpointError {
         path: dir.join(STATE_FILE),
         source: reason,
     }
+}
+
+/// What a run counted in steps (the driver's, Motion3DGAN's) wrote about itself in its
+/// `state.json`, for [`check_step_run`].
+#[derive(Debug)]
+pub struct StepRunState<'a, C> {
+    /// The state's format string.
+    pub format: &'a str,
+    /// The weight files it names.
+    pub files: &'a WeightFiles,
+    /// The settings it was made with.
+    pub config: &'a C,
+    /// Steps done.
+    pub steps_done: usize,
+    /// Entries in its loss history.
+    pub history: usize,
+}
+
+/// The checks a step-counted run's checkpoint in `dir` passes before it is loaded: the format
+/// `expected`, valid file names, the settings `config` (a difference that writes the same JSON
+/// is named whole), no `other` difference (the run's own comparisons of what it trains on, e.g.
+/// a data CRC), one history entry per step done, and no more steps done than `steps`, the steps
+/// this run asks for. Every difference is named at once.
+pub fn check_step_run<C: Serialize + PartialEq + std::fmt::Debug>(
+    dir: &Path,
+    state: &StepRunState<'_, C>,
+    expected: &'static str,
+    config: &C,
+    steps: usize,
+    other: Vec<String>,
+) -> Result<(), CheckpointError> {
+    let invalid = |reason| invalid(dir, reason);
+    if state.format != expected {
+        return Err(invalid(InvalidState::Format {
+            found: state.format.to_owned(),
+            expected,
+        }));
+    }
+    state.files.validate().map_err(invalid)?;
+    let mut differences = Vec::new();
+    serialised_differences("settings", state.config, config, &mut differences).map_err(
+        |source| CheckpointError::EncodeState {
+            path: dir.join(STATE_FILE),
+            source,
+        },
+    )?;
+    if differences.is_empty() && state.config != config {
+        // Settings that differ yet write the same JSON: named whole.
+        differences.push(format!(
+            "settings: {:?} in the checkpoint, {config:?} now",
+            state.config
+        ));
+    }
+    differences.extend(other);
+    if !differences.is_empty() {
+        return Err(invalid(InvalidState::OtherRun { differences }));
+    }
+    if state.history != state.steps_done {
+        return Err(invalid(InvalidState::History {
+            recorded: state.history,
+            done: state.steps_done,
+        }));
+    }
+    if state.steps_done > steps {
+        return Err(invalid(InvalidState::StepsDone {
+            done: state.steps_done,
+            asked: steps,
+        }));
+    }
+    Ok(())
 }
 
 /// Reads a checkpoint file named by `state.json` and checks it against its CRC.

@@ -15,7 +15,7 @@ use sinew_core::nn::Activation;
 
 use super::DriverConfig;
 use super::sample::{Sample, Sampler};
-use crate::training::checkpoint::{self, CheckpointError, InvalidState, STATE_FILE, WeightFiles};
+use crate::training::checkpoint::{self, CheckpointError, WeightFiles};
 use crate::training::nn::{Mlp, tensor, to_vec};
 use crate::training::random::Stream;
 
@@ -252,41 +252,28 @@ pub fn load_checkpoint(
 ) -> Result<Run, CheckpointError> {
     let (state, _): (CheckpointState, _) =
         checkpoint::read_state(dir, "a driver checkpoint state")?;
-    let invalid = |reason| checkpoint::invalid(dir, reason);
-    if state.format != CHECKPOINT_FORMAT {
-        return Err(invalid(InvalidState::Format {
-            found: state.format.clone(),
-            expected: CHECKPOINT_FORMAT,
-        }));
-    }
-    state.files.validate().map_err(invalid)?;
-    let mut differences = Vec::new();
-    checkpoint::serialised_differences("settings", &state.config, config, &mut differences)
-        .map_err(|source| CheckpointError::EncodeState {
-            path: dir.join(STATE_FILE),
-            source,
-        })?;
+    let mut other = Vec::new();
     if state.actor != actor {
-        differences.push(format!(
+        other.push(format!(
             "actor (content hash): {} in the checkpoint, {actor} now",
             state.actor
         ));
     }
-    if !differences.is_empty() {
-        return Err(invalid(InvalidState::OtherRun { differences }));
-    }
-    if state.history.len() != state.steps_done {
-        return Err(invalid(InvalidState::History {
-            recorded: state.history.len(),
-            done: state.steps_done,
-        }));
-    }
-    if state.steps_done > config.steps {
-        return Err(invalid(InvalidState::StepsDone {
-            done: state.steps_done,
-            asked: config.steps,
-        }));
-    }
+    let run_state = checkpoint::StepRunState {
+        format: &state.format,
+        files: &state.files,
+        config: &state.config,
+        steps_done: state.steps_done,
+        history: state.history.len(),
+    };
+    checkpoint::check_step_run(
+        dir,
+        &run_state,
+        CHECKPOINT_FORMAT,
+        config,
+        config.steps,
+        other,
+    )?;
     let net = checkpoint::load_module(
         run.net,
         dir.join(&state.files.model_file),
