@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail, ensure};
+use anyhow::{Context, Result, ensure};
 use burn::tensor::Device;
 use serde::{Deserialize, Serialize};
 use sinew_core::ArtifactKind;
@@ -18,6 +18,7 @@ use super::train::{Run, TangentData};
 use crate::io::container::SinewWriter;
 use crate::training::backend::Backend;
 use crate::training::checkpoint;
+use crate::training::interrupt::{Pieces, take_stop_request, train_in_pieces};
 
 /// `content` metadata of a baked generator.
 pub const CONTENT: &str = "motion-generator";
@@ -133,46 +134,40 @@ pub fn train_motion(opts: &TrainMotion) -> Result<TrainReport> {
             opts.motions.display()
         )
     })?;
-    let (dir, mut run) = match &opts.resume {
+    let (dir, run) = match &opts.resume {
         Some(dir) => (dir.clone(), load_checkpoint(dir, fresh, config, &data)?),
         None => (checkpoint::checkpoint_dir_for(&opts.out), fresh),
     };
-    crate::training::interrupt::watch_ctrl_c();
-    let bar = crate::training::progress::bar(config.steps as u64, opts.quiet);
-    bar.set_position(run.step as u64);
     let started = std::time::Instant::now();
-    let mut stopped = false;
-    while run.step < config.steps {
-        let until = (run.step + opts.checkpoint_every).min(config.steps);
-        run = run.advance(
-            &data,
-            config,
-            &device,
-            until,
-            &mut |_: usize, l: &StepLosses| {
-                bar.inc(1);
-                bar.set_message(format!(
-                    "W {:.3} GP {:.3} L_r {:.4}",
-                    l.wasserstein, l.penalty, l.reconstruction
-                ));
-            },
-            &mut || {
-                stopped = crate::training::interrupt::take_stop_request();
-                stopped
-            },
-        );
-        save_checkpoint(&dir, &run, config, &data)?;
-        if stopped {
-            bar.abandon();
-            bail!(
-                "interrupted after {} steps; checkpoint in {}: continue with --resume {}",
-                run.step,
-                dir.display(),
-                dir.display()
-            );
-        }
-    }
-    bar.finish();
+    let pieces = Pieces {
+        steps: config.steps,
+        every: opts.checkpoint_every,
+        quiet: opts.quiet,
+        dir: &dir,
+    };
+    let run = train_in_pieces(
+        run,
+        &pieces,
+        |run| run.step,
+        take_stop_request,
+        |run, until, bar, stop| {
+            run.advance(
+                &data,
+                config,
+                &device,
+                until,
+                &mut |_: usize, l: &StepLosses| {
+                    bar.inc(1);
+                    bar.set_message(format!(
+                        "W {:.3} GP {:.3} L_r {:.4}",
+                        l.wasserstein, l.penalty, l.reconstruction
+                    ));
+                },
+                stop,
+            )
+        },
+        |run| save_checkpoint(&dir, run, config, &data),
+    )?;
     crate::io::atomic::write(&opts.out, &bake(&run.generator, &data, config)?)?;
     let series = |f: fn(&StepLosses) -> f32| -> Vec<(f64, f64)> {
         run.history

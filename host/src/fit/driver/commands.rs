@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, bail, ensure};
+use anyhow::{Context, Result, anyhow, ensure};
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
 use sinew_core::driver::Intrinsics;
@@ -19,6 +19,7 @@ use super::train::{Normalisation, Run, load_checkpoint, save_checkpoint};
 use crate::fit::performance::Performance;
 use crate::training::backend::Backend;
 use crate::training::checkpoint;
+use crate::training::interrupt::{Pieces, take_stop_request, train_in_pieces};
 
 /// `sinew train driver`'s settings.
 #[derive(Clone, Debug)]
@@ -87,48 +88,42 @@ pub fn train_driver(opts: &TrainDriver) -> Result<TrainDriverReport> {
     let inputs = config.input.features();
     let outputs = 18 + actor.shape_count();
     let fresh = Run::new(inputs, outputs, config, &device);
-    let (dir, mut run) = match &opts.resume {
+    let (dir, run) = match &opts.resume {
         Some(dir) => (
             dir.clone(),
             load_checkpoint(dir, fresh, config, &actor_hex)?,
         ),
         None => (checkpoint::checkpoint_dir_for(&opts.out), fresh),
     };
-    crate::training::interrupt::watch_ctrl_c();
-    let bar = crate::training::progress::bar(config.steps as u64, opts.quiet);
-    bar.set_position(run.step as u64);
     let started = std::time::Instant::now();
-    let mut stopped = false;
-    while run.step < config.steps {
-        let until = (run.step + opts.checkpoint_every).min(config.steps);
-        run = run.advance(
-            &sampler,
-            &norm,
-            &metric,
-            config,
-            &device,
-            until,
-            &mut |_, loss| {
-                bar.inc(1);
-                bar.set_message(format!("loss {loss:.4}"));
-            },
-            &mut || {
-                stopped = crate::training::interrupt::take_stop_request();
-                stopped
-            },
-        );
-        save_checkpoint(&dir, &run, config, &actor_hex)?;
-        if stopped {
-            bar.abandon();
-            bail!(
-                "interrupted after {} steps; checkpoint in {}: continue with --resume {}",
-                run.step,
-                dir.display(),
-                dir.display()
-            );
-        }
-    }
-    bar.finish();
+    let pieces = Pieces {
+        steps: config.steps,
+        every: opts.checkpoint_every,
+        quiet: opts.quiet,
+        dir: &dir,
+    };
+    let run = train_in_pieces(
+        run,
+        &pieces,
+        |run| run.step,
+        take_stop_request,
+        |run, until, bar, stop| {
+            run.advance(
+                &sampler,
+                &norm,
+                &metric,
+                config,
+                &device,
+                until,
+                &mut |_, loss| {
+                    bar.inc(1);
+                    bar.set_message(format!("loss {loss:.4}"));
+                },
+                stop,
+            )
+        },
+        |run| save_checkpoint(&dir, run, config, &actor_hex),
+    )?;
     let units = actor
         .file()
         .metadata()
