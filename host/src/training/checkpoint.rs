@@ -381,10 +381,13 @@ pub struct StepRunState<'a, C> {
 }
 
 /// The checks a step-counted run's checkpoint in `dir` passes before it is loaded: the format
-/// `expected`, valid file names, the settings `config` (a difference that writes the same JSON
-/// is named whole), no `other` difference (the run's own comparisons of what it trains on, e.g.
-/// a data CRC), one history entry per step done, and no more steps done than `steps`, the steps
-/// this run asks for. Every difference is named at once.
+/// `expected`, valid file names, the settings `config` but for their `steps` entry, which a
+/// resumed run may raise to train on (a difference that writes the same JSON is named whole),
+/// no `other` difference (the run's own comparisons of what it trains on, e.g. a data CRC), one
+/// history entry per step done, and no more steps done than `steps`, the steps this run asks
+/// for. Every difference is named at once. Only for runs whose steps depend on the seed and the
+/// step alone, not on the number of steps, so that a run raised from a checkpoint is the longer
+/// run.
 pub fn check_step_run<C: Serialize + PartialEq + std::fmt::Debug>(
     dir: &Path,
     state: &StepRunState<'_, C>,
@@ -401,14 +404,18 @@ pub fn check_step_run<C: Serialize + PartialEq + std::fmt::Debug>(
         }));
     }
     state.files.validate().map_err(invalid)?;
-    let mut differences = Vec::new();
-    serialised_differences("settings", state.config, config, &mut differences).map_err(
-        |source| CheckpointError::EncodeState {
+    let encode = |c: &C| {
+        serde_json::to_value(c).map_err(|source| CheckpointError::EncodeState {
             path: dir.join(STATE_FILE),
             source,
-        },
-    )?;
-    if differences.is_empty() && state.config != config {
+        })
+    };
+    let (mut stored, mut current) = (encode(state.config)?, encode(config)?);
+    let take_steps = |v: &mut Value| v.as_object_mut().and_then(|o| o.remove("steps"));
+    let same_steps = take_steps(&mut stored) == take_steps(&mut current);
+    let mut differences = Vec::new();
+    self::differences("settings", &stored, &current, &mut differences);
+    if differences.is_empty() && same_steps && state.config != config {
         // Settings that differ yet write the same JSON: named whole.
         differences.push(format!(
             "settings: {:?} in the checkpoint, {config:?} now",

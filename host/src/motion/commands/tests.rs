@@ -662,6 +662,60 @@ fn the_diversity_term_lowers_the_generator_loss_and_resumes_bit_for_bit() {
     resumes_as(dir.path(), &data, &with, &straight, 3);
 }
 
+/// `--steps` may be raised on resume: a 4-step run's checkpoint at step 3 goes on to 6 steps as
+/// the 6-step run does (every step depends on the seed and the step alone), and a count below
+/// the steps done is refused.
+#[test]
+fn a_resumed_run_may_be_asked_for_more_steps() {
+    let (data, six) = (toy(), config());
+    let four = GanConfig {
+        steps: 4,
+        ..six.clone()
+    };
+    let fresh = |config: &GanConfig| {
+        let device = Backend::Flex.autodiff_device(config.seed).unwrap();
+        Run::new(&data, config, &device).unwrap()
+    };
+    let short = run_to(&data, &four, fresh(&four), 3);
+    let dir = tempfile::tempdir().unwrap();
+    save_checkpoint(dir.path(), &short, &four, &data).unwrap();
+    let straight = run_to(&data, &six, fresh(&six), 6);
+    let loaded = load_checkpoint(dir.path(), fresh(&six), &six, &data).unwrap();
+    assert_eq!(loaded.step, 3);
+    let raised = run_to(&data, &six, loaded, 6);
+    assert_eq!(
+        bake(&raised.generator, &data, &six).unwrap(),
+        bake(&straight.generator, &data, &six).unwrap()
+    );
+
+    let two = GanConfig {
+        steps: 2,
+        ..six.clone()
+    };
+    let e = load_checkpoint(dir.path(), fresh(&two), &two, &data).unwrap_err();
+    assert!(
+        matches!(
+            &e,
+            CheckpointError::Invalid {
+                source: InvalidState::StepsDone { done: 3, asked: 2 },
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    // Raising the steps hides no other difference.
+    let other = GanConfig {
+        lr: 2e-3,
+        ..six.clone()
+    };
+    let e = load_checkpoint(dir.path(), fresh(&other), &other, &data).unwrap_err();
+    assert!(
+        matches!(&e, CheckpointError::Invalid { source: InvalidState::OtherRun { differences }, .. }
+            if differences == &["settings.lr: 0.001 in the checkpoint, 0.002 now"]),
+        "{e:?}"
+    );
+}
+
 /// Checks that the checkpoint in `dir`, of a run with the settings `with`, resumes to `straight`
 /// (the same run carried on uninterrupted to `until` steps) bit for bit, and that a run with the
 /// paper's losses ([`config`]) refuses it as another run's.
