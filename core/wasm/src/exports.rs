@@ -12,7 +12,7 @@
 //! JavaScript's writes never alias a borrow; memory can grow during any call, so JavaScript
 //! takes a fresh view of it after each.
 //!
-//! Models, replays and performances live in a table here; JavaScript holds their handles
+//! Models, replays, performances, motion generators and drivers live in a table here; JavaScript holds their handles
 //! (positive `i32`) and hands them back with [`sinew_free`]. Pointers are 32-bit on `wasm32`, the only target these
 //! functions are meant for (on the host they are compiled and linted, not called).
 //!
@@ -38,11 +38,11 @@ impl Object {
     /// "a model", "a replay" or "a performance", for messages about a handle of the wrong kind.
     const fn what(&self) -> &'static str {
         match self {
-            Self::Model(_) => "a model",
-            Self::Replay(_) => "a replay",
-            Self::Performance(_) => "a performance",
-            Self::Motion(_) => "a motion generator",
-            Self::Driver(_) => "a landmark driver",
+            Self::Model(_) => Model::WHAT,
+            Self::Replay(_) => Replay::WHAT,
+            Self::Performance(_) => Performance::WHAT,
+            Self::Motion(_) => Motion::WHAT,
+            Self::Driver(_) => Driver::WHAT,
         }
     }
 }
@@ -54,7 +54,7 @@ thread_local! {
     static ERROR: RefCell<String> = const { RefCell::new(String::new()) };
     /// The input the core refused in the last failed operation, if that was why it failed.
     static REFUSED: Cell<Option<Refused>> = const { Cell::new(None) };
-    /// Models, replays and performances; handle `h` is slot `h − 1`.
+    /// The objects behind the handles; handle `h` is slot `h − 1`.
     static OBJECTS: RefCell<Vec<Option<Object>>> = const { RefCell::new(Vec::new()) };
 }
 
@@ -126,6 +126,60 @@ fn not_a(handle: i32, object: &Object, wanted: &str) -> Error {
     ))
 }
 
+/// A kind of object an export asks a handle for.
+trait Kind: Sized {
+    /// "a replay", … for messages about a handle of another kind.
+    const WHAT: &'static str;
+    /// The object as this kind, if it is one.
+    fn of(object: &Object) -> Option<&Self>;
+}
+
+macro_rules! kinds {
+    ($($kind:ident: $what:literal),*) => {$(
+        impl Kind for $kind {
+            const WHAT: &'static str = $what;
+            fn of(object: &Object) -> Option<&Self> {
+                match object {
+                    Object::$kind(x) => Some(x),
+                    _ => None,
+                }
+            }
+        }
+    )*};
+}
+
+kinds!(
+    Model: "a model",
+    Replay: "a replay",
+    Performance: "a performance",
+    Motion: "a motion generator",
+    Driver: "a landmark driver"
+);
+
+/// The object of kind `K` behind `handle`.
+fn get<K: Kind>(objects: &[Option<Object>], handle: i32) -> Result<&K, Error> {
+    match slot(handle)
+        .and_then(|i| objects.get(i))
+        .and_then(Option::as_ref)
+    {
+        Some(object) => K::of(object).ok_or_else(|| not_a(handle, object, K::WHAT)),
+        None => Err(stale(handle)),
+    }
+}
+
+/// Runs `f` on the object of kind `K` behind `handle`.
+fn with<K: Kind, T>(handle: i32, f: impl FnOnce(&K) -> Result<T, Error>) -> Result<T, Error> {
+    OBJECTS.with_borrow(|objects| f(get(objects, handle)?))
+}
+
+/// Runs `f` on the object of kind `K` behind `handle` and the model behind `model`.
+fn with_on_model<K: Kind, T>(
+    handle: i32,
+    model: i32,
+    f: impl FnOnce(&K, &Model) -> Result<T, Error>,
+) -> Result<T, Error> {
+    OBJECTS.with_borrow(|objects| f(get(objects, handle)?, get(objects, model)?))
+}
 /// Runs `f` on the model behind `handle`.
 fn with_model<T>(handle: i32, f: impl FnOnce(&mut Model) -> Result<T, Error>) -> Result<T, Error> {
     OBJECTS.with_borrow_mut(|objects| {
@@ -135,20 +189,6 @@ fn with_model<T>(handle: i32, f: impl FnOnce(&mut Model) -> Result<T, Error>) ->
         {
             Some(Object::Model(m)) => f(m),
             Some(other) => Err(not_a(handle, other, "a model")),
-            None => Err(stale(handle)),
-        }
-    })
-}
-
-/// Runs `f` on the replay behind `handle`.
-fn with_replay<T>(handle: i32, f: impl FnOnce(&Replay) -> Result<T, Error>) -> Result<T, Error> {
-    OBJECTS.with_borrow(|objects| {
-        match slot(handle)
-            .and_then(|i| objects.get(i))
-            .and_then(Option::as_ref)
-        {
-            Some(Object::Replay(r)) => f(r),
-            Some(other) => Err(not_a(handle, other, "a replay")),
             None => Err(stale(handle)),
         }
     })
@@ -259,7 +299,7 @@ pub extern "C" fn sinew_replay_load() -> i32 {
     handle_or_error(Replay::load(io_bytes()).and_then(|r| insert(Object::Replay(r))))
 }
 
-/// Frees the model, replay or performance behind `handle` (nothing for a handle not in use).
+/// Frees the object behind `handle` (nothing for a handle not in use).
 // Safety: exported under its own name; no other symbol in the module is called so.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
@@ -364,7 +404,7 @@ pub extern "C" fn sinew_array(handle: i32, which: u32) -> i32 {
         ARRAY_LANDMARKS => with_model(handle, |m| Ok(u32_bytes(&m.landmark_vertices()))),
         ARRAY_NEUTRAL => with_model(handle, |m| Ok(f32_bytes(&m.neutral()))),
         ARRAY_THICKNESS => with_model(handle, |m| Ok(f32_bytes(&m.thickness()?))),
-        ARRAY_REPLAY_NEUTRAL => with_replay(handle, |r| {
+        ARRAY_REPLAY_NEUTRAL => with(handle, |r: &Replay| {
             r.neutral()
                 .map(|n| f32_bytes(&n))
                 .ok_or_else(|| Error::new("this replay carries no neutral"))
@@ -441,7 +481,7 @@ pub extern "C" fn sinew_frame_hash() -> i32 {
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_replay_frame(handle: i32, frame: u32) -> i32 {
-    finish(with_replay(handle, |r| {
+    finish(with(handle, |r: &Replay| {
         Ok(match r.frame(frame as usize)? {
             FrameInputs::Aim {
                 head,
@@ -458,7 +498,7 @@ pub extern "C" fn sinew_replay_frame(handle: i32, frame: u32) -> i32 {
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_replay_expected(handle: i32, frame: u32) -> i32 {
-    finish(with_replay(handle, |r| {
+    finish(with(handle, |r: &Replay| {
         Ok(format!("{:016x}", r.expected(frame as usize)?).into_bytes())
     }))
 }
@@ -468,21 +508,9 @@ pub extern "C" fn sinew_replay_expected(handle: i32, frame: u32) -> i32 {
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_replay_check(replay: i32, model: i32) -> i32 {
-    let outcome = OBJECTS.with_borrow(|objects| {
-        let get = |h: i32| {
-            slot(h)
-                .and_then(|i| objects.get(i))
-                .and_then(Option::as_ref)
-        };
-        match (get(replay), get(model)) {
-            (Some(Object::Replay(r)), Some(Object::Model(m))) => r.check(m).map(|()| Vec::new()),
-            (Some(Object::Replay(_)), _) => {
-                Err(Error::new(format!("handle {model} is not a live model")))
-            }
-            _ => Err(Error::new(format!("handle {replay} is not a live replay"))),
-        }
-    });
-    finish(outcome)
+    finish(with_on_model(replay, model, |r: &Replay, m| {
+        r.check(m).map(|()| Vec::new())
+    }))
 }
 
 /// Loads the fitted performance whose bytes are in the I/O area ([`Performance::load`]); returns
@@ -494,46 +522,13 @@ pub extern "C" fn sinew_performance_load() -> i32 {
     handle_or_error(Performance::load(io_bytes()).and_then(|p| insert(Object::Performance(p))))
 }
 
-/// Runs `f` on the performance behind `perf` and, when `model` is given, the model behind it.
-fn with_performance<T>(
-    perf: i32,
-    model: Option<i32>,
-    f: impl FnOnce(&Performance, Option<&Model>) -> Result<T, Error>,
-) -> Result<T, Error> {
-    OBJECTS.with_borrow(|objects| {
-        let get = |h: i32| {
-            slot(h)
-                .and_then(|i| objects.get(i))
-                .and_then(Option::as_ref)
-        };
-        let p = match get(perf) {
-            Some(Object::Performance(p)) => p,
-            Some(other) => return Err(not_a(perf, other, "a performance")),
-            None => return Err(stale(perf)),
-        };
-        let m = match model.map(|h| (h, get(h))) {
-            None => None,
-            Some((_, Some(Object::Model(m)))) => Some(m),
-            Some((h, Some(other))) => return Err(not_a(h, other, "a model")),
-            Some((h, None)) => return Err(stale(h)),
-        };
-        f(p, m)
-    })
-}
-
-/// The model of an operation that named one (always there: [`with_performance`] was given its
-/// handle).
-fn needs_model(model: Option<&Model>) -> Result<&Model, Error> {
-    model.ok_or_else(|| Error::new("a performance plays on a model; none was given"))
-}
-
 /// Checks that a performance was fitted to a model ([`Performance::check`]). Result: empty.
 // Safety: exported under its own name; no other symbol in the module is called so.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_performance_check(perf: i32, model: i32) -> i32 {
-    finish(with_performance(perf, Some(model), |p, m| {
-        p.check(needs_model(m)?).map(|()| Vec::new())
+    finish(with_on_model(perf, model, |p: &Performance, m| {
+        p.check(m).map(|()| Vec::new())
     }))
 }
 
@@ -543,7 +538,7 @@ pub extern "C" fn sinew_performance_check(perf: i32, model: i32) -> i32 {
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_performance_frame(perf: i32, frame: u32) -> i32 {
-    finish(with_performance(perf, None, |p, _| {
+    finish(with(perf, |p: &Performance| {
         let f = p.frame(frame as usize)?;
         let coefficients = f.coefficients.unwrap_or_default();
         Ok(f32_bytes(
@@ -558,8 +553,8 @@ pub extern "C" fn sinew_performance_frame(perf: i32, frame: u32) -> i32 {
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_performance_pose(perf: i32, model: i32, frame: u32) -> i32 {
-    finish(with_performance(perf, Some(model), |p, m| {
-        Ok(f32_bytes(&p.pose(needs_model(m)?, frame as usize)?))
+    finish(with_on_model(perf, model, |p: &Performance, m| {
+        Ok(f32_bytes(&p.pose(m, frame as usize)?))
     }))
 }
 
@@ -569,8 +564,8 @@ pub extern "C" fn sinew_performance_pose(perf: i32, model: i32, frame: u32) -> i
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_performance_hash(perf: i32, model: i32, frame: u32) -> i32 {
-    finish(with_performance(perf, Some(model), |p, m| {
-        let hash = p.frame_hash(needs_model(m)?, frame as usize)?;
+    finish(with_on_model(perf, model, |p: &Performance, m| {
+        let hash = p.frame_hash(m, frame as usize)?;
         Ok(format!("{hash:016x}").into_bytes())
     }))
 }
@@ -581,7 +576,7 @@ pub extern "C" fn sinew_performance_hash(perf: i32, model: i32, frame: u32) -> i
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_performance_expected(perf: i32, frame: u32) -> i32 {
-    finish(with_performance(perf, None, |p, _| {
+    finish(with(perf, |p: &Performance| {
         Ok(p.expected(frame as usize)?
             .map(|h| format!("{h:016x}").into_bytes())
             .unwrap_or_default())
@@ -665,31 +660,6 @@ pub extern "C" fn sinew_motion_load() -> i32 {
     handle_or_error(Motion::load(io_bytes()).and_then(|m| insert(Object::Motion(m))))
 }
 
-/// Runs `f` on the motion generator behind `motion` and the model behind `model`.
-fn with_motion<T>(
-    motion: i32,
-    model: i32,
-    f: impl FnOnce(&Motion, &Model) -> Result<T, Error>,
-) -> Result<T, Error> {
-    OBJECTS.with_borrow(|objects| {
-        let get = |h: i32| {
-            slot(h)
-                .and_then(|i| objects.get(i))
-                .and_then(Option::as_ref)
-        };
-        let g = match get(motion) {
-            Some(Object::Motion(g)) => g,
-            Some(other) => return Err(not_a(motion, other, "a motion generator")),
-            None => return Err(stale(motion)),
-        };
-        match get(model) {
-            Some(Object::Model(m)) => f(g, m),
-            Some(other) => Err(not_a(model, other, "a model")),
-            None => Err(stale(model)),
-        }
-    })
-}
-
 /// The landmark curve of a label and a seed ([`Motion::curve`]) on the decoder `model`; the I/O
 /// area holds the neutral face to generate on, or nothing for the decoder's template. The seed
 /// is `seed_high · 2³² + seed_low`. Result: the curve (`f32`).
@@ -706,7 +676,7 @@ pub extern "C" fn sinew_motion_curve(
 ) -> i32 {
     let neutral = io_f32s();
     let seed = (u64::from(seed_high) << 32) | u64::from(seed_low);
-    finish(with_motion(motion, model, |g, m| {
+    finish(with_on_model(motion, model, |g: &Motion, m| {
         let neutral = (!neutral.is_empty()).then_some(&neutral[..]);
         Ok(f32_bytes(&g.curve(
             m,
@@ -726,7 +696,7 @@ pub extern "C" fn sinew_motion_curve(
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_motion_frame(motion: i32, model: i32, t: u32, curve_len: u32) -> i32 {
     let values = io_f32s();
-    finish(with_motion(motion, model, |g, m| {
+    finish(with_on_model(motion, model, |g: &Motion, m| {
         let (curve, neutral) = split_at(&values, curve_len)?;
         let neutral = (!neutral.is_empty()).then_some(neutral);
         Ok(f32_bytes(&g.frame(m, curve, t as usize, neutral)?))

@@ -193,6 +193,10 @@ test("a freed model refuses further calls", () => {
   aim.free();
   aim.free();
   assert.throws(() => aim.normals([]), { message: "handle 0 is not a live model, replay, performance, motion generator or driver" });
+  // Every export that takes a model says so alike, a replay's check too.
+  const replay = Replay.load(data("aim-procedural.f32.replay.sinew"));
+  assert.throws(() => replay.check(aim), { message: "handle 0 is not a live model, replay, performance, motion generator or driver" });
+  replay.free();
 });
 
 test("frameHash is xxh64 of the f32 bits, NaN canonicalised", () => {

@@ -2,43 +2,10 @@
 //! and hash, over the I/O area of the parent module's protocol.
 
 use super::{
-    OBJECTS, Object, f32_bytes, finish, handle_or_error, insert, io_bytes, io_f32s, not_a, slot,
-    split_at, stale,
+    Object, f32_bytes, finish, handle_or_error, insert, io_bytes, io_f32s, split_at, with,
+    with_on_model,
 };
-use crate::{Driver, Error, Model};
-
-/// Runs `f` on the driver behind `driver` and, when `model` is given, the model behind it.
-fn with_driver<T>(
-    driver: i32,
-    model: Option<i32>,
-    f: impl FnOnce(&Driver, Option<&Model>) -> Result<T, Error>,
-) -> Result<T, Error> {
-    OBJECTS.with_borrow(|objects| {
-        let get = |h: i32| {
-            slot(h)
-                .and_then(|i| objects.get(i))
-                .and_then(Option::as_ref)
-        };
-        let d = match get(driver) {
-            Some(Object::Driver(d)) => d,
-            Some(other) => return Err(not_a(driver, other, "a landmark driver")),
-            None => return Err(stale(driver)),
-        };
-        let m = match model.map(|h| (h, get(h))) {
-            None => None,
-            Some((_, Some(Object::Model(m)))) => Some(m),
-            Some((h, Some(other))) => return Err(not_a(h, other, "a model")),
-            Some((h, None)) => return Err(stale(h)),
-        };
-        f(d, m)
-    })
-}
-
-/// The model of an operation that named one (always there: [`with_driver`] was given its
-/// handle).
-fn needs_model(model: Option<&Model>) -> Result<&Model, Error> {
-    model.ok_or_else(|| Error::new("a driver plays on a model; none was given"))
-}
+use crate::{Driver, Model};
 
 /// Loads the landmark driver whose bytes are in the I/O area for the actor `model`
 /// ([`Driver::load`]); returns its handle, or -1.
@@ -47,16 +14,7 @@ fn needs_model(model: Option<&Model>) -> Result<&Model, Error> {
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_driver_load(model: i32) -> i32 {
     let bytes = io_bytes();
-    let loaded = OBJECTS.with_borrow(|objects| {
-        match slot(model)
-            .and_then(|i| objects.get(i))
-            .and_then(Option::as_ref)
-        {
-            Some(Object::Model(m)) => Driver::load(bytes, m),
-            Some(other) => Err(not_a(model, other, "a model")),
-            None => Err(stale(model)),
-        }
-    });
+    let loaded = with(model, |m: &Model| Driver::load(bytes, m));
     handle_or_error(loaded.and_then(|d| insert(Object::Driver(d))))
 }
 
@@ -80,7 +38,7 @@ pub extern "C" fn sinew_driver_pixels(pixels_len: u32) -> i32 {
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_driver_pose(driver: i32) -> i32 {
     let landmarks = io_f32s();
-    finish(with_driver(driver, None, |d, _| {
+    finish(with(driver, |d: &Driver| {
         Ok(f32_bytes(&d.pose(&landmarks)?))
     }))
 }
@@ -93,7 +51,7 @@ pub extern "C" fn sinew_driver_pose(driver: i32) -> i32 {
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_driver_filter(driver: i32, time: f32, pose_len: u32) -> i32 {
     let values = io_f32s();
-    finish(with_driver(driver, None, |d, _| {
+    finish(with(driver, |d: &Driver| {
         let (settings, rest) = split_at(&values, 3)?;
         let (pose, state) = split_at(rest, pose_len)?;
         let (mut pose, mut state) = (pose.to_vec(), state.to_vec());
@@ -108,8 +66,8 @@ pub extern "C" fn sinew_driver_filter(driver: i32, time: f32, pose_len: u32) -> 
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_driver_play(driver: i32, model: i32) -> i32 {
     let pose = io_f32s();
-    finish(with_driver(driver, Some(model), |d, m| {
-        Ok(f32_bytes(&d.play(needs_model(m)?, &pose)?))
+    finish(with_on_model(driver, model, |d: &Driver, m| {
+        Ok(f32_bytes(&d.play(m, &pose)?))
     }))
 }
 
@@ -120,8 +78,8 @@ pub extern "C" fn sinew_driver_play(driver: i32, model: i32) -> i32 {
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_driver_hash(driver: i32, model: i32) -> i32 {
     let pose = io_f32s();
-    finish(with_driver(driver, Some(model), |d, m| {
-        let hash = d.frame_hash(needs_model(m)?, &pose)?;
+    finish(with_on_model(driver, model, |d: &Driver, m| {
+        let hash = d.frame_hash(m, &pose)?;
         Ok(format!("{hash:016x}").into_bytes())
     }))
 }
