@@ -45,6 +45,7 @@ pub mod motion;
 pub mod performance;
 mod s2d;
 pub mod suite;
+pub mod target;
 
 pub use s2d::{S2dCosts, S2dRun, replay_s2d, s2d_costs};
 

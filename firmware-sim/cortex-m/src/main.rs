@@ -1,25 +1,25 @@
-//! Golden AIM, S2D, fitted-performance and generated-sequence replays on a Cortex-M4F
-//! (thumbv7em-none-eabihf, hardware single-precision FPU), run under
+//! The golden kernels, replays, fitted performance, generated sequence and driven track on a
+//! Cortex-M4F (thumbv7em-none-eabihf, hardware single-precision FPU), run under
 //! `qemu-system-arm -machine mps2-an386` with semihosting.
 //!
-//! Plays the 16-frame golden sequence with `sinew-core`, prints each frame's hash and its cost,
-//! and exits 0 only when every hash equals the one pinned on the x86_64 host. A panic or a
-//! HardFault exits non-zero too, so the runner never waits on a spinning core.
+//! The run is the common crate's ([`check_all`]); this firmware gives it semihosting's output and
+//! a SysTick clock, and adds the checks of its own core (flush-to-zero off, the stack's
+//! high-water mark). It prints each frame's hash and its cost, and exits 0 only when every hash
+//! equals the one pinned on the x86_64 host. A panic or a HardFault exits non-zero too, so the
+//! runner never waits on a spinning core.
 #![no_std]
 #![no_main]
+
+use core::fmt;
 
 use cortex_m::peripheral::SYST;
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::{ExceptionFrame, entry, exception};
 use cortex_m_semihosting::{debug, heprintln, hprintln};
 use panic_semihosting as _;
-use sinew_firmware_common::driver::{DRIVER_GOLDENS, driver_costs};
-use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
-use sinew_firmware_common::motion::{MOTION_GOLDENS, motion_costs};
-use sinew_firmware_common::suite::{Run, Suite};
-use sinew_firmware_common::{
-    Error, FrameCheck, GOLDENS, S2D_GOLDENS, Scratch, Summary, phase_costs, s2d_costs,
-};
+use sinew_firmware_common::Scratch;
+use sinew_firmware_common::kernels::KernelScratch;
+use sinew_firmware_common::target::{Target, check_all};
 
 /// SysTick reload: the counter is 24 bits wide.
 const SYST_MAX: u32 = 0x00FF_FFFF;
@@ -82,36 +82,36 @@ impl Clock {
     }
 }
 
-/// Plays `frames` to the end, printing each frame's check and cost in instructions and adding it
-/// to `summary`; false (after saying why) if a frame could not be played.
-///
-/// A frame is far shorter than a SysTick period (671 M instructions), but some span the counter's
-/// reload: the accumulating clock counts across it.
-fn timed_frames(
-    name: &str,
-    frames: &mut impl Iterator<Item = Result<FrameCheck, Error>>,
-    summary: &mut Summary,
-) -> bool {
-    let mut clock = Clock {
-        last: SYST::get_current(),
-        total: 0,
-    };
-    loop {
-        let start = clock.now();
-        let Some(result) = frames.next() else {
-            return true;
+/// The Cortex-M4F as the shared run's target: semihosting's output, SysTick's clock.
+struct M4f {
+    clock: Clock,
+}
+
+impl Target for M4f {
+    const PREFIX: &'static str = "sinew-firmware-sim";
+    const CORE: &'static str = "cortex-m4f";
+    // SysTick counts core clock ticks; instructions are ticks × INSTRUCTIONS_PER_TICK.
+    const ESTIMATE: &'static str = "~";
+
+    fn out(&mut self, line: fmt::Arguments<'_>) {
+        hprintln!("{}", line);
+    }
+
+    fn err(&mut self, line: fmt::Arguments<'_>) {
+        heprintln!("{}", line);
+    }
+
+    /// A frame is far shorter than a SysTick period (671 M instructions), but some span the
+    /// counter's reload: the accumulating clock counts across it.
+    fn restart(&mut self) {
+        self.clock = Clock {
+            last: SYST::get_current(),
+            total: 0,
         };
-        let instructions = clock.now() - start;
-        match result {
-            Ok(check) => {
-                hprintln!("{}  ~{} instructions", check, instructions);
-                summary.add(&check);
-            }
-            Err(e) => {
-                heprintln!("sinew-firmware-sim: {}: {}", name, e);
-                return false;
-            }
-        }
+    }
+
+    fn now(&mut self) -> u64 {
+        self.clock.now()
     }
 }
 
@@ -153,116 +153,17 @@ fn run() -> bool {
     syst.clear_current();
     syst.enable_counter();
 
-    // The core kernels on seeded weights, against the hashes pinned on the host.
-    let Some(kernel_scratch) = cortex_m::singleton!(: KernelScratch = KernelScratch::new()) else {
+    let Some(kernels) = cortex_m::singleton!(: KernelScratch = KernelScratch::new()) else {
         heprintln!("sinew-firmware-sim: kernel scratch already taken");
         return false;
     };
-    match check_kernels(kernel_scratch, |name, hash, ok| {
-        hprintln!(
-            "kernel {} {:016x} {}",
-            name,
-            hash,
-            if ok { "ok" } else { "DIFFERS" }
-        );
-    }) {
-        Ok((cases, 0)) => hprintln!(
-            "sinew-firmware-sim: {}/{} kernels bit-identical to the host",
-            cases,
-            cases
-        ),
-        Ok((cases, bad)) => {
-            heprintln!(
-                "sinew-firmware-sim: {} of {} kernels differ from the host",
-                bad,
-                cases
-            );
-            return false;
-        }
-        Err(e) => {
-            heprintln!("sinew-firmware-sim: kernel suite failed: {:?}", e);
-            return false;
-        }
-    }
-    // The AIM replays, the S2D replay, the fitted performance, the generated sequence and the
-    // driven track, in the same frame buffers.
-    let mut passed = true;
-    for suite in Suite::ALL {
-        let mut summary = Summary::default();
-        for golden in suite.goldens() {
-            let mut run = match Run::new(suite, golden, scratch) {
-                Ok(r) => r,
-                Err(e) => {
-                    heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
-                    return false;
-                }
-            };
-            hprintln!("sinew-firmware-sim: cortex-m4f, {}: {}", golden.name, run);
-            if !timed_frames(golden.name, &mut run, &mut summary) {
-                return false;
-            }
-        }
-        hprintln!(
-            "sinew-firmware-sim: {}/{} {} bit-identical to the host",
-            summary.frames - summary.mismatches,
-            summary.frames,
-            suite.frames_label()
-        );
-        passed &= summary.passed();
-    }
-    // Cost of each phase of one frame, per golden actor (the f32 replay stands for its model).
-    for golden in GOLDENS.iter().filter(|g| g.name.ends_with(".f32")) {
-        let mut clock = Clock {
+    let mut target = M4f {
+        clock: Clock {
             last: SYST::get_current(),
             total: 0,
-        };
-        match phase_costs(golden, 8, scratch, || clock.now()) {
-            Ok(c) => hprintln!("cost {} frame 8 (instructions): {}", golden.name, c),
-            Err(e) => {
-                heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
-                return false;
-            }
-        }
-    }
-    for golden in &S2D_GOLDENS {
-        let mut clock = Clock {
-            last: SYST::get_current(),
-            total: 0,
-        };
-        match s2d_costs(golden, 8, scratch, || clock.now()) {
-            Ok(c) => hprintln!("s2d cost {} frame 8 (instructions): {}", golden.name, c),
-            Err(e) => {
-                heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
-                return false;
-            }
-        }
-    }
-    for golden in &MOTION_GOLDENS {
-        let mut clock = Clock {
-            last: SYST::get_current(),
-            total: 0,
-        };
-        match motion_costs(golden, 8, scratch, || clock.now()) {
-            Ok(c) => hprintln!("motion cost {} frame 8 (instructions): {}", golden.name, c),
-            Err(e) => {
-                heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
-                return false;
-            }
-        }
-    }
-    for golden in &DRIVER_GOLDENS {
-        let mut clock = Clock {
-            last: SYST::get_current(),
-            total: 0,
-        };
-        match driver_costs(golden, 8, scratch, || clock.now()) {
-            Ok(c) => hprintln!("driver cost {} frame 8 (instructions): {}", golden.name, c),
-            Err(e) => {
-                heprintln!("sinew-firmware-sim: {}: {}", golden.name, e);
-                return false;
-            }
-        }
-    }
+        },
+    };
+    let passed = check_all(&mut target, kernels, scratch);
     hprintln!("stack high-water {} bytes", stack_high_water());
     passed
 }

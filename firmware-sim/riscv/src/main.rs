@@ -1,47 +1,44 @@
-//! Golden AIM, S2D, fitted-performance and generated-sequence replays on a 32-bit RISC-V core
-//! without FPU (riscv32imac-unknown-none-elf: every `f32` operation in software), run
-//! under `qemu-system-riscv32 -machine virt` with semihosting.
+//! The golden kernels, replays, fitted performance, generated sequence and driven track on a
+//! 32-bit RISC-V core without FPU (riscv32imac-unknown-none-elf: every `f32` operation in
+//! software), run under `qemu-system-riscv32 -machine virt` with semihosting.
 //!
-//! Plays the 16-frame golden sequence with `sinew-core`, prints each frame's hash and the
-//! instructions it retired, and exits 0 only when every hash equals the one pinned on the x86_64
-//! host. A panic or a trap exits non-zero too, so the runner never waits on a spinning hart.
+//! The run is the common crate's ([`check_all`]); this firmware gives it semihosting's output and
+//! `minstret`. It prints each frame's hash and the instructions it retired, and exits 0 only when
+//! every hash equals the one pinned on the x86_64 host. A panic or a trap exits non-zero too, so
+//! the runner never waits on a spinning hart.
 #![no_std]
 #![no_main]
 
+use core::fmt;
+
 use riscv::register::{mcause, mepc, minstret, mtval};
 use semihosting::{eprintln, println, process};
-use sinew_firmware_common::driver::{DRIVER_GOLDENS, driver_costs};
-use sinew_firmware_common::kernels::{KernelScratch, check_kernels};
-use sinew_firmware_common::motion::{MOTION_GOLDENS, motion_costs};
-use sinew_firmware_common::suite::{Run, Suite};
-use sinew_firmware_common::{
-    Error, FrameCheck, GOLDENS, S2D_GOLDENS, Scratch, Summary, phase_costs, s2d_costs,
-};
+use sinew_firmware_common::Scratch;
+use sinew_firmware_common::kernels::KernelScratch;
+use sinew_firmware_common::target::{Target, check_all};
 
-/// Plays `frames` to the end, printing each frame's check and cost in instructions retired (exact
-/// and repeatable under QEMU's -icount) and adding it to `summary`; false (after saying why) if a
-/// frame could not be played.
-fn timed_frames(
-    name: &str,
-    frames: &mut impl Iterator<Item = Result<FrameCheck, Error>>,
-    summary: &mut Summary,
-) -> bool {
-    loop {
-        let start = minstret::read64();
-        let Some(result) = frames.next() else {
-            return true;
-        };
-        let instructions = minstret::read64().wrapping_sub(start);
-        match result {
-            Ok(check) => {
-                println!("{check}  {instructions} instructions");
-                summary.add(&check);
-            }
-            Err(e) => {
-                eprintln!("sinew-firmware-sim-riscv: {name}: {e}");
-                return false;
-            }
-        }
+/// The RV32IMAC hart as the shared run's target: semihosting's output, `minstret`'s count of
+/// instructions retired (exact and repeatable under QEMU's -icount).
+struct Rv32;
+
+impl Target for Rv32 {
+    const PREFIX: &'static str = "sinew-firmware-sim-riscv";
+    const CORE: &'static str = "rv32imac";
+    const ESTIMATE: &'static str = "";
+
+    fn out(&mut self, line: fmt::Arguments<'_>) {
+        println!("{line}");
+    }
+
+    fn err(&mut self, line: fmt::Arguments<'_>) {
+        eprintln!("{line}");
+    }
+
+    /// `minstret` only counts up: the costs are differences of it.
+    fn restart(&mut self) {}
+
+    fn now(&mut self) -> u64 {
+        minstret::read64()
     }
 }
 
@@ -57,102 +54,11 @@ fn run() -> bool {
         eprintln!("sinew-firmware-sim-riscv: scratch already taken");
         return false;
     };
-    // The core kernels on seeded weights, against the hashes pinned on the host.
-    let Some(kernel_scratch) = riscv::singleton!(: KernelScratch = KernelScratch::new()) else {
+    let Some(kernels) = riscv::singleton!(: KernelScratch = KernelScratch::new()) else {
         eprintln!("sinew-firmware-sim-riscv: kernel scratch already taken");
         return false;
     };
-    match check_kernels(kernel_scratch, |name, hash, ok| {
-        println!(
-            "kernel {} {:016x} {}",
-            name,
-            hash,
-            if ok { "ok" } else { "DIFFERS" }
-        );
-    }) {
-        Ok((cases, 0)) => println!(
-            "sinew-firmware-sim-riscv: {}/{} kernels bit-identical to the host",
-            cases, cases
-        ),
-        Ok((cases, bad)) => {
-            eprintln!(
-                "sinew-firmware-sim-riscv: {} of {} kernels differ from the host",
-                bad, cases
-            );
-            return false;
-        }
-        Err(e) => {
-            eprintln!("sinew-firmware-sim-riscv: kernel suite failed: {:?}", e);
-            return false;
-        }
-    }
-    // The AIM replays, the S2D replay, the fitted performance and the generated sequence, in the
-    // same frame buffers.
-    let mut passed = true;
-    for suite in Suite::ALL {
-        let mut summary = Summary::default();
-        for golden in suite.goldens() {
-            let mut run = match Run::new(suite, golden, scratch) {
-                Ok(r) => r,
-                Err(e) => {
-                    eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
-                    return false;
-                }
-            };
-            println!(
-                "sinew-firmware-sim-riscv: rv32imac, {}: {}",
-                golden.name, run
-            );
-            if !timed_frames(golden.name, &mut run, &mut summary) {
-                return false;
-            }
-        }
-        println!(
-            "sinew-firmware-sim-riscv: {}/{} {} bit-identical to the host",
-            summary.frames - summary.mismatches,
-            summary.frames,
-            suite.frames_label()
-        );
-        passed &= summary.passed();
-    }
-    // Cost of each phase of one frame, per golden actor (the f32 replay stands for its model).
-    for golden in GOLDENS.iter().filter(|g| g.name.ends_with(".f32")) {
-        match phase_costs(golden, 8, scratch, minstret::read64) {
-            Ok(c) => println!("cost {} frame 8 (instructions): {c}", golden.name),
-            Err(e) => {
-                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
-                return false;
-            }
-        }
-    }
-    for golden in &S2D_GOLDENS {
-        match s2d_costs(golden, 8, scratch, minstret::read64) {
-            Ok(c) => println!("s2d cost {} frame 8 (instructions): {c}", golden.name),
-            Err(e) => {
-                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
-                return false;
-            }
-        }
-    }
-    for golden in &MOTION_GOLDENS {
-        match motion_costs(golden, 8, scratch, minstret::read64) {
-            Ok(c) => println!("motion cost {} frame 8 (instructions): {c}", golden.name),
-            Err(e) => {
-                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
-                return false;
-            }
-        }
-    }
-    for golden in &DRIVER_GOLDENS {
-        match driver_costs(golden, 8, scratch, minstret::read64) {
-            Ok(c) => println!("driver cost {} frame 8 (instructions): {c}", golden.name),
-            Err(e) => {
-                eprintln!("sinew-firmware-sim-riscv: {}: {e}", golden.name);
-                return false;
-            }
-        }
-    }
-    passed
+    check_all(&mut Rv32, kernels, scratch)
 }
 
 /// Any trap (bad memory access, illegal instruction, …) ends the run with a failure instead of
