@@ -34,13 +34,20 @@ pub trait Target {
 }
 
 /// Plays every golden and prints its costs; true when every kernel and frame matched the host.
-/// Stops at the first golden that cannot be played, after saying why.
+/// Stops at the first golden that cannot be played, after saying why; a frame that differs
+/// from the host's is reported and the run goes on.
 pub fn check_all(
     target: &mut impl Target,
     kernels: &mut KernelScratch,
     scratch: &mut Scratch,
 ) -> bool {
-    check_kernel_hashes(target, kernels) && check_goldens(target, scratch) && costs(target, scratch)
+    if !check_kernel_hashes(target, kernels) {
+        return false;
+    }
+    let Some(matched) = check_goldens(target, scratch) else {
+        return false;
+    };
+    costs(target, scratch) && matched
 }
 
 /// The core kernels on seeded weights, against the hashes pinned on the host.
@@ -72,8 +79,9 @@ fn check_kernel_hashes<T: Target>(target: &mut T, kernels: &mut KernelScratch) -
 }
 
 /// The AIM replays, the S2D replay, the fitted performance, the generated sequence and the
-/// driven track, in the same frame buffers, each frame's check and instructions printed.
-fn check_goldens<T: Target>(target: &mut T, scratch: &mut Scratch) -> bool {
+/// driven track, in the same frame buffers, each frame's check and instructions printed: whether
+/// every frame matched, or `None` when a golden could not be played.
+fn check_goldens<T: Target>(target: &mut T, scratch: &mut Scratch) -> Option<bool> {
     let mut passed = true;
     for suite in Suite::ALL {
         let mut summary = Summary::default();
@@ -81,8 +89,8 @@ fn check_goldens<T: Target>(target: &mut T, scratch: &mut Scratch) -> bool {
             let mut run = match Run::new(suite, golden, scratch) {
                 Ok(r) => r,
                 Err(e) => {
-                    target.err(format_args!("{}: {}: {e}", T::PREFIX, golden.name));
-                    return false;
+                    failed(target, golden.name, e);
+                    return None;
                 }
             };
             target.out(format_args!(
@@ -105,8 +113,8 @@ fn check_goldens<T: Target>(target: &mut T, scratch: &mut Scratch) -> bool {
                         summary.add(&check);
                     }
                     Err(e) => {
-                        target.err(format_args!("{}: {}: {e}", T::PREFIX, golden.name));
-                        return false;
+                        failed(target, golden.name, e);
+                        return None;
                     }
                 }
             }
@@ -120,7 +128,7 @@ fn check_goldens<T: Target>(target: &mut T, scratch: &mut Scratch) -> bool {
         ));
         passed &= summary.passed();
     }
-    passed
+    Some(passed)
 }
 
 /// The cost of each phase of one frame (frame 8), per golden (an AIM actor's f32 replay stands
