@@ -6,7 +6,7 @@
 //! verification, which hashes with [`sinew_core::replay::frame_hash`], the function the host
 //! recorded with) and compares hashes.
 //!
-//! The S2D golden ([`S2D_GOLDENS`], [`S2dRun`], [`replay_s2d`]) is a baked S2D decoder and its
+//! The S2D golden ([`S2D_GOLDENS`], [`s2d::S2dRun`], [`s2d::replay_s2d`]) is a baked S2D decoder and its
 //! replay (each frame's decoder input, the neutral it decodes onto, the host's hash of the decoded
 //! vertices), played with [`sinew_core::replay::check_s2d_frame`].
 //!
@@ -43,11 +43,9 @@ pub mod driver;
 pub mod kernels;
 pub mod motion;
 pub mod performance;
-mod s2d;
+pub mod s2d;
 pub mod suite;
 pub mod target;
-
-pub use s2d::{S2dCosts, S2dRun, replay_s2d, s2d_costs};
 
 use core::fmt;
 
@@ -67,6 +65,11 @@ pub struct Golden {
     /// The replay recorded on the host.
     pub replay: &'static [u8],
 }
+
+/// Values of [`Scratch`]'s performance buffer: a fitted performance's coefficients, F_W's input
+/// and its scratch ([`performance`]); a driver's landmarks, poses, filter state and network
+/// scratch ([`driver`]).
+pub const PERFORMANCE_SCRATCH: usize = 1024;
 
 /// The procedural actor: 336 vertices, 6 shapes.
 const PROCEDURAL: &[u8] = include_bytes!("../../../tests/data/aim-procedural.sinew");
@@ -141,7 +144,7 @@ pub struct Scratch {
     weights_q16: [Q16; MAX_SHAPES],
     /// A fitted performance's coefficients, F_W's input and scratch; a driver's landmarks,
     /// poses, filter state and network scratch (one golden plays at a time).
-    performance: [f32; performance::PERFORMANCE_SCRATCH],
+    performance: [f32; PERFORMANCE_SCRATCH],
 }
 
 impl Scratch {
@@ -152,7 +155,7 @@ impl Scratch {
             positions_q16: [Q16::ZERO; 3 * MAX_VERTICES],
             weights: [0.0; MAX_SHAPES],
             weights_q16: [Q16::ZERO; MAX_SHAPES],
-            performance: [0.0; performance::PERFORMANCE_SCRATCH],
+            performance: [0.0; PERFORMANCE_SCRATCH],
         }
     }
 
@@ -193,7 +196,7 @@ pub enum Error {
     /// mode unavailable), or a buffer length is wrong.
     Playback(ReplayError),
     /// A fitted performance needs more scratch values than
-    /// [`performance::PERFORMANCE_SCRATCH`].
+    /// [`PERFORMANCE_SCRATCH`].
     ScratchTooSmall {
         /// Values needed.
         values: usize,
@@ -232,7 +235,7 @@ impl fmt::Display for Error {
             Self::ScratchTooSmall { values } => write!(
                 f,
                 "golden performance needs {values} scratch values, more than the {} the firmware holds",
-                performance::PERFORMANCE_SCRATCH
+                PERFORMANCE_SCRATCH
             ),
             Self::S2dTooLarge { values } => write!(
                 f,
@@ -407,7 +410,7 @@ impl fmt::Display for PhaseCosts {
 /// This repeats the steps of [`sinew_core::replay::pose_frame`] and
 /// [`sinew_core::replay::frame_hash`] (posing in each mode, each mode's normals, hashing) only so
 /// that the counter can be read between them, in every mode on the same frame; the replays
-/// themselves ([`Replay`], [`S2dRun`]) play through the core's functions.
+/// themselves ([`Replay`], [`s2d::S2dRun`]) play through the core's functions.
 pub fn phase_costs(
     golden: &Golden,
     frame: usize,
@@ -493,82 +496,6 @@ mod tests {
     }
 
     #[test]
-    fn the_s2d_golden_matches_the_host() {
-        for g in &S2D_GOLDENS {
-            let mut seen = Vec::new();
-            let s = replay_s2d(g, &mut scratch(), |r| seen.push(*r)).unwrap();
-            assert!(s.passed(), "{}", g.name);
-            assert_eq!(s.frames, 16, "{}", g.name);
-            assert_ne!(seen[1].hash, seen[15].hash, "{}", g.name);
-            let mut sc = scratch();
-            let run = S2dRun::new(g, &mut sc).unwrap();
-            assert!(run.needed() <= ARENA);
-            assert_eq!(run.decoder().vertex_count(), 1177);
-        }
-    }
-
-    #[test]
-    fn s2d_replay_of_another_model_or_kind_is_refused() {
-        // An AIM actor is no S2D decoder.
-        let g = Golden {
-            model: ICT,
-            ..S2D_GOLDENS[0]
-        };
-        let got = S2dRun::new(&g, &mut scratch()).map(|_| ());
-        assert!(matches!(got, Err(Error::Model(_))), "{got:?}");
-        // An AIM replay is no S2D replay.
-        let g = Golden {
-            replay: GOLDENS[3].replay,
-            ..S2D_GOLDENS[0]
-        };
-        let got = S2dRun::new(&g, &mut scratch()).map(|_| ());
-        assert!(matches!(got, Err(Error::Replay(_))), "{got:?}");
-        // The S2D replay against the AIM pipeline.
-        let g = Golden {
-            replay: S2D_GOLDENS[0].replay,
-            ..GOLDENS[3]
-        };
-        let got = Replay::new(&g, &mut scratch()).map(|_| ());
-        assert!(matches!(got, Err(Error::Replay(_))), "{got:?}");
-    }
-
-    #[test]
-    fn s2d_corrupted_recorded_hash_is_a_mismatch() {
-        let g = S2D_GOLDENS[0];
-        let mut bytes = g.replay.to_vec();
-        let file = sinew_core::SinewFile::from_bytes(g.replay).unwrap();
-        let s = file.section("replay.hash").unwrap();
-        let offset = s.data().as_ptr() as usize - g.replay.as_ptr() as usize;
-        bytes[offset + 11 * 8 + 3] ^= 0x40;
-        let fixed = refresh_crcs(bytes, &file, "replay.hash");
-        let leaked: &'static [u8] = Box::leak(fixed.into_boxed_slice());
-        let bad = Golden {
-            replay: leaked,
-            ..g
-        };
-        let mut wrong = Vec::new();
-        let sum = replay_s2d(&bad, &mut scratch(), |r| {
-            if !r.ok() {
-                wrong.push(r.frame);
-            }
-        })
-        .unwrap();
-        assert_eq!((sum.frames, sum.mismatches), (16, 1));
-        assert_eq!(wrong, [11]);
-    }
-
-    #[test]
-    fn s2d_costs_measure_both_phases() {
-        let mut clock = 0u64;
-        let c = s2d_costs(&S2D_GOLDENS[0], 8, &mut scratch(), || {
-            clock += 1;
-            clock
-        })
-        .unwrap();
-        assert_eq!(c, S2dCosts { decode: 1, hash: 1 });
-    }
-
-    #[test]
     fn modes_differ() {
         let first = |g: &Golden| {
             replay(g, &mut scratch(), |_| {}).map(|_| {
@@ -621,7 +548,11 @@ mod tests {
 
     /// Recomputes the CRC of section `name` (the last field of its table entry) and the header
     /// CRC (over the header before its CRC field, then the table).
-    fn refresh_crcs(mut bytes: Vec<u8>, file: &sinew_core::SinewFile<'_>, name: &str) -> Vec<u8> {
+    pub(crate) fn refresh_crcs(
+        mut bytes: Vec<u8>,
+        file: &sinew_core::SinewFile<'_>,
+        name: &str,
+    ) -> Vec<u8> {
         use sinew_core::format::{
             CRC32, ENTRY_CRC, HEADER_CRC, HEADER_CRC_OFFSET, HEADER_LEN, SECTION_ENTRY_LEN,
         };

@@ -7,10 +7,7 @@ use sinew_core::aim::AimActor;
 use sinew_core::performance::{Performance, check_frame};
 use sinew_core::replay::{FrameCheck, ReplayError};
 
-use crate::{Error, Golden, ICT, MAX_VERTICES, Scratch, Summary, summarise};
-
-/// Values of [`Scratch`]'s performance buffer: the coefficients, F_W's input and its scratch.
-pub const PERFORMANCE_SCRATCH: usize = 1024;
+use crate::{Error, Golden, ICT, MAX_VERTICES, PERFORMANCE_SCRATCH, Scratch, Summary, summarise};
 
 /// The golden performance: 4 frames of a local fit (F_W 19 → 32 → 32 → 32 → 19) of the ICT
 /// actor. `replay` holds the performance, which carries its own frame hashes.

@@ -173,3 +173,92 @@ pub fn s2d_costs(
     costs.hash = now() - t;
     Ok(costs)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tests::refresh_crcs;
+    use crate::{GOLDENS, ICT, Replay, S2D_GOLDENS};
+    use std::boxed::Box;
+    use std::vec::Vec;
+
+    fn scratch() -> Box<Scratch> {
+        Box::default()
+    }
+
+    #[test]
+    fn the_s2d_golden_matches_the_host() {
+        for g in &S2D_GOLDENS {
+            let mut seen = Vec::new();
+            let s = replay_s2d(g, &mut scratch(), |r| seen.push(*r)).unwrap();
+            assert!(s.passed(), "{}", g.name);
+            assert_eq!(s.frames, 16, "{}", g.name);
+            assert_ne!(seen[1].hash, seen[15].hash, "{}", g.name);
+            let mut sc = scratch();
+            let run = S2dRun::new(g, &mut sc).unwrap();
+            assert!(run.needed() <= ARENA);
+            assert_eq!(run.decoder().vertex_count(), 1177);
+        }
+    }
+
+    #[test]
+    fn s2d_replay_of_another_model_or_kind_is_refused() {
+        // An AIM actor is no S2D decoder.
+        let g = Golden {
+            model: ICT,
+            ..S2D_GOLDENS[0]
+        };
+        let got = S2dRun::new(&g, &mut scratch()).map(|_| ());
+        assert!(matches!(got, Err(Error::Model(_))), "{got:?}");
+        // An AIM replay is no S2D replay.
+        let g = Golden {
+            replay: GOLDENS[3].replay,
+            ..S2D_GOLDENS[0]
+        };
+        let got = S2dRun::new(&g, &mut scratch()).map(|_| ());
+        assert!(matches!(got, Err(Error::Replay(_))), "{got:?}");
+        // The S2D replay against the AIM pipeline.
+        let g = Golden {
+            replay: S2D_GOLDENS[0].replay,
+            ..GOLDENS[3]
+        };
+        let got = Replay::new(&g, &mut scratch()).map(|_| ());
+        assert!(matches!(got, Err(Error::Replay(_))), "{got:?}");
+    }
+
+    #[test]
+    fn s2d_corrupted_recorded_hash_is_a_mismatch() {
+        let g = S2D_GOLDENS[0];
+        let mut bytes = g.replay.to_vec();
+        let file = sinew_core::SinewFile::from_bytes(g.replay).unwrap();
+        let s = file.section("replay.hash").unwrap();
+        let offset = s.data().as_ptr() as usize - g.replay.as_ptr() as usize;
+        bytes[offset + 11 * 8 + 3] ^= 0x40;
+        let fixed = refresh_crcs(bytes, &file, "replay.hash");
+        let leaked: &'static [u8] = Box::leak(fixed.into_boxed_slice());
+        let bad = Golden {
+            replay: leaked,
+            ..g
+        };
+        let mut wrong = Vec::new();
+        let sum = replay_s2d(&bad, &mut scratch(), |r| {
+            if !r.ok() {
+                wrong.push(r.frame);
+            }
+        })
+        .unwrap();
+        assert_eq!((sum.frames, sum.mismatches), (16, 1));
+        assert_eq!(wrong, [11]);
+    }
+
+    #[test]
+    fn s2d_costs_measure_both_phases() {
+        let mut clock = 0u64;
+        let c = s2d_costs(&S2D_GOLDENS[0], 8, &mut scratch(), || {
+            clock += 1;
+            clock
+        })
+        .unwrap();
+        assert_eq!(c, S2dCosts { decode: 1, hash: 1 });
+    }
+}

@@ -9,7 +9,8 @@ use core::fmt;
 use crate::driver::{DRIVER_GOLDENS, DriverRun};
 use crate::motion::{MOTION_GOLDENS, MotionRun};
 use crate::performance::{PERFORMANCE_GOLDENS, PerformanceRun};
-use crate::{Error, FrameCheck, GOLDENS, Golden, Replay, S2D_GOLDENS, S2dRun, Scratch};
+use crate::s2d::S2dRun;
+use crate::{Error, FrameCheck, GOLDENS, Golden, Replay, S2D_GOLDENS, Scratch};
 
 /// A kind of golden.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -11,8 +11,9 @@ use core::fmt;
 use crate::driver::{DRIVER_GOLDENS, driver_costs};
 use crate::kernels::{KernelScratch, check_kernels};
 use crate::motion::{MOTION_GOLDENS, motion_costs};
+use crate::s2d::s2d_costs;
 use crate::suite::{Run, Suite};
-use crate::{GOLDENS, S2D_GOLDENS, Scratch, Summary, phase_costs, s2d_costs};
+use crate::{GOLDENS, S2D_GOLDENS, Scratch, Summary, phase_costs};
 
 /// What a firmware gives the shared run.
 pub trait Target {
