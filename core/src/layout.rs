@@ -51,6 +51,10 @@ pub const MIN_ROTATION_COLUMN: f32 = 1e-6;
 /// `1 ± UNIT_TOLERANCE`. The exponential map then keeps every generated motion near the unit
 /// sphere, whatever the generator's output.
 pub const UNIT_TOLERANCE: f32 = 1e-3;
+/// The largest magnitude of a Gaussian value a motion generator draws from its seed (the
+/// Box–Muller draw of `motion::gaussian_noise`): `√(−2 ln 2⁻²⁴) ≈ 5.77`, rounded up (its `u1` is
+/// at least 2⁻²⁴, and the cosine at most 1). The one-hot label's values are 0 and 1.
+pub const NOISE_BOUND: f32 = 5.8;
 /// The largest magnitude a network (an MLP, or the S2D decoder's layers) may reach anywhere, for
 /// any input within its bounds, as validation bounds it from the file's weights: far below
 /// `f32`'s 3.4e38, so that every sum downstream stays finite.

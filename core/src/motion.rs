@@ -40,9 +40,8 @@ pub fn gaussian_noise(seed: u64, out: &mut [f32]) {
     }
 }
 
-/// The largest magnitude of a value of [`gaussian_noise`]: `√(−2 ln 2⁻²⁴) ≈ 5.77`, rounded up
-/// (`u1` is at least 2⁻²⁴, and the cosine at most 1). The one-hot label's values are 0 and 1.
-pub const NOISE_BOUND: f32 = 5.8;
+/// The largest magnitude of a value of [`gaussian_noise`] (defined with the other value bounds).
+pub use crate::layout::NOISE_BOUND;
 
 /// Per label, how the reach of a motion (its apex's distance from the neutral) is drawn from the
 /// seed's Gaussian value g, `[LABELS, 2]` (mean, spread) pairs.

@@ -26,7 +26,7 @@ pub enum Bound {
     UnitMotion,
     /// A log-normal draw that can pass [`MAX_FACTOR`]: a mean and a spread of a logarithm with
     /// `mean + NOISE_BOUND × spread` above `ln MAX_FACTOR`, where `NOISE_BOUND` is the largest
-    /// Gaussian value a seed draws ([`crate::motion::NOISE_BOUND`]; the index is the spread's).
+    /// Gaussian value a seed draws ([`crate::layout::NOISE_BOUND`]; the index is the spread's).
     LogNormalFactor,
     /// The first value of a 6D rotation that is not usable: the six values within
     /// ±[`crate::layout::MAX_ROTATION_ENTRY`], each column at least [`crate::layout::MIN_ROTATION_COLUMN`] long, the columns
@@ -82,7 +82,7 @@ impl fmt::Display for Bound {
             Self::LogNormalFactor => {
                 // In tenths and with integers only: formatting an f32 would put `core`'s float
                 // formatting (about 19 KiB) into every firmware image.
-                let tenths = (crate::motion::NOISE_BOUND * 10.0) as u32;
+                let tenths = (crate::layout::NOISE_BOUND * 10.0) as u32;
                 write!(
                     f,
                     "a spread that lets exp(mean + {}.{} × spread), a drawn factor, pass {}",
