@@ -10,7 +10,8 @@ use sinew_core::driver::{self, Driver as CoreDriver, Intrinsics, LANDMARKS};
 use sinew_core::error::Argument;
 use sinew_core::filter::OneEuro;
 
-use crate::{Error, Kind, Model, ModelInner, check_len};
+use crate::error::{Error, Refused};
+use crate::model::{Kind, Model, ModelInner, check_len};
 
 self_cell!(
     struct DriverCell {
@@ -134,7 +135,7 @@ impl Driver {
                     let rest = i.to_string();
                     let rest = rest.split_once(']').map_or("", |(_, r)| r);
                     let mut err = Error::new(format!("{name}[{}]{rest}", i.index));
-                    err.input = Some(crate::Refused {
+                    err.input = Some(Refused {
                         argument: name,
                         index: i.index,
                     });

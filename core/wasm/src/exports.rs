@@ -21,7 +21,12 @@
 
 use std::cell::{Cell, RefCell};
 
-use crate::{Driver, Error, FrameInputs, Model, Motion, Performance, Refused, Replay};
+use crate::driver::Driver;
+use crate::error::{Error, Refused};
+use crate::model::Model;
+use crate::motion::Motion;
+use crate::performance::Performance;
+use crate::replay::{FrameInputs, Replay};
 
 mod driver;
 

@@ -6,7 +6,8 @@ use fixed::types::I16F16;
 use sinew_core::hash::FrameHasher;
 use sinew_core::replay::{self, FrameBuffers, Mode};
 
-use crate::{Error, Model, check_len, pose_9d};
+use crate::error::Error;
+use crate::model::{Model, check_len, pose_9d};
 
 /// The name of corrective shape `i` when the file records none: `shape_1` … `shape_M`, the names
 /// `sinew export gltf` gives such morph targets.

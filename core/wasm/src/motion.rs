@@ -9,7 +9,8 @@ use sinew_core::s2d::S2dDecoder;
 use sinew_core::sequence::{Sequence, SequenceBuffers};
 use sinew_core::srvf::FRAMES;
 
-use crate::{Error, Kind, Model, ModelInner, check_len};
+use crate::error::Error;
+use crate::model::{Kind, Model, ModelInner, check_len};
 
 self_cell!(
     struct MotionCell {

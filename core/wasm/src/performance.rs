@@ -8,7 +8,8 @@ use sinew_core::aim::AimActor;
 use sinew_core::performance::{self as perf, Performance as CorePerformance};
 use sinew_core::replay::ReplayError;
 
-use crate::{Error, Kind, Model, ModelInner, POSE_9D};
+use crate::error::Error;
+use crate::model::{Kind, Model, ModelInner, POSE_9D};
 
 self_cell!(
     struct PerformanceCell {

@@ -5,7 +5,8 @@ use super::{
     Object, f32_bytes, finish, handle_or_error, insert, io_bytes, io_f32s, split_at, with,
     with_on_model,
 };
-use crate::{Driver, Model};
+use crate::driver::Driver;
+use crate::model::Model;
 
 /// Loads the landmark driver whose bytes are in the I/O area for the actor `model`
 /// ([`Driver::load`]); returns its handle, or -1.
