@@ -10,8 +10,9 @@ use std::path::Path;
 
 use serde::Serialize;
 
+use super::conventions::{Axis, Conventions};
+use super::error::RigError;
 use super::template::FaceTemplate;
-use super::{Conventions, RigError};
 use crate::geometry::align::{Affine, fit_similarity};
 use crate::geometry::nicp::{Settings, normals, register};
 use crate::geometry::surface::{Surface, agree};
@@ -320,7 +321,7 @@ pub(crate) fn register_template(
                 let (r, u, f) = (c.right(), c.up.vector(), c.forward.vector());
                 let name = |v: V3| {
                     let w: V3 = std::array::from_fn(|k| v[0] * r[k] + v[1] * u[k] + v[2] * f[k]);
-                    super::Axis::nearest(w).name()
+                    Axis::nearest(w).name()
                 };
                 return Err(fail(format!(
                     "the face stands along {} and looks along {} in the rig's own axes, not \
