@@ -3,7 +3,7 @@
 
 use core::fmt;
 
-use super::{Magnitude, RotationRule};
+use super::words::{Magnitude, RotationRule};
 use crate::layout::{MAX_COORDINATE, MAX_FACTOR};
 
 /// The rule a value of a file broke ([`super::FormatError::ValueOutOfRange`]); each names its limit, a

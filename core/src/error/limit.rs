@@ -3,7 +3,7 @@
 
 use core::fmt;
 
-use super::Magnitude;
+use super::words::Magnitude;
 use crate::layout::{MAX_NETWORK_VALUE, MAX_TANGENT_NORM};
 
 /// The limit a network's values must stay within ([`super::FormatError::Unbounded`]).

@@ -1,9 +1,74 @@
-//! ARKit's 52 blendshape names and the spellings rigs give them: Apple's camelCase
+//! ARKit's 52 blendshape names (in the column order of Live Link Face, whose channels are here
+//! too) and the spellings rigs give them: Apple's camelCase
 //! (`mouthSmileLeft`), Live Link Face's PascalCase (`MouthSmileLeft`), ICT-FaceKit's and many
 //! studios' `_L`/`_R` (`mouthSmile_L`), Blender's `.L`/`.R`, and a namespace before the name as
 //! Maya writes it (`blendShape1.jawOpen`). Names are compared ignoring case and punctuation.
 
-use super::LIVE_LINK_FACE_CHANNELS;
+/// The channels Live Link Face records, in its column order: ARKit's 52 blendshapes, then the
+/// head's and eyes' rotations.
+pub const LIVE_LINK_FACE_CHANNELS: [&str; 61] = [
+    "EyeBlinkLeft",
+    "EyeLookDownLeft",
+    "EyeLookInLeft",
+    "EyeLookOutLeft",
+    "EyeLookUpLeft",
+    "EyeSquintLeft",
+    "EyeWideLeft",
+    "EyeBlinkRight",
+    "EyeLookDownRight",
+    "EyeLookInRight",
+    "EyeLookOutRight",
+    "EyeLookUpRight",
+    "EyeSquintRight",
+    "EyeWideRight",
+    "JawForward",
+    "JawRight",
+    "JawLeft",
+    "JawOpen",
+    "MouthClose",
+    "MouthFunnel",
+    "MouthPucker",
+    "MouthRight",
+    "MouthLeft",
+    "MouthSmileLeft",
+    "MouthSmileRight",
+    "MouthFrownLeft",
+    "MouthFrownRight",
+    "MouthDimpleLeft",
+    "MouthDimpleRight",
+    "MouthStretchLeft",
+    "MouthStretchRight",
+    "MouthRollLower",
+    "MouthRollUpper",
+    "MouthShrugLower",
+    "MouthShrugUpper",
+    "MouthPressLeft",
+    "MouthPressRight",
+    "MouthLowerDownLeft",
+    "MouthLowerDownRight",
+    "MouthUpperUpLeft",
+    "MouthUpperUpRight",
+    "BrowDownLeft",
+    "BrowDownRight",
+    "BrowInnerUp",
+    "BrowOuterUpLeft",
+    "BrowOuterUpRight",
+    "CheekPuff",
+    "CheekSquintLeft",
+    "CheekSquintRight",
+    "NoseSneerLeft",
+    "NoseSneerRight",
+    "TongueOut",
+    "HeadYaw",
+    "HeadPitch",
+    "HeadRoll",
+    "LeftEyeYaw",
+    "LeftEyePitch",
+    "LeftEyeRoll",
+    "RightEyeYaw",
+    "RightEyePitch",
+    "RightEyeRoll",
+];
 
 /// The number of ARKit blendshapes.
 pub const ARKIT_SHAPES: usize = 52;
