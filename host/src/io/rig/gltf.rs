@@ -10,7 +10,7 @@ use std::path::Path;
 
 use gltf::mesh::Mode;
 
-use super::{IDENTITY, RigFile, RigFormat, RigReadError};
+use super::file::{IDENTITY, RigFile, RigFormat, RigReadError};
 use crate::io::mesh::Mesh;
 use crate::io::units::Unit;
 

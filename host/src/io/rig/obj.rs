@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use super::{IDENTITY, RigFile, RigFormat, RigReadError};
+use super::file::{IDENTITY, RigFile, RigFormat, RigReadError};
 use crate::io::mesh::Mesh;
 
 /// The mesh files of `dir`, as (name without `.obj`/`.obj.gz`, path), sorted by name.

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use gltf_json as json;
 use json::validation::Checked::Valid;
 
-use super::RigFile;
+use super::file::{IDENTITY, RigFile};
 use crate::io::glb::{BuildError, Builder};
 use crate::io::mesh::MeshError;
 
@@ -87,7 +87,7 @@ impl RigFile {
             .flatten()
             .map(|&v| v as f32)
             .collect();
-        let is_identity = self.node_transform == super::IDENTITY;
+        let is_identity = self.node_transform == IDENTITY;
         let node = b.root.push(json::Node {
             mesh: Some(mesh),
             name: Some(self.mesh_name.clone()),
