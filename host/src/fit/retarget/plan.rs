@@ -12,7 +12,7 @@
 use sinew_core::aim::AimActor;
 use sinew_core::tensor::F32s;
 
-use super::{Input, RetargetError};
+use super::input::{Input, RetargetError};
 use crate::fit::baseline::actor_shape_names;
 use crate::geometry::surface::Surface;
 use crate::geometry::vec3::{V3, add, scale, sub, to64};
