@@ -19,7 +19,6 @@
 //! the forward pass; `start` where each frame's head and jaw start (at rest, a rigid alignment,
 //! or a landmark driver's answer, which the fit then refines).
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use burn::module::Param;
@@ -32,83 +31,20 @@ use sinew_core::replay::model_hash;
 
 pub use crate::fit::setup::{Coefficients, Constrain, FitConfig, FitNet, Mode, Start};
 
-use crate::fit::baseline::{BaselineError, performance_unit};
+use crate::fit::baseline::performance_unit;
 use crate::fit::checkpoint::{CHECKPOINT_FORMAT, Checkpointing, EVERY, FitState, target_crc};
 use crate::fit::performance::Performance;
 use crate::fit::setup::{fw_mlp, gelu_mlp};
-use crate::training::backend::{Backend, BackendError};
-use crate::training::checkpoint::CheckpointError;
+use crate::training::backend::Backend;
 use crate::training::nn::{LayerWeights, tensor, to_vec};
-use crate::training::random::Stream;
 
-use objective::{TwoDTargets, step_loss};
+pub use cache::ActorCache;
+pub use error::FitError;
+use objective::{TwoDTargets, step_loss, step_rng};
 use posing::{Fixed, evaluate};
 #[cfg(test)]
 use start::rigid_start;
 use start::{constrained_vertices, starts};
-
-/// The identity head and jaw, `[6D, t]` twice.
-const IDENTITY_18: [f32; 18] = [
-    1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0,
-];
-
-/// The baked actor's playback cache, in mm (the fit's unit).
-#[derive(Clone, Debug)]
-pub struct ActorCache {
-    /// Vertices V.
-    pub vertices: usize,
-    /// Corrective shapes M = N − 1.
-    pub shapes: usize,
-    /// Neutral skin s0, `[V·3]`, mm.
-    pub rest: Vec<f32>,
-    /// Jaw skinning weight k, `[V]`.
-    pub k: Vec<f32>,
-    /// B_e, `[V·M·3]`, mm.
-    pub correctives: Vec<f32>,
-    /// Jaw pivot, mm.
-    pub pivot: [f32; 3],
-    /// Template points normalised to [−1, 1]: `(c − centre) / half`.
-    pub normalised: Vec<f32>,
-    /// The template's bounding-box centre (the actor's units).
-    pub centre: [f32; 3],
-    /// Half the bounding box's largest extent (the actor's units).
-    pub half: f32,
-    /// Millimetres per unit of the actor.
-    pub mm: f32,
-}
-
-impl ActorCache {
-    /// The cache of a baked actor whose lengths are in `unit_mm` millimetres.
-    pub fn new(actor: &AimActor<'_>, unit_mm: f32) -> Self {
-        let scaled = |v: sinew_core::tensor::F32s<'_>| v.iter().map(|x| x * unit_mm).collect();
-        let tpl: Vec<f32> = actor.template().iter().collect();
-        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-        for p in tpl.chunks_exact(3) {
-            for c in 0..3 {
-                lo[c] = lo[c].min(p[c]);
-                hi[c] = hi[c].max(p[c]);
-            }
-        }
-        let centre = [0, 1, 2].map(|c| 0.5 * (lo[c] + hi[c]));
-        let half = (0..3).map(|c| 0.5 * (hi[c] - lo[c])).fold(1e-12, f32::max);
-        let normalised = tpl
-            .chunks_exact(3)
-            .flat_map(|p| [0, 1, 2].map(|c| (p[c] - centre[c]) / half))
-            .collect();
-        Self {
-            vertices: actor.vertex_count(),
-            shapes: actor.shape_count(),
-            rest: scaled(actor.rest()),
-            k: actor.skinning_weights().iter().collect(),
-            correctives: scaled(actor.correctives()),
-            pivot: actor.jaw_pivot().to_array().map(|x| x * unit_mm),
-            normalised,
-            centre,
-            half,
-            mm: unit_mm,
-        }
-    }
-}
 
 /// The fit of one performance with one setting.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -151,80 +87,6 @@ pub struct FitResult {
     /// The normalisation of template points F_W saw: centre x, y, z and half extent.
     #[serde(skip)]
     pub normalisation: [f32; 4],
-}
-
-/// An AIM fit that was refused or failed; each names the file concerned.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum FitError {
-    /// Settings with no iteration, point, code dimension or hidden unit.
-    #[error("the fit needs at least one iteration, point, code dimension and hidden unit")]
-    EmptyConfig,
-    /// The performance's unit cannot be read.
-    #[error(transparent)]
-    Unit(#[from] BaselineError),
-    /// A frame with another vertex count than the actor's.
-    #[error("{}: {frame_vertices} vertices, the actor has {actor_vertices}", path.display())]
-    VertexCount {
-        /// The frame's mesh.
-        path: PathBuf,
-        /// Its vertices.
-        frame_vertices: usize,
-        /// The actor's vertices.
-        actor_vertices: usize,
-    },
-    /// The backend cannot run.
-    #[error(transparent)]
-    Backend(#[from] BackendError),
-    /// A checkpoint that cannot be saved or resumed (the error names the file).
-    #[error(transparent)]
-    Checkpoint(#[from] CheckpointError),
-    /// Landmark vertices that do not index the performance's meshes.
-    #[error("{}: the landmark vertices do not index the meshes", path.display())]
-    Landmarks {
-        /// The performance's manifest.
-        path: PathBuf,
-    },
-    /// Landmark tracks without one pixel per landmark and frame.
-    #[error(
-        "{}: the landmark tracks do not have one pixel per landmark and frame",
-        path.display()
-    )]
-    LandmarkTracks {
-        /// The performance's manifest.
-        path: PathBuf,
-    },
-    /// Ctrl-C: the fit stopped after saving a checkpoint.
-    #[error(
-        "stopped after step {step} of {iterations}; the fit is saved in {}: continue with \
-         --resume {}",
-        dir.display(),
-        dir.display()
-    )]
-    Stopped {
-        /// Steps done.
-        step: usize,
-        /// Steps asked for.
-        iterations: usize,
-        /// The checkpoint folder.
-        dir: PathBuf,
-    },
-    /// The fit's mean error is not finite.
-    #[error(
-        "the fit diverged (mean error {mean_error_mm}); try fewer points or a smaller learning rate"
-    )]
-    Diverged {
-        /// The mean error, mm.
-        mean_error_mm: f64,
-    },
-    /// A fit asked to start where a driver put the head without one driven pose per frame.
-    #[error("a fit from the driver's poses needs one per frame: {frames} frames, {driven} poses")]
-    DriverStart {
-        /// The performance's frames.
-        frames: usize,
-        /// The driven poses given.
-        driven: usize,
-    },
 }
 
 /// Fits `actor` (its bytes, `unit_mm` millimetres per unit) to every frame of `perf`.
@@ -605,15 +467,12 @@ pub fn worst_edge_change(
     edges[(edges.len() - 1) * 99 / 100]
 }
 
-/// The random stream of one step of a fit (and `u64::MAX`'s, the constrained subset's).
-fn step_rng(seed: u64, step: u64) -> Stream {
-    Stream::new(seed, step, 0x00a0_2bdb_0000_0000_0000_0000_0000_0f17)
-}
-
 fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len().max(1) as f64
 }
 
+mod cache;
+mod error;
 mod objective;
 mod posing;
 mod start;

@@ -1,7 +1,7 @@
 //! Which bone vertices lie behind the skin (a depth map seen from the front), for pictures and
 //! the constraint search.
 
-use super::*;
+use super::landmarks::FaceFrame;
 use crate::geometry::vec3::{V3, dot, scale, to64};
 use crate::io::mesh::Mesh;
 use serde::Serialize;

@@ -1,6 +1,7 @@
 //! Skin landmarks derived from the 68 iBUG landmarks, and the face frame they span.
 
-use super::*;
+use super::error::BonesError;
+use super::templates::{SkinRule, spec};
 use crate::geometry::spatial::{components, nearest_in_component, oriented_normals};
 use crate::geometry::vec3::{cross, dot, lerp, norm, normalize, scale, sub, to32, to64};
 use crate::io::mesh::Mesh;

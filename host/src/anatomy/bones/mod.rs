@@ -41,9 +41,6 @@ mod error;
 mod landmarks;
 mod templates;
 
-/// The landmark data file, compiled in.
-const LANDMARKS_JSON: &str = include_str!("../../../data/bone_landmarks.json");
-
 /// The landmarks' share of the ICP objective (their summed weight relative to the surface pairs).
 const LANDMARK_SHARE: f64 = 0.3;
 /// Most ICP iterations per bone group.

@@ -1,7 +1,7 @@
 //! The template bones and the bone landmark file (`host/data/bone_landmarks.json`): the
 //! ArtiSynth jaw and maxilla and the upper odedstein skull, registered once into one frame.
 
-use super::*;
+use super::error::BonesError;
 use crate::anatomy::constraints::Bone;
 use crate::geometry::align::fit_similarity;
 use crate::geometry::spatial::{Grid, cell_for};
@@ -125,6 +125,9 @@ pub struct SkinPatch {
     /// Geodesic radius (mm).
     pub patch_mm: f32,
 }
+
+/// The landmark data file, compiled in.
+const LANDMARKS_JSON: &str = include_str!("../../../data/bone_landmarks.json");
 
 pub(crate) fn spec() -> Result<Spec, BonesError> {
     serde_json::from_str(LANDMARKS_JSON).map_err(BonesError::LandmarkFile)

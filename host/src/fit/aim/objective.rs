@@ -7,8 +7,9 @@ use crate::fit::performance::Performance;
 use crate::fit::setup::{FitConfig, FitNet, Mode};
 use crate::training::nn::{tensor, to_vec};
 
+use super::error::FitError;
 use super::posing::{Fixed, pose};
-use super::{FitError, step_rng};
+use crate::training::random::Stream;
 
 /// The loss of step `step`: its draw of points (`subset`'s, or any vertex of `v`), the actor
 /// posed there and the objective; every tenth step's value is pushed onto `loss_history`.
@@ -121,4 +122,9 @@ impl TwoDTargets {
             .add_scalar(self.principal[1]);
         Tensor::cat(vec![u, v], 1)
     }
+}
+
+/// The random stream of one step of a fit (and `u64::MAX`'s, the constrained subset's).
+pub(super) fn step_rng(seed: u64, step: u64) -> Stream {
+    Stream::new(seed, step, 0x00a0_2bdb_0000_0000_0000_0000_0000_0f17)
 }

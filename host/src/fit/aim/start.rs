@@ -7,7 +7,8 @@ use crate::fit::setup::{Constrain, FitConfig, Mode, Start};
 use crate::geometry::align::fit_rigid;
 use crate::training::random::Stream;
 
-use super::{ActorCache, FitError, IDENTITY_18};
+use super::cache::{ActorCache, IDENTITY_18};
+use super::error::FitError;
 
 /// Per frame, the head and jaw that a zero F_T output means (translations in mm): as
 /// `config.start` says, from `driven` (per frame, the head and jaw a landmark driver gave, in

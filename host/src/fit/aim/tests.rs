@@ -1,3 +1,4 @@
+use super::cache::IDENTITY_18;
 use super::*;
 use crate::fit::aim::{Constrain, Mode, worst_edge_change};
 use crate::fit::performance::tests::golden_actor;
