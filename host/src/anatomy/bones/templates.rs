@@ -114,7 +114,7 @@ pub enum SkinRule {
 /// thickness, matched to the nearest surface of one bone.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SkinPatch {
-    /// Name, used as the skin landmark's name in [`SkinLandmarks`].
+    /// Name, used as the skin landmark's name in `SkinLandmarks`.
     pub name: String,
     /// The bone under the patch.
     pub bone: Bone,
