@@ -2,7 +2,8 @@
 # Proves on emulated targets that sinew-core plays the golden AIM actors, the golden S2D decoder, the
 # golden fitted performance and the golden generated sequence back bit-identically to the x86_64
 # host: installs what is missing, then for each crate checks formatting, runs clippy with warnings
-# as errors, builds in release and runs the replays. Exits non-zero if any target fails.
+# as errors, builds in release and runs the replays, and checks that neither microcontroller image
+# links core's float formatting. Exits non-zero if any target fails.
 #
 # Usage: bash firmware-sim/run.sh   (from anywhere)
 # Environment: CARGO_TARGET_DIR (default firmware-sim/target, shared by the four crates so that
@@ -44,6 +45,7 @@ install_tools() {
   command -v qemu-system-arm >/dev/null || pkgs+=(qemu-system-arm)
   command -v qemu-system-riscv32 >/dev/null || pkgs+=(qemu-system-misc)
   command -v node >/dev/null || pkgs+=(nodejs)
+  command -v readelf >/dev/null || pkgs+=(binutils)
   if [ "${#pkgs[@]}" -gt 0 ]; then
     say "apt-get install ${pkgs[*]}"
     as_root apt-get update -qq || return 1
@@ -78,6 +80,28 @@ check() {
   [ "$status" = PASS ] || failed=1
 }
 
+# no_float_printer NAME ELF: fails when the image links core's float formatting (`core::fmt::float`,
+# some 19 KiB of code on the Cortex-M4F): the core writes its numbers with integers so that no
+# firmware carries it, and a `{}` of an f32 anywhere on the playback path would bring it back.
+no_float_printer() {
+  local name="$1" elf="$2" t0=$SECONDS status=PASS found
+  say "$name: no float formatting linked ($elf)"
+  if ! found="$(readelf -s -W "$elf")"; then
+    status="FAIL (readelf)"
+  elif ! grep -q '10sinew_core' <<<"$found"; then
+    # A stripped image would pass for want of symbols.
+    status="FAIL (no sinew_core symbols to check)"
+  else
+    found="$(grep -c '4core3fmt5float' <<<"$found")"
+    if [ "$found" -ne 0 ]; then
+      echo "$elf links core::fmt::float ($found symbols): an f32 or f64 is formatted on the playback path" >&2
+      status="FAIL ($found float-formatting symbols)"
+    fi
+  fi
+  results+=("$(printf '%-10s %-32s %s, %ds' "$name" "float formatting" "$status" $((SECONDS - t0)))")
+  [ "$status" = PASS ] || failed=1
+}
+
 if ! install_tools; then
   echo "firmware-sim: could not install the targets or emulators" >&2
   exit 1
@@ -89,6 +113,8 @@ check host common "${NICE[@]}" cargo test
 check cortex-m cortex-m "${NICE[@]}" cargo run --release
 # rv32imac, software f32, under QEMU virt.
 check riscv riscv "${NICE[@]}" cargo run --release
+no_float_printer cortex-m "$CARGO_TARGET_DIR/thumbv7em-none-eabihf/release/sinew-firmware-sim"
+no_float_printer riscv "$CARGO_TARGET_DIR/riscv32imac-unknown-none-elf/release/sinew-firmware-sim-riscv"
 # wasm32 under node.
 check wasm wasm node run.mjs "$CARGO_TARGET_DIR/wasm32-unknown-unknown/release/sinew_firmware_wasm.wasm"
 

@@ -81,7 +81,8 @@ impl fmt::Display for Bound {
             ),
             Self::LogNormalFactor => {
                 // In tenths and with integers only: formatting an f32 would put `core`'s float
-                // formatting (about 19 KiB) into every firmware image.
+                // formatting (about 19 KiB) into every firmware image (firmware-sim/run.sh
+                // fails when it is there).
                 let tenths = (crate::layout::NOISE_BOUND * 10.0) as u32;
                 write!(
                     f,
