@@ -21,6 +21,7 @@
 //! the landmarks) of the motions from `diversity_seeds` seeds on the decoder's neutral; the LSTM
 //! takes no seed, so its motions repeat and its diversity comes out 0.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use burn::tensor::Device;
@@ -368,8 +369,27 @@ impl<'a> Redetector<'a> {
             .collect()
     }
 
+    /// [`Self::frames`] of each sequence. Decoding is a pure function of a sequence's bits, so a
+    /// sequence that repeats an earlier one bit for bit (the LSTM's diversity group: one motion a
+    /// label, once per seed) is decoded once and copied.
     fn all(&self, seqs: &[Vec<Vec<f32>>]) -> Result<Vec<Vec<Vec<f32>>>, RedetectError> {
-        seqs.par_iter().map(|s| self.frames(s)).collect()
+        let mut first: HashMap<Vec<u32>, usize> = HashMap::new();
+        let owner: Vec<usize> = seqs
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let mut bits: Vec<u32> = s.iter().flatten().map(|x| x.to_bits()).collect();
+                bits.extend(s.iter().map(|f| f.len() as u32));
+                *first.entry(bits).or_insert(i)
+            })
+            .collect();
+        let unique: Vec<usize> = (0..seqs.len()).filter(|&i| owner[i] == i).collect();
+        let decoded = unique
+            .par_iter()
+            .map(|&i| self.frames(&seqs[i]))
+            .collect::<Result<Vec<_>, _>>()?;
+        let at: HashMap<usize, usize> = unique.iter().enumerate().map(|(k, &i)| (i, k)).collect();
+        Ok(owner.iter().map(|o| decoded[at[o]].clone()).collect())
     }
 }
 
@@ -721,5 +741,43 @@ mod tests {
         let e = eval_motion(&opts).unwrap_err();
         assert!(matches!(e, EvalError::DiversitySeeds), "{e:?}");
         assert!(!opts.report.exists());
+    }
+
+    #[test]
+    fn repeated_sequences_are_redetected_once_and_as_each_alone() {
+        let bytes = std::fs::read(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/s2d-ict.sinew"),
+        )
+        .unwrap();
+        let decoder = S2dDecoder::from_bytes(&bytes).unwrap();
+        let r = Redetector::new(&decoder);
+        let neutral = r.neutral_landmarks();
+        // Three motions of three frames on the decoder's neutral: a, b, then a again.
+        let motion = |s: f32| -> Vec<Vec<f32>> {
+            (0..3)
+                .map(|t| {
+                    let mut f = neutral.clone();
+                    for (k, x) in f.iter_mut().enumerate() {
+                        *x += s * t as f32 * (0.01 + 0.001 * (k % 7) as f32);
+                    }
+                    f
+                })
+                .collect()
+        };
+        let (a, b) = (motion(1.0), motion(-0.5));
+        let seqs = vec![a.clone(), b.clone(), a.clone()];
+        let got = r.all(&seqs).unwrap();
+        assert_eq!(got.len(), 3);
+        assert_eq!(got[0], r.frames(&a).unwrap());
+        assert_eq!(got[1], r.frames(&b).unwrap());
+        assert_eq!(got[2], got[0]);
+        assert_ne!(got[0], got[1]);
+        // A sequence that differs from another in one value is its own.
+        let mut c = a.clone();
+        c[2][5] += 0.05;
+        let alone = r.frames(&c).unwrap();
+        assert_ne!(alone, got[0]);
+        let got = r.all(&[a.clone(), c]).unwrap();
+        assert_eq!(got[1], alone);
     }
 }
