@@ -13,7 +13,7 @@ use crate::kernels::{KernelScratch, check_kernels};
 use crate::motion::{MOTION_GOLDENS, motion_costs};
 use crate::s2d::s2d_costs;
 use crate::suite::{Run, Suite};
-use crate::{GOLDENS, S2D_GOLDENS, Scratch, Summary, phase_costs};
+use crate::{Error, GOLDENS, Golden, S2D_GOLDENS, Scratch, Summary, phase_costs};
 
 /// What a firmware gives the shared run.
 pub trait Target {
@@ -132,50 +132,57 @@ fn check_goldens<T: Target>(target: &mut T, scratch: &mut Scratch) -> Option<boo
     Some(passed)
 }
 
-/// The cost of each phase of one frame (frame 8), per golden (an AIM actor's f32 replay stands
-/// for its model).
+/// The frame whose phases are measured.
+const COST_FRAME: usize = 8;
+
+/// The cost of each phase of one frame ([`COST_FRAME`]), per golden (an AIM actor's f32 replay
+/// stands for its model).
 fn costs<T: Target>(target: &mut T, scratch: &mut Scratch) -> bool {
-    for golden in GOLDENS.iter().filter(|g| g.name.ends_with(".f32")) {
-        target.restart();
-        match phase_costs(golden, 8, scratch, || target.now()) {
-            Ok(c) => target.out(format_args!(
-                "cost {} frame 8 (instructions): {c}",
+    let f = COST_FRAME;
+    GOLDENS
+        .iter()
+        .filter(|g| g.name.ends_with(".f32"))
+        .all(|g| {
+            cost(target, "cost", g, |t| {
+                phase_costs(g, f, scratch, || t.now())
+            })
+        })
+        && S2D_GOLDENS.iter().all(|g| {
+            cost(target, "s2d cost", g, |t| {
+                s2d_costs(g, f, scratch, || t.now())
+            })
+        })
+        && MOTION_GOLDENS.iter().all(|g| {
+            cost(target, "motion cost", g, |t| {
+                motion_costs(g, f, scratch, || t.now())
+            })
+        })
+        && DRIVER_GOLDENS.iter().all(|g| {
+            cost(target, "driver cost", g, |t| {
+                driver_costs(g, f, scratch, || t.now())
+            })
+        })
+}
+
+/// Measures `golden`'s phases with `measure` from a restarted count and prints them after `what`
+/// (`cost`, `s2d cost`, …); false (after saying why) when the golden cannot be played.
+fn cost<T: Target, C: fmt::Display>(
+    target: &mut T,
+    what: &str,
+    golden: &Golden,
+    measure: impl FnOnce(&mut T) -> Result<C, Error>,
+) -> bool {
+    target.restart();
+    match measure(target) {
+        Ok(c) => {
+            target.out(format_args!(
+                "{what} {} frame {COST_FRAME} (instructions): {c}",
                 golden.name
-            )),
-            Err(e) => return failed(target, golden.name, e),
+            ));
+            true
         }
+        Err(e) => failed(target, golden.name, e),
     }
-    for golden in &S2D_GOLDENS {
-        target.restart();
-        match s2d_costs(golden, 8, scratch, || target.now()) {
-            Ok(c) => target.out(format_args!(
-                "s2d cost {} frame 8 (instructions): {c}",
-                golden.name
-            )),
-            Err(e) => return failed(target, golden.name, e),
-        }
-    }
-    for golden in &MOTION_GOLDENS {
-        target.restart();
-        match motion_costs(golden, 8, scratch, || target.now()) {
-            Ok(c) => target.out(format_args!(
-                "motion cost {} frame 8 (instructions): {c}",
-                golden.name
-            )),
-            Err(e) => return failed(target, golden.name, e),
-        }
-    }
-    for golden in &DRIVER_GOLDENS {
-        target.restart();
-        match driver_costs(golden, 8, scratch, || target.now()) {
-            Ok(c) => target.out(format_args!(
-                "driver cost {} frame 8 (instructions): {c}",
-                golden.name
-            )),
-            Err(e) => return failed(target, golden.name, e),
-        }
-    }
-    true
 }
 
 /// Says that `name` failed with `e`; false.
