@@ -12,9 +12,10 @@
 //! JavaScript's writes never alias a borrow; memory can grow during any call, so JavaScript
 //! takes a fresh view of it after each.
 //!
-//! Models, replays, performances, motion generators and drivers live in a table here; JavaScript holds their handles
-//! (positive `i32`) and hands them back with [`sinew_free`]. Pointers are 32-bit on `wasm32`, the only target these
-//! functions are meant for (on the host they are compiled and linted, not called).
+//! Models, replays, performances, motion generators and drivers live in a table here;
+//! JavaScript holds their handles (positive `i32`) and hands them back with [`sinew_free`].
+//! Pointers are 32-bit on `wasm32`, the only target these functions are meant for (on the host
+//! they are compiled and linted, not called).
 //!
 //! Every export carries `#[unsafe(no_mangle)]` (exported under its own name), the one kind of
 //! unsafe code in this crate; no other symbol in the module has a `sinew_` name.
@@ -40,7 +41,7 @@ enum Object {
 }
 
 impl Object {
-    /// "a model", "a replay" or "a performance", for messages about a handle of the wrong kind.
+    /// "a model", "a replay", … ([`Kind::WHAT`]), for messages about a handle of the wrong kind.
     const fn what(&self) -> &'static str {
         match self {
             Self::Model(_) => Model::WHAT,
@@ -185,6 +186,7 @@ fn with_on_model<K: Kind, T>(
 ) -> Result<T, Error> {
     OBJECTS.with_borrow(|objects| f(get(objects, handle)?, get(objects, model)?))
 }
+
 /// Runs `f` on the model behind `handle`.
 fn with_model<T>(handle: i32, f: impl FnOnce(&mut Model) -> Result<T, Error>) -> Result<T, Error> {
     OBJECTS.with_borrow_mut(|objects| {

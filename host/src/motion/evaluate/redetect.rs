@@ -68,23 +68,26 @@ impl<'a> Redetector<'a> {
     /// sequence that repeats an earlier one bit for bit (the LSTM's diversity group: one motion a
     /// label, once per seed) is decoded once and copied.
     pub(super) fn all(&self, seqs: &[Vec<Vec<f32>>]) -> Result<Vec<Vec<Vec<f32>>>, RedetectError> {
-        let mut first: HashMap<Vec<u32>, usize> = HashMap::new();
-        let owner: Vec<usize> = seqs
+        // Each sequence's slot among the distinct ones, and the first sequence of each slot.
+        let mut slot_of: HashMap<Vec<u32>, usize> = HashMap::new();
+        let mut distinct: Vec<usize> = Vec::new();
+        let slots: Vec<usize> = seqs
             .iter()
             .enumerate()
             .map(|(i, s)| {
                 let mut bits: Vec<u32> = s.iter().flatten().map(|x| x.to_bits()).collect();
                 bits.extend(s.iter().map(|f| f.len() as u32));
-                *first.entry(bits).or_insert(i)
+                *slot_of.entry(bits).or_insert_with(|| {
+                    distinct.push(i);
+                    distinct.len() - 1
+                })
             })
             .collect();
-        let unique: Vec<usize> = (0..seqs.len()).filter(|&i| owner[i] == i).collect();
-        let decoded = unique
+        let decoded = distinct
             .par_iter()
             .map(|&i| self.frames(&seqs[i]))
             .collect::<Result<Vec<_>, _>>()?;
-        let at: HashMap<usize, usize> = unique.iter().enumerate().map(|(k, &i)| (i, k)).collect();
-        Ok(owner.iter().map(|o| decoded[at[o]].clone()).collect())
+        Ok(slots.iter().map(|&k| decoded[k].clone()).collect())
     }
 }
 
