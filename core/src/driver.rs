@@ -28,6 +28,13 @@
 //! - `drv.in`: `f32 [2, D]`, the features' mean `μ_in` and scale `s_in` (D = 139 or 204);
 //! - `drv.out`: `f32 [2, 18 + M]`, the output's offset `μ_out` and scale `s_out`;
 //! - the MLP `drv.net` ([`crate::network`]), D inputs and `18 + M` outputs.
+//!
+//! A 2D driver's metadata names its canonical camera (`camera=x,y,z`, the actor's unit and
+//! frame): the centre of the pinhole camera the head's pose is relative to, looking along −z,
+//! v down, so that a point `p` of the actor's frame is seen at `((p.x − x) / (z − p.z),
+//! −(p.y − y) / (z − p.z))`, the normalised image coordinates the driver reads
+//! ([`Driver::camera`], [`project`]). The calibration and the lost-frame rules of
+//! [`crate::live`] see the driven face through it.
 
 use crate::aim::{AimActor, MAX_SHAPES};
 use crate::error::{
@@ -38,6 +45,7 @@ use crate::format::{ArtifactKind, SinewFile, out_of_range};
 use crate::hash::FrameHasher;
 use crate::input::check_values;
 use crate::layout::{MAX_COORDINATE, MAX_FACTOR};
+use crate::linalg::Vec3;
 use crate::network::{check_bound, load_mlp};
 use crate::nn::Mlp;
 use crate::replay::{AIM_POSE_LEN, ReplayError, model_hash};
@@ -71,6 +79,8 @@ pub const MIN_SPREAD: f32 = 1e-3;
 /// The largest input scale a driver may carry (a landmark coordinate's training spread is at
 /// least 1e-6 of its unit).
 pub const MAX_INPUT_SCALE: f32 = 1e6;
+/// The metadata key of a 2D driver's canonical camera centre (`x,y,z`, the actor's unit).
+pub const CAMERA: &str = "camera";
 
 /// Where a driver's landmarks live.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -117,6 +127,7 @@ pub struct Driver<'a> {
     input: F32s<'a>,
     output: F32s<'a>,
     net: Mlp<'a>,
+    camera: Option<Vec3>,
 }
 
 impl<'a> Driver<'a> {
@@ -127,8 +138,9 @@ impl<'a> Driver<'a> {
     /// network whose width is neither 139 nor 204 inputs or whose outputs are not `18 + M`
     /// (`M` up to [`MAX_SHAPES`]), an input mean outside ±`MAX_COORDINATE`, an input scale not
     /// in (0, [`MAX_INPUT_SCALE`]], an output offset outside ±`MAX_COORDINATE`, an output scale
-    /// outside ±`MAX_FACTOR`, or a network that can exceed ±`MAX_NETWORK_VALUE` for inputs
-    /// within ±[`MAX_INPUT`].
+    /// outside ±`MAX_FACTOR`, a network that can exceed ±`MAX_NETWORK_VALUE` for inputs
+    /// within ±[`MAX_INPUT`], or ([`FormatError::BadMetadata`]) a 2D driver without a
+    /// `camera` entry, or a `camera` entry that is not three numbers within ±`MAX_COORDINATE`.
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::Driver)?;
         let model = file.u32_tensor(MODEL_HASH, &[2])?;
@@ -176,6 +188,12 @@ impl<'a> Driver<'a> {
             }
         }
         check_bound(&net, NETWORK, f64::from(MAX_INPUT))?;
+        let metadata = file.metadata();
+        let camera = match metadata.get(CAMERA) {
+            Some(text) => Some(parse_point(text).ok_or_else(|| metadata.bad_entry(CAMERA))?),
+            None if space == Space::Image => return Err(metadata.bad_entry(CAMERA)),
+            None => None,
+        };
         Ok(Self {
             model_hash: u64::from(model.at(0)) | (u64::from(model.at(1)) << 32),
             space,
@@ -184,7 +202,14 @@ impl<'a> Driver<'a> {
             input,
             output,
             net,
+            camera,
         })
+    }
+
+    /// The canonical camera's centre (module documentation): always there for a 2D driver;
+    /// a 3D driver may record one.
+    pub const fn camera(&self) -> Option<Vec3> {
+        self.camera
     }
 
     /// The content hash of the actor this driver was trained for.
@@ -318,6 +343,30 @@ impl<'a> Driver<'a> {
         }
         Ok(())
     }
+}
+
+/// Three comma-separated numbers within ±`MAX_COORDINATE` (the `camera` entry), parsed with
+/// `core`'s correctly rounded `f32` parser, which reads back the bits the host wrote.
+fn parse_point(text: &str) -> Option<Vec3> {
+    let mut values = text.split(',').map(|v| v.trim().parse::<f32>().ok());
+    let mut next = || {
+        values
+            .next()
+            .flatten()
+            .filter(|v| Bound::Coordinate.contains(*v))
+    };
+    let point = Vec3::new(next()?, next()?, next()?);
+    values.next().is_none().then_some(point)
+}
+
+/// Where the canonical camera at `camera` sees the point `p` of the actor's frame, in
+/// normalised image coordinates `((p.x − c.x) / d, −(p.y − c.y) / d)`, `d = c.z − p.z` held at
+/// least `min_depth` (a point at or behind the camera is seen as if at that depth, so that
+/// every finite point projects to finite coordinates).
+pub fn project(camera: Vec3, p: Vec3, min_depth: f32) -> [f32; 2] {
+    let depth = camera.z - p.z;
+    let depth = if depth >= min_depth { depth } else { min_depth };
+    [(p.x - camera.x) / depth, -(p.y - camera.y) / depth]
 }
 
 /// A frame's landmarks (`[68 × dims]`) as a driver of `space` reads them, into `out`

@@ -490,6 +490,10 @@ pub enum Argument {
     /// A frame's time stamp in seconds (a time-stamped filter step), within ±`MAX_COORDINATE` and
     /// at least `1 / MAX_FACTOR` after the last one the filter saw.
     Time,
+    /// Live driving's settings ([`crate::live::Settings`]): the calibration's frame count, the
+    /// largest residual, head speed and turn rate, and the time before a lost head is found
+    /// again, each within `[0, MAX_FACTOR]`.
+    Live,
 }
 
 impl Argument {
@@ -514,6 +518,7 @@ impl Argument {
             Self::Landmarks => "landmarks",
             Self::Filter => "filter",
             Self::Time => "time",
+            Self::Live => "live",
         }
     }
 
@@ -528,7 +533,7 @@ impl Argument {
             Self::Head | Self::Jaw if index < 6 => MAX_ROTATION_ENTRY,
             Self::PoseHead | Self::PoseJaw if index < 9 => MAX_FACTOR,
             Self::Mask => return (0.0, 1.0),
-            Self::Filter => return (0.0, MAX_FACTOR),
+            Self::Filter | Self::Live => return (0.0, MAX_FACTOR),
             Self::Weights | Self::Scale | Self::Input | Self::Intensity => MAX_FACTOR,
             _ => MAX_COORDINATE,
         };

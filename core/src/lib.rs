@@ -101,6 +101,7 @@ pub mod hash;
 pub mod input;
 pub mod layout;
 pub mod linalg;
+pub mod live;
 pub mod motion;
 pub mod network;
 pub mod nn;
