@@ -16,10 +16,10 @@ use sinew_core::aim::AimActor;
 use sinew_core::driver::{Driver, Intrinsics, filter_pose, normalise_pixels, play};
 use sinew_core::filter::OneEuro;
 use sinew_core::replay::model_hash;
-use sinew_host::fit::driver::DriverConfig;
-use sinew_host::fit::driver::bake::{BakeInputs, bake};
-use sinew_host::fit::driver::sample::Sampler;
-use sinew_host::fit::driver::train::{Normalisation, network};
+use sinew_host::driver::DriverConfig;
+use sinew_host::driver::bake::{BakeInputs, bake};
+use sinew_host::driver::sample::Sampler;
+use sinew_host::driver::train::{Normalisation, network};
 
 fn golden(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -54,7 +54,7 @@ fn camera() -> Intrinsics {
 /// A driver of the golden actor with `hidden` units per layer and seeded weights.
 fn sized_driver(actor_bytes: &[u8], hidden: usize) -> Vec<u8> {
     let a = AimActor::from_bytes(actor_bytes).expect("valid actor");
-    let vertices = sinew_host::fit::driver::landmark_vertices(&golden(""), &a).expect("landmarks");
+    let vertices = sinew_host::driver::landmark_vertices(&golden(""), &a).expect("landmarks");
     let config = DriverConfig {
         hidden,
         ..DriverConfig::default()

@@ -13,8 +13,9 @@ use std::path::Path;
 use criterion::{Criterion, criterion_group};
 use sinew_core::aim::AimActor;
 use sinew_host::fit::aim::fit;
-use sinew_host::fit::performance::{Performance, PerformanceConfig, generate};
 use sinew_host::fit::setup::FitConfig;
+use sinew_host::io::performance::Performance;
+use sinew_host::performance::{PerformanceConfig, generate};
 use sinew_host::training::backend::Backend;
 
 fn bench(c: &mut Criterion) {

@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use sinew_core::aim::AimActor;
-use sinew_host::fit::driver::sample::Sampler;
-use sinew_host::fit::driver::{DriverConfig, landmark_vertices};
+use sinew_host::driver::sample::Sampler;
+use sinew_host::driver::{DriverConfig, landmark_vertices};
 use sinew_host::io::openface::{OpenFaceFrame, write_csv};
 use sinew_host::training::random::Stream;
 
@@ -210,7 +210,8 @@ fn bad_tracks_and_another_actors_driver_are_refused_without_output() {
 #[test]
 fn a_fit_refines_the_drivers_answer() {
     use sinew_host::fit::aim::{FitConfig, Mode, Start, fit_from};
-    use sinew_host::fit::performance::{Performance, PerformanceConfig, generate};
+    use sinew_host::io::performance::Performance;
+    use sinew_host::performance::{PerformanceConfig, generate};
     use sinew_host::training::backend::Backend;
     let Some(data) = sinew_host::io::data::data_dir() else {
         return;

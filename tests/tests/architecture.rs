@@ -20,7 +20,7 @@ const HOST_LAYERS: &[&[&str]] = &[
     &["geometry"],
     &["figures"],
     &["anatomy", "training", "rig"],
-    &["aim", "s2d", "fit", "motion"],
+    &["aim", "s2d", "fit", "motion", "driver", "performance"],
     &["replay", "export"],
     &["view"],
     &["cli"],

@@ -11,10 +11,10 @@ use sinew_core::driver::{
 use sinew_core::error::{Argument, Bound, InputError, InputErrorKind};
 use sinew_core::replay::{ReplayError, model_hash};
 use sinew_core::{EvalError, FormatError};
-use sinew_host::fit::driver::DriverConfig;
-use sinew_host::fit::driver::bake::{BakeInputs, bake};
-use sinew_host::fit::driver::sample::Sampler;
-use sinew_host::fit::driver::train::{Normalisation, network};
+use sinew_host::driver::DriverConfig;
+use sinew_host::driver::bake::{BakeInputs, bake};
+use sinew_host::driver::sample::Sampler;
+use sinew_host::driver::train::{Normalisation, network};
 use sinew_host::training::random::Stream;
 use sinew_tests::golden_dir;
 
@@ -25,7 +25,7 @@ fn actor_bytes() -> Vec<u8> {
 /// A driver for the golden actor with random weights (16 hidden units), and the sampler.
 fn baked(actor: &[u8], edit: impl FnOnce(&mut Normalisation)) -> (Vec<u8>, Sampler) {
     let a = AimActor::from_bytes(actor).unwrap();
-    let vertices = sinew_host::fit::driver::landmark_vertices(&golden_dir(), &a).unwrap();
+    let vertices = sinew_host::driver::landmark_vertices(&golden_dir(), &a).unwrap();
     let config = DriverConfig {
         hidden: 16,
         ..DriverConfig::default()

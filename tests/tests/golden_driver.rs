@@ -14,8 +14,8 @@ use sinew_core::aim::AimActor;
 use sinew_core::driver::{Driver, Intrinsics, LANDMARKS, filter_pose, normalise_pixels, pose_hash};
 use sinew_core::filter::OneEuro;
 use sinew_core::hash::frame_hash;
-use sinew_host::fit::driver::drive::{bind, poses};
-use sinew_host::fit::driver::track;
+use sinew_host::driver::drive::{bind, poses};
+use sinew_host::driver::track;
 use sinew_tests::{check, check_bytes, golden_dir};
 
 const ACTOR: &str = "aim-ict.sinew";
@@ -184,7 +184,7 @@ fn the_track_is_the_performances_openface_csv() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    let config = sinew_host::fit::performance::PerformanceConfig {
+    let config = sinew_host::performance::PerformanceConfig {
         seed: PERFORMANCE_SEED,
         frames: FRAMES,
         landmark_noise_px: LANDMARK_NOISE_PX,
@@ -192,7 +192,7 @@ fn the_track_is_the_performances_openface_csv() {
     };
     let out = dir.path().join("perf");
     let actor = golden_dir().join(ACTOR);
-    sinew_host::fit::performance::generate(&kit, Some(Path::new(&actor)), &config, &out).unwrap();
-    let csv = std::fs::read(out.join(sinew_host::fit::performance::OPENFACE_CSV)).unwrap();
+    sinew_host::performance::generate(&kit, Some(Path::new(&actor)), &config, &out).unwrap();
+    let csv = std::fs::read(out.join(sinew_host::io::performance::OPENFACE_CSV)).unwrap();
     check_bytes(TRACK, &csv);
 }

@@ -7,8 +7,8 @@ use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
 use sinew_core::driver::{Intrinsics, Space};
 use sinew_core::filter::OneEuro;
-use sinew_host::fit::driver::DriverConfig;
-use sinew_host::fit::driver::commands::{
+use sinew_host::driver::DriverConfig;
+use sinew_host::driver::commands::{
     DriveCommand, TrainDriver, drive_command, eval_driver, train_driver,
 };
 use sinew_host::training::backend::Backend;

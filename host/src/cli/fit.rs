@@ -1,104 +1,15 @@
-//! `sinew data performance`, `sinew fit` and `sinew eval fit`: the arguments, and the hand-over
-//! to [`sinew_host::fit`].
+//! `sinew fit`, `sinew eval fit` and `sinew retarget`: the arguments, and the hand-over to
+//! [`sinew_host::fit`].
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::Args;
+use sinew_host::driver::commands::driven_starts;
 use sinew_host::fit::aim::{Coefficients, Constrain, FitConfig, Mode, Start};
-use sinew_host::fit::commands::{eval_fit, fit_command, retarget_command};
-use sinew_host::fit::performance::{PerformanceConfig, generate};
+use sinew_host::fit::commands::{DrivenStarts, eval_fit, fit_command, retarget_command};
 use sinew_host::fit::retarget::SourceFit;
 use sinew_host::training::backend::Backend;
-
-/// `sinew data performance`.
-#[derive(Debug, Args)]
-pub(crate) struct PerformanceArgs {
-    /// ICT-FaceKit folder.
-    #[arg(long)]
-    data: PathBuf,
-    /// Output folder (one OBJ per frame and performance.json).
-    #[arg(long)]
-    out: PathBuf,
-    /// Seed of the trajectories and the noise.
-    #[arg(long, env = "SINEW_SEED", default_value_t = PerformanceConfig::default().seed)]
-    seed: u64,
-    /// Number of frames (30 per second).
-    #[arg(long, default_value_t = PerformanceConfig::default().frames)]
-    frames: usize,
-    /// Gaussian noise on every coordinate, standard deviation in mm.
-    #[arg(long, default_value_t = 0.0)]
-    noise_mm: f32,
-    /// Gaussian noise on every landmark pixel coordinate of the 2D tracks (a landmark
-    /// detector's error), standard deviation in pixels.
-    #[arg(long, default_value_t = 0.0)]
-    landmark_noise_px: f32,
-    /// A baked AIM actor made on the kit: the meshes take its topology (every template vertex
-    /// must be a vertex of the kit's face region), and the jaw moves rigidly about its pivot with
-    /// its skinning weights. Without it: the full face region, the jaw through the kit's jaw
-    /// shapes only.
-    #[arg(long)]
-    actor: Option<PathBuf>,
-}
-
-/// `sinew data performance`.
-pub(crate) fn performance(args: PerformanceArgs) -> Result<()> {
-    let config = PerformanceConfig {
-        seed: args.seed,
-        frames: args.frames,
-        noise_mm: args.noise_mm,
-        landmark_noise_px: args.landmark_noise_px,
-        ..PerformanceConfig::default()
-    };
-    config.validate()?;
-    eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
-    let m = generate(&args.data, args.actor.as_deref(), &config, &args.out)?;
-    println!(
-        "{}: synthetic performance, {} frames of {} vertices over {} expression shapes, 68 \
-         landmarks in a {}×{} image",
-        args.out.display(),
-        m.frames,
-        m.vertices,
-        m.expressions.len(),
-        m.camera.width,
-        m.camera.height
-    );
-    Ok(())
-}
-
-/// `sinew data neutral`.
-#[derive(Debug, Args)]
-pub(crate) struct NeutralArgs {
-    /// ICT-FaceKit folder.
-    #[arg(long)]
-    data: PathBuf,
-    #[command(flatten)]
-    identity: super::args::IdentityArg,
-    /// A baked AIM actor made on the kit's generic neutral (e.g. tests/data/aim-ict.sinew): the
-    /// face takes its vertices and triangles. Without it: the whole face region.
-    #[arg(long)]
-    like: Option<PathBuf>,
-    /// Output OBJ.
-    #[arg(long)]
-    out: PathBuf,
-}
-
-/// `sinew data neutral`.
-pub(crate) fn neutral(args: NeutralArgs) -> Result<()> {
-    let mesh = sinew_host::fit::performance::write_neutral(
-        &args.data,
-        &args.identity.weights,
-        args.like.as_deref(),
-        &args.out,
-    )?;
-    println!(
-        "{}: {} vertices, {} polygons",
-        args.out.display(),
-        mesh.positions.len(),
-        mesh.polygons.len()
-    );
-    Ok(())
-}
 
 /// `sinew fit` and `sinew eval fit`'s shared options.
 #[derive(Debug, Args)]
@@ -328,6 +239,22 @@ pub(crate) fn fit(args: FitArgs) -> Result<()> {
         ..args.options.config(c)
     };
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
+    // The driver runs only for a driver start (`fit_command` refuses a driver start without it).
+    let driven = match &args.driver {
+        Some(driver) if config.start == Start::Driver => {
+            let (driver_hash, starts) = driven_starts(&args.model, driver, &args.target)?;
+            Some(DrivenStarts {
+                driver: driver.clone(),
+                driver_hash,
+                starts,
+            })
+        }
+        Some(driver) => bail!(
+            "{}: a driver is only read with --start driver",
+            driver.display()
+        ),
+        None => None,
+    };
     sinew_host::training::interrupt::watch_ctrl_c();
     let r = fit_command(
         &args.model,
@@ -336,7 +263,7 @@ pub(crate) fn fit(args: FitArgs) -> Result<()> {
         &args.report,
         &config,
         args.resume.as_deref(),
-        args.driver.as_deref(),
+        driven,
         args.options.backend,
     )?;
     println!(

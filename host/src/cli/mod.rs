@@ -5,6 +5,7 @@
 mod aim;
 mod args;
 mod bones;
+mod data;
 mod driver;
 mod export;
 mod fit;
@@ -79,7 +80,7 @@ enum Command {
     Retarget(fit::RetargetArgs),
     /// Generate data sets.
     #[command(subcommand)]
-    Data(s2d::Data),
+    Data(data::Data),
     /// A label and a seed become a 4D expression of a face: a baked Motion3DGAN generator makes
     /// the landmark motion on the neutral, a baked S2D-Dec the meshes (frame_01.obj to
     /// frame_30.obj and strip.png), all through sinew-core.
@@ -167,7 +168,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Bones(cmd) => bones::run(cmd),
         Command::Replay(cmd) => replay::run(cmd),
         Command::S2d(cmd) => s2d::run(cmd),
-        Command::Data(cmd) => s2d::data(cmd),
+        Command::Data(cmd) => data::run(cmd),
         Command::Generate(args) => motion::generate(args),
         Command::Interpolate(args) => motion::interpolate(args),
         Command::View(args) => view::run(args),

@@ -1,96 +1,16 @@
-//! `sinew data s2d-pairs`, `train s2d`, `eval s2d` and `sinew s2d …`: the arguments, and the
-//! hand-over to [`sinew_host::s2d`].
+//! `train s2d`, `eval s2d` and `sinew s2d …`: the arguments, and the hand-over to
+//! [`sinew_host::s2d`].
 
 use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::{Args, Subcommand};
-use sinew_host::s2d::data::{Expressions, PairsConfig};
 use sinew_host::s2d::decoder::{DecoderConfig, InputNormalisation, StageActivation};
 use sinew_host::s2d::experiment::{self, DEFAULT_EPOCHS, Objective, TrainS2d};
 use sinew_host::s2d::hierarchy::{Config, DEFAULT_FACTORS};
 use sinew_host::s2d::protocol::{FOLDS, Protocol};
 use sinew_host::s2d::train::TrainConfig;
 use sinew_host::training::backend::Backend;
-
-#[derive(Debug, Subcommand)]
-pub(crate) enum Data {
-    /// S2D training pairs (neutral, expressive) on the ICT-FaceKit face region: random
-    /// identities (N(0, 1) weights of the identity modes) and sparse combinations of expression
-    /// shapes; writes pairs.sinew and manifest.json into the output folder.
-    S2dPairs {
-        /// ICT-FaceKit folder.
-        #[arg(long)]
-        data: PathBuf,
-        /// Output folder.
-        #[arg(long)]
-        out: PathBuf,
-        /// Seed.
-        #[arg(long, env = "SINEW_SEED", default_value_t = PairsConfig::default().seed)]
-        seed: u64,
-        /// Number of identities.
-        #[arg(long, default_value_t = PairsConfig::default().identities)]
-        identities: usize,
-        /// Number of pairs.
-        #[arg(long, default_value_t = PairsConfig::default().pairs)]
-        pairs: usize,
-        /// Most expression shapes combined in one pair.
-        #[arg(long, default_value_t = PairsConfig::default().max_shapes)]
-        max_shapes: usize,
-        /// Decimate the face region by this factor (quadric decimation; landmarks move to the
-        /// nearest kept vertex): data for decoders small enough for microcontrollers.
-        #[arg(long)]
-        decimate: Option<usize>,
-        /// `shared`: the kit's expression deltas, the same for every identity; `transferred`:
-        /// each delta deformation-transferred onto each identity (identity-specific
-        /// expressions, stored per identity).
-        #[arg(long, value_enum, default_value_t = PairsConfig::default().expressions)]
-        expressions: Expressions,
-    },
-    /// A synthetic facial performance on an ICT-FaceKit actor for fitting: smooth seeded
-    /// trajectories of all 53 expression weights, the jaw and the head; one OBJ per frame,
-    /// performance.json with the ground truth, the camera and 68 projected landmarks.
-    Performance(super::fit::PerformanceArgs),
-    /// The ICT-FaceKit face region of an identity as OBJ, optionally on a baked actor's vertices
-    /// and triangles: the template to bake another identity's actor on in correspondence with it
-    /// (for `sinew retarget`).
-    Neutral(super::fit::NeutralArgs),
-    /// The face `sinew demo` trains on: the ICT-FaceKit face region decimated to about 1,500
-    /// vertices with its 20 default shapes and the bone constraints AIM trains on, as compact
-    /// gzipped JSON (the repository's copy is host/data/demo-face.json.gz).
-    DemoFace {
-        /// ICT-FaceKit folder.
-        #[arg(long)]
-        data: PathBuf,
-        #[command(flatten)]
-        templates: super::args::TemplatesArg,
-        /// Output file.
-        #[arg(long)]
-        out: PathBuf,
-    },
-    /// The face template that finds a rig's landmarks (`sinew rig inspect`): the ICT-FaceKit
-    /// face region decimated to 2,500 vertices with its 68 landmarks and the fitted jaw hinge,
-    /// as gzipped JSON (the repository's copy is host/data/face-template.json.gz).
-    FaceTemplate {
-        /// ICT-FaceKit folder.
-        #[arg(long)]
-        data: PathBuf,
-        #[command(flatten)]
-        templates: super::args::TemplatesArg,
-        /// Output file.
-        #[arg(long)]
-        out: PathBuf,
-    },
-    /// A sample blendshape rig from ICT-FaceKit to try `--rig` with: the face region re-meshed,
-    /// with all 53 expression shapes, a UV seam, as .glb (metres) or an OBJ folder, and its
-    /// landmarks' true places beside it.
-    Rig(super::rig::SampleRigArgs),
-    /// Synthetic labelled landmark motions for Motion3DGAN: CoMA's 12 expression classes played
-    /// from neutral to apex on ICT-FaceKit identities (identity-specific deltas), with random
-    /// intensity, timing, easing and noise; the first sequence of each identity and class is the
-    /// test set.
-    Motions(super::motion::MotionsArgs),
-}
 
 #[derive(Debug, Subcommand)]
 pub(crate) enum S2d {
@@ -304,76 +224,6 @@ pub(crate) fn train(args: TrainS2dArgs) -> Result<()> {
 pub(crate) fn eval(args: EvalS2d) -> Result<()> {
     let r = experiment::eval_s2d(&args.model, &args.pairs, args.folds, &args.report)?;
     print_s2d(&r, &args.report);
-    Ok(())
-}
-
-/// `sinew data`.
-pub(crate) fn data(cmd: Data) -> Result<()> {
-    match cmd {
-        Data::S2dPairs {
-            data,
-            out,
-            seed,
-            identities,
-            pairs,
-            max_shapes,
-            decimate,
-            expressions,
-        } => {
-            let config = PairsConfig {
-                seed,
-                identities,
-                pairs,
-                max_shapes,
-                expressions,
-            };
-            config.validate()?;
-            eprintln!("seed {seed} (override with --seed or SINEW_SEED)");
-            let set = sinew_host::s2d::data::generate_to(&data, &out, &config, decimate)?;
-            println!(
-                "{}: {} pairs of {} identities over {} expression shapes ({:?}) in {} groups, {} \
-                 vertices",
-                out.display(),
-                set.len(),
-                set.neutrals.len(),
-                set.manifest.expressions.len(),
-                expressions,
-                set.manifest.shape_groups.len(),
-                set.vertices()
-            );
-        }
-        Data::Performance(args) => super::fit::performance(args)?,
-        Data::Neutral(args) => super::fit::neutral(args)?,
-        Data::DemoFace {
-            data,
-            templates,
-            out,
-        } => {
-            let set = sinew_host::aim::demo_face::write(&data, &templates.path, &out)?;
-            println!(
-                "{}: {} vertices, {} shapes, {:.0} % of the vertices constrained",
-                out.display(),
-                set.vertices(),
-                set.shapes.len(),
-                100.0 * set.constrained_fraction()
-            );
-        }
-        Data::FaceTemplate {
-            data,
-            templates,
-            out,
-        } => {
-            let t = sinew_host::aim::face_template::write(&data, &templates.path, &out)?;
-            println!(
-                "{}: {} vertices, {} triangles, 68 landmarks",
-                out.display(),
-                t.positions.len(),
-                t.triangles.len()
-            );
-        }
-        Data::Rig(args) => super::rig::sample_rig(args)?,
-        Data::Motions(args) => super::motion::motions(args)?,
-    }
     Ok(())
 }
 

@@ -31,10 +31,9 @@ use sinew_core::replay::model_hash;
 
 pub use crate::fit::setup::{Coefficients, Constrain, FitConfig, FitNet, Mode, Start};
 
-use crate::fit::baseline::performance_unit;
 use crate::fit::checkpoint::{CHECKPOINT_FORMAT, Checkpointing, EVERY, FitState, target_crc};
-use crate::fit::performance::Performance;
 use crate::fit::setup::{fw_mlp, gelu_mlp};
+use crate::io::performance::Performance;
 use crate::training::backend::Backend;
 use crate::training::nn::{LayerWeights, tensor, to_vec};
 
@@ -219,7 +218,7 @@ fn setup(
     if !(config.iterations > 0 && config.points > 0 && config.code > 0 && config.hidden > 0) {
         return Err(FitError::EmptyConfig);
     }
-    let unit = performance_unit(perf)?;
+    let unit = perf.unit;
     let v = actor.vertex_count();
     for (f, frame) in perf.frames.iter().enumerate() {
         if frame.len() != v {

@@ -17,10 +17,10 @@ use std::time::Instant;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-use crate::fit::performance::Performance;
 use crate::geometry::align::{RigidFit, fit_rigid};
 use crate::io::ict::{DEFAULT_SHAPES, FACE_REGION, IctError, IctFaceKit};
-use crate::io::units::{Unit, UnknownUnit};
+use crate::io::performance::Performance;
+use crate::io::units::Unit;
 
 /// Most alternations of rigid alignment and least squares per frame for GBS, which stops
 /// earlier once no weight changes by more than [`CONVERGED`].
@@ -61,15 +61,6 @@ pub enum BaselineError {
         /// What the kit reader said.
         #[source]
         source: IctError,
-    },
-    /// A performance whose manifest names an unknown unit.
-    #[error("{}: the performance's unit", path.display())]
-    Unit {
-        /// The performance's manifest.
-        path: PathBuf,
-        /// The unit it names.
-        #[source]
-        source: UnknownUnit,
     },
     /// A frame the fit cannot align to.
     #[error("{}", path.display())]
@@ -128,7 +119,7 @@ impl Basis {
     /// kit folder the performance was made from.
     pub fn of_performance(perf: &Performance, names: &[String]) -> Result<Self, BaselineError> {
         let kit_error = |source| BaselineError::Kit {
-            path: perf.dir.join(super::performance::MANIFEST),
+            path: perf.dir.join(crate::io::performance::MANIFEST),
             source,
         };
         let kit = IctFaceKit::open(&perf.manifest.data).map_err(kit_error)?;
@@ -412,16 +403,6 @@ pub fn mean_error_mm(fit: &[[f32; 3]], target: &[[f32; 3]], unit: Unit) -> f64 {
 }
 
 /// The unit of a performance's meshes.
-pub fn performance_unit(perf: &Performance) -> Result<Unit, BaselineError> {
-    perf.manifest
-        .units
-        .parse()
-        .map_err(|source| BaselineError::Unit {
-            path: perf.dir.join(super::performance::MANIFEST),
-            source,
-        })
-}
-
 /// Fitted positions per frame, `[J][V]`.
 pub type FittedMeshes = Vec<Vec<[f32; 3]>>;
 
@@ -430,7 +411,7 @@ pub fn fit_performance(
     model: &dyn Blendshapes,
     perf: &Performance,
 ) -> Result<(FittedMeshes, MethodResult), BaselineError> {
-    let unit = performance_unit(perf)?;
+    let unit = perf.unit;
     let start = Instant::now();
     let fits = perf
         .frames

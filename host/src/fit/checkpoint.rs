@@ -9,8 +9,8 @@ use burn::module::Module;
 use burn::optim::ModuleOptimizer;
 use serde::{Deserialize, Serialize};
 
-use crate::fit::performance::Performance;
 use crate::fit::setup::{FitConfig, FitNet};
+use crate::io::performance::Performance;
 use crate::training::checkpoint::{self, CheckpointError, InvalidState, WeightFiles};
 
 /// `format` of a fit checkpoint's `state.json`.

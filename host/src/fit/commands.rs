@@ -1,7 +1,7 @@
 //! The work behind `sinew fit` and `sinew eval fit`.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
@@ -12,10 +12,22 @@ use crate::fit::aim::{Coefficients, Constrain, FitConfig, FitResult, Mode, Start
 use crate::fit::bake::{bake, play};
 use crate::fit::baseline::{Basis, Gbs, PATCH_GRID, Pbs, actor_shape_names, fit_performance};
 use crate::fit::checkpoint::Checkpointing;
-use crate::fit::performance::Performance;
 use crate::fit::retarget::{Input, RetargetReport, SourceFit, create_output, write_parts};
 use crate::io::mesh::Mesh;
+use crate::io::performance::Performance;
 use crate::training::backend::Backend;
+
+/// Where a landmark driver put each frame's head and jaw, for `sinew fit --start driver`.
+#[derive(Clone, Debug)]
+pub struct DrivenStarts {
+    /// The driver file.
+    pub driver: PathBuf,
+    /// Its content hash (16 hex digits), so that a fit resumed from another driver's answer is
+    /// refused.
+    pub driver_hash: String,
+    /// Per frame, the head (9) and the jaw (9) the driver gave.
+    pub starts: Vec<[f32; 18]>,
+}
 
 /// The `sinew fit` report: the fit without its meshes.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -36,8 +48,9 @@ fn read_actor(model: &Path) -> Result<Vec<u8>> {
 /// `sinew fit`: fits the actor to the performance, checkpointing into `OUT.ckpt/` (or
 /// continuing from `resume`); bakes the fit into `out` (a `.sinew` performance, docs/FORMAT.md),
 /// writes the core's playback of it into `OUT_STEM.meshes/` and the report (with per-frame head,
-/// jaw and, for a global fit, coefficients). With `driver` (and [`Start::Driver`]), each frame's
-/// head and jaw start where the landmark driver puts them for the performance's own track.
+/// jaw and, for a global fit, coefficients). With `driven` (and [`Start::Driver`]), each frame's
+/// head and jaw start where a landmark driver put them for the performance's own track
+/// (`crate::driver::commands::driven_starts`).
 #[allow(clippy::too_many_arguments)]
 pub fn fit_command(
     model: &Path,
@@ -46,7 +59,7 @@ pub fn fit_command(
     report: &Path,
     config: &FitConfig,
     resume: Option<&Path>,
-    driver: Option<&Path>,
+    driven: Option<DrivenStarts>,
     backend: Backend,
 ) -> Result<FitReport> {
     let bytes = read_actor(model)?;
@@ -57,19 +70,18 @@ pub fn fit_command(
         dir: resume.unwrap_or(&own),
         resume: resume.is_some(),
     };
-    let (config, driven) = match (config.start, driver) {
-        (Start::Driver, Some(path)) => {
-            let (hash, driven) = driven_starts(model, &bytes, path, target)?;
+    let (config, driven) = match (config.start, driven) {
+        (Start::Driver, Some(d)) => {
             let config = FitConfig {
-                driver: Some(hash),
+                driver: Some(d.driver_hash),
                 ..config.clone()
             };
-            (config, Some(driven))
+            (config, Some(d.starts))
         }
         (Start::Driver, None) => bail!("--start driver needs the driver (--driver D.sinew)"),
-        (_, Some(path)) => bail!(
+        (_, Some(d)) => bail!(
             "{}: a driver is only read with --start driver",
-            path.display()
+            d.driver.display()
         ),
         (_, None) => (config.clone(), None),
     };
@@ -192,32 +204,6 @@ fn aim_rows(config: &FitConfig, constraints: bool) -> Vec<(&'static str, FitConf
         rows.push(("aim_local_2d", with(local, Mode::TwoD, all)));
     }
     rows
-}
-
-/// The driver at `driver_path` bound to the actor at `model` (its `bytes`) and run over the
-/// performance at `target` (its 2D track, or its meshes' landmarks for a 3D driver): its content
-/// hash (16 hex digits) and each frame's head and jaw.
-fn driven_starts(
-    model: &Path,
-    bytes: &[u8],
-    driver_path: &Path,
-    target: &Path,
-) -> Result<(String, Vec<[f32; 18]>)> {
-    use crate::fit::driver::{drive, track};
-    let driver_bytes = crate::io::container::read(driver_path)?;
-    let bound = drive::bind(model, bytes, driver_path, &driver_bytes)?;
-    let placement = track::Placement::of(model, &bound.actor, &bound.driver)?;
-    let track = track::read(target, bound.driver.space(), None, 0.0, placement)?;
-    let poses = drive::poses(&bound, driver_path, &track, None)
-        .with_context(|| format!("{}: driving", target.display()))?;
-    let starts = poses
-        .iter()
-        .map(|p| std::array::from_fn(|i| p[i]))
-        .collect();
-    Ok((
-        format!("{:016x}", sinew_core::replay::model_hash(&driver_bytes)),
-        starts,
-    ))
 }
 
 /// `sinew eval fit`: GBS, PBS and the global and local AIM fits on one performance; with

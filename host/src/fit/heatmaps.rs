@@ -5,16 +5,12 @@
 use std::path::{Path, PathBuf};
 
 use crate::figures::render::{Image, View, render_heatmap};
-use crate::fit::baseline::{BaselineError, performance_unit};
-use crate::fit::performance::Performance;
+use crate::io::performance::Performance;
 
 /// Heatmaps that could not be drawn or written.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum HeatmapError {
-    /// The performance's unit cannot be read (the error names its manifest).
-    #[error(transparent)]
-    Unit(#[from] BaselineError),
     /// A method without a fitted mesh for a frame asked for.
     #[error("frame {frame}: {method} has no fitted mesh for it")]
     MissingFrame {
@@ -59,7 +55,7 @@ pub fn write(
     frames: &[usize],
     out: &Path,
 ) -> Result<Vec<PathBuf>, HeatmapError> {
-    let unit_mm = performance_unit(perf)?.mm();
+    let unit_mm = perf.unit.mm();
     let triangles = fan_triangles(&perf.polygons);
     let mut written = Vec::new();
     for &f in frames {
@@ -111,9 +107,9 @@ mod tests {
     use super::*;
     use crate::fit::aim::FitConfig;
     use crate::fit::commands::eval_fit;
-    use crate::fit::performance::tests::golden_actor;
-    use crate::fit::performance::{PerformanceConfig, generate};
     use crate::io::data::data_dir;
+    use crate::performance::tests::golden_actor;
+    use crate::performance::{PerformanceConfig, generate};
     use crate::training::backend::Backend;
 
     #[test]

@@ -1,4 +1,4 @@
-//! Files in and out: meshes (OBJ, PLY), the ICT-FaceKit reader, ARKit captures (Live Link Face CSV), landmark tracks (OpenFace 2.0 CSV), the `.sinew` writer and
+//! Files in and out: meshes (OBJ, PLY), the ICT-FaceKit reader, ARKit captures (Live Link Face CSV), landmark tracks (OpenFace 2.0 CSV), performance folders, the `.sinew` writer and
 //! inspector, the data-set folders (manifest and numbers), the real-data folder, a baked S2D decoder's template face, and atomic outputs. The lowest layer of the host: it imports
 //! nothing else of the crate.
 
@@ -13,5 +13,6 @@ pub mod ict;
 pub mod inspect;
 pub mod mesh;
 pub mod openface;
+pub mod performance;
 pub mod rig;
 pub mod units;

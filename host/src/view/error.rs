@@ -16,11 +16,11 @@ use crate::io::mesh::MeshError;
 pub enum ViewError {
     /// The landmark driver is no driver, or one of another actor.
     #[error(transparent)]
-    Driver(#[from] crate::fit::driver::drive::DriveError),
+    Driver(#[from] crate::driver::drive::DriveError),
     /// The driver's track cannot be read for it (the error names the file, and a CSV's row and
     /// column).
     #[error(transparent)]
-    Track(#[from] crate::fit::driver::track::TrackError),
+    Track(#[from] crate::driver::track::TrackError),
     /// A `.sinew` file could not be read or is no valid artefact.
     #[error(transparent)]
     Container(#[from] ContainerError),

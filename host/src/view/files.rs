@@ -13,7 +13,7 @@ use sinew_core::replay::{AimReplay, check_model};
 
 use super::error::ViewError;
 use crate::aim::play::PoseFile;
-use crate::fit::driver::track::{self, Placement};
+use crate::driver::track::{self, Placement};
 
 /// The page, its script and style, and the core's JavaScript binding (core/wasm/js).
 const INDEX_HTML: &str = include_str!("web/index.html");
@@ -215,7 +215,7 @@ impl Site {
         let mut driven = None;
         if let Some(d) = inputs.driver {
             let bytes = crate::io::container::read(d.driver)?;
-            let bound = crate::fit::driver::drive::bind(inputs.model, &model, d.driver, &bytes)?;
+            let bound = crate::driver::drive::bind(inputs.model, &model, d.driver, &bytes)?;
             let placement = Placement::of(inputs.model, &bound.actor, &bound.driver)?;
             let space = bound.driver.space();
             let track = track::read(

@@ -2,7 +2,6 @@
 
 use std::path::PathBuf;
 
-use crate::fit::baseline::BaselineError;
 use crate::training::backend::BackendError;
 use crate::training::checkpoint::CheckpointError;
 
@@ -13,9 +12,6 @@ pub enum FitError {
     /// Settings with no iteration, point, code dimension or hidden unit.
     #[error("the fit needs at least one iteration, point, code dimension and hidden unit")]
     EmptyConfig,
-    /// The performance's unit cannot be read.
-    #[error(transparent)]
-    Unit(#[from] BaselineError),
     /// A frame with another vertex count than the actor's.
     #[error("{}: {frame_vertices} vertices, the actor has {actor_vertices}", path.display())]
     VertexCount {

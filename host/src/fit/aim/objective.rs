@@ -3,8 +3,8 @@
 
 use burn::tensor::{Device, Int, Tensor, TensorData};
 
-use crate::fit::performance::Performance;
 use crate::fit::setup::{FitConfig, FitNet, Mode};
+use crate::io::performance::Performance;
 use crate::training::nn::{tensor, to_vec};
 
 use super::error::FitError;

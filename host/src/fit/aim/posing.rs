@@ -4,8 +4,8 @@
 use burn::tensor::{Int, Tensor, TensorData};
 
 use crate::fit::baseline::mean_error_mm;
-use crate::fit::performance::Performance;
 use crate::fit::setup::{Coefficients, FitNet};
+use crate::io::performance::Performance;
 use crate::training::nn::to_vec;
 use crate::training::rotation::rotate_6d;
 

@@ -2,9 +2,9 @@
 //! (at rest, at a rigid alignment, or where a landmark driver put them) and the vertices a step
 //! may draw.
 
-use crate::fit::performance::Performance;
 use crate::fit::setup::{Constrain, FitConfig, Mode, Start};
 use crate::geometry::align::fit_rigid;
+use crate::io::performance::Performance;
 use crate::training::random::Stream;
 
 use super::cache::{ActorCache, IDENTITY_18};

@@ -1,9 +1,9 @@
 use super::cache::IDENTITY_18;
 use super::*;
 use crate::fit::aim::{Constrain, Mode, worst_edge_change};
-use crate::fit::performance::tests::golden_actor;
-use crate::fit::performance::{PerformanceConfig, generate};
 use crate::io::data::data_dir;
+use crate::performance::tests::golden_actor;
+use crate::performance::{PerformanceConfig, generate};
 
 fn short(coefficients: Coefficients) -> FitConfig {
     FitConfig {
@@ -226,7 +226,7 @@ fn the_head_starts_where_a_rigid_alignment_puts_it() {
         return;
     };
     let actor = AimActor::from_bytes(&bytes).unwrap();
-    let mm = performance_unit(&perf).unwrap().mm() as f32;
+    let mm = perf.unit.mm() as f32;
     let cache = ActorCache::new(&actor, mm);
     let starts = rigid_start(&cache, &perf, Mode::ThreeD, None, mm);
     let column = |r6: &[f32], c: usize| -> [f32; 3] { std::array::from_fn(|i| r6[3 * c + i]) };

@@ -1,7 +1,7 @@
 use super::*;
-use crate::fit::performance::tests::golden_actor;
-use crate::fit::performance::{PerformanceConfig, generate};
 use crate::io::data::data_dir;
+use crate::performance::tests::golden_actor;
+use crate::performance::{PerformanceConfig, generate};
 
 /// A short performance on the golden ICT actor and the actor's basis, or `None` without data.
 fn performance(frames: usize) -> Option<(tempfile::TempDir, Performance, Basis)> {

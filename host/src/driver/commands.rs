@@ -16,7 +16,7 @@ use super::drive::{bind, poses, write_frames};
 use super::measure::{DriverMeasure, measure};
 use super::sample::Sampler;
 use super::train::{Normalisation, Run, load_checkpoint, save_checkpoint};
-use crate::fit::performance::Performance;
+use crate::io::performance::Performance;
 use crate::training::backend::Backend;
 use crate::training::checkpoint;
 use crate::training::interrupt::{Pieces, take_stop_request, train_in_pieces};
@@ -224,6 +224,28 @@ pub fn eval_driver(model: &Path, driver: &Path, target: &Path) -> Result<DriverM
     );
     let placement = super::track::Placement::of(model, &bound.actor, &bound.driver)?;
     let track = super::track::read(target, bound.driver.space(), None, 0.0, placement)?;
-    let unit = crate::fit::baseline::performance_unit(&perf)?;
-    Ok(measure(&bound, driver, &track, &perf, unit.mm())?)
+    Ok(measure(&bound, driver, &track, &perf, perf.unit.mm())?)
+}
+
+/// `sinew fit --start driver`'s starts: the driver at `driver_path` bound to the actor at `model`
+/// and run over the performance at `target` (its 2D track, or its meshes' landmarks for a 3D
+/// driver). Returns the driver's content hash (16 hex digits) and each frame's head (9) and jaw
+/// (9).
+pub fn driven_starts(
+    model: &Path,
+    driver_path: &Path,
+    target: &Path,
+) -> Result<(String, Vec<[f32; 18]>)> {
+    let bytes = crate::io::container::read(model)?;
+    let driver_bytes = crate::io::container::read(driver_path)?;
+    let bound = bind(model, &bytes, driver_path, &driver_bytes)?;
+    let placement = super::track::Placement::of(model, &bound.actor, &bound.driver)?;
+    let track = super::track::read(target, bound.driver.space(), None, 0.0, placement)?;
+    let poses = poses(&bound, driver_path, &track, None)
+        .with_context(|| format!("{}: driving", target.display()))?;
+    let starts = poses
+        .iter()
+        .map(|p| std::array::from_fn(|i| p[i]))
+        .collect();
+    Ok((format!("{:016x}", model_hash(&driver_bytes)), starts))
 }

@@ -1,8 +1,11 @@
+use std::path::{Path, PathBuf};
+
 use super::*;
 use crate::io::container::ContainerError;
 use crate::io::data::data_dir;
 use crate::io::dataset::DataSetError;
 use crate::io::mesh::MeshError;
+use crate::io::performance::{Camera, MANIFEST, Performance, PerformanceError};
 
 pub(crate) fn golden_actor() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/aim-ict.sinew")

@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use sinew_core::aim::AimActor;
 use sinew_core::driver::{Driver, Intrinsics, LANDMARKS, Space, normalise_pixels};
 
-use crate::fit::performance::{Performance, PerformanceError};
 use crate::io::openface::{self, OpenFaceError};
+use crate::io::performance::{Performance, PerformanceError};
 
 /// A track in a driver's input space: per frame the landmarks, or `None` where the tracker lost
 /// the face.
@@ -238,7 +238,7 @@ fn performance(dir: &Path, space: Space) -> Result<Track, TrackError> {
     let perf = Performance::read(dir)?;
     let m = &perf.manifest;
     let bad = || TrackError::Landmarks {
-        path: dir.join(crate::fit::performance::MANIFEST),
+        path: dir.join(crate::io::performance::MANIFEST),
     };
     if m.landmarks.vertices.len() != LANDMARKS
         || m.landmarks

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use super::drive::{Bound, DriveError, meshes};
 use super::track::Track;
-use crate::fit::performance::Performance;
+use crate::io::performance::Performance;
 
 /// The driver on one performance.
 #[derive(Clone, Debug, Serialize, Deserialize)]
