@@ -42,7 +42,7 @@ use crate::error::{
 };
 use crate::filter::OneEuro;
 use crate::format::{ArtifactKind, SinewFile, out_of_range};
-use crate::hash::FrameHasher;
+use crate::hash::posed_frame_hash;
 use crate::input::check_values;
 use crate::layout::{MAX_COORDINATE, MAX_FACTOR};
 use crate::linalg::Vec3;
@@ -529,7 +529,7 @@ pub struct DriveBuffers<'b> {
 ///
 /// # Errors
 /// As [`Driver::drive`] and [`AimActor::pose`].
-pub fn frame_hash(
+pub fn drive_frame_hash(
     driver: &Driver<'_>,
     actor: &AimActor<'_>,
     landmarks: &[f32],
@@ -552,10 +552,7 @@ pub fn pose_hash(
 ) -> Result<u64, EvalError> {
     play(actor, pose, positions)?;
     actor.normals(positions, normals)?;
-    let mut h = FrameHasher::new();
-    h.write_f32s(positions);
-    h.write_f32s(normals);
-    Ok(h.finish())
+    Ok(posed_frame_hash(positions, normals))
 }
 
 /// Smooths a driven `pose` (`[18 + M]`, [`Driver::drive`]'s) taken at `time` seconds with the

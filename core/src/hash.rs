@@ -92,10 +92,30 @@ impl fmt::Debug for FrameHasher {
     }
 }
 
-/// The frame hash of `values`: [`FrameHasher::write_f32s`] then [`FrameHasher::finish`].
+/// The frame hash of `values`: [`FrameHasher::write_f32s`] then [`FrameHasher::finish`]. An S2D
+/// frame's hash (replays, generated sequences): its decoded vertices.
 pub fn frame_hash(values: &[f32]) -> u64 {
     let mut h = FrameHasher::new();
     h.write_f32s(values);
+    h.finish()
+}
+
+/// The frame hash of a posed actor in the f32 and fast modes (replays, fitted performances,
+/// driven frames): its `positions`, then its `normals`.
+pub fn posed_frame_hash(positions: &[f32], normals: &[f32]) -> u64 {
+    let mut h = FrameHasher::new();
+    h.write_f32s(positions);
+    h.write_f32s(normals);
+    h.finish()
+}
+
+/// The frame hash of a posed actor in the Q16.16 mode: its fixed-point `positions`' raw bits
+/// ([`FrameHasher::write_u32`] of each; the normals are not computed in that mode).
+pub fn q16_frame_hash(positions: &[crate::q16::Q16]) -> u64 {
+    let mut h = FrameHasher::new();
+    for v in positions {
+        h.write_u32(v.to_bits() as u32);
+    }
     h.finish()
 }
 
@@ -128,6 +148,29 @@ mod tests {
         let mut h = FrameHasher::new();
         h.write_u32(0x3F80_0000);
         assert_eq!(h.finish(), frame_hash(&[1.0]));
+    }
+
+    #[test]
+    fn a_posed_frame_is_its_positions_then_its_normals() {
+        let positions: Vec<f32> = (0..30).map(|i| i as f32 * 0.25 - 3.0).collect();
+        let normals: Vec<f32> = (0..30).map(|i| 1.0 - i as f32 / 30.0).collect();
+        let both: Vec<f32> = positions.iter().chain(&normals).copied().collect();
+        assert_eq!(posed_frame_hash(&positions, &normals), frame_hash(&both));
+        assert_ne!(
+            posed_frame_hash(&positions, &normals),
+            posed_frame_hash(&normals, &positions)
+        );
+        // Q16.16 positions hash their raw 32 bits, as `write_u32` of each.
+        let q16: Vec<crate::q16::Q16> = positions
+            .iter()
+            .map(|&v| crate::q16::Q16::from_num(v))
+            .collect();
+        let mut h = FrameHasher::new();
+        for v in &q16 {
+            h.write_u32(v.to_bits() as u32);
+        }
+        assert_eq!(q16_frame_hash(&q16), h.finish());
+        assert_ne!(q16_frame_hash(&q16), frame_hash(&positions));
     }
 
     #[test]

@@ -7,8 +7,10 @@
 //!
 //! A model is loaded once with `from_bytes`, which validates everything; playing a frame then only
 //! fills buffers the caller owns (`static` arrays on a microcontroller, vectors below) and cannot
-//! fail on model data. [`replay`] holds the one definition of a frame's hash, which every target
-//! compares with the hashes the host recorded.
+//! fail on model data. [`hash`] holds the definitions of a frame's hash (a posed actor's
+//! positions then normals, its Q16.16 positions, an S2D frame's vertices), which every target
+//! compares with the hashes the host recorded; the `*_frame_hash` functions of [`replay`],
+//! [`performance`], [`driver`] and [`sequence`] play one frame and hash it so.
 //!
 //! # Playing an AIM actor
 //!
@@ -18,7 +20,7 @@
 //!
 //! ```
 //! use sinew_core::aim::AimActor;
-//! use sinew_core::hash::FrameHasher;
+//! use sinew_core::hash::posed_frame_hash;
 //! use sinew_core::replay::AimReplay;
 //!
 //! let actor = AimActor::from_bytes(include_bytes!("../../tests/data/aim-procedural.sinew"))?;
@@ -34,11 +36,8 @@
 //! actor.pose(&actor.pose_from_9d(&jaw, &head)?, &weights, &mut positions)?;
 //! actor.normals(&positions, &mut normals)?;
 //!
-//! // The f32 frame hash (`replay::frame_hash`): the positions, then the normals.
-//! let mut hash = FrameHasher::new();
-//! hash.write_f32s(&positions);
-//! hash.write_f32s(&normals);
-//! assert_eq!(Some(hash.finish()), replay.expected(0));
+//! // The f32 frame hash: the positions, then the normals.
+//! assert_eq!(Some(posed_frame_hash(&positions, &normals)), replay.expected(0));
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
 //!
@@ -49,7 +48,7 @@
 //! the decoder's golden replay, which also carries the neutral:
 //!
 //! ```
-//! use sinew_core::hash::FrameHasher;
+//! use sinew_core::hash::frame_hash;
 //! use sinew_core::replay::S2dReplay;
 //! use sinew_core::s2d::S2dDecoder;
 //!
@@ -63,10 +62,8 @@
 //! let mut vertices = vec![0.0f32; 3 * decoder.vertex_count()];
 //! decoder.decode_onto(&neutral, &input, &mut scratch, &mut vertices)?;
 //!
-//! // The S2D frame hash (`replay::s2d_frame_hash`): the decoded vertices.
-//! let mut hash = FrameHasher::new();
-//! hash.write_f32s(&vertices);
-//! assert_eq!(Some(hash.finish()), replay.expected(0));
+//! // The S2D frame hash: the decoded vertices.
+//! assert_eq!(Some(frame_hash(&vertices)), replay.expected(0));
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
 #![no_std]

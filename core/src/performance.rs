@@ -16,7 +16,7 @@
 //! - global: `perf.w`: `f32 [J, M]`;
 //! - local: `perf.z`: `f32 [J, f]`; `perf.box`: `f32 [4]` (centre x, y, z, half extent); the MLP
 //!   `perf.fw` ([`crate::network`]) with `f + 3` inputs and `M` outputs;
-//! - optional `perf.hash`: `u32 [J, 2]`, each frame's f32 hash ([`frame_hash`]) as baked;
+//! - optional `perf.hash`: `u32 [J, 2]`, each frame's f32 hash ([`play_frame_hash`]) as baked;
 //! - optional, local only: `perf.points`: `f32 [V, 3]`, the template points `F_W` is evaluated
 //!   at when they are not the actor's own: a performance retargeted from another actor in
 //!   correspondence (AIM Sec. 5.4) evaluates `w_j(c)` at the source actor's points, where the fit
@@ -25,7 +25,7 @@
 use crate::aim::{AimActor, MAX_SHAPES};
 use crate::error::{Argument, Bound, BufferError, EvalError, FormatError};
 use crate::format::{ArtifactKind, SinewFile, out_of_range};
-use crate::hash::FrameHasher;
+use crate::hash::posed_frame_hash;
 use crate::layout::MAX_COORDINATE;
 use crate::linalg::Vec3;
 use crate::network::{check_bound, load_mlp};
@@ -333,7 +333,7 @@ impl<'a> Performance<'a> {
         }
     }
 
-    /// The baked hash of frame `f` ([`frame_hash`]), if the file carries them.
+    /// The baked hash of frame `f` ([`play_frame_hash`]), if the file carries them.
     pub fn expected(&self, f: usize) -> Option<u64> {
         let h = self.hashes.as_ref()?;
         if f >= self.frames {
@@ -435,7 +435,7 @@ fn check_poses(poses: F32s<'_>) -> Result<(), FormatError> {
 ///
 /// # Errors
 /// As [`Performance::pose`]; [`BufferError::Output`] if `normals` is not `[V, 3]`.
-pub fn frame_hash(
+pub fn play_frame_hash(
     perf: &Performance<'_>,
     actor: &AimActor<'_>,
     f: usize,
@@ -445,19 +445,16 @@ pub fn frame_hash(
 ) -> Result<u64, EvalError> {
     perf.pose(actor, f, scratch, positions)?;
     actor.normals(positions, normals)?;
-    let mut h = FrameHasher::new();
-    h.write_f32s(positions);
-    h.write_f32s(normals);
-    Ok(h.finish())
+    Ok(posed_frame_hash(positions, normals))
 }
 
-/// Plays frame `f` ([`frame_hash`]) and compares its hash with the one baked into the file: the
+/// Plays frame `f` ([`play_frame_hash`]) and compares its hash with the one baked into the file: the
 /// step of every target's performance loop. A performance without baked hashes compares
 /// against the complement of the computed hash, so the check fails rather than passing
 /// vacuously. Call [`Performance::check_actor`] once before the first frame.
 ///
 /// # Errors
-/// As [`frame_hash`].
+/// As [`play_frame_hash`].
 pub fn check_frame(
     perf: &Performance<'_>,
     actor: &AimActor<'_>,
@@ -466,7 +463,7 @@ pub fn check_frame(
     positions: &mut [f32],
     normals: &mut [f32],
 ) -> Result<FrameCheck, EvalError> {
-    let hash = frame_hash(perf, actor, f, scratch, positions, normals)?;
+    let hash = play_frame_hash(perf, actor, f, scratch, positions, normals)?;
     Ok(FrameCheck {
         frame: f,
         hash,

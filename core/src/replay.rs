@@ -13,8 +13,8 @@
 //! ([`S2dDecoder::decode_onto`]; without it, the decoder's own template, [`S2dDecoder::decode`]).
 //! Their mode is always `f32`.
 //!
-//! [`frame_hash`] (AIM) and [`s2d_frame_hash`] (S2D) are the one definition of a frame's hash;
-//! recording (host) and verification (every target) both call them. [`check_frame`] and
+//! [`pose_frame_hash`] (AIM) and [`s2d_frame_hash`] (S2D) play one frame and hash it as
+//! [`crate::hash`] defines; recording (host) and verification (every target) both call them. [`check_frame`] and
 //! [`check_s2d_frame`] play one frame of a replay and compare it with the recording: [`verify`]
 //! and [`verify_s2d`] loop over them, and so do the firmware targets, one frame at a time.
 
@@ -23,7 +23,7 @@ use core::fmt;
 use crate::aim::{AimActor, MAX_SHAPES};
 use crate::error::{Argument, BufferError, EvalError, FormatError, InputError};
 use crate::format::{ArtifactKind, SinewFile};
-use crate::hash::FrameHasher;
+use crate::hash;
 use crate::input::check_values;
 use crate::q16::{PoseQ16, Q16, q16_slice};
 use crate::s2d::S2dDecoder;
@@ -350,12 +350,12 @@ pub fn pose_frame(
 }
 
 /// Poses `actor` for one frame in `mode` ([`pose_frame`]) and returns the frame's hash: in the
-/// f32 and fast modes the positions then the normals ([`FrameHasher::write_f32s`]); in Q16 mode
-/// the positions' raw bits ([`FrameHasher::write_u32`] of each).
+/// f32 and fast modes the positions then the normals ([`hash::posed_frame_hash`]); in Q16 mode
+/// the positions' raw bits ([`hash::q16_frame_hash`]).
 ///
 /// # Errors
 /// As [`pose_frame`].
-pub fn frame_hash(
+pub fn pose_frame_hash(
     actor: &AimActor<'_>,
     mode: Mode,
     head: &[f32; 9],
@@ -363,16 +363,11 @@ pub fn frame_hash(
     buf: &mut FrameBuffers<'_>,
 ) -> Result<u64, ReplayError> {
     pose_frame(actor, mode, head, jaw, buf)?;
-    let mut h = FrameHasher::new();
-    if mode == Mode::Q16 {
-        for v in buf.positions_q16.iter() {
-            h.write_u32(v.to_bits() as u32);
-        }
+    Ok(if mode == Mode::Q16 {
+        hash::q16_frame_hash(buf.positions_q16)
     } else {
-        h.write_f32s(buf.positions);
-        h.write_f32s(buf.normals);
-    }
-    Ok(h.finish())
+        hash::posed_frame_hash(buf.positions, buf.normals)
+    })
 }
 
 /// [`ReplayError::WrongModel`] unless `model_bytes` hash to `expected` ([`model_hash`]).
@@ -437,7 +432,7 @@ impl fmt::Display for FrameCheck {
     }
 }
 
-/// Plays frame `f` of `replay` through `actor` ([`frame_hash`] in the replay's mode) and compares
+/// Plays frame `f` of `replay` through `actor` ([`pose_frame_hash`] in the replay's mode) and compares
 /// its hash with the recorded one: the step of [`verify`] and of every target's replay loop.
 /// `buf.weights` receives the frame's coefficients. Call [`check_model`] once before the first
 /// frame.
@@ -454,7 +449,7 @@ pub fn check_frame(
     let (head, jaw) = replay
         .frame(f, buf.weights)
         .ok_or(ReplayError::Buffer(BufferError::Input))?;
-    let hash = frame_hash(actor, replay.mode(), &head, &jaw, buf)?;
+    let hash = pose_frame_hash(actor, replay.mode(), &head, &jaw, buf)?;
     Ok(FrameCheck {
         frame: f,
         hash,
@@ -628,7 +623,7 @@ pub fn decode_frame(decoder: &S2dDecoder<'_>, buf: &mut S2dBuffers<'_>) -> Resul
 }
 
 /// Decodes one frame ([`decode_frame`]) and returns the frame's hash: the decoded vertices' bits
-/// ([`FrameHasher::write_f32s`]).
+/// ([`hash::frame_hash`]).
 ///
 /// # Errors
 /// [`ReplayError::Buffer`] if a buffer has the wrong length.
@@ -637,9 +632,7 @@ pub fn s2d_frame_hash(
     buf: &mut S2dBuffers<'_>,
 ) -> Result<u64, ReplayError> {
     decode_frame(decoder, buf)?;
-    let mut h = FrameHasher::new();
-    h.write_f32s(buf.vertices);
-    Ok(h.finish())
+    Ok(hash::frame_hash(buf.vertices))
 }
 
 /// Checks that `replay` was recorded with the decoder whose bytes are `model_bytes` (content

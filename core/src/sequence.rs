@@ -189,7 +189,11 @@ impl<'a> Sequence<'a> {
     ///
     /// # Errors
     /// As [`Sequence::frame`].
-    pub fn frame_hash(&self, t: usize, buf: &mut SequenceBuffers<'_>) -> Result<u64, EvalError> {
+    pub fn decode_frame_hash(
+        &self,
+        t: usize,
+        buf: &mut SequenceBuffers<'_>,
+    ) -> Result<u64, EvalError> {
         self.frame(t, buf)?;
         Ok(frame_hash(buf.vertices))
     }
@@ -307,15 +311,15 @@ mod tests {
         s.curve(3, 11, 0.8, &mut b.view()).unwrap();
         assert_eq!(a.curve, b.curve);
         for t in [1, 15, FRAMES] {
-            let ha = s.frame_hash(t, &mut a.view()).unwrap();
-            let hb = s.frame_hash(t, &mut b.view()).unwrap();
+            let ha = s.decode_frame_hash(t, &mut a.view()).unwrap();
+            let hb = s.decode_frame_hash(t, &mut b.view()).unwrap();
             assert_eq!(ha, hb, "frame {t}");
             assert_eq!(ha, frame_hash(&a.vertices));
         }
         // Another seed is another sequence.
-        let first = s.frame_hash(FRAMES, &mut a.view()).unwrap();
+        let first = s.decode_frame_hash(FRAMES, &mut a.view()).unwrap();
         s.curve(3, 12, 0.8, &mut a.view()).unwrap();
-        assert_ne!(s.frame_hash(FRAMES, &mut a.view()).unwrap(), first);
+        assert_ne!(s.decode_frame_hash(FRAMES, &mut a.view()).unwrap(), first);
     }
 
     #[test]

@@ -1,6 +1,6 @@
 //! Recording and verifying replays (`sinew replay record|verify`): a model's content hash, a pose
 //! sequence and the hash of every frame `sinew-core` computes from it, in one numeric mode. The
-//! frames are hashed by `sinew_core::replay::frame_hash`, the same function every firmware target
+//! frames are hashed by `sinew_core::replay::pose_frame_hash`, the same function every firmware target
 //! runs, so a replay recorded here verifies bit for bit anywhere.
 //!
 //! S2D decoders have replays of their own ([`record_s2d`]): per frame the decoder input, and
@@ -15,8 +15,8 @@ use sinew_core::format::ArtifactKind;
 use sinew_core::q16::Q16;
 use sinew_core::replay::{
     AIM_INPUTS, AIM_POSE_LEN, AimReplay, FRAME_HASHES, FrameBuffers, FrameCheck, MODEL_HASH, Mode,
-    ReplayError as CoreReplayError, S2D_INPUTS, S2D_NEUTRAL, S2dBuffers, S2dReplay, frame_hash,
-    hash_words, model_hash, pose_frame, s2d_frame_hash, verify as core_verify, verify_s2d,
+    ReplayError as CoreReplayError, S2D_INPUTS, S2D_NEUTRAL, S2dBuffers, S2dReplay, hash_words,
+    model_hash, pose_frame, pose_frame_hash, s2d_frame_hash, verify as core_verify, verify_s2d,
 };
 use sinew_core::s2d::S2dDecoder;
 
@@ -273,7 +273,7 @@ pub fn record(model: &[u8], mode: Mode, frames: &[Frame]) -> Result<Vec<u8>, Rep
             });
         }
         buf.weights.copy_from_slice(&f.weights);
-        let h = frame_hash(&actor, mode, &f.head, &f.jaw, &mut buf.view())
+        let h = pose_frame_hash(&actor, mode, &f.head, &f.jaw, &mut buf.view())
             .map_err(|source| ReplayError::Frame { frame: i, source })?;
         inputs.extend(f.head.iter().chain(&f.jaw).chain(&f.weights));
         hashes.extend(hash_words(h));

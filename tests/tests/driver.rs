@@ -5,7 +5,7 @@
 use burn::tensor::Device;
 use sinew_core::aim::AimActor;
 use sinew_core::driver::{
-    DriveBuffers, Driver, Intrinsics, LANDMARKS, STEADY, Space, features, frame_hash,
+    DriveBuffers, Driver, Intrinsics, LANDMARKS, STEADY, Space, drive_frame_hash, features,
     normalise_pixels,
 };
 use sinew_core::error::{Argument, Bound, InputError, InputErrorKind};
@@ -67,7 +67,7 @@ fn a_driver_drives_its_actor_to_the_same_bits_every_time() {
         let mut scratch = vec![0.0; driver.scratch_len()];
         let mut pose = vec![0.0; driver.output_len()];
         let (mut positions, mut normals) = (vec![0.0; 3 * v], vec![0.0; 3 * v]);
-        let h = frame_hash(
+        let h = drive_frame_hash(
             &driver,
             &actor,
             &sample.input,

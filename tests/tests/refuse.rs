@@ -10,7 +10,7 @@ use sinew_core::error::{Argument, Bound, InputError, InputErrorKind, SectionName
 use sinew_core::motion::MotionGenerator;
 use sinew_core::performance::Performance;
 use sinew_core::q16::Q16;
-use sinew_core::replay::{FrameBuffers, Mode, ReplayError, frame_hash};
+use sinew_core::replay::{FrameBuffers, Mode, ReplayError, pose_frame_hash};
 use sinew_core::s2d::S2dDecoder;
 use sinew_core::{EvalError, FormatError};
 use sinew_tests::{map_f32, with_f32};
@@ -65,7 +65,7 @@ impl Frame {
             weights: &mut self.weights,
             weights_q16: &mut self.weights_q16,
         };
-        frame_hash(actor, mode, head, jaw, &mut buf)
+        pose_frame_hash(actor, mode, head, jaw, &mut buf)
     }
 
     fn untouched(&self) -> bool {

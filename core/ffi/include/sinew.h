@@ -496,7 +496,7 @@ enum SinewStatus sinew_aim_pose(const struct SinewModel *model,
                                 struct SinewError *err);
 
 // Poses an AIM frame in `mode` (a `SINEW_MODE_*` code) and writes its hash to `*hash`: the very
-// hash `sinew replay record` pins and every target checks (`sinew_core::replay::frame_hash`).
+// hash `sinew replay record` pins and every target checks (`sinew_core::replay::pose_frame_hash`).
 // f32 and fast modes hash the positions then the normals, Q16 mode the positions' raw Q16.16
 // bits. Inputs are refused as `sinew_aim_pose` refuses them, in every mode alike.
 //
@@ -656,7 +656,7 @@ enum SinewStatus sinew_performance_expected(const struct SinewPerformance *perf,
 // jaw and coefficients, the local ones evaluated per vertex by F_W (eq. 19). Writes
 // `positions` (`3 * vertex_count`) and, when `normals` is not NULL, the area-weighted vertex
 // normals; when `hash` is not NULL too, the frame's hash (positions then normals, exactly
-// `sinew_core::performance::frame_hash`, the hash `sinew fit` bakes). A `hash` without `normals`
+// `sinew_core::performance::play_frame_hash`, the hash `sinew fit` bakes). A `hash` without `normals`
 // is `SINEW_STATUS_NULL_POINTER`: the hash covers the normals.
 //
 // `scratch`: at least `scratch_floats` of the performance info; contents on entry ignored.

@@ -334,7 +334,7 @@ pub(crate) fn mode_of(code: u32) -> Result<Mode> {
 }
 
 /// Poses an AIM frame in `mode` (a `SINEW_MODE_*` code) and writes its hash to `*hash`: the very
-/// hash `sinew replay record` pins and every target checks (`sinew_core::replay::frame_hash`).
+/// hash `sinew replay record` pins and every target checks (`sinew_core::replay::pose_frame_hash`).
 /// f32 and fast modes hash the positions then the normals, Q16 mode the positions' raw Q16.16
 /// bits. Inputs are refused as `sinew_aim_pose` refuses them, in every mode alike.
 ///
@@ -394,7 +394,8 @@ pub unsafe extern "C" fn sinew_aim_frame_hash(
                 weights_q16: &mut [],
             }
         };
-        let h = replay::frame_hash(actor, mode, &head, &jaw, &mut buf).map_err(Fail::replay)?;
+        let h =
+            replay::pose_frame_hash(actor, mode, &head, &jaw, &mut buf).map_err(Fail::replay)?;
         ptr::write(hash, h, "hash")
     })
 }

@@ -3,7 +3,7 @@
 //! at every vertex, AIM eq. 19), played on the actor they were fitted to.
 
 use sinew_core::aim::AimActor;
-use sinew_core::performance::{Performance, frame_hash as perf_hash};
+use sinew_core::performance::{Performance, play_frame_hash};
 use sinew_core::{ArtifactKind, SinewFile};
 
 use crate::model::{SinewModel, expect_len, expect_scratch};
@@ -269,7 +269,7 @@ pub unsafe extern "C" fn sinew_performance_expected(
 /// jaw and coefficients, the local ones evaluated per vertex by F_W (eq. 19). Writes
 /// `positions` (`3 * vertex_count`) and, when `normals` is not NULL, the area-weighted vertex
 /// normals; when `hash` is not NULL too, the frame's hash (positions then normals, exactly
-/// `sinew_core::performance::frame_hash`, the hash `sinew fit` bakes). A `hash` without `normals`
+/// `sinew_core::performance::play_frame_hash`, the hash `sinew fit` bakes). A `hash` without `normals`
 /// is `SINEW_STATUS_NULL_POINTER`: the hash covers the normals.
 ///
 /// `scratch`: at least `scratch_floats` of the performance info; contents on entry ignored.
@@ -311,7 +311,7 @@ pub unsafe extern "C" fn sinew_performance_pose(
         match normals {
             // The core's own frame hash: pose, normals, then positions and normals hashed.
             Some(n) if !hash.is_null() => {
-                let h = perf_hash(&perf.perf, actor, f, scratch, positions, n)
+                let h = play_frame_hash(&perf.perf, actor, f, scratch, positions, n)
                     .map_err(|e| Fail::eval("performance pose", e))?;
                 ptr::write(hash, h, "hash")?;
             }

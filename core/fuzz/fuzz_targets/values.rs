@@ -18,9 +18,9 @@ use sinew_core::format::{
 };
 use sinew_core::layout::{MAX_COORDINATE, MAX_FACTOR, MAX_ROTATION_ENTRY};
 use sinew_core::motion::{LABELS, MotionGenerator};
-use sinew_core::performance::{Performance, frame_hash as performance_hash};
+use sinew_core::performance::{Performance, play_frame_hash};
 use sinew_core::q16::Q16;
-use sinew_core::replay::{FrameBuffers, Mode, ReplayError, frame_hash, model_hash};
+use sinew_core::replay::{FrameBuffers, Mode, ReplayError, model_hash, pose_frame_hash};
 use sinew_core::s2d::S2dDecoder;
 use sinew_core::sequence::{Sequence, SequenceBuffers};
 use sinew_core::{EvalError, SinewFile};
@@ -187,7 +187,7 @@ fn aim(bytes: &[u8], rng: &mut Rng) {
             weights: &mut w,
             weights_q16: &mut wq,
         };
-        match frame_hash(&actor, mode, &head, &jaw, &mut buf) {
+        match pose_frame_hash(&actor, mode, &head, &jaw, &mut buf) {
             Ok(_) => assert!(
                 finite(&positions) && finite(&normals),
                 "{mode}: a non-finite output from accepted inputs"
@@ -283,7 +283,7 @@ fn performance(bytes: &[u8], rng: &mut Rng) {
     let mut scratch = vec![0.0f32; perf.scratch_len()];
     let mut positions = vec![0.0f32; 3 * actor.vertex_count()];
     let mut normals = vec![0.0f32; positions.len()];
-    performance_hash(&perf, &actor, f, &mut scratch, &mut positions, &mut normals).unwrap();
+    play_frame_hash(&perf, &actor, f, &mut scratch, &mut positions, &mut normals).unwrap();
     assert!(
         finite(&positions) && finite(&normals),
         "frame {f}: a non-finite output"

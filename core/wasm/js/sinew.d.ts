@@ -160,7 +160,7 @@ export class Performance {
   frame(f: number): PerformanceFrame;
   /** `[vertexCount * 3]` `model` posed for frame `f`; throws unless fitted to `model`. */
   pose(model: Model, f: number): Float32Array;
-  /** Frame `f` posed, normals and hash computed in the module: sinew-core's `performance::frame_hash`. */
+  /** Frame `f` posed, normals and hash computed in the module: sinew-core's `performance::play_frame_hash`. */
   frameHash(model: Model, f: number): string;
   /** The hash baked for frame `f`, 16 hex digits, or null when the file carries none. */
   expected(f: number): string | null;
@@ -266,7 +266,7 @@ export function frameHashQ16(values: Int32Array): string;
 
 /**
  * A frame's hash, 16 hex digits: the values of every array in order. `frameHash(positions,
- * normals)` equals sinew-core's `replay::frame_hash` in the f32 mode, `frameHash(vertices)` its
- * `replay::s2d_frame_hash`.
+ * normals)` equals sinew-core's `hash::posed_frame_hash` (an f32 frame's), `frameHash(vertices)`
+ * its `hash::frame_hash` (an S2D frame's).
  */
 export function frameHash(...arrays: Floats[]): string;

@@ -325,7 +325,7 @@ impl Model {
 }
 
 /// The hash of a frame: the values of `parts` in order, as [`FrameHasher::write_f32s`] writes
-/// them. `[positions, normals]` gives [`sinew_core::replay::frame_hash`] in the f32 mode,
+/// them. `[positions, normals]` gives [`sinew_core::hash::posed_frame_hash`] (the f32 mode's),
 /// `[vertices]` gives [`sinew_core::replay::s2d_frame_hash`].
 pub fn frame_hash(parts: &[&[f32]]) -> u64 {
     let mut h = FrameHasher::new();

@@ -118,7 +118,7 @@ impl Model {
 }
 
 /// The hash of a Q16 frame: each raw Q16.16 value's 32 bits in order, as
-/// [`sinew_core::replay::frame_hash`] hashes the Q16 mode's positions.
+/// [`sinew_core::hash::q16_frame_hash`] hashes the Q16 mode's positions.
 pub fn frame_hash_q16(values: &[i32]) -> u64 {
     let mut h = FrameHasher::new();
     for v in values {

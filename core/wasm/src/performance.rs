@@ -1,7 +1,7 @@
 //! A fitted performance (`sinew fit --out FIT.sinew`) that owns its bytes, played on the AIM
 //! actor it was fitted to: per frame the core's [`Performance::pose`] (AIM eq. 17, with the local
 //! coefficients of eq. 19 where the fit has them) and the frame hash every target computes
-//! ([`sinew_core::performance::frame_hash`]).
+//! ([`sinew_core::performance::play_frame_hash`]).
 
 use self_cell::self_cell;
 use sinew_core::aim::AimActor;
@@ -178,7 +178,7 @@ impl Performance {
     }
 
     /// Frame `f`'s hash as every target computes it: posed, normals, then
-    /// [`sinew_core::performance::frame_hash`].
+    /// [`sinew_core::performance::play_frame_hash`].
     ///
     /// # Errors
     /// As [`Self::pose`].
@@ -188,7 +188,7 @@ impl Performance {
         let mut scratch = vec![0.0; self.core().scratch_len()];
         let mut positions = vec![0.0; 3 * actor.vertex_count()];
         let mut normals = vec![0.0; positions.len()];
-        Ok(perf::frame_hash(
+        Ok(perf::play_frame_hash(
             self.core(),
             actor,
             f,

@@ -1,6 +1,6 @@
 // The golden fitted performance through the JavaScript API: tests/data/fit-ict.sinew played on
 // aim-ict.sinew in WebAssembly must hash, frame by frame, as baked into the file and as listed
-// in tests/data/fit-ict.hashes (the x86_64 host's sinew_core::performance::frame_hash). Then the
+// in tests/data/fit-ict.hashes (the x86_64 host's sinew_core::performance::play_frame_hash). Then the
 // refusals a page can meet.
 //
 // Usage: bash core/wasm/build.sh && node --test core/wasm/test/

@@ -1,6 +1,6 @@
 //! The Rust layer under the WebAssembly module, on the host: the golden replays played through
 //! [`Model`] and [`Replay`] hash as recorded, and [`frame_hash`] of positions and normals is the
-//! core's own `replay::frame_hash` in the f32 mode. (The same replays through the JavaScript
+//! core's own `replay::pose_frame_hash` in the f32 mode. (The same replays through the JavaScript
 //! API, in WebAssembly: `core/wasm/test/golden.test.mjs`.)
 #![allow(
     clippy::unwrap_used,
@@ -53,11 +53,12 @@ fn aim_replays_hash_as_recorded_and_as_the_core_hashes() {
                 weights: &mut w,
                 weights_q16: &mut [],
             };
-            let core = sinew_core::replay::frame_hash(&actor, Mode::F32, &head, &jaw, &mut buf);
+            let core =
+                sinew_core::replay::pose_frame_hash(&actor, Mode::F32, &head, &jaw, &mut buf);
             assert_eq!(
                 hash,
                 core.unwrap(),
-                "{name} frame {f}: the core's frame_hash"
+                "{name} frame {f}: the core's pose_frame_hash"
             );
         }
     }

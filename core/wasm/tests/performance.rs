@@ -1,6 +1,6 @@
 //! A fitted performance through the Rust layer under the WebAssembly module, on the host: the
 //! golden fit `tests/data/fit-ict.sinew` played on `aim-ict.sinew` hashes as baked, as listed in
-//! `fit-ict.hashes` and as the core's own `performance::frame_hash` computes; other actors are
+//! `fit-ict.hashes` and as the core's own `performance::play_frame_hash` computes; other actors are
 //! refused. (The same through the JavaScript API: `core/wasm/test/performance.test.mjs`.)
 #![allow(
     clippy::unwrap_used,
@@ -10,7 +10,7 @@
 )]
 
 use sinew_core::aim::AimActor;
-use sinew_core::performance::{Performance as CorePerformance, frame_hash as core_frame_hash};
+use sinew_core::performance::{Performance as CorePerformance, play_frame_hash};
 use sinew_wasm::{Model, Performance, frame_hash};
 
 fn data(name: &str) -> Vec<u8> {
@@ -60,8 +60,8 @@ fn the_golden_fit_hashes_as_baked_listed_and_as_the_core_computes() {
         assert_eq!(hash, *listed, "frame {f} in fit-ict.hashes");
         assert_eq!(perf.expected(f).unwrap(), Some(hash), "frame {f} as baked");
         assert_eq!(perf.frame_hash(&model, f).unwrap(), hash, "frame {f}");
-        let core_hash = core_frame_hash(&core, &actor, f, &mut scratch, &mut p, &mut n).unwrap();
-        assert_eq!(hash, core_hash, "frame {f}: the core's frame_hash");
+        let core_hash = play_frame_hash(&core, &actor, f, &mut scratch, &mut p, &mut n).unwrap();
+        assert_eq!(hash, core_hash, "frame {f}: the core's play_frame_hash");
         assert_eq!(positions, p, "frame {f}: the core's positions");
 
         let frame = perf.frame(f).unwrap();

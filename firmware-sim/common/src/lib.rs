@@ -3,7 +3,7 @@
 //! on the x86_64 host (`tests/data/*.replay.sinew`: the model's content hash, the pose of every
 //! frame and the hash the host computed for it, in one numeric mode). A target plays each frame
 //! through `sinew-core` ([`sinew_core::replay::check_frame`], the step of the host's
-//! verification, which hashes with [`sinew_core::replay::frame_hash`], the function the host
+//! verification, which hashes with [`sinew_core::replay::pose_frame_hash`], the function the host
 //! recorded with) and compares hashes.
 //!
 //! The S2D golden ([`S2D_GOLDENS`], [`s2d::S2dRun`], [`s2d::replay_s2d`]) is a baked S2D decoder and its
@@ -408,7 +408,7 @@ impl fmt::Display for PhaseCosts {
 /// retired instructions on RISC-V, SysTick on the Cortex-M).
 ///
 /// This repeats the steps of [`sinew_core::replay::pose_frame`] and
-/// [`sinew_core::replay::frame_hash`] (posing in each mode, each mode's normals, hashing) only so
+/// [`sinew_core::replay::pose_frame_hash`] (posing in each mode, each mode's normals, hashing) only so
 /// that the counter can be read between them, in every mode on the same frame; the replays
 /// themselves ([`Replay`], [`s2d::S2dRun`]) play through the core's functions.
 pub fn phase_costs(

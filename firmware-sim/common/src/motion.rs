@@ -116,7 +116,7 @@ impl<'s> MotionRun<'s> {
         let expected = self.hashes.expected(t);
         let hash = self
             .sequence
-            .frame_hash(t, &mut carve(&self.sequence, self.arena)?)
+            .decode_frame_hash(t, &mut carve(&self.sequence, self.arena)?)
             .map_err(|e| Error::Playback(ReplayError::from(e)))?;
         Ok(FrameCheck {
             frame: t,
@@ -204,7 +204,7 @@ impl fmt::Display for MotionCosts {
 
 /// Measures the curve's generation and the decoding and hashing of frame `t` of the generated
 /// `golden` separately with `now`. Both steps are the core's [`Sequence::curve`] and
-/// [`Sequence::frame`]; the hashing half of [`Sequence::frame_hash`] is repeated here only so
+/// [`Sequence::frame`]; the hashing half of [`Sequence::decode_frame_hash`] is repeated here only so
 /// that the counter can be read between the two.
 pub fn motion_costs(
     golden: &Golden,

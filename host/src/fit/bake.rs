@@ -129,7 +129,7 @@ pub fn play(actor_bytes: &[u8], perf_bytes: &[u8]) -> Result<(Vec<Vec<f32>>, Vec
     let mut hashes = Vec::with_capacity(p.frames());
     for f in 0..p.frames() {
         let mut positions = vec![0.0; 3 * v];
-        let h = perf::frame_hash(&p, &actor, f, &mut scratch, &mut positions, &mut normals)
+        let h = perf::play_frame_hash(&p, &actor, f, &mut scratch, &mut positions, &mut normals)
             .map_err(|source| BakeError::Frame { frame: f, source })?;
         frames.push(positions);
         hashes.push(h);
