@@ -160,6 +160,55 @@ pub fn fit(
     skin_landmarks: &SkinLandmarks,
     templates: &BoneTemplates,
 ) -> Result<FittedBones, BonesError> {
+    let mm = check_inputs(neutral, skin_landmarks)?;
+    let frame = FaceFrame::new(neutral, skin_landmarks)?;
+    let skin = Skin::of(neutral);
+    let pairs = landmark_pairs(templates, skin_landmarks, &skin, mm)?;
+    let mirror = Mirror::midsagittal(&frame, skin_landmarks, &skin.pos);
+    let init = initial_similarity(&pairs, &mirror);
+    let (mut targets, taken) = patch_targets(neutral, &skin, &pairs, templates, skin_landmarks, mm);
+    let closed_head = calvarium_targets(
+        &skin,
+        &taken,
+        &frame,
+        skin_landmarks,
+        templates,
+        mm,
+        &mut targets,
+    )?;
+    let fit = GroupFit {
+        neutral,
+        frame: &frame,
+        targets: &targets,
+        pairs: &pairs,
+        init,
+        mirror,
+        closed_head,
+        mm,
+    };
+    let (skull_report, skull_tf) = fit.group(Bone::Skull, &templates.skull_points());
+    let (jaw_report, jaw_tf) = fit.group(Bone::Jaw, &templates.jaw_points());
+    let tf_of = |b: Bone| match b {
+        Bone::Skull => skull_tf,
+        Bone::Jaw => jaw_tf,
+    };
+    let landmarks = landmark_reports(&pairs, tf_of, &skin.pos, mm);
+    let (skull, jaw) = templates.placed(&skull_tf, &jaw_tf);
+    Ok(FittedBones {
+        skull,
+        jaw,
+        report: FitReport {
+            mm_per_unit: mm as f32,
+            frame,
+            cranium_registration: templates.cranium_registration,
+            groups: vec![skull_report, jaw_report],
+            landmarks,
+        },
+    })
+}
+
+/// The skin's mm per unit, once the neutral and the skin landmarks are known to fit together.
+fn check_inputs(neutral: &Mesh, skin_landmarks: &SkinLandmarks) -> Result<f64, BonesError> {
     let mm = skin_landmarks.mm_per_unit as f64;
     if !(mm > 0.0 && mm.is_finite()) {
         return Err(BonesError::MmPerUnit {
@@ -184,25 +233,57 @@ pub fn fit(
             vertices: nv,
         });
     }
-    let frame = FaceFrame::new(neutral, skin_landmarks)?;
-    let comp = components(neutral);
-    let normals = oriented_normals(neutral, &comp);
-    let pos: Vec<[f64; 3]> = neutral.positions.iter().map(|p| to64(*p)).collect();
+    Ok(mm)
+}
 
-    // Landmark pairs: bone landmark → skin landmark pushed in by the expected thickness.
-    struct Pair<'a> {
-        lm: &'a BoneLandmark,
-        vertex: u32,
-        target: [f64; 3],
+/// The neutral skin as the fit reads it: positions in `f64`, outward normals, and the connected
+/// component of each vertex.
+struct Skin {
+    pos: Vec<V3>,
+    normals: Vec<V3>,
+    comp: Vec<u32>,
+}
+
+impl Skin {
+    fn of(neutral: &Mesh) -> Self {
+        let comp = components(neutral);
+        let normals = oriented_normals(neutral, &comp);
+        let pos = neutral.positions.iter().map(|p| to64(*p)).collect();
+        Self { pos, normals, comp }
     }
-    let pairs: Vec<Pair<'_>> = templates
+}
+
+/// A bone landmark and its skin landmark pushed in by the expected thickness.
+struct LandmarkPair<'a> {
+    lm: &'a BoneLandmark,
+    /// The skin vertex.
+    vertex: u32,
+    /// Where the bone landmark belongs, skin units.
+    target: V3,
+}
+
+impl LandmarkPair<'_> {
+    fn weighted(&self) -> bool {
+        self.lm.weight > 0.0
+    }
+}
+
+/// Every bone landmark whose skin landmark the face has, paired with its target under the skin;
+/// [`BonesError::TooFewLandmarks`] unless each bone has three weighted ones.
+fn landmark_pairs<'a>(
+    templates: &'a BoneTemplates,
+    skin_landmarks: &SkinLandmarks,
+    skin: &Skin,
+    mm: f64,
+) -> Result<Vec<LandmarkPair<'a>>, BonesError> {
+    let pairs: Vec<LandmarkPair<'_>> = templates
         .landmarks
         .iter()
         .filter_map(|lm| {
             let v = *skin_landmarks.vertices.get(&lm.name)?;
             let d = lm.fstt_mm as f64 / mm;
-            let target = sub(pos[v as usize], scale(normals[v as usize], d));
-            Some(Pair {
+            let target = sub(skin.pos[v as usize], scale(skin.normals[v as usize], d));
+            Some(LandmarkPair {
                 lm,
                 vertex: v,
                 target,
@@ -212,55 +293,42 @@ pub fn fit(
     for bone in [Bone::Skull, Bone::Jaw] {
         let n = pairs
             .iter()
-            .filter(|p| p.lm.bone == bone && p.lm.weight > 0.0)
+            .filter(|p| p.lm.bone == bone && p.weighted())
             .count();
         if n < 3 {
             return Err(BonesError::TooFewLandmarks { bone, count: n });
         }
     }
-    let (lx, ly, lw): (Vec<_>, Vec<_>, Vec<_>) = {
-        let mut x = Vec::new();
-        let mut y = Vec::new();
-        let mut w = Vec::new();
-        for p in pairs.iter().filter(|p| p.lm.weight > 0.0) {
-            x.push(to64(p.lm.position));
-            y.push(p.target);
-            w.push(p.lm.weight as f64);
-        }
-        (x, y, w)
-    };
-    // Symmetry: the templates are mirror-symmetric about their x = 0 plane; every pair is also
-    // used mirrored (template across x = 0, skin across the face's midsagittal plane), so the
-    // fit maps one plane onto the other and cannot yaw or roll the bones to one side. The
-    // plane has normal `left` and passes through the midline landmarks and the zygia's midpoint.
-    let left = to64(frame.left);
-    let mid_offset = {
-        let mut acc = Vec::new();
-        for n in ["nasion", "menton"] {
-            if let Some(&v) = skin_landmarks.vertices.get(n) {
-                acc.push(dot(pos[v as usize], left));
-            }
-        }
-        if let (Some(&a), Some(&b)) = (
-            skin_landmarks.vertices.get("zygion_l"),
-            skin_landmarks.vertices.get("zygion_r"),
-        ) {
-            acc.push(0.5 * (dot(pos[a as usize], left) + dot(pos[b as usize], left)));
-        }
-        acc.iter().sum::<f64>() / acc.len().max(1) as f64
-    };
-    let mirror = Mirror {
-        left,
-        offset: mid_offset,
-    };
-    let (lx, ly, lw) = mirror.symmetrize(&lx, &ly, &lw);
-    let init = fit_similarity(&lx, &ly, &lw);
+    Ok(pairs)
+}
 
-    // ICP targets: geodesic patches around the weighted landmarks and the extra patches, then
-    // the calvarium. Each source: (skin vertex, radius, thickness in units, bone).
+/// The start of both groups' ICP: Horn's similarity from the weighted landmark pairs, each also
+/// used mirrored.
+fn initial_similarity(pairs: &[LandmarkPair<'_>], mirror: &Mirror) -> Affine {
+    let (mut x, mut y, mut w) = (Vec::new(), Vec::new(), Vec::new());
+    for p in pairs.iter().filter(|p| p.weighted()) {
+        x.push(to64(p.lm.position));
+        y.push(p.target);
+        w.push(p.lm.weight as f64);
+    }
+    let (x, y, w) = mirror.symmetrize(&x, &y, &w);
+    fit_similarity(&x, &y, &w)
+}
+
+/// The ICP targets of the geodesic patches around the weighted landmarks and the templates'
+/// extra patches, each pushed in by its thickness; and which skin vertices they took.
+fn patch_targets(
+    neutral: &Mesh,
+    skin: &Skin,
+    pairs: &[LandmarkPair<'_>],
+    templates: &BoneTemplates,
+    skin_landmarks: &SkinLandmarks,
+    mm: f64,
+) -> (Vec<Target>, Vec<bool>) {
+    // Each source: (skin vertex, radius, thickness in units, bone).
     let mut sources: Vec<(u32, f64, f64, Bone)> = pairs
         .iter()
-        .filter(|p| p.lm.weight > 0.0)
+        .filter(|p| p.weighted())
         .map(|p| {
             (
                 p.vertex,
@@ -281,22 +349,38 @@ pub fn fit(
         }
     }
     let radii: Vec<(u32, f64)> = sources.iter().map(|s| (s.0, s.1)).collect();
-    let label = geodesic_labels(neutral, &pos, &radii);
+    let label = geodesic_labels(neutral, &skin.pos, &radii);
     let mut targets = Vec::new();
-    let mut taken = vec![false; nv];
+    let mut taken = vec![false; skin.pos.len()];
     for (v, l) in label.iter().enumerate() {
         let Some(k) = *l else { continue };
         let (centre, _, d, bone) = sources[k];
-        if dot(normals[v], normals[centre as usize]) < PAIR_MIN_COS {
+        if dot(skin.normals[v], skin.normals[centre as usize]) < PAIR_MIN_COS {
             continue;
         }
         taken[v] = true;
         targets.push(Target {
-            point: sub(pos[v], scale(normals[v], d)),
-            normal: normals[v],
+            point: sub(skin.pos[v], scale(skin.normals[v], d)),
+            normal: skin.normals[v],
             bone,
         });
     }
+    (targets, taken)
+}
+
+/// Adds the calvarium's targets (the nasion's component above the brows, not `taken` by a
+/// patch, pushed in by the calvarium's thickness) to `targets`; whether the skin is a whole head
+/// (enough of them face backwards).
+fn calvarium_targets(
+    skin: &Skin,
+    taken: &[bool],
+    frame: &FaceFrame,
+    skin_landmarks: &SkinLandmarks,
+    templates: &BoneTemplates,
+    mm: f64,
+    targets: &mut Vec<Target>,
+) -> Result<bool, BonesError> {
+    let pos = &skin.pos;
     let up = to64(frame.up);
     let forward = to64(frame.forward);
     let nasion =
@@ -320,86 +404,135 @@ pub fn fit(
     let above = brow + templates.calvarium_above_brows_mm as f64 / mm;
     let calv_d = templates.calvarium_thickness_mm as f64 / mm;
     let mut backward = 0;
-    for v in 0..nv {
-        if taken[v] || comp[v] != comp[nasion as usize] || dot(pos[v], up) <= above {
+    for v in 0..pos.len() {
+        if taken[v] || skin.comp[v] != skin.comp[nasion as usize] || dot(pos[v], up) <= above {
             continue;
         }
-        if dot(normals[v], forward) < -0.3 {
+        if dot(skin.normals[v], forward) < -0.3 {
             backward += 1;
         }
         targets.push(Target {
-            point: sub(pos[v], scale(normals[v], calv_d)),
-            normal: normals[v],
+            point: sub(pos[v], scale(skin.normals[v], calv_d)),
+            normal: skin.normals[v],
             bone: Bone::Skull,
         });
     }
-    let closed_head = backward >= CLOSED_HEAD_TARGETS;
+    Ok(backward >= CLOSED_HEAD_TARGETS)
+}
 
-    // The two groups.
-    let skull_src: Vec<[f64; 3]> = templates
-        .maxilla
-        .positions
-        .iter()
-        .chain(&templates.cranium.positions)
-        .map(|p| to64(*p))
-        .collect();
-    let skull_n: Vec<[f64; 3]> = templates
-        .maxilla
-        .vertex_normals()
-        .into_iter()
-        .chain(templates.cranium.vertex_normals())
-        .map(to64)
-        .collect();
-    let jaw_src: Vec<[f64; 3]> = templates.jaw.positions.iter().map(|p| to64(*p)).collect();
-    let jaw_n: Vec<[f64; 3]> = templates
-        .jaw
-        .vertex_normals()
-        .into_iter()
-        .map(to64)
-        .collect();
+/// A bone group's template points and their normals (mm frame).
+struct GroupPoints {
+    points: Vec<V3>,
+    normals: Vec<V3>,
+}
 
-    let mut groups = Vec::new();
-    let mut transforms = Vec::new();
-    for (bone, src, srcn) in [
-        (Bone::Skull, &skull_src, &skull_n),
-        (Bone::Jaw, &jaw_src, &jaw_n),
-    ] {
-        let tg: Vec<Target> = targets.iter().copied().filter(|t| t.bone == bone).collect();
-        let lm: Vec<([f64; 3], [f64; 3], f64)> = pairs
+impl BoneTemplates {
+    /// The skull group's points: the maxilla's, then the cranium's.
+    fn skull_points(&self) -> GroupPoints {
+        GroupPoints {
+            points: (self.maxilla.positions.iter())
+                .chain(&self.cranium.positions)
+                .map(|p| to64(*p))
+                .collect(),
+            normals: (self.maxilla.vertex_normals().into_iter())
+                .chain(self.cranium.vertex_normals())
+                .map(to64)
+                .collect(),
+        }
+    }
+
+    /// The jaw group's points.
+    fn jaw_points(&self) -> GroupPoints {
+        GroupPoints {
+            points: self.jaw.positions.iter().map(|p| to64(*p)).collect(),
+            normals: self.jaw.vertex_normals().into_iter().map(to64).collect(),
+        }
+    }
+
+    /// The skull (maxilla and cranium, one mesh, maxilla vertices first) and the jaw moved by
+    /// their fitted transforms.
+    fn placed(&self, skull_tf: &Affine, jaw_tf: &Affine) -> (Mesh, Mesh) {
+        let moved = |m: &Mesh, tf: &Affine| {
+            Mesh::new(
+                m.positions
+                    .iter()
+                    .map(|p| to32(tf.apply(to64(*p))))
+                    .collect(),
+                m.polygons.clone(),
+            )
+        };
+        let mut skull = moved(&self.maxilla, skull_tf);
+        let offset = skull.positions.len() as u32;
+        let cranium = moved(&self.cranium, skull_tf);
+        skull.positions.extend(cranium.positions);
+        skull.polygons.extend(
+            cranium
+                .polygons
+                .into_iter()
+                .map(|p| p.into_iter().map(|v| v + offset).collect()),
+        );
+        (skull, moved(&self.jaw, jaw_tf))
+    }
+}
+
+/// What every group's fit shares.
+struct GroupFit<'a> {
+    neutral: &'a Mesh,
+    frame: &'a FaceFrame,
+    targets: &'a [Target],
+    pairs: &'a [LandmarkPair<'a>],
+    init: Affine,
+    mirror: Mirror,
+    closed_head: bool,
+    mm: f64,
+}
+
+impl GroupFit<'_> {
+    /// One group's ICP from the initial similarity (the skull of a whole head affine, unless
+    /// that stretches it more than [`MAX_ANISOTROPY`]), its report and its transform.
+    fn group(&self, bone: Bone, template: &GroupPoints) -> (GroupReport, Affine) {
+        let mm = self.mm;
+        let tg: Vec<Target> = (self.targets.iter().copied())
+            .filter(|t| t.bone == bone)
+            .collect();
+        let lm: Vec<([f64; 3], [f64; 3], f64)> = self
+            .pairs
             .iter()
-            .filter(|p| p.lm.bone == bone && p.lm.weight > 0.0)
+            .filter(|p| p.lm.bone == bone && p.weighted())
             .map(|p| (to64(p.lm.position), p.target, p.lm.weight as f64))
             .collect();
         let icp = Icp {
-            src,
-            normals: srcn,
+            src: &template.points,
+            normals: &template.normals,
             targets: &tg,
             landmarks: &lm,
             cell: CELL_MM / mm,
             floor: REJECT_FLOOR_MM / mm,
-            mirror,
+            mirror: self.mirror,
         };
-        let mut model = if bone == Bone::Skull && closed_head {
+        let mut model = if bone == Bone::Skull && self.closed_head {
             Model::Affine
         } else {
             Model::Similarity
         };
-        let mut run = icp.run(init, model);
+        let mut run = icp.run(self.init, model);
         let sv = singular_values(run.tf.a);
         if model == Model::Affine && sv[0] > MAX_ANISOTROPY * sv[2] {
             model = Model::Similarity;
-            run = icp.run(init, model);
+            run = icp.run(self.init, model);
         }
         let sv = singular_values(run.tf.a);
-        let moved: Vec<[f32; 3]> = src.iter().map(|p| to32(run.tf.apply(*p))).collect();
+        let moved: Vec<[f32; 3]> = (template.points.iter())
+            .map(|p| to32(run.tf.apply(*p)))
+            .collect();
         let behind = behind_skin(
-            neutral,
-            &frame,
+            self.neutral,
+            self.frame,
             &moved,
             (NEAR_DEPTH_MM as f64 / mm) as f32,
             (1.0 / mm) as f32,
         );
-        groups.push(GroupReport {
+        let report = GroupReport {
             bone,
             model,
             transform: run.tf.matrix(),
@@ -414,18 +547,20 @@ pub fn fit(
             rms_residual: run.rms as f32,
             iterations: run.iterations,
             behind_skin: behind,
-        });
-        transforms.push((bone, run.tf));
+        };
+        (report, run.tf)
     }
-    let tf_of = |b: Bone| {
-        transforms
-            .iter()
-            .find(|t| t.0 == b)
-            .map(|t| t.1)
-            .unwrap_or(init)
-    };
+}
 
-    let landmarks = pairs
+/// Each landmark after the fit: how far its fitted bone point lies from its target and from the
+/// skin.
+fn landmark_reports(
+    pairs: &[LandmarkPair<'_>],
+    tf_of: impl Fn(Bone) -> Affine,
+    pos: &[V3],
+    mm: f64,
+) -> Vec<LandmarkReport> {
+    pairs
         .iter()
         .map(|p| {
             let b = tf_of(p.lm.bone).apply(to64(p.lm.position));
@@ -439,39 +574,7 @@ pub fn fit(
                 depth_mm: (norm(sub(b, pos[p.vertex as usize])) * mm) as f32,
             }
         })
-        .collect();
-    let moved = |m: &Mesh, tf: &Affine| {
-        Mesh::new(
-            m.positions
-                .iter()
-                .map(|p| to32(tf.apply(to64(*p))))
-                .collect(),
-            m.polygons.clone(),
-        )
-    };
-    let skull_tf = tf_of(Bone::Skull);
-    let mut skull = moved(&templates.maxilla, &skull_tf);
-    let offset = skull.positions.len() as u32;
-    let cranium = moved(&templates.cranium, &skull_tf);
-    skull.positions.extend(cranium.positions);
-    skull.polygons.extend(
-        cranium
-            .polygons
-            .into_iter()
-            .map(|p| p.into_iter().map(|v| v + offset).collect()),
-    );
-    let jaw = moved(&templates.jaw, &tf_of(Bone::Jaw));
-    Ok(FittedBones {
-        skull,
-        jaw,
-        report: FitReport {
-            mm_per_unit: mm as f32,
-            frame,
-            cranium_registration: templates.cranium_registration,
-            groups,
-            landmarks,
-        },
-    })
+        .collect()
 }
 
 /// The ICP problem of one bone group.
@@ -499,6 +602,31 @@ struct Mirror {
 }
 
 impl Mirror {
+    /// The templates are mirror-symmetric about their x = 0 plane; every pair is also used
+    /// mirrored (template across x = 0, skin across the face's midsagittal plane), so the fit
+    /// maps one plane onto the other and cannot yaw or roll the bones to one side. The skin's
+    /// plane has normal `left` and passes through the midline landmarks and the zygia's
+    /// midpoint.
+    fn midsagittal(frame: &FaceFrame, skin_landmarks: &SkinLandmarks, pos: &[V3]) -> Self {
+        let left = to64(frame.left);
+        let mut acc = Vec::new();
+        for n in ["nasion", "menton"] {
+            if let Some(&v) = skin_landmarks.vertices.get(n) {
+                acc.push(dot(pos[v as usize], left));
+            }
+        }
+        if let (Some(&a), Some(&b)) = (
+            skin_landmarks.vertices.get("zygion_l"),
+            skin_landmarks.vertices.get("zygion_r"),
+        ) {
+            acc.push(0.5 * (dot(pos[a as usize], left) + dot(pos[b as usize], left)));
+        }
+        Self {
+            left,
+            offset: acc.iter().sum::<f64>() / acc.len().max(1) as f64,
+        }
+    }
+
     fn template(&self, p: V3) -> V3 {
         [-p[0], p[1], p[2]]
     }
