@@ -16,7 +16,6 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use sinew_core::aim::AimActor;
 use sinew_core::linalg::{Mat3, Vec3};
 use sinew_core::rotation::to_6d;
 use sinew_core::skinning::{BoneTransform, lbs};
@@ -235,10 +234,7 @@ struct Topology {
 /// bit, a vertex of the face region (decimation keeps vertices; it does not move them).
 fn actor_topology(actor_path: &Path, face: &Mesh) -> Result<Topology, GenerateError> {
     let bytes = crate::io::container::read(actor_path)?;
-    let actor = AimActor::from_bytes(&bytes).map_err(|source| GenerateError::NotAnActor {
-        path: actor_path.to_owned(),
-        source,
-    })?;
+    let actor = crate::io::container::actor(actor_path, &bytes)?;
     let by_bits: HashMap<[u32; 3], u32> = face
         .positions
         .iter()

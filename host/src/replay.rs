@@ -138,15 +138,6 @@ pub enum ReplayFileError {
         #[source]
         source: serde_json::Error,
     },
-    /// The model is neither an S2D decoder nor an AIM actor.
-    #[error("{}", path.display())]
-    NotAnActor {
-        /// The model file.
-        path: PathBuf,
-        /// What the core said.
-        #[source]
-        source: FormatError,
-    },
     /// The pose file is unreadable or does not fit the actor.
     #[error(transparent)]
     Poses(#[from] PoseFileError),
@@ -566,10 +557,7 @@ pub fn replay_record(
         crate::io::atomic::write(out, &replay)?;
         return Ok(inputs.len());
     }
-    let actor = AimActor::from_bytes(&bytes).map_err(|source| ReplayFileError::NotAnActor {
-        path: model.to_path_buf(),
-        source,
-    })?;
+    let actor = crate::io::container::actor(model, &bytes)?;
     let file = PoseFile::read(poses, actor.shape_count())?;
     let replay = crate::replay::record(&bytes, mode, &file.frames).map_err(recording)?;
     crate::io::atomic::write(out, &replay)?;

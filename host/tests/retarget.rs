@@ -15,10 +15,9 @@ use sinew_core::performance::{self as perf, Performance};
 use sinew_core::replay::ReplayError;
 use sinew_host::fit::bake::play;
 use sinew_host::fit::retarget::{
-    Input, Part, Plan, RetargetError, create_output, read_actor, retarget, retarget_planned,
-    write_parts,
+    Input, Part, Plan, RetargetError, create_output, retarget, retarget_planned, write_parts,
 };
-use sinew_host::io::container::{ContainerError, SinewWriter};
+use sinew_host::io::container::{ContainerError, SinewWriter, read_actor};
 
 fn golden(name: &str) -> PathBuf {
     PathBuf::from(repo(&format!("tests/data/{name}")))
@@ -210,7 +209,7 @@ fn retargeting_refuses_fits_of_another_actor_and_files_of_another_kind() {
     )
     .unwrap_err();
     assert!(
-        matches!(&e, RetargetError::NotAnActor { path, .. } if path.ends_with("fit-ict.sinew")),
+        matches!(&e, RetargetError::Read(ContainerError::NotAnActor { path, .. }) if path.ends_with("fit-ict.sinew")),
         "{e:?}"
     );
     let e = retarget_files(
@@ -462,7 +461,7 @@ fn writing_the_parts_names_a_missing_fit_and_an_output_that_cannot_be_a_folder()
         "{e:?}"
     );
     let e = read_actor(&golden("fit-ict.sinew")).unwrap_err();
-    assert!(matches!(e, RetargetError::NotAnActor { .. }), "{e:?}");
+    assert!(matches!(e, ContainerError::NotAnActor { .. }), "{e:?}");
 }
 
 #[test]

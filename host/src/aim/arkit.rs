@@ -271,7 +271,7 @@ pub fn playback_of(
 /// and writes the channel mapping to `arkit.json` beside them.
 pub fn play_arkit(model: &Path, capture: &Path, out: &Path) -> Result<Playback, ArkitError> {
     let bytes = crate::io::container::read(model).map_err(PlayError::from)?;
-    let actor = crate::aim::play::actor(model, &bytes)?;
+    let actor = crate::io::container::actor(model, &bytes).map_err(PlayError::from)?;
     let playback = playback(&actor, capture)?;
     crate::aim::play::play_frames(&actor, &playback.frames, out, None)?;
     let summary = serde_json::json!({

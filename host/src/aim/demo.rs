@@ -1,10 +1,7 @@
 //! `sinew demo`: the built-in face (the ICT-FaceKit face region, [`super::demo_face`]) trained,
 //! baked, measured, played back and pictured, with no data files.
 
-use std::path::{Path, PathBuf};
-
-use sinew_core::FormatError;
-use sinew_core::aim::AimActor;
+use std::path::Path;
 
 use crate::aim::AimConfig;
 use crate::aim::config::InvalidConfig;
@@ -39,15 +36,6 @@ pub enum DemoError {
     /// The baked actor could not be read back.
     #[error(transparent)]
     Container(#[from] ContainerError),
-    /// The baked file is not an AIM actor.
-    #[error("{}", path.display())]
-    NotAnActor {
-        /// The model file.
-        path: PathBuf,
-        /// What the core said.
-        #[source]
-        source: FormatError,
-    },
     /// The actor carries no training poses.
     #[error(transparent)]
     Eval(#[from] EvalError),
@@ -98,10 +86,7 @@ pub fn demo(out: &Path, config: &AimConfig, quiet: bool) -> Result<Report, DemoE
 
     // Play a short sequence back through the core: open the jaw, then smile on both sides.
     let bytes = crate::io::container::read(&model)?;
-    let actor = AimActor::from_bytes(&bytes).map_err(|source| DemoError::NotAnActor {
-        path: model.clone(),
-        source,
-    })?;
+    let actor = crate::io::container::actor(&model, &bytes)?;
     let poses = crate::aim::eval::training_poses(&actor)?;
     let index = |name: &str| set.names.iter().position(|n| n == name);
     let frames: Vec<serde_json::Value> = (0..24)

@@ -4,8 +4,6 @@
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
-use sinew_core::FormatError;
-use sinew_core::aim::AimActor;
 
 use crate::figures::render::PngError;
 use crate::io::container::ContainerError;
@@ -18,15 +16,6 @@ pub enum EditError {
     /// The model file could not be read or is no `.sinew` artefact.
     #[error(transparent)]
     Container(#[from] ContainerError),
-    /// The model is not an AIM actor.
-    #[error("{}", path.display())]
-    NotAnActor {
-        /// The model file.
-        path: PathBuf,
-        /// What the core said.
-        #[source]
-        source: FormatError,
-    },
     /// A negative or non-finite scale.
     #[error("--scale must be a finite non-negative number, got {scale}")]
     Scale {
@@ -154,10 +143,7 @@ pub fn edit_thickness(
     out: &Path,
 ) -> Result<(), EditError> {
     let bytes = crate::io::container::read(model)?;
-    let actor = AimActor::from_bytes(&bytes).map_err(|source| EditError::NotAnActor {
-        path: model.to_path_buf(),
-        source,
-    })?;
+    let actor = crate::io::container::actor(model, &bytes)?;
     if !scale.is_finite() || scale < 0.0 {
         return Err(EditError::Scale { scale });
     }

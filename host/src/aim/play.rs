@@ -4,7 +4,6 @@
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use sinew_core::FormatError;
 use sinew_core::aim::AimActor;
 
 use crate::io::container::ContainerError;
@@ -67,15 +66,6 @@ pub enum PlayError {
     /// The model file could not be read or is no `.sinew` artefact.
     #[error(transparent)]
     Container(#[from] ContainerError),
-    /// The model is not an AIM actor.
-    #[error("{}", path.display())]
-    NotAnActor {
-        /// The model file.
-        path: PathBuf,
-        /// What the core said.
-        #[source]
-        source: FormatError,
-    },
     /// The pose file is unreadable or does not fit the actor.
     #[error(transparent)]
     Poses(#[from] PoseFileError),
@@ -109,14 +99,6 @@ pub fn rig_record(
         .get(crate::rig::record::KEY)
         .map(|value| crate::rig::record::Record::parse(value, actor.vertex_count()))
         .transpose()
-}
-
-/// Parses an AIM actor from `bytes`, naming `path` when they are not one.
-pub(crate) fn actor<'a>(path: &Path, bytes: &'a [u8]) -> Result<AimActor<'a>, PlayError> {
-    AimActor::from_bytes(bytes).map_err(|source| PlayError::NotAnActor {
-        path: path.to_path_buf(),
-        source,
-    })
 }
 
 /// One frame of a pose file.
@@ -196,7 +178,7 @@ pub fn play(
     template: Option<&Mesh>,
 ) -> Result<usize, PlayError> {
     let bytes = crate::io::container::read(model)?;
-    let actor = actor(model, &bytes)?;
+    let actor = crate::io::container::actor(model, &bytes)?;
     let file = PoseFile::read(poses, actor.shape_count())?;
     play_frames(&actor, &file.frames, out, template)
 }

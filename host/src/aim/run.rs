@@ -13,7 +13,7 @@ use super::train::{TERMS, TrainError, TrainOptions, Trained, train};
 use super::{AimConfig, ErrorStats, TrainingSet};
 use crate::figures::render::{Image, PngError, View, render_heatmap};
 use crate::io::atomic::AtomicWriteError;
-use crate::io::container::WriterError;
+use crate::io::container::{ContainerError, WriterError};
 use crate::io::mesh::MeshError;
 
 /// Why an AIM run (train, bake, measure, report) or its pictures failed.
@@ -43,15 +43,9 @@ pub enum RunError {
     /// The model, configuration or report could not be written.
     #[error(transparent)]
     Write(#[from] AtomicWriteError),
-    /// The model file is not an AIM actor.
-    #[error("{}", path.display())]
-    NotAnActor {
-        /// The model file.
-        path: PathBuf,
-        /// What the core said.
-        #[source]
-        source: FormatError,
-    },
+    /// The model file is not an AIM actor (the error names it).
+    #[error(transparent)]
+    Container(#[from] ContainerError),
     /// The model's bytes are not an AIM actor (no file involved).
     #[error("model")]
     Model(#[source] FormatError),
@@ -230,10 +224,7 @@ pub fn evaluate(
     iterations: usize,
     model: &Path,
 ) -> Result<Report, RunError> {
-    let actor = AimActor::from_bytes(bytes).map_err(|source| RunError::NotAnActor {
-        path: model.to_path_buf(),
-        source,
-    })?;
+    let actor = crate::io::container::actor(model, bytes)?;
     let errors = shape_errors(&actor, &set.names, &set.shapes, set.mm_per_unit)?;
     let jaw_degrees = crate::aim::eval::training_poses(&actor)?
         .iter()
@@ -487,7 +478,7 @@ mod tests {
         )
         .unwrap_err();
         assert!(
-            matches!(&err, RunError::NotAnActor { path, .. } if *path == file),
+            matches!(&err, RunError::Container(ContainerError::NotAnActor { path, .. }) if *path == file),
             "{err}"
         );
         assert!(anatomy_surface(&golden).is_ok());

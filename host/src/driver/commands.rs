@@ -5,7 +5,6 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, ensure};
 use serde::{Deserialize, Serialize};
-use sinew_core::aim::AimActor;
 use sinew_core::driver::Intrinsics;
 use sinew_core::filter::OneEuro;
 use sinew_core::replay::model_hash;
@@ -16,6 +15,7 @@ use super::drive::{bind, poses, write_frames};
 use super::measure::{DriverMeasure, measure};
 use super::sample::Sampler;
 use super::train::{Normalisation, Run, load_checkpoint, save_checkpoint};
+use crate::io::container::{self, read_actor};
 use crate::io::performance::Performance;
 use crate::training::backend::Backend;
 use crate::training::checkpoint;
@@ -59,13 +59,6 @@ pub struct TrainDriverReport {
     pub history: Vec<f32>,
 }
 
-fn read_actor(model: &Path) -> Result<Vec<u8>> {
-    let bytes = crate::io::container::read(model)?;
-    AimActor::from_bytes(&bytes)
-        .map_err(|e| anyhow!("{}: not an AIM actor: {e}", model.display()))?;
-    Ok(bytes)
-}
-
 /// `sinew train driver`: trains (or resumes), checkpoints, bakes the driver, writes the loss
 /// picture beside it (`OUT` with extension `losses.png`) and the report.
 pub fn train_driver(opts: &TrainDriver) -> Result<TrainDriverReport> {
@@ -74,8 +67,8 @@ pub fn train_driver(opts: &TrainDriver) -> Result<TrainDriverReport> {
         config.steps > 0 && config.batch > 0 && config.hidden > 0 && opts.checkpoint_every > 0,
         "steps, batch, hidden units and the checkpoint interval must be positive"
     );
-    let bytes = read_actor(&opts.model)?;
-    let actor = AimActor::from_bytes(&bytes).map_err(|e| anyhow!("{e}"))?;
+    let bytes = container::read(&opts.model)?;
+    let actor = container::actor(&opts.model, &bytes)?;
     let vertices = super::landmark_vertices(&opts.model, &actor)?;
     let sampler = Sampler::new(&actor, &vertices, config);
     let norm = Normalisation::measure(&sampler, config.seed);

@@ -4,15 +4,15 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
-use sinew_core::aim::AimActor;
 
 use crate::fit::aim::{Coefficients, Constrain, FitConfig, FitResult, Mode, Start, fit, fit_from};
 use crate::fit::bake::{bake, play};
 use crate::fit::baseline::{Basis, Gbs, PATCH_GRID, Pbs, actor_shape_names, fit_performance};
 use crate::fit::checkpoint::Checkpointing;
 use crate::fit::retarget::{Input, RetargetReport, SourceFit, create_output, write_parts};
+use crate::io::container::{self, read_actor};
 use crate::io::mesh::Mesh;
 use crate::io::performance::Performance;
 use crate::training::backend::Backend;
@@ -38,13 +38,6 @@ pub struct FitReport {
     pub fit: FitResult,
 }
 
-fn read_actor(model: &Path) -> Result<Vec<u8>> {
-    let bytes = crate::io::container::read(model)?;
-    AimActor::from_bytes(&bytes)
-        .map_err(|e| anyhow!("{}: not an AIM actor: {e}", model.display()))?;
-    Ok(bytes)
-}
-
 /// `sinew fit`: fits the actor to the performance, checkpointing into `OUT.ckpt/` (or
 /// continuing from `resume`); bakes the fit into `out` (a `.sinew` performance, docs/FORMAT.md),
 /// writes the core's playback of it into `OUT_STEM.meshes/` and the report (with per-frame head,
@@ -62,8 +55,8 @@ pub fn fit_command(
     driven: Option<DrivenStarts>,
     backend: Backend,
 ) -> Result<FitReport> {
-    let bytes = read_actor(model)?;
-    let actor = AimActor::from_bytes(&bytes).map_err(|e| anyhow!("{}: {e}", model.display()))?;
+    let bytes = container::read(model)?;
+    let actor = container::actor(model, &bytes)?;
     let perf = Performance::read(target)?;
     let own = crate::training::checkpoint::checkpoint_dir_for(out);
     let checkpoints = Checkpointing {
@@ -119,8 +112,8 @@ pub fn fit_command(
 /// `sinew play --performance`: plays a baked performance on its actor through the core, one OBJ
 /// per frame in `out`; returns the frame count.
 pub fn play_performance(model: &Path, performance: &Path, out: &Path) -> Result<usize> {
-    let bytes = read_actor(model)?;
-    let actor = AimActor::from_bytes(&bytes).map_err(|e| anyhow!("{}: {e}", model.display()))?;
+    let bytes = container::read(model)?;
+    let actor = container::actor(model, &bytes)?;
     let baked = crate::io::container::read(performance)?;
     let (frames, _) = play(&bytes, &baked).with_context(|| {
         format!(
@@ -219,8 +212,8 @@ pub fn eval_fit(
     heatmaps: Option<&Path>,
     backend: Backend,
 ) -> Result<EvalReport> {
-    let bytes = read_actor(model)?;
-    let actor = AimActor::from_bytes(&bytes).map_err(|e| anyhow!("{}: {e}", model.display()))?;
+    let bytes = container::read(model)?;
+    let actor = container::actor(model, &bytes)?;
     let perf = Performance::read(target)?;
     let names = actor_shape_names(model, &bytes)?;
     let basis = Basis::of_performance(&perf, &names)?;
@@ -281,8 +274,8 @@ pub fn retarget_command(
     out: &Path,
     strip: Option<&[usize]>,
 ) -> Result<RetargetReport> {
-    let source_bytes = crate::fit::retarget::read_actor(source)?;
-    let target_bytes = crate::fit::retarget::read_actor(target)?;
+    let source_bytes = read_actor(source)?;
+    let target_bytes = read_actor(target)?;
     create_output(out)?;
     let (fit_path, fit_seconds, fit_error) = match input {
         SourceFit::Baked(path) => (path.clone(), None, None),

@@ -67,10 +67,7 @@ impl Part {
 
 /// Reads `input` as an AIM actor.
 fn actor<'a>(input: Input<'a>) -> Result<AimActor<'a>, RetargetError> {
-    AimActor::from_bytes(input.bytes).map_err(|source| RetargetError::NotAnActor {
-        path: input.path.to_owned(),
-        source,
-    })
+    Ok(crate::io::container::actor(input.path, input.bytes)?)
 }
 
 /// The `.sinew` performance of `part` of `fit` (a performance of the actor `source`) retargeted
@@ -284,20 +281,6 @@ pub struct Retargeted {
     pub strip: Image,
     /// How the actors were matched.
     pub plan: Plan,
-}
-
-/// Reads `path` and checks that it is an AIM actor; returns its bytes.
-///
-/// # Errors
-/// [`RetargetError::Read`] if the file cannot be read as a `.sinew` file,
-/// [`RetargetError::NotAnActor`] if it is not an actor.
-pub fn read_actor(path: &Path) -> Result<Vec<u8>, RetargetError> {
-    let bytes = crate::io::container::read(path)?;
-    actor(Input {
-        path,
-        bytes: &bytes,
-    })?;
-    Ok(bytes)
 }
 
 /// Creates the output folder `out`.

@@ -1,9 +1,12 @@
-//! The `.sinew` writer. The reader and every constant live in `sinew_core::format`; this module
-//! only lays bytes out as `docs/FORMAT.md` specifies, so the two cannot drift apart.
+//! The `.sinew` writer, and a file's bytes read and checked by the core (any artefact, or an AIM
+//! actor: the one reader of an actor file). The reader and every constant live in
+//! `sinew_core::format`; this module only lays bytes out as `docs/FORMAT.md` specifies, so the
+//! two cannot drift apart.
 
 use std::path::{Path, PathBuf};
 
 use sinew_core::FormatError;
+use sinew_core::aim::AimActor;
 use sinew_core::format::{
     ArtifactKind, CRC32, Dtype, ENTRY_CRC, ENTRY_DTYPE, ENTRY_KIND, ENTRY_LENGTH, ENTRY_NAME,
     ENTRY_OFFSET, ENTRY_RANK, HEADER_CRC, HEADER_FILE_LEN, HEADER_FLAGS, HEADER_KIND, HEADER_LEN,
@@ -31,6 +34,16 @@ pub enum ContainerError {
         /// The file.
         path: PathBuf,
         /// Why.
+        #[source]
+        source: FormatError,
+    },
+    /// A valid artefact that is not an AIM actor where one is expected (or an actor the core
+    /// refuses).
+    #[error("{}: not an AIM actor", path.display())]
+    NotAnActor {
+        /// The file.
+        path: PathBuf,
+        /// What the core said.
         #[source]
         source: FormatError,
     },
@@ -410,6 +423,23 @@ pub fn read(path: &Path) -> Result<Vec<u8>, ContainerError> {
     let bytes = read_bytes(path)?;
     sinew_core::SinewFile::from_bytes(&bytes).map_err(|source| invalid(path, source))?;
     Ok(bytes)
+}
+
+/// Reads an AIM actor file: its bytes, checked by the core as an actor ([`actor`] parses them
+/// again where the actor is needed), naming the file in any error.
+pub fn read_actor(path: &Path) -> Result<Vec<u8>, ContainerError> {
+    let bytes = read(path)?;
+    actor(path, &bytes)?;
+    Ok(bytes)
+}
+
+/// The AIM actor in `bytes`, read from `path`: [`ContainerError::NotAnActor`] naming the file
+/// when they are not one.
+pub fn actor<'a>(path: &Path, bytes: &'a [u8]) -> Result<AimActor<'a>, ContainerError> {
+    AimActor::from_bytes(bytes).map_err(|source| ContainerError::NotAnActor {
+        path: path.to_owned(),
+        source,
+    })
 }
 
 /// Reads a file's bytes without validating them.

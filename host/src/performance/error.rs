@@ -3,8 +3,6 @@
 
 use std::path::PathBuf;
 
-use sinew_core::error::FormatError;
-
 use crate::io::atomic::AtomicWriteError;
 use crate::io::container::ContainerError;
 use crate::io::ict::IctError;
@@ -41,18 +39,9 @@ pub enum GenerateError {
     /// The ICT-FaceKit folder cannot be read (the error names the file).
     #[error(transparent)]
     Kit(#[from] IctError),
-    /// The actor file cannot be read as a `.sinew` file (the error names it).
+    /// The actor file cannot be read, or is not an AIM actor (the error names it).
     #[error(transparent)]
     ActorFile(#[from] ContainerError),
-    /// An actor file that is not an AIM actor.
-    #[error("{}: not an AIM actor", path.display())]
-    NotAnActor {
-        /// The actor file.
-        path: PathBuf,
-        /// What the core said.
-        #[source]
-        source: FormatError,
-    },
     /// An actor whose template point is not a vertex of the kit's face region.
     #[error(
         "{}: template vertex {vertex} at {position:?} is not a vertex of the ICT-FaceKit face \

@@ -1,5 +1,7 @@
 use std::path::{Path, PathBuf};
 
+use sinew_core::aim::AimActor;
+
 use super::*;
 use crate::io::container::ContainerError;
 use crate::io::data::data_dir;

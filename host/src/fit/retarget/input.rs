@@ -24,15 +24,6 @@ pub struct Input<'a> {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum RetargetError {
-    /// An actor file that is not an AIM actor.
-    #[error("{}: not an AIM actor", path.display())]
-    NotAnActor {
-        /// The actor file.
-        path: PathBuf,
-        /// What the core said.
-        #[source]
-        source: FormatError,
-    },
     /// A fit file that is not a `.sinew` performance.
     #[error("{}: not a performance", path.display())]
     NotAPerformance {
@@ -133,7 +124,8 @@ pub enum RetargetError {
         #[source]
         source: Box<BakeError>,
     },
-    /// A file that cannot be read as a `.sinew` file (the error names it).
+    /// A file that cannot be read as a `.sinew` file, or an actor file that is not an AIM actor
+    /// (the error names it).
     #[error(transparent)]
     Read(#[from] ContainerError),
     /// The output folder cannot be created.
