@@ -13,6 +13,7 @@ rustup target add thumbv7em-none-eabihf wasm32-unknown-unknown >/dev/null
 step "fmt"
 cargo fmt --all --check
 (cd core/fuzz && cargo fmt --check)
+(cd host/fuzz && cargo fmt --check)
 
 step "clippy"
 # The ndarray backend is linted here (once), so its narrow deprecation allowance stays checked.
@@ -23,6 +24,12 @@ RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace --locked
 
 step "no_std core for thumbv7em-none-eabihf"
 cargo build -p sinew-core --target thumbv7em-none-eabihf --locked
+
+step "gltfpack for the rig tests (npm, host/tests/gltfpack)"
+if ! command -v npm >/dev/null; then
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq nodejs npm >/dev/null
+fi
+(cd host/tests/gltfpack && npm ci --no-audit --no-fund --silent)
 
 step "tests"
 cargo test --workspace --locked

@@ -12,16 +12,19 @@ mod file;
 mod gltf;
 mod obj;
 mod write;
-pub use file::{IDENTITY, RigFile, RigFormat, RigReadError};
+pub use file::{
+    Avatar, DroppedExpression, Expression, ExpressionProblem, ExtensionUse, IDENTITY, RigFile,
+    RigFormat, RigReadError, Treatment,
+};
 pub use gltf::COMPENSATION_KEY;
 pub use write::RigWriteError;
 
 impl RigFile {
-    /// Reads the rig at `path`: a `.glb`/`.gltf` file (its skin being the mesh named `mesh`, or
+    /// Reads the rig at `path`: a `.glb`/`.gltf`/`.vrm` file (its skin being the mesh named `mesh`, or
     /// the one with the most morph targets) or an OBJ folder.
     pub fn read(path: &Path, mesh: Option<&str>) -> Result<Self, RigReadError> {
         let lower = path.to_string_lossy().to_ascii_lowercase();
-        let rig = if lower.ends_with(".glb") || lower.ends_with(".gltf") {
+        let rig = if [".glb", ".gltf", ".vrm"].iter().any(|e| lower.ends_with(e)) {
             gltf::read(path, mesh)?
         } else if path.is_dir() {
             obj::read(path)?

@@ -13,6 +13,7 @@ use crate::figures::render::{Image, PngError, View, render};
 use crate::geometry::symmetry::symmetry_plane;
 use crate::geometry::vec3::{norm, sub, to64};
 use crate::io::atomic::{AtomicWriteError, WriteStep};
+use crate::io::rig::{Avatar, ExtensionUse};
 
 /// Why `rig inspect` could not finish.
 #[derive(Debug, thiserror::Error)]
@@ -59,6 +60,13 @@ pub struct RigReport {
     pub format: &'static str,
     /// The skin mesh.
     pub mesh: String,
+    /// The glTF extensions the rig uses, each with whether it is required and what Sinew made
+    /// of it (`decoded`, or `not_read`: it concerns only what Sinew does not read).
+    pub extensions: Vec<ExtensionUse>,
+    /// A VRM avatar's expressions as shapes: each one's morph target binds and weights, and
+    /// the expressions not taken and why.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vrm: Option<Avatar>,
     /// The rig's length unit.
     pub units: &'static str,
     /// Whether the unit was guessed from the head's size.
@@ -148,6 +156,8 @@ pub fn report(rig: &Rig, found: &Found) -> Result<RigReport, RigError> {
         rig: rig.path().display().to_string(),
         format: rig.file.format.name(),
         mesh: rig.file.mesh_name.clone(),
+        extensions: rig.file.extensions.clone(),
+        vrm: rig.file.avatar.clone(),
         units: rig.conventions.units.name(),
         units_guessed: rig.conventions.units_guessed,
         up: rig.conventions.up,

@@ -169,6 +169,8 @@ pub fn sample(
             deltas,
             node_transform: placement.node_transform,
             units: Some(placement.units),
+            extensions: Vec::new(),
+            avatar: None,
         },
         landmarks: landmarks.iter().map(|&p| back(p)).collect(),
     })

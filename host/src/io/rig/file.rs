@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+use serde::Serialize;
+
 use crate::io::mesh::{InvalidMesh, Mesh, MeshError};
 use crate::io::units::Unit;
 
@@ -47,6 +49,65 @@ pub struct RigFile {
     pub node_transform: [[f64; 4]; 4],
     /// The unit the file states (glTF: metres); `None` where the format has none (OBJ).
     pub units: Option<Unit>,
+    /// The glTF extensions the file uses and what Sinew made of each (empty for OBJ).
+    pub extensions: Vec<ExtensionUse>,
+    /// A VRM avatar's expressions, which are then the rig's shapes; `None` for other rigs.
+    pub avatar: Option<Avatar>,
+}
+
+/// A glTF extension a rig uses, and what Sinew made of it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct ExtensionUse {
+    /// The extension's name.
+    pub name: String,
+    /// Whether the file lists it in `extensionsRequired`.
+    pub required: bool,
+    /// What Sinew did with it.
+    pub treatment: Treatment,
+}
+
+/// What Sinew does with an extension a rig uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Treatment {
+    /// Sinew decodes it (quantised or compressed geometry, a VRM avatar's expressions).
+    Decoded,
+    /// It concerns only what Sinew does not read (textures, materials, lights, animation,
+    /// physics), so the skin and its shapes read the same without it.
+    NotRead,
+}
+
+/// A VRM avatar's expressions, each of which is one of the rig's shapes: the sum of its morph
+/// target binds, each target by its weight.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Avatar {
+    /// `1.0` (`VRMC_vrm`) or `0.x` (`VRM`).
+    pub version: &'static str,
+    /// The expressions that became shapes, in the rig's shape order.
+    pub expressions: Vec<Expression>,
+    /// The expressions, or parts of them, that did not, and why.
+    pub dropped: Vec<DroppedExpression>,
+}
+
+/// One expression of a VRM avatar as a shape.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Expression {
+    /// Its name: the preset's (`aa`, `blink`, `happy`, …; VRM 0.x presets under VRM 1.0's
+    /// names) or the custom expression's.
+    pub name: String,
+    /// Whether it is one of VRM's presets.
+    pub preset: bool,
+    /// The face mesh's morph targets it binds, by name, with their weights.
+    pub binds: Vec<(String, f32)>,
+}
+
+/// An expression, or a part of one, that is not a shape.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DroppedExpression {
+    /// The expression.
+    pub name: String,
+    /// Why (no morph target binds; binds on another mesh than the face).
+    pub reason: String,
 }
 
 /// The 4 × 4 identity, column-major.
@@ -61,9 +122,9 @@ pub const IDENTITY: [[f64; 4]; 4] = [
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum RigReadError {
-    /// The path is neither a `.glb`/`.gltf` file nor a folder.
+    /// The path is neither a `.glb`/`.gltf`/`.vrm` file nor a folder.
     #[error(
-        "{}: not a rig (a .glb or .gltf file, or a folder with neutral.obj and shapes/NAME.obj)",
+        "{}: not a rig (a .glb, .gltf or .vrm file, or a folder with neutral.obj and shapes/NAME.obj)",
         path.display()
     )]
     UnknownKind {
@@ -90,17 +151,23 @@ pub enum RigReadError {
     /// The file needs a mesh compression extension that Sinew does not decode.
     #[error(
         "{}: its meshes are compressed with {extension}, which Sinew does not decode; export \
-         the rig without mesh compression (Blender: untick \"Compression\" in the glTF exporter)",
+         the rig without it (Blender: untick \"Compression\" in the glTF exporter) or with \
+         meshopt compression (gltfpack -c), which Sinew reads",
         path.display()
     )]
     Compressed {
         /// The file.
         path: PathBuf,
-        /// The extension (`KHR_draco_mesh_compression`, `EXT_meshopt_compression`).
+        /// The extension (`KHR_draco_mesh_compression`).
         extension: String,
     },
-    /// The file requires another extension that Sinew does not read.
-    #[error("{}: requires the glTF extension {extension}, which Sinew does not read", path.display())]
+    /// The file requires another extension that may change the geometry and that Sinew does
+    /// not decode.
+    #[error(
+        "{}: requires the glTF extension {extension}, which may change the geometry and which \
+         Sinew does not decode",
+        path.display()
+    )]
     Extension {
         /// The file.
         path: PathBuf,
@@ -128,6 +195,40 @@ pub enum RigReadError {
         declared: usize,
         /// The bytes found.
         found: usize,
+    },
+    /// An accessor the skin reads that breaks a rule of glTF or of `KHR_mesh_quantization`
+    /// (a component type the attribute may not have, data past its buffer view).
+    #[error("{}: accessor {accessor} ({role}): {what}", path.display())]
+    Accessor {
+        /// The glTF file.
+        path: PathBuf,
+        /// The accessor's index.
+        accessor: usize,
+        /// What the skin reads it as (`POSITION`, `morph target 3 POSITION`, `indices`, …).
+        role: String,
+        /// What is wrong.
+        what: String,
+    },
+    /// A buffer view whose data cannot be had: compressed data that does not decode, a range
+    /// past its buffer, a fallback buffer without data.
+    #[error("{}: buffer view {view}: {what}", path.display())]
+    BufferView {
+        /// The glTF file.
+        path: PathBuf,
+        /// The buffer view's index.
+        view: usize,
+        /// What is wrong.
+        what: String,
+    },
+    /// A VRM avatar's expression that cannot be a shape.
+    #[error("{}: VRM expression {expression:?}: {what}", path.display())]
+    Expression {
+        /// The file.
+        path: PathBuf,
+        /// The expression.
+        expression: String,
+        /// What is wrong with it.
+        what: ExpressionProblem,
     },
     /// No mesh of the file has morph targets.
     #[error("{}: no mesh has morph targets (blendshapes); {meshes} mesh(es) found", path.display())]
@@ -217,6 +318,44 @@ pub enum RigReadError {
         /// The name.
         name: String,
     },
+}
+
+/// What is wrong with a VRM expression.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ExpressionProblem {
+    /// Two expressions of one name (VRM 0.x groups, or one name twice in an object).
+    #[error("is defined twice")]
+    Repeated,
+    /// A bind to a node or mesh the file does not have, or to a node without a mesh.
+    #[error("binds {what}, which the file does not have")]
+    NoSuchMesh {
+        /// The node or mesh named.
+        what: String,
+    },
+    /// A bind to a morph target its mesh does not have.
+    #[error("binds morph target {index} of mesh {mesh:?}, which has {targets}")]
+    NoSuchTarget {
+        /// The mesh.
+        mesh: String,
+        /// The target's index.
+        index: u64,
+        /// The mesh's target count.
+        targets: usize,
+    },
+    /// A bind whose weight is NaN or infinite.
+    #[error(
+        "binds morph target {index} with the weight {weight}, which is not a finite 32-bit number"
+    )]
+    NonFiniteWeight {
+        /// The target's index.
+        index: u64,
+        /// The weight as written.
+        weight: String,
+    },
+    /// The extension's JSON breaks the schema.
+    #[error("{0}")]
+    Schema(String),
 }
 
 impl RigFile {

@@ -1,34 +1,91 @@
-//! A rig as a glTF 2.0 file, read with the `gltf` crate: the skin is the mesh with morph targets
-//! (the one with the most, or the one named), its primitives joined into one vertex list in
-//! their order; target names from `mesh.extras.targetNames` (Blender's, three.js's and most
-//! exporters' convention), else `target_N`; sparse accessors as the crate reads them; the node
-//! transforms above the mesh multiplied out (skinned meshes sit in their bind pose, where the
-//! spec ignores the node's transform). Other meshes (eyes, teeth) are not read, nor the targets a
-//! Sinew export adds to compensate its animation (`extras.sinewCompensationTargets`, the last N).
+//! A rig as a glTF 2.0 file (`.glb`, `.gltf`, or a VRM avatar's `.vrm`), read with the `gltf`
+//! crate's document and this module's own accessor reader: the skin is the mesh with morph
+//! targets (the one with the most, the one named, or a VRM avatar's face, the mesh its
+//! expressions bind), its primitives joined into one vertex list in their order; target names
+//! from `mesh.extras.targetNames` (Blender's, three.js's and most exporters' convention), else
+//! `target_N`; a VRM avatar's shapes are its expressions instead. Quantised attributes
+//! (`KHR_mesh_quantization`) are dequantised, meshopt-compressed views decoded, sparse accessors
+//! applied, and the node transforms above the mesh multiplied out (skinned meshes sit in their
+//! bind pose, where the spec ignores the node's transform). Other meshes (eyes, teeth) are not
+//! read, nor the targets a Sinew export adds to compensate its animation
+//! (`extras.sinewCompensationTargets`, the last N).
 
 use std::path::Path;
 
 use gltf::mesh::Mode;
 
-use super::file::{IDENTITY, RigFile, RigFormat, RigReadError};
+use super::file::{Avatar, ExtensionUse, IDENTITY, RigFile, RigFormat, RigReadError};
 use crate::io::mesh::Mesh;
 use crate::io::units::Unit;
 
-/// The mesh compression extensions, whose data Sinew does not decode.
-const COMPRESSION: [&str; 3] = [
-    "KHR_draco_mesh_compression",
-    "EXT_meshopt_compression",
-    "KHR_meshopt_compression",
-];
+mod accessor;
+mod extensions;
+mod meshopt;
+mod vrm;
 
-fn cut(s: &str) -> String {
-    match s.char_indices().nth(80) {
-        Some((i, _)) => format!("{}…", &s[..i]),
-        None => s.to_owned(),
-    }
-}
+use accessor::{Data, Role};
+
+/// The mesh `extras` key under which a Sinew export counts its compensation targets.
+pub const COMPENSATION_KEY: &str = "sinewCompensationTargets";
 
 pub(super) fn read(path: &Path, wanted: Option<&str>) -> Result<RigFile, RigReadError> {
+    let Parsed {
+        document,
+        json,
+        blob,
+        extensions,
+    } = parse(path)?;
+    let data = Data::load(path, &document, blob)?;
+    let avatar = vrm::Expressions::read(path, &json, &document)?;
+    let mesh = skin_mesh(path, &document, wanted, avatar.as_ref())?;
+    let mut skin = read_skin(path, &mesh, &data)?;
+    let mut names = target_names(mesh.extras(), skin.deltas.len());
+    let (shape_names, deltas, avatar) = match avatar {
+        Some(expressions) => {
+            let (avatar, names, deltas) = expressions.shapes(&mesh, &names, &skin.deltas);
+            (names, deltas, Some(avatar))
+        }
+        None => {
+            // A Sinew export's last targets compensate its animation for glTF's order of
+            // operations (docs/ENGINES.md); they are no shapes of the face.
+            let kept =
+                skin.deltas.len() - compensation_targets(mesh.extras()).min(skin.deltas.len());
+            names.truncate(kept);
+            skin.deltas.truncate(kept);
+            (names, skin.deltas, None::<Avatar>)
+        }
+    };
+    let mut neutral = Mesh::new(skin.positions, skin.polygons);
+    neutral.uvs = skin.uvs;
+    Ok(RigFile {
+        path: path.to_owned(),
+        format: RigFormat::Gltf,
+        mesh_name: name_of(&mesh),
+        neutral,
+        shape_names,
+        deltas,
+        node_transform: node_transform(&document, mesh.index(), &data)?,
+        units: Some(Unit::Metre),
+        extensions,
+        avatar,
+    })
+}
+
+/// A glTF file parsed and validated.
+struct Parsed {
+    /// Its document.
+    document: gltf::Document,
+    /// Its JSON, as written.
+    json: Vec<u8>,
+    /// A `.glb`'s binary chunk.
+    blob: Option<Vec<u8>>,
+    /// Its extensions, each with what Sinew makes of it.
+    extensions: Vec<ExtensionUse>,
+}
+
+/// The file parsed and validated; a required extension that may change the geometry and is not
+/// decoded is an error.
+fn parse(path: &Path) -> Result<Parsed, RigReadError> {
     let bytes = std::fs::read(path).map_err(|source| RigReadError::Read {
         path: path.to_owned(),
         source,
@@ -39,178 +96,159 @@ pub(super) fn read(path: &Path, wanted: Option<&str>) -> Result<RigFile, RigRead
     };
     let parsed =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| invalid(e.to_string()))?;
-    let blob = parsed.blob;
-    let json = parsed.document.into_json();
-    for extension in &json.extensions_required {
-        if COMPRESSION.contains(&extension.as_str()) {
-            return Err(RigReadError::Compressed {
-                path: path.to_owned(),
-                extension: extension.clone(),
-            });
-        }
-    }
+    let text = if bytes.starts_with(b"glTF") {
+        gltf::Glb::from_slice(&bytes)
+            .map_err(|e| invalid(e.to_string()))?
+            .json
+            .into_owned()
+    } else {
+        bytes.clone()
+    };
+    let mut json = parsed.document.into_json();
+    let extensions = extensions::check(path, &json.extensions_used, &json.extensions_required)?;
+    // The policy above decided on every required extension; the crate's validation knows only
+    // its own few, so it checks the rest of the file without them.
+    json.extensions_required.clear();
     let document = gltf::Document::from_json(json).map_err(|e| match e {
-        gltf::Error::Validation(list) => {
-            let unsupported = list.iter().find_map(|(p, e)| {
-                (*e == gltf::json::validation::Error::Unsupported
-                    && p.as_str().starts_with("extensionsRequired"))
-                .then(|| p.as_str().to_owned())
-            });
-            match unsupported {
-                Some(at) => RigReadError::Extension {
-                    path: path.to_owned(),
-                    extension: at,
-                },
-                None => invalid(
-                    list.iter()
-                        .take(3)
-                        .map(|(p, e)| format!("{}: {e}", p.as_str()))
-                        .collect::<Vec<_>>()
-                        .join("; "),
-                ),
-            }
-        }
+        gltf::Error::Validation(list) => invalid(
+            list.iter()
+                .take(3)
+                .map(|(p, e)| format!("{}: {e}", p.as_str()))
+                .collect::<Vec<_>>()
+                .join("; "),
+        ),
         other => invalid(other.to_string()),
     })?;
-    let buffers = load_buffers(path, &document, blob)?;
+    Ok(Parsed {
+        document,
+        json: text,
+        blob: parsed.blob,
+        extensions,
+    })
+}
 
-    let meshes: Vec<gltf::Mesh<'_>> = document.meshes().collect();
-    let name_of = |m: &gltf::Mesh<'_>| {
-        m.name()
-            .map_or_else(|| format!("mesh {}", m.index()), str::to_owned)
+/// A mesh's name in messages and reports: its own, else `mesh N`.
+fn name_of(m: &gltf::Mesh<'_>) -> String {
+    m.name()
+        .map_or_else(|| format!("mesh {}", m.index()), str::to_owned)
+}
+
+/// The most morph targets any primitive of `m` has.
+fn target_count(m: &gltf::Mesh<'_>) -> usize {
+    m.primitives()
+        .map(|p| p.morph_targets().len())
+        .max()
+        .unwrap_or(0)
+}
+
+/// The skin: the mesh named `wanted`, else a VRM avatar's face, else the mesh with the most
+/// morph targets (the first of those with as many).
+fn skin_mesh<'a>(
+    path: &Path,
+    document: &'a gltf::Document,
+    wanted: Option<&str>,
+    avatar: Option<&vrm::Expressions>,
+) -> Result<gltf::Mesh<'a>, RigReadError> {
+    let meshes: Vec<gltf::Mesh<'a>> = document.meshes().collect();
+    let no_targets = || RigReadError::NoMorphTargets {
+        path: path.to_owned(),
+        meshes: meshes.len(),
     };
-    let targets = |m: &gltf::Mesh<'_>| {
-        m.primitives()
-            .map(|p| p.morph_targets().len())
-            .max()
-            .unwrap_or(0)
-    };
-    let mesh =
-        match wanted {
-            Some(name) => meshes.iter().find(|m| name_of(m) == name).ok_or_else(|| {
-                RigReadError::NoSuchMesh {
-                    path: path.to_owned(),
-                    name: name.to_owned(),
-                    names: meshes.iter().map(name_of).collect(),
-                }
+    let mesh = match (wanted, avatar) {
+        (Some(name), _) => meshes
+            .iter()
+            .find(|m| name_of(m) == name)
+            .cloned()
+            .ok_or_else(|| RigReadError::NoSuchMesh {
+                path: path.to_owned(),
+                name: name.to_owned(),
+                names: meshes.iter().map(name_of).collect(),
             })?,
-            None => meshes
-                .iter()
-                .filter(|m| targets(m) > 0)
-                .max_by_key(|m| (targets(m), std::cmp::Reverse(m.index())))
-                .ok_or(RigReadError::NoMorphTargets {
-                    path: path.to_owned(),
-                    meshes: meshes.len(),
-                })?,
-        };
-    let mesh_name = name_of(mesh);
-    let target_count = targets(mesh);
-    if target_count == 0 {
-        return Err(RigReadError::NoMorphTargets {
-            path: path.to_owned(),
-            meshes: meshes.len(),
-        });
+        (None, Some(expressions)) => document
+            .meshes()
+            .nth(expressions.face())
+            .ok_or_else(no_targets)?,
+        (None, None) => meshes
+            .iter()
+            .filter(|m| target_count(m) > 0)
+            .max_by_key(|m| (target_count(m), std::cmp::Reverse(m.index())))
+            .cloned()
+            .ok_or_else(no_targets)?,
+    };
+    if target_count(&mesh) == 0 {
+        return Err(no_targets());
     }
+    Ok(mesh)
+}
+
+/// The skin mesh's primitives joined: positions, triangles, texture coordinates (where every
+/// primitive has them) and each morph target's position offsets.
+struct Skin {
+    positions: Vec<[f32; 3]>,
+    polygons: Vec<Vec<u32>>,
+    uvs: Vec<[f32; 2]>,
+    deltas: Vec<Vec<[f32; 3]>>,
+}
+
+fn read_skin(path: &Path, mesh: &gltf::Mesh<'_>, data: &Data<'_>) -> Result<Skin, RigReadError> {
+    let target_count = target_count(mesh);
     let attribute = |primitive: usize, what: String| RigReadError::Attribute {
         path: path.to_owned(),
-        mesh: mesh_name.clone(),
+        mesh: name_of(mesh),
         primitive,
         what,
     };
-
-    let mut positions: Vec<[f32; 3]> = Vec::new();
-    let mut polygons: Vec<Vec<u32>> = Vec::new();
-    let mut uvs: Vec<[f32; 2]> = Vec::new();
+    let mut skin = Skin {
+        positions: Vec::new(),
+        polygons: Vec::new(),
+        uvs: Vec::new(),
+        deltas: vec![Vec::new(); target_count],
+    };
     let mut all_uvs = true;
-    let mut deltas: Vec<Vec<[f32; 3]>> = vec![Vec::new(); target_count];
     for (pi, primitive) in mesh.primitives().enumerate() {
         if primitive.mode() != Mode::Triangles {
             return Err(RigReadError::NotTriangles {
                 path: path.to_owned(),
-                mesh: mesh_name.clone(),
+                mesh: name_of(mesh),
                 primitive: pi,
                 mode: format!("{:?}", primitive.mode()),
             });
         }
-        let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-        let points: Vec<[f32; 3]> = reader
-            .read_positions()
-            .ok_or_else(|| attribute(pi, "no readable POSITION attribute".into()))?
-            .collect();
-        let base = positions.len() as u32;
+        let position = primitive
+            .get(&gltf::Semantic::Positions)
+            .ok_or_else(|| attribute(pi, "no POSITION attribute".into()))?;
+        let points = triples(&data.read(&position, Role::Position)?);
+        let base = u32::try_from(skin.positions.len())
+            .map_err(|_| attribute(pi, "more vertices than 32-bit indices reach".into()))?;
         let count = points.len();
-        match reader.read_indices() {
-            Some(indices) => {
-                let indices: Vec<u32> = indices.into_u32().collect();
-                if !indices.len().is_multiple_of(3) {
-                    return Err(attribute(
-                        pi,
-                        format!("{} indices, not a multiple of 3", indices.len()),
-                    ));
-                }
-                if let Some(&i) = indices.iter().find(|&&i| i as usize >= count) {
-                    return Err(attribute(
-                        pi,
-                        format!("index {i} past its {count} vertices"),
-                    ));
-                }
-                polygons.extend(
-                    indices
-                        .chunks_exact(3)
-                        .map(|t| t.iter().map(|&i| base + i).collect()),
-                );
-            }
-            None if primitive.indices().is_some() => {
-                return Err(attribute(pi, "its indices cannot be read".into()));
-            }
-            None => {
-                if !count.is_multiple_of(3) {
-                    return Err(attribute(
-                        pi,
-                        format!("{count} unindexed vertices, not a multiple of 3"),
-                    ));
-                }
-                polygons.extend(
-                    (0..count as u32 / 3)
-                        .map(|t| vec![base + 3 * t, base + 3 * t + 1, base + 3 * t + 2]),
-                );
-            }
-        }
-        match reader.read_tex_coords(0) {
-            Some(t) => {
-                let t: Vec<[f32; 2]> = t.into_f32().collect();
-                if t.len() != count {
-                    return Err(attribute(
-                        pi,
-                        format!("{} TEXCOORD_0 values for {count} positions", t.len()),
-                    ));
-                }
-                uvs.extend(t);
+        skin.polygons.extend(
+            triangles(&primitive, data, count, base).map_err(|e| match e {
+                Triangles::Read(e) => e,
+                Triangles::Bad(what) => attribute(pi, what),
+            })?,
+        );
+        match primitive.get(&gltf::Semantic::TexCoords(0)) {
+            Some(uv) => {
+                let values = data.read(&uv, Role::TexCoord)?;
+                let transform = uv_transform(&primitive);
+                skin.uvs
+                    .extend(values.chunks_exact(2).map(|c| transform([c[0], c[1]])));
             }
             None => all_uvs = false,
         }
-        let declared: Vec<bool> = primitive
-            .morph_targets()
-            .map(|t| t.positions().is_some())
-            .collect();
-        if declared.len() != target_count {
+        let targets: Vec<gltf::mesh::MorphTarget<'_>> = primitive.morph_targets().collect();
+        if targets.len() != target_count {
             return Err(attribute(
                 pi,
                 format!(
                     "{} morph targets where the mesh's other primitives have {target_count}",
-                    declared.len()
+                    targets.len()
                 ),
             ));
         }
-        for (k, (target, declared)) in reader.read_morph_targets().zip(declared).enumerate() {
-            let d: Vec<[f32; 3]> = match target.0 {
-                Some(p) => p.collect(),
-                None if declared => {
-                    return Err(attribute(
-                        pi,
-                        format!("morph target {k}'s POSITION cannot be read"),
-                    ));
-                }
+        for (k, target) in targets.iter().enumerate() {
+            let d = match target.positions() {
+                Some(a) => triples(&data.read(&a, Role::TargetPosition(k))?),
                 None => vec![[0.0; 3]; count],
             };
             if d.len() != count {
@@ -222,31 +260,82 @@ pub(super) fn read(path: &Path, wanted: Option<&str>) -> Result<RigFile, RigRead
                     ),
                 ));
             }
-            deltas[k].extend(d);
+            skin.deltas[k].extend(d);
         }
-        positions.extend(points);
+        skin.positions.extend(points);
     }
+    if !all_uvs {
+        skin.uvs.clear();
+    }
+    Ok(skin)
+}
 
-    let mut shape_names = target_names(mesh.extras(), target_count);
-    // A Sinew export's last targets compensate its animation for glTF's order of operations
-    // (docs/ENGINES.md); they are no shapes of the face.
-    let kept = target_count - compensation_targets(mesh.extras()).min(target_count);
-    shape_names.truncate(kept);
-    deltas.truncate(kept);
-    let mut neutral = Mesh::new(positions, polygons);
-    if all_uvs {
-        neutral.uvs = uvs;
+fn triples(flat: &[f32]) -> Vec<[f32; 3]> {
+    flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
+/// Why a primitive's triangles cannot be had.
+enum Triangles {
+    Read(RigReadError),
+    Bad(String),
+}
+
+/// A triangle list primitive's triangles over `count` vertices, offset by `base`.
+fn triangles(
+    primitive: &gltf::Primitive<'_>,
+    data: &Data<'_>,
+    count: usize,
+    base: u32,
+) -> Result<Vec<Vec<u32>>, Triangles> {
+    let Some(accessor) = primitive.indices() else {
+        if !count.is_multiple_of(3) {
+            return Err(Triangles::Bad(format!(
+                "{count} unindexed vertices, not a multiple of 3"
+            )));
+        }
+        return Ok((0..count as u32 / 3)
+            .map(|t| vec![base + 3 * t, base + 3 * t + 1, base + 3 * t + 2])
+            .collect());
+    };
+    let indices = data.indices(&accessor).map_err(Triangles::Read)?;
+    if !indices.len().is_multiple_of(3) {
+        return Err(Triangles::Bad(format!(
+            "{} indices, not a multiple of 3",
+            indices.len()
+        )));
     }
-    Ok(RigFile {
-        path: path.to_owned(),
-        format: RigFormat::Gltf,
-        mesh_name,
-        neutral,
-        shape_names,
-        deltas,
-        node_transform: node_transform(&document, mesh.index()),
-        units: Some(Unit::Metre),
-    })
+    if let Some(&i) = indices.iter().find(|&&i| i as usize >= count) {
+        return Err(Triangles::Bad(format!(
+            "index {i} past its {count} vertices"
+        )));
+    }
+    Ok(indices
+        .chunks_exact(3)
+        .map(|t| t.iter().map(|&i| base + i).collect())
+        .collect())
+}
+
+/// The map from a primitive's stored `TEXCOORD_0` to texture space: the identity, or the
+/// `KHR_texture_transform` of its material's first texture that reads set 0 (where
+/// `KHR_mesh_quantization` keeps the dequantisation of quantised coordinates).
+fn uv_transform(primitive: &gltf::Primitive<'_>) -> impl Fn([f32; 2]) -> [f32; 2] + use<> {
+    let material = primitive.material();
+    let pbr = material.pbr_metallic_roughness();
+    let transform = [pbr.base_color_texture(), pbr.metallic_roughness_texture()]
+        .into_iter()
+        .flatten()
+        .chain(material.emissive_texture())
+        .filter(|info| info.tex_coord() == 0)
+        .find_map(|info| info.texture_transform())
+        .map(|t| (t.offset(), t.scale(), t.rotation()));
+    move |uv: [f32; 2]| match transform {
+        None => uv,
+        Some((offset, scale, rotation)) => {
+            let (s, c) = rotation.sin_cos();
+            let (u, v) = (uv[0] * scale[0], uv[1] * scale[1]);
+            [c * u + s * v + offset[0], -s * u + c * v + offset[1]]
+        }
+    }
 }
 
 /// `extras.targetNames` when it names every target, else `target_0` ….
@@ -274,101 +363,74 @@ fn compensation_targets(extras: &gltf::json::Extras) -> usize {
         .map_or(0, |n| usize::try_from(n).unwrap_or(usize::MAX))
 }
 
-/// The mesh `extras` key under which a Sinew export counts its compensation targets.
-pub const COMPENSATION_KEY: &str = "sinewCompensationTargets";
-
-/// Each buffer's bytes: the `.glb`'s binary chunk, a `data:` URI or a file beside the glTF.
-fn load_buffers(
-    path: &Path,
-    document: &gltf::Document,
-    mut blob: Option<Vec<u8>>,
-) -> Result<Vec<Vec<u8>>, RigReadError> {
-    let mut out = Vec::new();
-    for buffer in document.buffers() {
-        let bad_uri = |uri: &str| RigReadError::BufferUri {
-            path: path.to_owned(),
-            buffer: buffer.index(),
-            uri: cut(uri),
-        };
-        let data = match buffer.source() {
-            gltf::buffer::Source::Bin => blob.take().ok_or_else(|| RigReadError::Gltf {
-                path: path.to_owned(),
-                reason: format!(
-                    "buffer {} is the binary chunk, which the file lacks",
-                    buffer.index()
-                ),
-            })?,
-            gltf::buffer::Source::Uri(uri) => {
-                if let Some(rest) = uri.strip_prefix("data:") {
-                    let (_, payload) = rest.split_once(";base64,").ok_or_else(|| bad_uri(uri))?;
-                    use base64::Engine as _;
-                    base64::engine::general_purpose::STANDARD
-                        .decode(payload)
-                        .map_err(|_| bad_uri(uri))?
-                } else {
-                    let decoded = urlencoding::decode(uri).map_err(|_| bad_uri(uri))?;
-                    let relative = Path::new(decoded.as_ref());
-                    if decoded.contains(':') || relative.is_absolute() {
-                        return Err(bad_uri(uri));
-                    }
-                    let file = path.parent().unwrap_or(Path::new(".")).join(relative);
-                    std::fs::read(&file).map_err(|source| RigReadError::Read {
-                        path: file.clone(),
-                        source,
-                    })?
-                }
-            }
-        };
-        if data.len() < buffer.length() {
-            return Err(RigReadError::BufferLength {
-                path: path.to_owned(),
-                buffer: buffer.index(),
-                declared: buffer.length(),
-                found: data.len(),
-            });
-        }
-        out.push(data);
-    }
-    Ok(out)
-}
-
 /// Column-major product of two 4 × 4 matrices.
 fn mul(a: &[[f64; 4]; 4], b: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
     std::array::from_fn(|c| std::array::from_fn(|r| (0..4).map(|k| a[k][r] * b[c][k]).sum()))
 }
 
 /// The scene transform of the first node (depth first from the default scene's roots, else
-/// every scene's) that holds `mesh`; the identity for a skinned node or an unplaced mesh.
-fn node_transform(document: &gltf::Document, mesh: usize) -> [[f64; 4]; 4] {
+/// every scene's) that holds `mesh`; the identity for an unplaced mesh. A skinned mesh is
+/// placed by its skin, where the spec ignores the node's own transform: at rest its first joint's
+/// scene transform times that joint's inverse bind matrix (the identity for most exporters;
+/// `KHR_mesh_quantization`'s dequantisation for a quantised skinned mesh).
+fn node_transform(
+    document: &gltf::Document,
+    mesh: usize,
+    data: &Data<'_>,
+) -> Result<[[f64; 4]; 4], RigReadError> {
+    // Each node's scene transform, in depth-first order from the scenes' roots.
     fn visit(
         node: gltf::Node<'_>,
         parent: [[f64; 4]; 4],
-        mesh: usize,
         depth: usize,
-    ) -> Option<[[f64; 4]; 4]> {
+        out: &mut Vec<(usize, [[f64; 4]; 4])>,
+    ) {
         // A node graph is a forest by the spec; the depth bound keeps a broken file finite.
-        if depth > 256 {
-            return None;
+        if depth > 256 || out.iter().any(|(n, _)| *n == node.index()) {
+            return;
         }
         let local = node.transform().matrix().map(|c| c.map(f64::from));
         let world = mul(&parent, &local);
-        if node.mesh().is_some_and(|m| m.index() == mesh) {
-            return Some(if node.skin().is_some() {
-                IDENTITY
-            } else {
-                world
-            });
+        out.push((node.index(), world));
+        for child in node.children() {
+            visit(child, world, depth + 1, out);
         }
-        node.children()
-            .find_map(|child| visit(child, world, mesh, depth + 1))
     }
     let scenes: Vec<gltf::Scene<'_>> = match document.default_scene() {
         Some(s) => vec![s],
         None => document.scenes().collect(),
     };
-    scenes
-        .iter()
-        .flat_map(gltf::Scene::nodes)
-        .find_map(|root| visit(root, IDENTITY, mesh, 0))
-        .unwrap_or(IDENTITY)
+    let mut worlds = Vec::new();
+    for root in scenes.iter().flat_map(gltf::Scene::nodes) {
+        visit(root, IDENTITY, 0, &mut worlds);
+    }
+    let world = |index: usize| worlds.iter().find(|(n, _)| *n == index).map(|(_, w)| *w);
+    let Some((node, placed)) = worlds.iter().find_map(|&(n, w)| {
+        let node = document.nodes().nth(n)?;
+        node.mesh()
+            .is_some_and(|m| m.index() == mesh)
+            .then_some((node, w))
+    }) else {
+        return Ok(IDENTITY);
+    };
+    let Some(skin) = node.skin() else {
+        return Ok(placed);
+    };
+    let Some(joint) = skin.joints().next() else {
+        return Ok(IDENTITY);
+    };
+    let joint_world = world(joint.index()).unwrap_or(IDENTITY);
+    let inverse_bind = match skin.inverse_bind_matrices() {
+        Some(accessor) => {
+            let m = data.read(&accessor, Role::InverseBind)?;
+            match m.get(..16) {
+                Some(first) => {
+                    std::array::from_fn(|c| std::array::from_fn(|r| f64::from(first[4 * c + r])))
+                }
+                None => IDENTITY,
+            }
+        }
+        None => IDENTITY,
+    };
+    Ok(mul(&joint_world, &inverse_bind))
 }

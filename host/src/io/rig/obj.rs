@@ -74,5 +74,7 @@ pub(super) fn read(dir: &Path) -> Result<RigFile, RigReadError> {
         deltas,
         node_transform: IDENTITY,
         units: None,
+        extensions: Vec::new(),
+        avatar: None,
     })
 }
