@@ -55,8 +55,14 @@ three_checks=()
   --arkit tests/data/arkit-sample.csv --out "$gltf_dir/arkit" >/dev/null 2>&1
 "$sinew" export gltf --model tests/data/aim-ict.sinew \
   --arkit tests/data/arkit-sample.csv --bones --out "$gltf_dir/arkit.glb" >/dev/null 2>&1
-glbs=("$gltf_dir/poses.glb" "$gltf_dir/arkit.glb")
-three_checks+=("poses poses.glb 0.01 0.02" "arkit arkit.glb 0.01 0.02")
+# Every ARKit channel alone at 1, each shape with the jaw it learned (docs/ENGINES.md, "The jaw
+# of a pose given by coefficients").
+"$sinew" play --model tests/data/aim-ict.sinew \
+  --arkit tests/data/arkit-each.csv --out "$gltf_dir/each" >/dev/null 2>&1
+"$sinew" export gltf --model tests/data/aim-ict.sinew --arkit tests/data/arkit-each.csv \
+  --names arkit --out "$gltf_dir/each.glb" >/dev/null 2>&1
+glbs=("$gltf_dir/poses.glb" "$gltf_dir/arkit.glb" "$gltf_dir/each.glb")
+three_checks+=("poses poses.glb 0.01 0.02" "arkit arkit.glb 0.01 0.02" "each each.glb 0.01 0.02")
 # A studio rig as `sinew data rig` writes it (morph targets, UVs split at a seam, a node transform),
 # and an actor learned briefly from the same rig as an OBJ folder (texture coordinates per corner),
 # exported in the rig's frame.

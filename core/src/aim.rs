@@ -14,6 +14,7 @@
 //! | `cache.d0` | f32 | `[V]` | soft-tissue thickness d0 (eq. 4) |
 //! | `cache.n0` | f32 | `[V, 3]` | unit bone normal n0 (eq. 5) |
 //! | `jaw.pivot` | f32 | `[3]` | the jaw's pivot p: T_b(x) = R (x − p) + p + t |
+//! | `train.jaw` | f32 | `[M, 9]` | optional: each training shape's learned jaw transform ([`crate::jaw`]) |
 //! | `aim.norm` | f32 | `[4]` | network input normalisation: ĉ = (c − centre) / scale; centre xyz, scale |
 //! | `net.b`, `net.d`, `net.n`, `net.k`, `net.e` | MLP | | the five networks (absent when playback-only) |
 //!
@@ -23,6 +24,7 @@
 use crate::error::{Argument, Bound, BufferError, EvalError, FormatError, InputError};
 use crate::format::{ArtifactKind, FLAG_PLAYBACK_ONLY, SinewFile, out_of_range};
 use crate::input::{check_finite, check_values};
+use crate::jaw::LearnedJaws;
 use crate::layout::MAX_COORDINATE;
 use crate::linalg::Vec3;
 use crate::network::{check_bound, load_mlp};
@@ -97,6 +99,7 @@ pub struct AimActor<'a> {
     thickness: F32s<'a>,
     normal: F32s<'a>,
     pivot: Vec3,
+    jaws: Option<LearnedJaws<'a>>,
     networks: Option<AimNetworks<'a>>,
     q16: Option<AimQ16<'a>>,
 }
@@ -202,6 +205,7 @@ impl<'a> AimActor<'a> {
             thickness: file.f32_tensor_within("cache.d0", &[v], Bound::Coordinate)?,
             normal: file.f32_tensor_within("cache.n0", &[v, 3], Bound::Factor)?,
             pivot: vec3(pivot, 0),
+            jaws: LearnedJaws::from_file(&file, m as usize)?,
             networks,
             q16: AimQ16::from_file(&file, v, m)?,
             file,
@@ -267,6 +271,35 @@ impl<'a> AimActor<'a> {
     /// The jaw pivot.
     pub const fn jaw_pivot(&self) -> Vec3 {
         self.pivot
+    }
+
+    /// Every training shape's learned jaw transform (`train.jaw`), when the artefact records them
+    /// (every actor Sinew trains does).
+    pub const fn learned_jaws(&self) -> Option<&LearnedJaws<'a>> {
+        self.jaws.as_ref()
+    }
+
+    /// The jaw transform of a pose given by corrective coefficients alone (an ARKit capture, an
+    /// engine driving shapes by name, a viewer's sliders): every shape's learned jaw blended by
+    /// its coefficient and held within the range the shapes span ([`crate::jaw`] gives the rule);
+    /// the identity for an actor without learned jaws. The result is a transform
+    /// [`Self::pose_from_9d`] accepts.
+    ///
+    /// # Shapes
+    /// - `weights`: `[M]`
+    ///
+    /// # Errors
+    /// [`EvalError::Buffer`] for a wrong length; [`EvalError::Input`] for a coefficient that is
+    /// not finite or outside ±[`crate::layout::MAX_FACTOR`].
+    pub fn jaw_from_weights(&self, weights: &[f32]) -> Result<[f32; 9], EvalError> {
+        if weights.len() != self.shapes {
+            return Err(BufferError::Input.into());
+        }
+        check_values(Argument::Weights, weights)?;
+        Ok(self
+            .jaws
+            .as_ref()
+            .map_or(crate::jaw::IDENTITY, |j| j.blend(weights)))
     }
 
     /// The Q16.16 playback cache, when the artefact has one (`sinew bake --q16`).

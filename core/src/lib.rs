@@ -96,6 +96,7 @@ pub mod filter;
 pub mod format;
 pub mod hash;
 pub mod input;
+pub mod jaw;
 pub mod layout;
 pub mod linalg;
 pub mod live;

@@ -117,6 +117,36 @@ fn pin_replays(name: &str, model: &[u8]) {
             writeln!(text, "{mode} {} {:016x}", c.frame, c.hash).unwrap();
         }
     }
+    // The jaw of a pose given by coefficients alone (`sinew_core::jaw`): each frame's
+    // coefficients blended over the actor's learned jaws (the frame's own jaw set aside), the
+    // jaw's 9 values hashed, then the f32 frame posed with it and the frame's head.
+    writeln!(
+        text,
+        "# jaw: per frame, the hash of jaw_from_weights(coefficients), then the f32 frame hash \
+         with that jaw"
+    )
+    .unwrap();
+    let (v, m) = (actor.vertex_count(), actor.shape_count());
+    for (f, frame) in sequence(m).iter().enumerate() {
+        let jaw = actor.jaw_from_weights(&frame.weights).unwrap();
+        let (mut positions, mut normals) = (vec![0.0; 3 * v], vec![0.0; 3 * v]);
+        let mut weights = frame.weights.clone();
+        let mut buf = sinew_core::replay::FrameBuffers {
+            positions: &mut positions,
+            normals: &mut normals,
+            positions_q16: &mut [],
+            weights: &mut weights,
+            weights_q16: &mut [],
+        };
+        let hash =
+            sinew_core::replay::frame_hash(&actor, Mode::F32, &frame.head, &jaw, &mut buf).unwrap();
+        writeln!(
+            text,
+            "jaw {f} {:016x} {hash:016x}",
+            sinew_core::hash::frame_hash(&jaw)
+        )
+        .unwrap();
+    }
     check(&format!("{name}.hashes"), &text);
 }
 

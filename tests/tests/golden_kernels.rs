@@ -6,6 +6,7 @@
 use std::fmt::Write;
 
 use sinew_core::hash::frame_hash;
+use sinew_core::jaw::LearnedJaws;
 use sinew_core::linalg::Vec3;
 use sinew_core::nn::{Activation, Dense, Mlp};
 use sinew_core::skinning::{BoneTransform, Pose, Triangles, skin, vertex_normals};
@@ -155,6 +156,29 @@ fn skinning_output() -> (Vec<f32>, Vec<f32>) {
     (out, normals)
 }
 
+/// The jaw of a pose given by coefficients alone (`sinew_core::jaw`) over four learned jaws (an
+/// opening, a smaller one, a sideways turn, a slight closing), for coefficients within the
+/// shapes' range, past it, far outside [0, 1], and one shape alone: 36 values.
+fn jaw_blend_output() -> Vec<f32> {
+    let jaws: [[f32; 9]; 4] = [
+        [1.0, 0.0, 0.0, 0.0, 0.94, 0.34, 0.0, -0.12, 0.05],
+        [1.0, 0.0, 0.0, 0.0, 0.995, 0.1, 0.0, 0.0, 0.02],
+        [0.998, 0.0, -0.06, 0.0, 1.0, 0.0, 0.03, 0.0, 0.0],
+        [1.0, 0.0, 0.0, 0.0, 0.9998, -0.02, 0.0, 0.01, 0.0],
+    ];
+    let weights: [[f32; 4]; 4] = [
+        [0.5, 0.3, 0.2, 0.0],
+        [1.0, 1.0, 1.0, 1.0],
+        [-0.7, 2.0, -1.5, 3.0],
+        [0.0, 0.0, 1.0, 0.0],
+    ];
+    let bytes = le_f32(jaws.as_flattened());
+    let learned = LearnedJaws::new(F32s::new(&bytes).unwrap()).unwrap();
+    // One shape alone at weight 1 is its learned jaw, bit for bit.
+    assert_eq!(learned.blend(&weights[3]), jaws[2]);
+    weights.iter().flat_map(|w| learned.blend(w)).collect()
+}
+
 #[test]
 fn kernel_hashes_are_pinned() {
     let (skinned, normals) = skinning_output();
@@ -197,6 +221,7 @@ fn kernel_hashes_are_pinned() {
                 .flat_map(|c| c.to_array())
                 .collect(),
         ),
+        ("jaw-blend", jaw_blend_output()),
     ];
     let mut text = String::new();
     for (name, values) in &cases {

@@ -7,7 +7,8 @@
  *
  * With two arguments NAME.sinew is the model: an AIM actor is played from
  * NAME.f32/q16/fast.replay.sinew (each frame hashed by sinew_aim_frame_hash and again from the
- * pose call of its mode), an S2D decoder from NAME.replay.sinew. With three, NAME.sinew is played
+ * pose call of its mode), then each f32 frame's coefficients posed with the jaw they give alone
+ * (sinew_aim_jaw_from_weights: the "jaw" lines), an S2D decoder from NAME.replay.sinew. With three, NAME.sinew is played
  * on MODEL.sinew: a fitted performance on its actor (frame hashes as `sinew fit` bakes them), or
  * a motion generator on its S2D decoder, generating the sequence NAME.hashes names (label, seed,
  * intensity) and decoding its frames. Build and run: core/ffi/run-example.sh (docs/C-API.md). */
@@ -349,6 +350,58 @@ done:
     return result;
 }
 
+/* The "jaw" lines of an AIM hash list: for each frame of the f32 replay at `path`, the hash of
+ * the jaw its coefficients give alone (sinew_aim_jaw_from_weights), then the f32 frame hash of
+ * the frame's head, that jaw and the coefficients. Returns 0, or -1 when a call fails. */
+static int play_jaw(const SinewModel *model, const SinewModelInfo *info, const char *path) {
+    SinewError err;
+    size_t len = 0;
+    uint8_t *bytes = read_file(path, &len);
+    if (bytes == NULL) {
+        return -1;
+    }
+    int bad = -1;
+    SinewReplay *replay = NULL;
+    SinewReplayInfo rinfo;
+    float *scratch = calloc(info->scratch_floats, sizeof(float));
+    float *weights = calloc(info->shape_count + 1, sizeof(float));
+    if (scratch == NULL || weights == NULL) {
+        fprintf(stderr, "%s: out of memory\n", path);
+        goto done;
+    }
+    if (failed(sinew_replay_open(bytes, len, &replay, &err), &err, path) ||
+        failed(sinew_replay_info(replay, &rinfo, &err), &err, path)) {
+        goto done;
+    }
+    printf("# jaw: per frame, the hash of jaw_from_weights(coefficients), then the f32 frame hash "
+           "with that jaw\n");
+    for (size_t f = 0; f < rinfo.frame_count; f++) {
+        float head[9], recorded_jaw[9], jaw[9];
+        uint64_t expected = 0, jaw_hash = 0, hash = 0;
+        if (failed(sinew_replay_aim_frame(replay, f, head, recorded_jaw, weights,
+                                          rinfo.shape_count, &expected, &err),
+                   &err, path) ||
+            failed(sinew_aim_jaw_from_weights(model, weights, info->shape_count, jaw, &err), &err,
+                   path) ||
+            failed(sinew_hash_frame(jaw, 9, NULL, 0, &jaw_hash, &err), &err, path) ||
+            failed(sinew_aim_frame_hash(model, SINEW_MODE_F32, head, jaw, weights,
+                                        info->shape_count, scratch, info->scratch_floats, &hash,
+                                        &err),
+                   &err, path)) {
+            goto done;
+        }
+        printf("jaw %zu %016llx %016llx\n", f, (unsigned long long)jaw_hash,
+               (unsigned long long)hash);
+    }
+    bad = 0;
+done:
+    sinew_replay_free(replay);
+    free(bytes);
+    free(scratch);
+    free(weights);
+    return bad;
+}
+
 int main(int argc, char **argv) {
     if (argc != 3 && argc != 4) {
         fprintf(stderr,
@@ -395,6 +448,12 @@ int main(int argc, char **argv) {
             snprintf(path, sizeof path, "%s/%s.%s.replay.sinew", dir, name, MODE_NAMES[m]);
             int r = play(model, &info, path, MODE_NAMES[m]);
             bad = r < 0 ? r : bad + r;
+        }
+        if (bad >= 0) {
+            snprintf(path, sizeof path, "%s/%s.f32.replay.sinew", dir, name);
+            if (play_jaw(model, &info, path) < 0) {
+                bad = -1;
+            }
         }
         if (bad >= 0 && refuses_nan(model, &info, name)) {
             bad = -1;

@@ -495,6 +495,26 @@ enum SinewStatus sinew_aim_pose(const struct SinewModel *model,
                                 size_t normals_len,
                                 struct SinewError *err);
 
+// The jaw of a pose given by coefficients alone (an ARKit capture, sliders, shapes driven by
+// name): every training shape's learned jaw transform blended by its coefficient and held within
+// the range the shapes span (docs/ENGINES.md, "The jaw of a pose given by coefficients"; the
+// identity for an actor that records no learned jaws). Writes 9 floats to `jaw` (`[6D rotation,
+// translation]`, the form `sinew_aim_pose` takes); the result is always a jaw `sinew_aim_pose`
+// accepts.
+//
+// `weights`: `weights_len == shape_count`. A NaN, infinite or out-of-range coefficient is
+// refused with `SINEW_STATUS_INVALID_INPUT`, naming it; nothing is written then.
+//
+// # Safety
+// `model` is a live handle; `weights` points to `weights_len` floats; `jaw` points to 9
+// writable floats overlapping no other argument; `err` is NULL or points to a writable
+// `SinewError`.
+enum SinewStatus sinew_aim_jaw_from_weights(const struct SinewModel *model,
+                                            const float *weights,
+                                            size_t weights_len,
+                                            float *jaw,
+                                            struct SinewError *err);
+
 // Poses an AIM frame in `mode` (a `SINEW_MODE_*` code) and writes its hash to `*hash`: the very
 // hash `sinew replay record` pins and every target checks (`sinew_core::replay::pose_frame_hash`).
 // f32 and fast modes hash the positions then the normals, Q16 mode the positions' raw Q16.16

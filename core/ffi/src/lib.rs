@@ -34,9 +34,9 @@ pub use meta::{
     sinew_model_content_hash, sinew_model_meta, sinew_model_metadata, sinew_model_shape_name,
 };
 pub use model::{
-    SinewKind, SinewModel, SinewModelInfo, sinew_aim_frame_hash, sinew_aim_pose,
-    sinew_aim_triangles, sinew_hash_frame, sinew_model_free, sinew_model_info, sinew_model_open,
-    sinew_s2d_decode, sinew_s2d_landmark_input, sinew_s2d_landmarks,
+    SinewKind, SinewModel, SinewModelInfo, sinew_aim_frame_hash, sinew_aim_jaw_from_weights,
+    sinew_aim_pose, sinew_aim_triangles, sinew_hash_frame, sinew_model_free, sinew_model_info,
+    sinew_model_open, sinew_s2d_decode, sinew_s2d_landmark_input, sinew_s2d_landmarks,
 };
 pub use performance::{
     SinewPerformance, SinewPerformanceInfo, sinew_performance_check_model,

@@ -320,6 +320,42 @@ pub unsafe extern "C" fn sinew_aim_pose(
     })
 }
 
+/// The jaw of a pose given by coefficients alone (an ARKit capture, sliders, shapes driven by
+/// name): every training shape's learned jaw transform blended by its coefficient and held within
+/// the range the shapes span (docs/ENGINES.md, "The jaw of a pose given by coefficients"; the
+/// identity for an actor that records no learned jaws). Writes 9 floats to `jaw` (`[6D rotation,
+/// translation]`, the form `sinew_aim_pose` takes); the result is always a jaw `sinew_aim_pose`
+/// accepts.
+///
+/// `weights`: `weights_len == shape_count`. A NaN, infinite or out-of-range coefficient is
+/// refused with `SINEW_STATUS_INVALID_INPUT`, naming it; nothing is written then.
+///
+/// # Safety
+/// `model` is a live handle; `weights` points to `weights_len` floats; `jaw` points to 9
+/// writable floats overlapping no other argument; `err` is NULL or points to a writable
+/// `SinewError`.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn sinew_aim_jaw_from_weights(
+    model: *const SinewModel,
+    weights: *const f32,
+    weights_len: usize,
+    jaw: *mut f32,
+    err: *mut SinewError,
+) -> SinewStatus {
+    guard(err, || {
+        let actor = ptr::handle(model, "model")?.aim()?;
+        let weights = ptr::slice(weights, weights_len, "weights")?;
+        expect_len("weights", weights.len(), actor.shape_count())?;
+        let out = ptr::slice_mut(jaw, 9, "jaw")?;
+        let blended = actor
+            .jaw_from_weights(weights)
+            .map_err(|e| Fail::eval("jaw_from_weights", e))?;
+        out.copy_from_slice(&blended);
+        Ok(())
+    })
+}
+
 /// The numeric mode of a `SINEW_MODE_*` code.
 pub(crate) fn mode_of(code: u32) -> Result<Mode> {
     match code {

@@ -124,6 +124,32 @@ fn aim_hash_list(name: &str) -> String {
             writeln!(text, "{label} {f} {hash:016x}").unwrap();
         }
     }
+    // Each f32 frame's coefficients alone give the jaw (`sinew_aim_jaw_from_weights`).
+    text.push_str(
+        "# jaw: per frame, the hash of jaw_from_weights(coefficients), then the f32 frame hash \
+         with that jaw\n",
+    );
+    let replay = Replay::open(&format!("{name}.f32.replay.sinew"));
+    let mut weights = vec![0.0; info.shape_count];
+    for f in 0..replay.info().frame_count {
+        let (head, _, _) = replay.aim_frame(f, &mut weights);
+        let mut jaw = [0.0f32; 9];
+        let mut err = new_error();
+        // Safety: a live handle, buffers of the lengths passed.
+        let status = unsafe {
+            sinew_aim_jaw_from_weights(
+                model.handle,
+                weights.as_ptr(),
+                weights.len(),
+                jaw.as_mut_ptr(),
+                &mut err,
+            )
+        };
+        assert_eq!(status, SinewStatus::Ok, "{}", message(&err));
+        let jaw_hash = sinew_core::hash::frame_hash(&jaw);
+        let hash = aim_hash(&model, SinewMode::F32 as u32, &head, &jaw, &weights);
+        writeln!(text, "jaw {f} {jaw_hash:016x} {hash:016x}").unwrap();
+    }
     text
 }
 

@@ -74,6 +74,8 @@ export class Model {
    * translation; the jaw about the actor's pivot); `coefficients`: `[shapeCount]`.
    */
   pose(head: Floats, jaw: Floats, coefficients: Floats): Float32Array;
+  /** The jaw of a pose given by coefficients alone: the shapes' learned jaws blended, within their range (9 values). */
+  jawFromWeights(coefficients: Floats): Float32Array;
   /**
    * AIM: `[vertexCount * 3]` posed positions in Q16.16 fixed point, as raw values (value × 65536):
    * the Q16 replays' mode (needs the actor's Q16.16 cache). `frameHashQ16` of them is the frame's

@@ -259,6 +259,16 @@ export class Model extends Handle {
   }
 
   /**
+   * The jaw of a pose given by coefficients alone (an ARKit capture, sliders, shapes driven by
+   * name): every training shape's learned jaw blended by its coefficient and held within the
+   * range the shapes span; 9 values for `pose`'s `jaw`.
+   */
+  jawFromWeights(coefficients) {
+    put(f32Bytes(floats(coefficients, "coefficients")));
+    return takeF32(exports().sinew_jaw_from_weights(this._h));
+  }
+
+  /**
    * Poses an AIM actor in Q16.16 fixed point (the Q16 replays' mode): the positions' raw values
    * (value × 65536), x y z per vertex. `frameHashQ16(poseQ16(...))` is the frame's Q16 hash.
    */

@@ -434,6 +434,17 @@ pub extern "C" fn sinew_pose(handle: i32, head_len: u32, jaw_len: u32) -> i32 {
     }))
 }
 
+/// The jaw of the coefficients in the I/O area ([`Model::jaw_from_weights`]). Result: 9 `f32`.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_jaw_from_weights(handle: i32) -> i32 {
+    let values = io_f32s();
+    finish(with_model(handle, |m| {
+        Ok(f32_bytes(&m.jaw_from_weights(&values)?))
+    }))
+}
+
 /// Vertex normals ([`Model::normals`]) of the positions in the I/O area. Result: `f32`.
 // Safety: exported under its own name; no other symbol in the module is called so.
 #[allow(unsafe_code)]

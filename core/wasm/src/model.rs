@@ -251,6 +251,22 @@ impl Model {
         Ok(out)
     }
 
+    /// The jaw of a pose given by coefficients alone ([`AimActor::jaw_from_weights`]): every
+    /// training shape's learned jaw blended by its coefficient, held within the range the shapes
+    /// span; 9 values for [`Self::pose`]'s `jaw`.
+    ///
+    /// # Shapes
+    /// `coefficients`: `[M]`; returns `[9]`.
+    ///
+    /// # Errors
+    /// Not an AIM actor, coefficients of the wrong length, or a coefficient the core refuses
+    /// (NaN, infinite, out of range), named with its index.
+    pub fn jaw_from_weights(&self, coefficients: &[f32]) -> Result<Vec<f32>, Error> {
+        let actor = self.aim("jawFromWeights")?;
+        check_len("coefficients", coefficients.len(), actor.shape_count())?;
+        Ok(actor.jaw_from_weights(coefficients)?.to_vec())
+    }
+
     /// Area-weighted vertex normals of an AIM actor's posed positions ([`AimActor::normals`]).
     ///
     /// # Shapes

@@ -50,6 +50,30 @@ for (const name of ["aim-ict", "aim-procedural"]) {
   });
 }
 
+for (const name of ["aim-ict", "aim-procedural"]) {
+  test(`${name}: the jaw of each frame's coefficients alone, and the frame posed with it, hash as recorded`, () => {
+    const model = Model.load(data(`${name}.sinew`));
+    const replay = Replay.load(data(`${name}.f32.replay.sinew`));
+    const lines = data(`${name}.hashes`)
+      .toString("utf8")
+      .split("\n")
+      .filter((l) => l.startsWith("jaw "))
+      .map((l) => l.split(" "));
+    assert.equal(lines.length, replay.frameCount);
+    for (const [, f, jawHash, hash] of lines) {
+      const { head, coefficients } = replay.frame(Number(f));
+      const jaw = model.jawFromWeights(coefficients);
+      assert.equal(jaw.length, 9);
+      assert.equal(frameHash(jaw), jawHash, `jaw ${f}`);
+      const positions = model.pose(head, jaw, coefficients);
+      assert.equal(frameHash(positions, model.normals(positions)), hash, `frame ${f}`);
+    }
+    assert.throws(() => model.jawFromWeights(new Float32Array(model.shapeCount + 1)), /coefficients/);
+    replay.free();
+    model.free();
+  });
+}
+
 test("s2d-ict: every frame decoded onto the replay's neutral hashes as recorded", () => {
   const model = Model.load(data("s2d-ict.sinew"));
   const replay = Replay.load(data("s2d-ict.replay.sinew"));

@@ -1,6 +1,6 @@
 //! The golden kernel suite on every target: each core kernel (MLP with GELU/ELU, SIREN, spiral
-//! convolution, CSR product, eq. 17 skinning, vertex normals, 6D rotation) on seeded weights and
-//! inputs, hashed and compared with `tests/data/kernels.hashes`, pinned on the x86_64 host by
+//! convolution, CSR product, eq. 17 skinning, vertex normals, 6D rotation, the jaw of a pose given
+//! by coefficients alone) on seeded weights and inputs, hashed and compared with `tests/data/kernels.hashes`, pinned on the x86_64 host by
 //! `tests/tests/golden_kernels.rs`.
 //!
 //! The weights and inputs come from the same PCG32 stream as the host test's `sinew_tests::Rng`,
@@ -10,6 +10,7 @@
 
 use rand_core::RngCore;
 use sinew_core::hash::frame_hash;
+use sinew_core::jaw::LearnedJaws;
 use sinew_core::linalg::Vec3;
 use sinew_core::nn::{Activation, Dense, Mlp};
 use sinew_core::skinning::{BoneTransform, Pose, Triangles, skin, vertex_normals};
@@ -325,7 +326,44 @@ pub fn run_kernels(
         o.copy_from_slice(&c.to_array());
     }
     report("rotation-6d", frame_hash(&values), 9);
+    let (h, n) = jaw_blend(s)?;
+    report("jaw-blend", h, n);
     Ok(())
+}
+
+/// Four learned jaw transforms (an opening, a smaller one, a sideways turn, a slight closing),
+/// as `tests/tests/golden_kernels.rs` writes them.
+const JAWS: [[f32; 9]; 4] = [
+    [1.0, 0.0, 0.0, 0.0, 0.94, 0.34, 0.0, -0.12, 0.05],
+    [1.0, 0.0, 0.0, 0.0, 0.995, 0.1, 0.0, 0.0, 0.02],
+    [0.998, 0.0, -0.06, 0.0, 1.0, 0.0, 0.03, 0.0, 0.0],
+    [1.0, 0.0, 0.0, 0.0, 0.9998, -0.02, 0.0, 0.01, 0.0],
+];
+
+/// Coefficients within the shapes' range, past it, far outside [0, 1], and one shape alone.
+const JAW_WEIGHTS: [[f32; 4]; 4] = [
+    [0.5, 0.3, 0.2, 0.0],
+    [1.0, 1.0, 1.0, 1.0],
+    [-0.7, 2.0, -1.5, 3.0],
+    [0.0, 0.0, 1.0, 0.0],
+];
+
+/// The jaw of a pose given by coefficients alone (`sinew_core::jaw`) for each of
+/// [`JAW_WEIGHTS`] over [`JAWS`]: 36 values.
+fn jaw_blend(s: &mut KernelScratch) -> Result<(u64, usize), KernelError> {
+    let bytes = s
+        .bytes
+        .get_mut(..4 * 36)
+        .ok_or(KernelError::Buffer(BufferError::Scratch))?;
+    for (c, v) in bytes.chunks_exact_mut(4).zip(JAWS.iter().flatten()) {
+        c.copy_from_slice(&v.to_le_bytes());
+    }
+    let jaws = LearnedJaws::new(f32s(bytes)?)?;
+    let out = slot(&mut s.a, 36)?;
+    for (o, w) in out.chunks_exact_mut(9).zip(&JAW_WEIGHTS) {
+        o.copy_from_slice(&jaws.blend(w));
+    }
+    Ok((frame_hash(out), 36))
 }
 
 /// The pinned hash of kernel case `name` in [`KERNEL_HASHES`], with its value count.
@@ -398,7 +436,7 @@ mod tests {
             }
         })
         .unwrap();
-        assert_eq!((cases, mismatches), (7, 2));
+        assert_eq!((cases, mismatches), (8, 2));
         assert_eq!(bad, ["siren-w30", "rotation-6d"]);
     }
 }

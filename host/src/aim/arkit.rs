@@ -15,10 +15,12 @@
 //! (between the ears): `R = R_y(yaw) · R_x(pitch) · R_z(roll)` in the actor's face frame (+x to
 //! the actor's left, +y up, +z forward). A channel that plays none of the actor's shapes (the
 //! eye rotations, and every shape the actor was not trained on) is reported, never silently
-//! dropped. The jaw channels
-//! (`jawOpen`, `jawLeft`, `jawRight`, `jawForward`) also move the jaw: each blends the jaw
-//! transform learned for its shape (`train.jaw`) in from the identity by its weight, as
-//! `sinew demo` opens the jaw.
+//! dropped. Every played shape also moves the jaw as it learned to: the frame's jaw is every
+//! shape's learned jaw transform (`train.jaw`) blended by the coefficients and held within the
+//! range the shapes span, the core's rule for a pose given by coefficients alone
+//! ([`sinew_core::jaw`], `AimActor::jaw_from_weights`). On a studio's rig `mouthClose`,
+//! `mouthFunnel` or the smiles turn the jaw by several degrees, and their correctives were
+//! learned on top of that jaw.
 
 use std::path::{Path, PathBuf};
 
@@ -27,7 +29,9 @@ use sinew_core::aim::AimActor;
 
 use crate::aim::model::IDENTITY_9D;
 use crate::aim::play::{Frame, PlayError};
-use crate::io::arkit::{Capture, CaptureError, CaptureFrame, LIVE_LINK_FACE_CHANNELS, comparable};
+use crate::io::arkit::{
+    ARKIT_SHAPES, Capture, CaptureError, CaptureFrame, LIVE_LINK_FACE_CHANNELS, comparable,
+};
 use crate::io::atomic::AtomicWriteError;
 
 /// Why a Live Link Face capture could not be played on an actor.
@@ -51,6 +55,17 @@ pub enum ArkitError {
         channels: Vec<String>,
         /// The actor's corrective shapes.
         shapes: Vec<String>,
+    },
+    /// A row's coefficients cannot pose the actor (a value beyond the core's limits).
+    #[error("{}: row {} (frame {frame})", path.display(), frame + 1)]
+    Frame {
+        /// The capture.
+        path: PathBuf,
+        /// The frame, from 0.
+        frame: usize,
+        /// The core's reason.
+        #[source]
+        source: sinew_core::EvalError,
     },
     /// The actor could not be read or posed, or a frame not written.
     #[error(transparent)]
@@ -78,9 +93,10 @@ pub struct Mapping {
     pub unplayable: Vec<String>,
     /// The actor's corrective shapes that no channel drives (they stay at rest).
     pub at_rest: Vec<String>,
-    /// Shapes whose learned jaw transform the capture blends in (the jaw channels the actor has
-    /// and carries a training pose for).
-    pub jaw_shapes: Vec<String>,
+    /// The played shapes whose learned jaw turns the jaw by more than [`MOVES_JAW_DEGREES`],
+    /// with that angle in degrees, in the actor's shape order (every shape's learned jaw plays;
+    /// these are the ones that matter).
+    pub jaw_shapes: Vec<(String, f32)>,
     /// The head rotation channels the capture has (`HeadYaw`, `HeadPitch`, `HeadRoll`), which
     /// turn the head.
     pub head: Vec<String>,
@@ -208,16 +224,19 @@ pub struct Playback {
 /// The head rotation channels, in the order yaw, pitch, roll.
 const HEAD_CHANNELS: [&str; 3] = ["HeadYaw", "HeadPitch", "HeadRoll"];
 
-/// Shapes whose learned jaw transform moves the jaw when they play.
-const JAW_SHAPES: [&str; 4] = ["jawOpen", "jawLeft", "jawRight", "jawForward"];
+/// A learned jaw rotation above which a shape is said to move the jaw: reported in the mapping
+/// (`jaw_shapes`), and the shapes the export's tests hold to the core one by one. Every shape's
+/// learned jaw plays, whatever its angle.
+pub const MOVES_JAW_DEGREES: f32 = 0.5;
 
-/// The indices of `shapes` whose channel also moves the jaw (ARKit's `jawOpen`, `jawLeft`,
-/// `jawRight`, `jawForward`, however spelled), in that order.
-pub fn jaw_shapes(shapes: &[String]) -> Vec<usize> {
-    JAW_SHAPES
-        .iter()
-        .filter_map(|n| shapes.iter().position(|s| comparable(s) == comparable(n)))
-        .collect()
+/// Each corrective shape's learned jaw rotation in degrees, in shape order; empty when the actor
+/// records no learned jaws.
+pub fn jaw_degrees(actor: &AimActor<'_>) -> Vec<f32> {
+    actor.learned_jaws().map_or_else(Vec::new, |jaws| {
+        (0..jaws.shape_count())
+            .map(|s| crate::aim::eval::rotation_degrees(&jaws.shape(s)) as f32)
+            .collect()
+    })
 }
 
 /// Reads a Live Link Face capture and maps it onto `actor`.
@@ -234,36 +253,34 @@ pub fn playback_of(
 ) -> Result<Playback, ArkitError> {
     let shapes = crate::aim::play::corrective_names(actor);
     let mut mapping = Mapping::new(path, &capture.channels, &shapes)?;
-    // The learned jaw transforms, when the artefact records them (every trained actor does).
-    let poses = crate::aim::eval::training_poses(actor).ok();
-    let jaw: Vec<(usize, [f32; 9])> = match &poses {
-        Some(p) => jaw_shapes(&shapes)
-            .into_iter()
-            .filter(|s| mapping.routes.iter().any(|r| r.1 == *s))
-            .map(|s| (s, p[s + 1]))
-            .collect(),
-        None => Vec::new(),
-    };
-    mapping.jaw_shapes = jaw.iter().map(|(s, _)| shapes[*s].clone()).collect();
+    let degrees = jaw_degrees(actor);
+    mapping.jaw_shapes = degrees
+        .iter()
+        .enumerate()
+        .filter(|&(s, d)| *d > MOVES_JAW_DEGREES && mapping.routes.iter().any(|r| r.1 == s))
+        .map(|(s, d)| (shapes[s].clone(), *d))
+        .collect();
+    let pivot = actor.jaw_pivot();
     let frames = capture
         .frames
         .iter()
-        .map(|row| {
+        .enumerate()
+        .map(|(f, row)| {
             let weights = mapping.weights(row, shapes.len());
-            let mut jaw9 = IDENTITY_9D;
-            for (s, learned) in &jaw {
-                for (j, v) in jaw9.iter_mut().enumerate() {
-                    *v += weights[*s] * (learned[j] - IDENTITY_9D[j]);
-                }
-            }
-            let pivot = actor.jaw_pivot();
-            Frame {
+            let jaw = actor
+                .jaw_from_weights(&weights)
+                .map_err(|source| ArkitError::Frame {
+                    path: path.to_path_buf(),
+                    frame: f,
+                    source,
+                })?;
+            Ok(Frame {
                 head: mapping.head(row, [pivot.x, pivot.y, pivot.z]),
-                jaw: jaw9,
+                jaw,
                 weights,
-            }
+            })
         })
-        .collect();
+        .collect::<Result<_, ArkitError>>()?;
     Ok(Playback { mapping, frames })
 }
 
@@ -327,6 +344,22 @@ pub fn sample_capture() -> Capture {
     Capture { channels, frames }
 }
 
+/// The capture `tests/data/arkit-each.csv`: Live Link Face's 61 channels, frame 0 at rest, then
+/// each of ARKit's 52 blendshape channels alone at 1 for one frame (53 frames at 30 fps): every
+/// shape an ARKit rig plays, one at a time, with the jaw it learned.
+pub fn each_channel_capture() -> Capture {
+    let channels: Vec<String> = LIVE_LINK_FACE_CHANNELS.map(String::from).to_vec();
+    let frames = (0..=ARKIT_SHAPES)
+        .map(|f| CaptureFrame {
+            timecode: format!("00:00:{:02}:{:02}.000", f / 30, f % 30),
+            values: (0..channels.len())
+                .map(|c| if c + 1 == f { 1.0 } else { 0.0 })
+                .collect(),
+        })
+        .collect();
+    Capture { channels, frames }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -351,6 +384,27 @@ mod tests {
             .unwrap_or_else(|e| panic!("{}: {e} (UPDATE_EXPECT=1 writes it)", path.display()));
         assert_eq!(committed, made, "{} is stale", path.display());
         assert_eq!(Capture::read(&path).unwrap(), sample_capture());
+    }
+
+    /// The committed one-channel-at-a-time capture is what [`each_channel_capture`] makes.
+    #[test]
+    fn each_channel_capture_is_the_committed_file() {
+        let path = repo("tests/data/arkit-each.csv");
+        let made = each_channel_capture().to_csv();
+        if std::env::var_os("UPDATE_EXPECT").is_some_and(|v| v == "1") {
+            crate::io::atomic::write(&path, made.as_bytes()).unwrap();
+        }
+        let committed = std::fs::read_to_string(&path)
+            .unwrap_or_else(|e| panic!("{}: {e} (UPDATE_EXPECT=1 writes it)", path.display()));
+        assert_eq!(committed, made, "{} is stale", path.display());
+        let read = Capture::read(&path).unwrap();
+        assert_eq!(read.frames.len(), 53);
+        // Frame f + 1 raises channel f alone.
+        for (f, frame) in read.frames.iter().enumerate() {
+            let raised: Vec<usize> = (0..61).filter(|&c| frame.values[c] != 0.0).collect();
+            let want: Vec<usize> = f.checked_sub(1).into_iter().collect();
+            assert_eq!(raised, want, "frame {f}");
+        }
     }
 
     #[test]
@@ -387,10 +441,21 @@ mod tests {
             );
         }
         assert_eq!(p.mapping.unplayable.len(), 61 - 19 - 3);
-        assert_eq!(
-            p.mapping.jaw_shapes,
-            ["jawOpen", "jawLeft", "jawRight", "jawForward"]
-        );
+        // Every played shape whose learned jaw turns by more than the threshold is listed with
+        // its angle, jawOpen's 21.1° among them.
+        let shapes = crate::aim::play::corrective_names(&actor);
+        let degrees = jaw_degrees(&actor);
+        assert_eq!(degrees.len(), shapes.len());
+        let moving: Vec<(String, f32)> = shapes
+            .iter()
+            .zip(&degrees)
+            .filter(|(_, d)| **d > MOVES_JAW_DEGREES)
+            .map(|(n, d)| (n.clone(), *d))
+            .collect();
+        eprintln!("shapes that move the jaw: {moving:?}");
+        assert_eq!(p.mapping.jaw_shapes, moving);
+        let open = moving.iter().find(|(n, _)| n == "jawOpen").unwrap().1;
+        assert!((open - 21.1).abs() < 0.05, "jawOpen turns {open}°");
     }
 
     #[test]
@@ -406,7 +471,6 @@ mod tests {
         // The first frame is at rest: no weight, the jaw and head the identity.
         assert!(p.frames[0].weights.iter().all(|w| *w == 0.0));
         assert_eq!(p.frames[0].jaw, IDENTITY_9D);
-        let learned = crate::aim::eval::training_poses(&actor).unwrap()[s("jawOpen") + 1];
         for (f, (frame, row)) in p.frames.iter().zip(&capture.frames).enumerate() {
             assert_eq!(
                 frame.weights[s("jawOpen")],
@@ -441,12 +505,17 @@ mod tests {
             let r = sinew_core::rotation::rigid_from_9d(&frame.head);
             let moved = r.apply(pivot);
             assert!((moved - pivot).norm() < 1e-4, "frame {f}: the hinge moved");
-            let open = row.values[c("JawOpen")];
-            for j in 0..9 {
-                let want = IDENTITY_9D[j] + open * (learned[j] - IDENTITY_9D[j]);
-                assert!((frame.jaw[j] - want).abs() < 1e-6, "frame {f}, jaw[{j}]");
-            }
+            // The jaw is the core's for the frame's coefficients: every shape's learned jaw.
+            assert_eq!(
+                frame.jaw,
+                actor.jaw_from_weights(&frame.weights).unwrap(),
+                "frame {f}"
+            );
         }
+        // At the jaw's widest (frame 15, JawOpen 0.8 with the smiles and brows up) it opens by
+        // most of jawOpen's learned 21°.
+        let opened = crate::aim::eval::rotation_degrees(&p.frames[15].jaw);
+        assert!((14.0..21.2).contains(&opened), "{opened}°");
         // Posed through the core, the blink at mid-sequence moves the right eyelid: the vertex
         // that moves most between the first frame and the blink's peak (frame 14, where the
         // brows are also up and the jaw open) lies in the upper face, and the right lid (x < 0:

@@ -76,6 +76,14 @@ pub fn training_poses(actor: &AimActor<'_>) -> Result<Vec<[f32; 9]>, EvalError> 
     Ok(poses)
 }
 
+/// The angle of a 9D transform's rotation (as the core builds it), in degrees.
+pub fn rotation_degrees(transform: &[f32; 9]) -> f64 {
+    let [r0, r1, r2, r3, r4, r5, ..] = *transform;
+    let r = sinew_core::rotation::from_6d(&[r0, r1, r2, r3, r4, r5]);
+    let trace = f64::from(r.cols[0].x) + f64::from(r.cols[1].y) + f64::from(r.cols[2].z);
+    ((trace - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees()
+}
+
 /// Poses training shape `i` (0 = neutral) through the core.
 ///
 /// # Errors

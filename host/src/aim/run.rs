@@ -207,13 +207,6 @@ pub fn run(
     Ok(report)
 }
 
-/// The angle of a 9D jaw transform's rotation, in degrees.
-fn jaw_degrees(pose: &[f32; 9]) -> f64 {
-    let r = sinew_core::rotation::from_6d(&[pose[0], pose[1], pose[2], pose[3], pose[4], pose[5]]);
-    let trace = f64::from(r.cols[0].x) + f64::from(r.cols[1].y) + f64::from(r.cols[2].z);
-    ((trace - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees()
-}
-
 /// Measures a baked actor on its training set.
 pub fn evaluate(
     bytes: &[u8],
@@ -230,7 +223,7 @@ pub fn evaluate(
         .iter()
         .zip(&set.names)
         .skip(1)
-        .map(|(pose, name)| (name.clone(), jaw_degrees(pose)))
+        .map(|(pose, name)| (name.clone(), super::eval::rotation_degrees(pose)))
         .collect();
     let thickness = actor.thickness();
     Ok(Report {

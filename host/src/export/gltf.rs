@@ -42,7 +42,7 @@ pub use super::jaw::{
 };
 pub use super::names::{Names, Targets};
 use super::place::{Place, PlaceError};
-use crate::aim::arkit::{ArkitError, jaw_shapes};
+use crate::aim::arkit::ArkitError;
 use crate::aim::play::{Frame, PoseFile, PoseFileError, corrective_names};
 use crate::geometry::uv::UvError;
 use crate::io::atomic::AtomicWriteError;
@@ -396,13 +396,13 @@ pub fn glb(
     let rest: Vec<f32> = actor.rest().iter().collect();
     let skin = Skin::of(actor, &correctives);
     let shape_names = corrective_names(actor);
-    let learned: Vec<(usize, [f32; 9])> = match crate::aim::eval::training_poses(actor) {
-        Ok(poses) => jaw_shapes(&shape_names)
-            .into_iter()
-            .map(|s| (s, poses[s + 1]))
-            .collect(),
-        Err(_) => Vec::new(),
-    };
+    // Every shape's target is undone by its own learned jaw, which the core's rule gives it
+    // alone at weight 1 (`sinew_core::jaw`).
+    let learned: Vec<(usize, [f32; 9])> = actor.learned_jaws().map_or_else(Vec::new, |jaws| {
+        (0..jaws.shape_count())
+            .map(|s| (s, jaws.shape(s)))
+            .collect()
+    });
     let deltas =
         shape_deltas(actor, &skin, &learned).map_err(|(s, source)| GltfError::LearnedJaw {
             shape: shape_names[s].clone(),
@@ -464,8 +464,8 @@ pub fn glb(
         Some(ArrayBuffer),
     );
 
-    // Morph targets: each shape's displacement (its corrective, a jaw shape's compensated for
-    // its jaw, `super::jaw`) and the normal change it makes, then each combined ARKit target's
+    // Morph targets: each shape's displacement (its corrective compensated for its learned jaw,
+    // `super::jaw`) and the normal change it makes, then each combined ARKit target's
     // (the sum of its shapes'), then the animation's jaw compensation.
     let named = Targets::of(&shape_names, options.names);
     let sums: Vec<Vec<usize>> = (0..m)

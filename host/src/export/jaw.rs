@@ -7,13 +7,14 @@
 //! skin weights also clamp a learned `k` outside [0, 1] ([`joint_weight`]). Two
 //! things put it right:
 //!
-//! 1. **The named targets** ([`shape_deltas`]): the jaw shapes (`jawOpen`, `jawLeft`,
-//!    `jawRight`, `jawForward`, the shapes whose ARKit channel also turns the jaw) hold
-//!    `A_j⁻¹ e_j`, their corrective undone by the rotation their own learned jaw transform
-//!    (`train.jaw`) makes, so that a jaw shape alone at weight 1 with its jaw poses exactly as
-//!    in the core; every other shape holds `e_j`. An engine that drives the targets by name and
-//!    the jaw joint live gets what the core plays up to the remainder of the pose's other shapes
-//!    and weights (docs/ENGINES.md gives it).
+//! 1. **The named targets** ([`shape_deltas`]): every shape's target holds `A_j⁻¹ e_j`, its
+//!    corrective undone by the rotation of its own learned jaw transform (`train.jaw`). A shape
+//!    alone at weight 1 takes exactly that jaw under the core's rule for a pose given by
+//!    coefficients alone (`sinew_core::jaw`: the learned jaws blended by the coefficients), so
+//!    an engine that drives a target by name and turns the jaw joint by the same rule poses it
+//!    exactly as the core does: `jawOpen`, and on a studio's rig `mouthClose` or `mouthFunnel`,
+//!    whose learned jaws turn by several degrees. With several shapes at once, what is left is
+//!    the remainder of the pose's other shapes and weights (docs/ENGINES.md gives it).
 //! 2. **The animation** ([`compensate`]): for each frame, the displacement glTF needs before
 //!    skinning, `X* = A_c⁻¹((k − k_c)(T_b(s0) − s0) + Σ w_j e_j)` (with `k_c` the clamped
 //!    weight), less what the named targets give, `Σ w_j d_j`, is the frame's remainder. The
@@ -106,8 +107,8 @@ fn rotation(m: &sinew_core::linalg::Mat3) -> Matrix3<f64> {
     Matrix3::from_columns(&c)
 }
 
-/// The named targets' displacements `[V, M, 3]` (actor units): each shape's corrective, a jaw
-/// shape's undone by its own learned jaw rotation (`jaw`: shape index and its learned 9D jaw
+/// The named targets' displacements `[V, M, 3]` (actor units): each shape's corrective, undone by
+/// its own learned jaw rotation where `jaw` gives one (shape index and its learned 9D jaw
 /// transform). A learned jaw the core refuses is returned with its shape.
 pub(crate) fn shape_deltas(
     actor: &AimActor<'_>,

@@ -44,3 +44,41 @@ pub fn repo(path: &str) -> String {
     p.to_str().unwrap().to_owned()
 }
 pub mod gltf;
+
+/// A Live Link Face capture whose channels are `names` (an actor's own shape names, which the
+/// mapping plays exactly): frame 0 at rest, then frame `i + 1` with channel `i` alone at 1.
+pub fn each_shape_capture(names: &[String]) -> String {
+    use sinew_host::io::arkit::{Capture, CaptureFrame};
+    let frames = (0..=names.len())
+        .map(|f| CaptureFrame {
+            timecode: format!("00:00:{:02}:{:02}.000", f / 30, f % 30),
+            values: (0..names.len())
+                .map(|c| if c + 1 == f { 1.0 } else { 0.0 })
+                .collect(),
+        })
+        .collect();
+    Capture {
+        channels: names.to_vec(),
+        frames,
+    }
+    .to_csv()
+}
+
+/// Mean and largest distance between two vertex lists, in the lists' unit.
+pub fn distances(a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, f64) {
+    assert_eq!(a.len(), b.len());
+    let d: Vec<f64> = a
+        .iter()
+        .zip(b)
+        .map(|(p, q)| {
+            (0..3)
+                .map(|k| f64::from(p[k] - q[k]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .collect();
+    (
+        d.iter().sum::<f64>() / d.len() as f64,
+        d.iter().copied().fold(0.0, f64::max),
+    )
+}

@@ -149,7 +149,7 @@ async function main() {
   };
   toggle.addEventListener("change", showThickness);
   showThickness();
-  const rig = new Rig(model.shapeCount, shapeNames(model), () => show(() => posed(rig.pose()), null));
+  const rig = new Rig(model.shapeCount, shapeNames(model), (w) => model.jawFromWeights(w), () => show(() => posed(rig.pose()), null));
   const times = [];
   /** Hashes of the frames played, by source and frame index. */
   const played = sources.map(() => new Map());
@@ -409,17 +409,22 @@ function shapeNames(model) {
   );
 }
 
-/** The sliders: head yaw and pitch, jaw opening, one per corrective coefficient, named. */
+/**
+ * The sliders: head yaw and pitch, one per corrective coefficient, named, and a jaw opening
+ * beyond what the coefficients open. `learnedJaw(coefficients)` is the core's jaw of a pose given
+ * by coefficients alone (the shapes' learned jaws blended, `jawFromWeights`).
+ */
 class Rig {
-  constructor(shapeCount, names, onInput) {
+  constructor(shapeCount, names, learnedJaw, onInput) {
     this.onInput = onInput;
+    this.learnedJaw = learnedJaw;
     this.head = { yaw: 0, pitch: 0 };
     this.jaw = 0;
     this.coefficients = new Float32Array(shapeCount);
     const rig = $("rig");
     this.slider(rig, "head-yaw", "head yaw", -45, 45, 1, "°", (v) => (this.head.yaw = v));
     this.slider(rig, "head-pitch", "head pitch", -30, 30, 1, "°", (v) => (this.head.pitch = v));
-    this.slider(rig, "jaw", "jaw open", -2, 20, 0.5, "°", (v) => (this.jaw = v));
+    this.slider(rig, "jaw", "jaw open +", -2, 20, 0.5, "°", (v) => (this.jaw = v));
     this.shapeInputs = [];
     for (let i = 0; i < shapeCount; i++) {
       const input = this.slider($("shapes"), `shape-${i}`, names[i], 0, 1, 0.01, "", (v) => {
@@ -467,9 +472,14 @@ class Rig {
     const [cp, sp] = [Math.cos(this.head.pitch * rad), Math.sin(this.head.pitch * rad)];
     // R = Ry(yaw) · Rx(pitch); its first two columns.
     const head = [cy, 0, -sy, sy * sp, cp, cy * sp, 0, 0, 0];
-    // The jaw opens about the x axis through the actor's pivot.
+    // The coefficients' own jaw (each shape's learned jaw, as sinew play --arkit and engines
+    // driving shapes by name take it), then the slider's opening about the x axis through the
+    // pivot on top: R' = Rx · R, t' = Rx · t. At 0° the jaw is the core's to the bit.
+    const learned = this.learnedJaw(this.coefficients);
+    if (this.jaw === 0) return { head, jaw: Array.from(learned), coefficients: this.coefficients };
     const [cj, sj] = [Math.cos(this.jaw * rad), Math.sin(this.jaw * rad)];
-    const jaw = [1, 0, 0, 0, cj, sj, 0, 0, 0];
+    const rx = (v) => [v[0], cj * v[1] - sj * v[2], sj * v[1] + cj * v[2]];
+    const jaw = [...rx(learned.slice(0, 3)), ...rx(learned.slice(3, 6)), ...rx(learned.slice(6, 9))];
     return { head, jaw, coefficients: this.coefficients };
   }
 }
