@@ -74,7 +74,7 @@ impl<'a> LearnedJaws<'a> {
     /// for a rotation's, [`Bound::Coordinate`] for a translation's;
     /// [`FormatError::IncompatibleShapes`] if the length is not a multiple of 9.
     pub fn new(jaws: F32s<'a>) -> Result<Self, FormatError> {
-        if jaws.len() % 9 != 0 {
+        if !jaws.len().is_multiple_of(9) {
             return Err(FormatError::incompatible_shapes(SECTION));
         }
         let shapes = jaws.len() / 9;
@@ -317,7 +317,7 @@ mod tests {
             (Vec3::new(1.0, 0.0, 0.0), 1e-6),
             (Vec3::new(1.0, 0.0, 0.0), 0.37),
             (Vec3::new(0.6, -0.8, 0.0), 1.9),
-            (Vec3::new(0.0, 0.6, 0.8), 3.14),
+            (Vec3::new(0.0, 0.6, 0.8), 3.1),
             (Vec3::new(-0.48, 0.6, 0.64), core::f32::consts::PI),
         ] {
             let r = axis.normalize().scale(angle);
