@@ -396,9 +396,14 @@ fn retargeting_refuses_an_actor_that_shares_no_shape_or_is_no_face() {
             .chunks_exact(3 * m)
             .flat_map(|vertex| vertex[..3 * (m - 1)].iter().copied())
             .collect();
+        let jaw: Vec<f32> = actor.learned_jaws().map_or_else(Vec::new, |j| {
+            (0..m - 1).flat_map(|s| j.shape(s)).collect()
+        });
         w.remove_prefixed("cache.e");
         w.remove_prefixed("q16.");
+        w.remove_prefixed("train.jaw");
         w.f32s("cache.e", &[v, m - 1, 3], &kept).unwrap();
+        w.f32s("train.jaw", &[m - 1, 9], &jaw).unwrap();
         w.flags(sinew_core::format::FLAG_PLAYBACK_ONLY);
         let names: Vec<String> = (0..m - 1).map(|i| format!("custom{i}")).collect();
         w.meta("shapes", format!("neutral,{}", names.join(",")));
