@@ -396,9 +396,9 @@ fn retargeting_refuses_an_actor_that_shares_no_shape_or_is_no_face() {
             .chunks_exact(3 * m)
             .flat_map(|vertex| vertex[..3 * (m - 1)].iter().copied())
             .collect();
-        let jaw: Vec<f32> = actor.learned_jaws().map_or_else(Vec::new, |j| {
-            (0..m - 1).flat_map(|s| j.shape(s)).collect()
-        });
+        let jaw: Vec<f32> = actor
+            .learned_jaws()
+            .map_or_else(Vec::new, |j| (0..m - 1).flat_map(|s| j.shape(s)).collect());
         w.remove_prefixed("cache.e");
         w.remove_prefixed("q16.");
         w.remove_prefixed("train.jaw");

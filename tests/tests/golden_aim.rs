@@ -139,7 +139,8 @@ fn pin_replays(name: &str, model: &[u8]) {
             weights_q16: &mut [],
         };
         let hash =
-            sinew_core::replay::frame_hash(&actor, Mode::F32, &frame.head, &jaw, &mut buf).unwrap();
+            sinew_core::replay::pose_frame_hash(&actor, Mode::F32, &frame.head, &jaw, &mut buf)
+                .unwrap();
         writeln!(
             text,
             "jaw {f} {:016x} {hash:016x}",
