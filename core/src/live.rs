@@ -25,7 +25,7 @@
 //! held pose, or, after [`Settings::reacquire`] seconds, by the next frame the residual accepts
 //! (the head really moved while the tracker was unsure). Lengths are in units of the actor's
 //! face size: the root mean square distance of the steady rest landmarks (nose and eyes,
-//! [`crate::driver::STEADY`]) from their centre, 2.4 cm on the ICT actor.
+//! [`crate::driver::STEADY`]) from their centre, 3.5 cm on the ICT actor.
 //!
 //! Deterministic as the rest of the core: the caller's time stamps, never a clock; the state in
 //! the caller's buffer (zeros: a session that has seen nothing); libm only, in index order.
@@ -41,140 +41,11 @@ use crate::rotation::from_6d;
 use crate::skinning::skin_vertex;
 use crate::tensor::F32s;
 
-/// The most frames a calibration may take ([`Settings::calibrate_frames`]).
-pub const MAX_CALIBRATION_FRAMES: u32 = 1000;
-
-/// Live driving's settings; a limit of 0 turns its rule off.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Settings {
-    /// Found frames taken as the face at rest looking at the camera (0: no calibration).
-    pub calibrate_frames: u32,
-    /// The largest residual of a found frame: the root mean square distance between the
-    /// track's landmarks and the driven pose's, in units of the face's size in the image (2D:
-    /// the steady landmarks' spread in the frame; 3D: the actor's face size).
-    pub max_residual: f32,
-    /// The fastest the face's centre moves, in face sizes per second.
-    pub max_speed: f32,
-    /// The fastest the head turns, in radians per second.
-    pub max_turn: f32,
-    /// Seconds after which a run of frames lost to a jump is taken as the head's real motion.
-    pub reacquire: f32,
-}
-
-impl Settings {
-    /// No calibration, no lost-frame rule: every found frame is driven as it is.
-    pub const OFF: Self = Self {
-        calibrate_frames: 0,
-        max_residual: 0.0,
-        max_speed: 0.0,
-        max_turn: 0.0,
-        reacquire: 0.0,
-    };
-
-    /// The lost-frame rules' defaults (docs/FIT.md, "Live driving", where they were measured),
-    /// calibrating on `calibrate_frames` frames.
-    pub const fn defaults(calibrate_frames: u32) -> Self {
-        Self {
-            calibrate_frames,
-            max_residual: DEFAULT_MAX_RESIDUAL,
-            max_speed: DEFAULT_MAX_SPEED,
-            max_turn: DEFAULT_MAX_TURN,
-            reacquire: DEFAULT_REACQUIRE,
-        }
-    }
-
-    /// The settings as the values [`Argument::Live`] indexes: frames, residual, speed, turn,
-    /// reacquire.
-    pub fn values(&self) -> [f32; 5] {
-        [
-            self.calibrate_frames as f32,
-            self.max_residual,
-            self.max_speed,
-            self.max_turn,
-            self.reacquire,
-        ]
-    }
-
-    /// Checks every value.
-    ///
-    /// # Errors
-    /// [`InputError`] naming [`Argument::Live`] and the value ([`Self::values`]' index) for a
-    /// value that is not finite or outside `[0, MAX_FACTOR]`, or a frame count above
-    /// [`MAX_CALIBRATION_FRAMES`].
-    pub fn check(&self) -> Result<(), InputError> {
-        for (i, v) in self.values().into_iter().enumerate() {
-            check_value(Argument::Live, i, v)?;
-        }
-        if self.calibrate_frames > MAX_CALIBRATION_FRAMES {
-            return Err(InputError::new(
-                Argument::Live,
-                0,
-                InputErrorKind::OutOfRange,
-            ));
-        }
-        Ok(())
-    }
-}
-
-/// The default [`Settings::max_residual`]: measured on clean tracks (docs/FIT.md).
-pub const DEFAULT_MAX_RESIDUAL: f32 = 0.25;
-/// The default [`Settings::max_speed`]: 40 face sizes a second, about 1 m/s.
-pub const DEFAULT_MAX_SPEED: f32 = 40.0;
-/// The default [`Settings::max_turn`], radians a second.
-pub const DEFAULT_MAX_TURN: f32 = 8.0;
-/// The default [`Settings::reacquire`], seconds.
-pub const DEFAULT_REACQUIRE: f32 = 0.5;
-
-/// What became of one frame ([`Live::step`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum Outcome {
-    /// Taken into the calibration; the pose written is the rest pose.
-    Calibrating,
-    /// Driven and accepted; the pose written is the frame's.
-    Driven,
-    /// Found but lost; the pose written is the last accepted one (the rest pose before any).
-    Lost(Lost),
-    /// No landmarks (the tracker found no face); the pose written is the last accepted one.
-    Missing,
-}
-
-/// Why a found frame is lost.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum Lost {
-    /// The driven pose's landmarks lie further from the track than
-    /// [`Settings::max_residual`].
-    Residual,
-    /// The face moved or turned faster than a head does.
-    Jump,
-}
-
-impl Outcome {
-    /// The outcome as a number (the C ABI's and the wasm package's): 0 driven, 1 calibrating,
-    /// 2 missing, 3 lost to the residual, 4 lost to a jump.
-    pub const fn code(self) -> u32 {
-        match self {
-            Self::Driven => 0,
-            Self::Calibrating => 1,
-            Self::Missing => 2,
-            Self::Lost(Lost::Residual) => 3,
-            Self::Lost(Lost::Jump) => 4,
-        }
-    }
-
-    /// The outcome in a word: `driven`, `calibrating`, `missing`, `lost-residual`,
-    /// `lost-jump`.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Driven => "driven",
-            Self::Calibrating => "calibrating",
-            Self::Missing => "missing",
-            Self::Lost(Lost::Residual) => "lost-residual",
-            Self::Lost(Lost::Jump) => "lost-jump",
-        }
-    }
-}
+mod settings;
+pub use settings::{
+    DEFAULT_MAX_RESIDUAL, DEFAULT_MAX_SPEED, DEFAULT_MAX_TURN, DEFAULT_REACQUIRE, Lost,
+    MAX_CALIBRATION_FRAMES, Outcome, Settings,
+};
 
 // The state's layout: a few scalars, the offsets, then the held pose.
 /// Found frames taken into the calibration so far.
@@ -196,9 +67,16 @@ const LOST_SINCE: usize = 7;
 /// During the calibration the sum of the offsets' squares; then their root mean square
 /// deviation from the mean, in face sizes.
 const DEVIATION: usize = 8;
+/// The last found frame's residual ([`Live::residual`]) once calibrated; 0 before.
+const RESIDUAL: usize = 9;
+/// 1 once [`REFERENCE`] holds a head.
+const HAS_REFERENCE: usize = 10;
+/// `[9]`: the head the next found frame's is compared with for jumps: the last accepted pose's,
+/// or, before any, the calibration's last frame driven with the completed calibration.
+const REFERENCE: usize = 11;
 /// `[68, 3]`: the offsets' sum during the calibration, then their mean (the actor's unit, the
 /// face's frame).
-const OFFSETS: usize = 9;
+const OFFSETS: usize = 20;
 /// `[18 + M]`: the last accepted pose.
 const HELD: usize = OFFSETS + 3 * LANDMARKS;
 
@@ -284,7 +162,7 @@ impl<'d, 'a> Live<'d, 'a> {
         self.size
     }
 
-    /// The state's length: 9 values, the 68 offsets (3 each), the held pose (`18 + M`). A state
+    /// The state's length: 20 values, the 68 offsets (3 each), the held pose (`18 + M`). A state
     /// of zeros has seen nothing.
     pub const fn state_len(&self) -> usize {
         HELD + self.driver.output_len()
@@ -293,6 +171,12 @@ impl<'d, 'a> Live<'d, 'a> {
     /// Scratch values [`Self::step`] needs: the driver's, the corrected landmarks, two poses.
     pub fn scratch_len(&self) -> usize {
         self.driver.scratch_len() + 3 * LANDMARKS + 2 * self.driver.output_len()
+    }
+
+    /// The residual of the last found frame driven ([`Self::residual`]), lost or not; 0 before
+    /// one was.
+    pub fn last_residual(&self, state: &[f32]) -> f32 {
+        value(state, RESIDUAL)
     }
 
     /// Found frames taken into the calibration so far (at most [`Settings::calibrate_frames`]).
@@ -349,6 +233,36 @@ impl<'d, 'a> Live<'d, 'a> {
             sq += d.dot(d);
         }
         Ok(Some(libm::sqrtf(sq / LANDMARKS as f32) / self.size))
+    }
+
+    /// One frame's landmarks less the completed calibration's offsets, as [`Self::step`] gives
+    /// them to the driver (the landmarks as they are before the calibration completes, or
+    /// without one), into `out` ([`Driver::input_len`]).
+    ///
+    /// # Errors
+    /// As [`Driver::drive`]; [`BufferError`] for a buffer of the wrong length.
+    pub fn calibrated(
+        &self,
+        state: &[f32],
+        landmarks: &[f32],
+        scratch: &mut [f32],
+        out: &mut [f32],
+    ) -> Result<(), EvalError> {
+        if state.len() != self.state_len() {
+            return Err(BufferError::Scratch.into());
+        }
+        if out.len() != landmarks.len() {
+            return Err(BufferError::Output.into());
+        }
+        let buffers = self.split(scratch)?;
+        self.driver.drive(landmarks, buffers.driver, buffers.raw)?;
+        if self.calibration_deviation(state).is_none() {
+            out.copy_from_slice(landmarks);
+            return Ok(());
+        }
+        let head = self.head(landmarks, head_of(buffers.raw));
+        self.correct(state, landmarks, &head, out);
+        Ok(())
     }
 
     /// One frame, taken at `time` seconds: its landmarks as the driver reads them (`None`
@@ -420,6 +334,17 @@ impl<'d, 'a> Live<'d, 'a> {
         let taken = self.calibrated_frames(state);
         if taken < n {
             self.calibrate(state, landmarks, &head, taken + 1);
+            if taken + 1 == n {
+                // The jumps' first reference: this frame driven as the calibration reads it
+                // (a frame whose corrected landmarks the driver refuses leaves none).
+                let corrected = b.landmarks.get_mut(..landmarks.len());
+                if let Some(corrected) = corrected {
+                    self.correct(state, landmarks, &head, corrected);
+                    if self.driver.drive(corrected, b.driver, b.candidate).is_ok() {
+                        set_reference(state, b.candidate);
+                    }
+                }
+            }
             return Ok(Outcome::Calibrating);
         }
         let corrected = b
@@ -433,16 +358,17 @@ impl<'d, 'a> Live<'d, 'a> {
         }
         self.driver.drive(corrected, b.driver, b.candidate)?;
         let s = &self.settings;
-        let lost =
-            if s.max_residual > 0.0 && self.residual(b.candidate, corrected)? > s.max_residual {
-                Some(Lost::Residual)
-            } else if self.jumped(state, b.candidate, time) {
-                let waited = time - value(state, LOST_SINCE);
-                let reacquired = flag(state, LOST) && s.reacquire > 0.0 && waited >= s.reacquire;
-                (!reacquired).then_some(Lost::Jump)
-            } else {
-                None
-            };
+        let residual = self.residual(b.candidate, corrected)?;
+        set(state, RESIDUAL, residual);
+        let lost = if s.max_residual > 0.0 && residual > s.max_residual {
+            Some(Lost::Residual)
+        } else if self.jumped(state, b.candidate, time) {
+            let waited = time - value(state, LOST_SINCE);
+            let reacquired = flag(state, LOST) && s.reacquire > 0.0 && waited >= s.reacquire;
+            (!reacquired).then_some(Lost::Jump)
+        } else {
+            None
+        };
         Ok(match lost {
             Some(why) => {
                 if !flag(state, LOST) {
@@ -455,6 +381,7 @@ impl<'d, 'a> Live<'d, 'a> {
                 if let Some(held) = state.get_mut(HELD..) {
                     held.copy_from_slice(b.candidate);
                 }
+                set_reference(state, b.candidate);
                 set(state, ACCEPTED, 1.0);
                 set(state, LOST, 0.0);
                 Outcome::Driven
@@ -549,9 +476,14 @@ impl<'d, 'a> Live<'d, 'a> {
     }
 
     /// The root mean square distance between `pose`'s landmarks (the actor's landmark vertices
-    /// posed, 2D: seen by the camera) and `landmarks`, in face sizes (2D: the landmarks' own
-    /// steady spread in the image).
-    fn residual(&self, pose: &[f32], landmarks: &[f32]) -> Result<f32, EvalError> {
+    /// posed, 2D: seen by the camera) and `landmarks` (as the driver read them: see
+    /// [`Self::calibrated`]), in face sizes (2D: the landmarks' own steady spread in the image):
+    /// what [`Settings::max_residual`] bounds.
+    ///
+    /// # Errors
+    /// [`BufferError::Input`] for a pose shorter than 18 values; [`EvalError::Input`] for a pose
+    /// the actor refuses (a driven pose never is).
+    pub fn residual(&self, pose: &[f32], landmarks: &[f32]) -> Result<f32, EvalError> {
         let (head_jaw, weights) = pose
             .split_at_checked(AIM_POSE_LEN)
             .ok_or(BufferError::Input)?;
@@ -593,17 +525,17 @@ impl<'d, 'a> Live<'d, 'a> {
     }
 
     /// Whether `pose`'s head moved or turned faster than a head does since the last found
-    /// frame, against the held pose (never before a pose is held).
+    /// frame, against the reference head (never before there is one).
     fn jumped(&self, state: &[f32], pose: &[f32], time: f32) -> bool {
         let s = &self.settings;
-        if !flag(state, ACCEPTED)
+        if !flag(state, HAS_REFERENCE)
             || !flag(state, FOUND)
             || (s.max_speed <= 0.0 && s.max_turn <= 0.0)
         {
             return false;
         }
         let dt = time - value(state, FOUND_TIME);
-        let held = head_of(state.get(HELD..).unwrap_or(&[]));
+        let held = head_of(state.get(REFERENCE..REFERENCE + 9).unwrap_or(&[]));
         let now = head_of(pose);
         let a = held.rot.mul_vec(self.centre) + held.trans;
         let b = now.rot.mul_vec(self.centre) + now.trans;
@@ -693,6 +625,14 @@ fn rest_landmark(driver: &Driver<'_>, actor: &AimActor<'_>, l: usize) -> Vec3 {
     let v = driver.landmark_vertex(l).unwrap_or(0);
     let s0: F32s<'_> = actor.rest();
     Vec3::new(s0.at(3 * v), s0.at(3 * v + 1), s0.at(3 * v + 2))
+}
+
+/// Makes `pose`'s head (`[0..9]`) the reference for jumps.
+fn set_reference(state: &mut [f32], pose: &[f32]) {
+    if let (Some(r), Some(head)) = (state.get_mut(REFERENCE..REFERENCE + 9), pose.get(..9)) {
+        r.copy_from_slice(head);
+        set(state, HAS_REFERENCE, 1.0);
+    }
 }
 
 /// The calibrated offset of landmark `l` in `state` (zero past its end).

@@ -16,19 +16,25 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use sinew_core::linalg::{Mat3, Vec3};
-use sinew_core::rotation::to_6d;
+use sinew_core::linalg::Vec3;
 use sinew_core::skinning::{BoneTransform, lbs};
 
 use crate::io::ict::{FACE_REGION, IctFaceKit};
 use crate::io::mesh::Mesh;
+use crate::io::performance::ConventionRecord;
 use crate::io::performance::{
     Camera, FORMAT, FrameParameters, Landmarks, MANIFEST, Manifest, OPENFACE_CSV, VERSION,
 };
 use crate::training::random::Stream;
+use crate::training::tracker::{Convention, Failures};
 
 mod error;
+mod trajectories;
 pub use error::{GenerateError, InvalidPerformanceConfig};
+use trajectories::{Ease, Trajectories};
+
+/// How long a performance takes to ease in from its frames at rest, seconds.
+pub const EASE_SECONDS: f64 = 0.5;
 
 /// What `sinew data performance` varies.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -49,6 +55,15 @@ pub struct PerformanceConfig {
     pub focal: f32,
     /// Distance from the face's front to the camera, in cm.
     pub distance: f32,
+    /// Frames at rest looking at the camera before the performance eases in (over half a
+    /// second): what a person holds while a live tool calibrates.
+    pub rest_frames: usize,
+    /// A tracker's convention on the 2D track: its seed (`None`: the landmark vertices).
+    pub convention: Option<u64>,
+    /// The convention's contour amplitude, mm.
+    pub convention_mm: f32,
+    /// Tracker failures on the 2D track (after the frames at rest).
+    pub failures: usize,
 }
 
 impl Default for PerformanceConfig {
@@ -62,6 +77,10 @@ impl Default for PerformanceConfig {
             image: [640, 480],
             focal: 1200.0,
             distance: 60.0,
+            rest_frames: 0,
+            convention: None,
+            convention_mm: 4.0,
+            failures: 0,
         }
     }
 }
@@ -85,6 +104,15 @@ impl PerformanceConfig {
         if !(self.focal > 0.0 && self.distance > 0.0 && self.image.iter().all(|&s| s > 0)) {
             return Err(Invalid::Camera);
         }
+        if !(self.convention_mm.is_finite() && self.convention_mm >= 0.0) {
+            return Err(Invalid::ConventionMm(self.convention_mm));
+        }
+        if self.rest_frames >= self.frames {
+            return Err(Invalid::RestFrames {
+                rest: self.rest_frames,
+                frames: self.frames,
+            });
+        }
         Ok(())
     }
 }
@@ -98,6 +126,16 @@ fn trajectory_stream(seed: u64) -> Stream {
     )
 }
 
+/// The tracker's convention and failures: streams of their own, so that the meshes and the
+/// landmark noise of a seed stay as they were without them.
+fn tracker_stream(seed: u64, which: u128) -> Stream {
+    Stream::new(
+        seed,
+        0x7a_c4_e2_00,
+        0x00a0_2bdb_0000_0000_0000_0000_0000_0010 + which,
+    )
+}
+
 /// The landmark pixels' noise: a stream of its own, so that adding it left the meshes of a seed
 /// as they were.
 fn landmark_stream(seed: u64) -> Stream {
@@ -106,120 +144,6 @@ fn landmark_stream(seed: u64) -> Stream {
         0x1a_4d_a2_c5,
         0x00a0_2bdb_0000_0000_0000_0000_0000_0003,
     )
-}
-
-/// A smooth signal in [−1, 1]: the mean of three sinusoids of 0.1–0.8 Hz with random phases.
-struct Wave([(f64, f64); 3]);
-
-impl Wave {
-    fn new(rng: &mut Stream) -> Self {
-        Self([(); 3].map(|()| {
-            (
-                rng.uniform(0.1, 0.8),
-                rng.uniform(0.0, std::f64::consts::TAU),
-            )
-        }))
-    }
-
-    fn at(&self, seconds: f64) -> f64 {
-        self.0
-            .iter()
-            .map(|(f, phase)| (std::f64::consts::TAU * f * seconds + phase).sin())
-            .sum::<f64>()
-            / 3.0
-    }
-}
-
-/// An expression weight's trajectory: `clamp(offset + amplitude · wave, 0, 1)`; the offset is
-/// mostly negative, so each shape is active part of the time, as in a real performance.
-struct Weight {
-    wave: Wave,
-    offset: f64,
-    amplitude: f64,
-}
-
-/// Rotation `Rz(γ) Ry(β) Rx(α)`.
-fn euler(a: f64, b: f64, g: f64) -> Mat3 {
-    let (sa, ca) = a.sin_cos();
-    let (sb, cb) = b.sin_cos();
-    let (sg, cg) = g.sin_cos();
-    let m = [
-        [cg * cb, cg * sb * sa - sg * ca, cg * sb * ca + sg * sa],
-        [sg * cb, sg * sb * sa + cg * ca, sg * sb * ca - cg * sa],
-        [-sb, cb * sa, cb * ca],
-    ];
-    let col = |j: usize| Vec3::new(m[0][j] as f32, m[1][j] as f32, m[2][j] as f32);
-    Mat3 {
-        cols: [col(0), col(1), col(2)],
-    }
-}
-
-fn nine(rot: &Mat3, t: [f64; 3]) -> [f32; 9] {
-    let r = to_6d(rot);
-    [
-        r[0],
-        r[1],
-        r[2],
-        r[3],
-        r[4],
-        r[5],
-        t[0] as f32,
-        t[1] as f32,
-        t[2] as f32,
-    ]
-}
-
-/// The trajectories of every parameter, seeded.
-struct Trajectories {
-    weights: Vec<Weight>,
-    /// Jaw opening, yaw, and translation x, y, z.
-    jaw: [Wave; 5],
-    /// Head rotations about x, y, z and translation x, y, z.
-    head: [Wave; 6],
-}
-
-impl Trajectories {
-    fn new(rng: &mut Stream, shapes: usize) -> Self {
-        let weights = (0..shapes)
-            .map(|_| Weight {
-                wave: Wave::new(rng),
-                offset: rng.uniform(-0.6, 0.2),
-                amplitude: rng.uniform(0.4, 1.0),
-            })
-            .collect();
-        Self {
-            weights,
-            jaw: [(); 5].map(|()| Wave::new(rng)),
-            head: [(); 6].map(|()| Wave::new(rng)),
-        }
-    }
-
-    /// The parameters at time `t` seconds; `jaw` false keeps the jaw transform the identity.
-    fn at(&self, t: f64, jaw: bool) -> FrameParameters {
-        let weights = self
-            .weights
-            .iter()
-            .map(|w| (w.offset + w.amplitude * w.wave.at(t)).clamp(0.0, 1.0) as f32)
-            .collect();
-        let j = |i: usize| self.jaw[i].at(t);
-        // Opening 0–0.12 rad about x (positive opens: the chin, in front of the pivot, goes
-        // down), ±0.03 rad of yaw, ±0.5 mm of translation.
-        let jaw = if jaw {
-            nine(
-                &euler(0.06 * (1.0 + j(0)), 0.03 * j(1), 0.0),
-                [0.05 * j(2), 0.05 * j(3), 0.05 * j(4)],
-            )
-        } else {
-            nine(&Mat3::IDENTITY, [0.0; 3])
-        };
-        let h = |i: usize| self.head[i].at(t);
-        // ±0.08 rad about each axis, ±8 mm of translation.
-        let head = nine(
-            &euler(0.08 * h(0), 0.08 * h(1), 0.08 * h(2)),
-            [0.8 * h(3), 0.8 * h(4), 0.8 * h(5)],
-        );
-        FrameParameters { weights, jaw, head }
-    }
 }
 
 /// The mesh vertices of a performance in kit terms: which kit vertex each is, the triangles, and
@@ -312,6 +236,31 @@ pub fn generate(
     let trajectories = Trajectories::new(&mut rng, names.len());
     let noise_cm = f64::from(config.noise_mm) / face.units.mm();
     let mut pixel_rng = landmark_stream(config.seed);
+    let convention = config.convention.map(|seed| {
+        let amplitude = f64::from(config.convention_mm) / face.units.mm();
+        let c = Convention::draw(&mut tracker_stream(seed, 0), amplitude);
+        ConventionRecord {
+            seed,
+            amplitude_mm: config.convention_mm,
+            offsets: c.offsets,
+        }
+    });
+    let failures = Failures::draw(
+        &mut tracker_stream(config.seed, 1),
+        config.failures,
+        config.rest_frames,
+        config.frames,
+        f64::from(config.fps),
+    );
+    if failures.len() < config.failures {
+        return Err(InvalidPerformanceConfig::Failures {
+            failures: config.failures,
+            frames: config.frames,
+        }
+        .into());
+    }
+    let mut scatter_rng = tracker_stream(config.seed, 2);
+    let ramp = (f64::from(config.fps) * EASE_SECONDS).round() as usize;
     let mut manifest = Manifest {
         format: FORMAT.into(),
         version: VERSION,
@@ -340,10 +289,18 @@ pub fn generate(
             vertices: landmark_vertices.clone(),
             pixels: Vec::new(),
         },
+        rest_frames: config.rest_frames,
+        convention: convention.clone(),
+        failures: failures.clone(),
     };
     crate::io::atomic::create_folder(out, "output folder")?;
     for f in 0..config.frames {
-        let params = trajectories.at(f as f64 / f64::from(config.fps), topology.jaw.is_some());
+        let params = trajectories.at(
+            f as f64 / f64::from(config.fps),
+            topology.jaw.is_some(),
+            Ease::at(f, config.rest_frames, ramp),
+        );
+        let turn = sinew_core::rotation::rigid_from_9d(&params.head).rot;
         let mut positions = pose(&neutral, &deltas, topology.jaw.as_ref(), &params);
         if noise_cm > 0.0 {
             for p in &mut positions {
@@ -356,7 +313,11 @@ pub fn generate(
             .iter()
             .enumerate()
             .map(|(l, &v)| {
-                let p = positions[v as usize];
+                let mut p = positions[v as usize];
+                if let Some(c) = &convention {
+                    let o = c.offsets[l].map(|x| x as f32);
+                    p = (Vec3::from_array(p) + turn.mul_vec(Vec3::from_array(o))).to_array();
+                }
                 let detected = |[u, w]: [f32; 2]| {
                     let sd = f64::from(config.landmark_noise_px);
                     if sd > 0.0 {
@@ -383,6 +344,10 @@ pub fn generate(
                     })
             })
             .collect::<Result<Vec<_>, _>>()?;
+        let mut pixels = pixels;
+        for failure in failures.iter().filter(|x| x.covers(f)) {
+            Failures::apply(failure, &mut pixels, &mut scatter_rng);
+        }
         let file = format!("frame_{f:05}.obj");
         Mesh::new(positions, topology.polygons.clone()).write(&out.join(&file))?;
         manifest.files.push(file);
@@ -393,12 +358,13 @@ pub fn generate(
         path: out.join(MANIFEST),
         source,
     })?;
-    let track: Vec<_> = (manifest.landmarks.pixels.iter())
-        .map(|p| crate::io::openface::OpenFaceFrame {
+    let track: Vec<_> = (manifest.landmarks.pixels.iter().enumerate())
+        .map(|(f, p)| crate::io::openface::OpenFaceFrame {
             pixels: p.iter().flatten().copied().collect(),
             world: Vec::new(),
             confidence: 1.0,
-            success: true,
+            success: !manifest.tracker_lost(f),
+            timestamp: None,
         })
         .collect();
     let csv = crate::io::openface::write_csv(&track, config.fps);

@@ -45,6 +45,7 @@ fn track(frames: usize) -> Vec<OpenFaceFrame> {
                 world: Vec::new(),
                 confidence: 0.98,
                 success: true,
+                timestamp: None,
             }
         })
         .collect()
@@ -96,6 +97,9 @@ fn a_driver_trains_resumes_and_drives_a_track_holding_lost_frames() {
         s(&played),
         "--intrinsics",
         "1000,1000,320,240",
+        // Frames drawn apart, not a motion: the lost-frame rules off.
+        "--lost-rules",
+        "0,0,0,0",
     ];
     ok(&drive);
     let obj = |f: usize| std::fs::read(played.join(format!("frame_{f:05}.obj"))).unwrap();
@@ -354,6 +358,7 @@ fn a_three_d_driver_drives_openface_millimetres_wherever_the_camera_stood() {
                     .collect(),
                 confidence: 0.97,
                 success: true,
+                timestamp: None,
             })
             .collect();
         let csv = dir.path().join(format!("{name}.csv"));
@@ -369,6 +374,8 @@ fn a_three_d_driver_drives_openface_millimetres_wherever_the_camera_stood() {
             s(&csv),
             "--out",
             s(&frames),
+            "--lost-rules",
+            "0,0,0,0",
         ]);
         played.push(
             (0..4)
@@ -410,4 +417,139 @@ fn a_three_d_driver_drives_openface_millimetres_wherever_the_camera_stood() {
     ]);
     assert!(e.contains("x_0 … y_67"), "{e}");
     assert!(!dir.path().join("none").exists());
+}
+
+/// Runs `sinew`, requires success and returns its standard error.
+fn err_or_warn(args: &[&str]) -> String {
+    let out = common::sinew(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// `sinew drive --calibrate-frames` on the golden live track (a tracker's convention, a rest at
+/// the start, four failures): the calibration, the lost frames and the frame without a face are
+/// reported by number, the lost ones hold the last pose; a calibration over frames where the face
+/// moves names them in a warning; bad settings are refused naming the flag, with no output.
+#[test]
+fn drive_calibrates_reports_lost_frames_and_warns_of_a_moving_calibration() {
+    let dir = tempfile::tempdir().unwrap();
+    let (actor, driver) = (
+        repo("tests/data/aim-ict.sinew"),
+        repo("tests/data/driver-ict.sinew"),
+    );
+    let track = repo("tests/data/driver-ict-live.csv");
+    let out = dir.path().join("live");
+    let run = |calibrate: &str, out: &Path| {
+        common::sinew(&[
+            "drive",
+            "--model",
+            &actor,
+            "--driver",
+            &driver,
+            "--landmarks",
+            &track,
+            "--intrinsics",
+            "1200,1200,320,240",
+            "--calibrate-frames",
+            calibrate,
+            "--out",
+            s(out),
+        ])
+    };
+    let done = run("6", &out);
+    assert!(done.status.success());
+    let said = String::from_utf8_lossy(&done.stderr);
+    assert!(
+        said.contains("calibrated on frames 0-5 (6 frames)"),
+        "{said}"
+    );
+    assert!(
+        said.contains("10 frames lost to the rules (the last pose held): 6-11, 21-23, 32"),
+        "{said}"
+    );
+    assert!(
+        said.contains("1 frames without a face in the track: 45"),
+        "{said}"
+    );
+    assert!(!said.contains("warning"), "{said}");
+    let obj = |f: usize| std::fs::read(out.join(format!("frame_{f:05}.obj"))).unwrap();
+    assert_eq!(obj(0), obj(5), "the calibration frames are written at rest");
+    assert_eq!(
+        obj(6),
+        obj(5),
+        "before any frame is driven, a lost one stays at rest"
+    );
+    assert_eq!(obj(23), obj(20), "a lost run holds the last pose");
+    assert_eq!(obj(45), obj(44), "so does a frame without a face");
+    assert_ne!(obj(20), obj(19));
+    // A calibration during which the mouth opened and the brows rose for a frame (3): the
+    // warning names it.
+    let mut rows = sinew_host::io::openface::read(Path::new(&track)).unwrap();
+    for row in &mut rows[3..4] {
+        for l in 48..68 {
+            row.pixels[2 * l + 1] += 25.0;
+        }
+        for l in 17..27 {
+            row.pixels[2 * l + 1] -= 10.0;
+        }
+    }
+    let moving = dir.path().join("moving.csv");
+    std::fs::write(&moving, write_csv(&rows, 30.0)).unwrap();
+    let said = err_or_warn(&[
+        "drive",
+        "--model",
+        &actor,
+        "--driver",
+        &driver,
+        "--landmarks",
+        s(&moving),
+        "--intrinsics",
+        "1200,1200,320,240",
+        "--calibrate-frames",
+        "6",
+        "--out",
+        s(&dir.path().join("moving")),
+    ]);
+    assert!(
+        said.contains("warning: the face was not at rest on calibration frames 3 (up to"),
+        "{said}"
+    );
+    // Bad settings name their flag and write nothing.
+    let refused = dir.path().join("refused");
+    for (flags, message) in [
+        (
+            ["--calibrate-frames", "5000"],
+            "--calibrate-frames: live[0] is outside [0, 1e3]",
+        ),
+        (
+            ["--lost-rules", "0.2,-1,8,0.5"],
+            "--lost-rules: live[2] is outside [0, 1e3]",
+        ),
+        (
+            ["--lost-rules", "0.2,40"],
+            "--lost-rules: expected RESIDUAL,SPEED,TURN,REACQUIRE",
+        ),
+    ] {
+        let mut args = vec![
+            "drive",
+            "--model",
+            &actor,
+            "--driver",
+            &driver,
+            "--landmarks",
+            &track,
+            "--intrinsics",
+            "1200,1200,320,240",
+            "--out",
+            s(&refused),
+        ];
+        args.extend(flags);
+        let e = err(&args);
+        assert!(e.contains(message), "{e}");
+        assert!(!refused.exists());
+    }
 }

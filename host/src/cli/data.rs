@@ -186,6 +186,24 @@ pub(crate) struct PerformanceArgs {
     /// shapes only.
     #[arg(long)]
     actor: Option<PathBuf>,
+    /// Frames at rest, looking at the camera, before the performance eases in over half a second
+    /// (what `sinew drive --calibrate-frames` takes as the face at rest).
+    #[arg(long, default_value_t = 0)]
+    rest_frames: usize,
+    /// A tracker's convention on the 2D track, drawn from this seed: smooth offsets of the 68
+    /// landmarks from the landmark vertices (largest on the contour, lips and brows). The meshes
+    /// stay the truth.
+    #[arg(long)]
+    convention: Option<u64>,
+    /// The convention's amplitude on the contour, mm (the brows and lips three quarters of it,
+    /// the nose and eyes a tenth).
+    #[arg(long, default_value_t = PerformanceConfig::default().convention_mm)]
+    convention_mm: f32,
+    /// Tracker failures on the 2D track after the frames at rest, in turn: a face read smaller
+    /// for 4–10 frames, one found elsewhere for 1–3, one frame scattered, no face for 1–5
+    /// (`success` 0); listed in performance.json's `failures`.
+    #[arg(long, default_value_t = 0)]
+    failures: usize,
 }
 
 /// `sinew data performance`.
@@ -195,6 +213,10 @@ pub(crate) fn performance(args: PerformanceArgs) -> Result<()> {
         frames: args.frames,
         noise_mm: args.noise_mm,
         landmark_noise_px: args.landmark_noise_px,
+        rest_frames: args.rest_frames,
+        convention: args.convention,
+        convention_mm: args.convention_mm,
+        failures: args.failures,
         ..PerformanceConfig::default()
     };
     config.validate()?;

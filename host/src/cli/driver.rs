@@ -7,10 +7,11 @@ use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
 use sinew_core::driver::{Intrinsics, Space};
 use sinew_core::filter::OneEuro;
-use sinew_host::driver::DriverConfig;
+use sinew_core::live::{self, Settings};
 use sinew_host::driver::commands::{
     DriveCommand, TrainDriver, drive_command, eval_driver, train_driver,
 };
+use sinew_host::driver::{DriverConfig, drive};
 use sinew_host::training::backend::Backend;
 
 /// The landmarks a driver reads.
@@ -139,6 +140,137 @@ pub(crate) struct DriveArgs {
     /// The One Euro filter on the driven poses: MIN_CUTOFF_HZ,BETA,FPS (off without it).
     #[arg(long, value_delimiter = ',')]
     filter: Option<Vec<f32>>,
+    #[command(flatten)]
+    live: LiveArgs,
+}
+
+/// The calibration and the lost-frame rules (`sinew drive`, `sinew eval driver`).
+#[derive(Debug, Args)]
+pub(crate) struct LiveArgs {
+    /// Take the first N found frames as the face at rest looking at the camera: the tracker's
+    /// convention is measured there and taken off every later frame, which are written at rest
+    /// until then (docs/FIT.md, "Live driving"). 0: no calibration.
+    #[arg(long, default_value_t = 0)]
+    calibrate_frames: u32,
+    /// The lost-frame rules, RESIDUAL,SPEED,TURN,REACQUIRE: the largest residual (face sizes),
+    /// the fastest the face moves (face sizes a second) and turns (radians a second), and the
+    /// seconds after which a run of jumps is taken as real motion; 0 turns a rule off,
+    /// `0,0,0,0` all of them.
+    #[arg(long, value_delimiter = ',', default_values_t = live::Settings::defaults(0).values()[1..].to_vec())]
+    lost_rules: Vec<f32>,
+}
+
+impl LiveArgs {
+    /// The settings, checked.
+    fn settings(&self) -> Result<Settings> {
+        let &[max_residual, max_speed, max_turn, reacquire] = self.lost_rules.as_slice() else {
+            bail!(
+                "--lost-rules: expected RESIDUAL,SPEED,TURN,REACQUIRE, got {} values",
+                self.lost_rules.len()
+            );
+        };
+        let settings = Settings {
+            calibrate_frames: self.calibrate_frames,
+            max_residual,
+            max_speed,
+            max_turn,
+            reacquire,
+        };
+        settings.check().map_err(|e| {
+            anyhow::anyhow!(
+                "{}: {e}",
+                [
+                    "--calibrate-frames",
+                    "--lost-rules",
+                    "--lost-rules",
+                    "--lost-rules",
+                    "--lost-rules"
+                ][e.index.min(4)]
+            )
+        })?;
+        Ok(settings)
+    }
+}
+
+/// The calibration as `report_frames` prints it: its frames, its deviation, and each frame's.
+struct CalibrationSeen<'a> {
+    frames: &'a [usize],
+    deviation: f32,
+    frame_deviation: &'a [f32],
+}
+
+/// What became of a driven track, on standard error: lost frames, the calibration and the
+/// frames of it where the face was not at rest.
+fn report_frames(lost: &[usize], missing: &[usize], calibration: Option<CalibrationSeen<'_>>) {
+    if let Some(c) = calibration {
+        eprintln!(
+            "calibrated on frames {} ({} frames), deviation {:.3} face sizes",
+            ranges(c.frames),
+            c.frames.len(),
+            c.deviation
+        );
+        let unsteady = drive::unsteady_frames(c.frames, c.frame_deviation);
+        if !unsteady.is_empty() {
+            let worst = c.frame_deviation.iter().copied().fold(0.0, f32::max);
+            eprintln!(
+                "warning: the face was not at rest on calibration frames {} (up to {worst:.3} \
+                 face sizes from the calibration's mean, the other frames' noise is below \
+                 {:.3}): calibrate on frames where the face holds still and neutral",
+                ranges(&unsteady),
+                drive::UNSTEADY_RATIO * median(c.frame_deviation)
+            );
+        } else if c.deviation > drive::UNSTEADY {
+            eprintln!(
+                "warning: the face was not at rest during the calibration (its frames deviate by \
+                 {:.3} face sizes, more than {}): calibrate on frames where the face holds still \
+                 and neutral",
+                c.deviation,
+                drive::UNSTEADY
+            );
+        }
+    }
+    eprintln!(
+        "{} frames lost to the rules (the last pose held): {}",
+        lost.len(),
+        if lost.is_empty() {
+            "none".into()
+        } else {
+            ranges(lost)
+        }
+    );
+    if !missing.is_empty() {
+        eprintln!(
+            "{} frames without a face in the track: {}",
+            missing.len(),
+            ranges(missing)
+        );
+    }
+}
+
+/// The median of `values` (0 for none).
+fn median(values: &[f32]) -> f32 {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f32::total_cmp);
+    sorted.get(sorted.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// Frame numbers as ranges: `3-5, 9`.
+fn ranges(frames: &[usize]) -> String {
+    let mut out: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < frames.len() {
+        let mut j = i;
+        while j + 1 < frames.len() && frames[j + 1] == frames[j] + 1 {
+            j += 1;
+        }
+        out.push(if i == j {
+            frames[i].to_string()
+        } else {
+            format!("{}-{}", frames[i], frames[j])
+        });
+        i = j + 1;
+    }
+    out.join(", ")
 }
 
 /// `--intrinsics FX,FY,CX,CY` as the camera it names (`sinew drive`, `sinew view`).
@@ -167,7 +299,8 @@ pub(crate) fn drive(args: DriveArgs) -> Result<()> {
             other.len()
         ),
     };
-    let frames = drive_command(&DriveCommand {
+    let live = args.live.settings()?;
+    let driven = drive_command(&DriveCommand {
         model: args.model,
         driver: args.driver,
         landmarks: args.landmarks,
@@ -175,10 +308,21 @@ pub(crate) fn drive(args: DriveArgs) -> Result<()> {
         intrinsics,
         min_confidence: args.min_confidence,
         filter,
+        live,
     })?;
+    report_frames(
+        &driven.lost(),
+        &driven.missing(),
+        driven.calibration.as_ref().map(|c| CalibrationSeen {
+            frames: &c.frames,
+            deviation: c.deviation,
+            frame_deviation: &c.frame_deviation,
+        }),
+    );
     println!(
-        "{}: {frames} frames driven through sinew-core (frame_NNNNN.obj, strip.png)",
-        args.out.display()
+        "{}: {} frames driven through sinew-core (frame_NNNNN.obj, strip.png)",
+        args.out.display(),
+        driven.poses.len()
     );
     Ok(())
 }
@@ -198,17 +342,39 @@ pub(crate) struct EvalDriverArgs {
     /// JSON report.
     #[arg(long)]
     report: Option<PathBuf>,
+    #[command(flatten)]
+    live: LiveArgs,
 }
 
 /// `sinew eval driver`.
 pub(crate) fn eval(args: EvalDriverArgs) -> Result<()> {
-    let m = eval_driver(&args.model, &args.driver, &args.target)?;
+    let m = eval_driver(
+        &args.model,
+        &args.driver,
+        &args.target,
+        args.live.settings()?,
+    )?;
+    let calibration_frames: Vec<usize> = (m.outcomes.iter().enumerate())
+        .filter(|(_, o)| *o == "calibrating")
+        .map(|(f, _)| f)
+        .collect();
+    report_frames(
+        &m.lost_frames,
+        &m.missing_frames,
+        m.calibration_deviation.map(|deviation| CalibrationSeen {
+            frames: &calibration_frames,
+            deviation,
+            frame_deviation: &m.calibration_frame_deviation,
+        }),
+    );
     println!(
-        "{}: {} frames, mean per-vertex error {:.3} mm; the core's driver {:.4} ms a frame, \
-         with posing {:.3} ms",
+        "{}: {} frames, mean per-vertex error {:.3} mm ({:.3} mm over the performing frames, \
+         worst frame {:.3} mm); the core's driver {:.4} ms a frame, with posing {:.3} ms",
         args.target.display(),
         m.frames,
         m.mean_error_mm,
+        m.performing_error_mm,
+        m.worst_frame_error_mm,
         1e3 * m.drive_seconds_per_frame,
         1e3 * m.seconds_per_frame
     );

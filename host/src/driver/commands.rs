@@ -7,11 +7,12 @@ use anyhow::{Context, Result, anyhow, ensure};
 use serde::{Deserialize, Serialize};
 use sinew_core::driver::Intrinsics;
 use sinew_core::filter::OneEuro;
+use sinew_core::live::Settings;
 use sinew_core::replay::model_hash;
 
 use super::DriverConfig;
 use super::bake::{BakeInputs, bake};
-use super::drive::{bind, poses, write_frames};
+use super::drive::{Driven, bind, drive_track, poses, write_frames};
 use super::measure::{DriverMeasure, measure};
 use super::sample::Sampler;
 use super::train::{Normalisation, Run, load_checkpoint, save_checkpoint};
@@ -181,11 +182,14 @@ pub struct DriveCommand {
     pub min_confidence: f32,
     /// The One Euro filter: minimum cutoff (Hz), speed coefficient, frame rate (Hz).
     pub filter: Option<OneEuro>,
+    /// The calibration and the lost-frame rules.
+    pub live: Settings,
 }
 
 /// `sinew drive`: every frame's pose through the core, written as OBJs and `strip.png` once the
-/// whole track has been read and driven (bad input leaves no output); returns the frame count.
-pub fn drive_command(opts: &DriveCommand) -> Result<usize> {
+/// whole track has been read and driven (bad input leaves no output); returns what became of
+/// each frame and the calibration.
+pub fn drive_command(opts: &DriveCommand) -> Result<Driven> {
     let actor_bytes = read_actor(&opts.model)?;
     let driver_bytes = crate::io::container::read(&opts.driver)?;
     let bound = bind(&opts.model, &actor_bytes, &opts.driver, &driver_bytes)?;
@@ -197,13 +201,26 @@ pub fn drive_command(opts: &DriveCommand) -> Result<usize> {
         opts.min_confidence,
         placement,
     )?;
-    let poses = poses(&bound, &opts.driver, &track, opts.filter.as_ref())
-        .with_context(|| format!("{}: driving", opts.landmarks.display()))?;
-    Ok(write_frames(&bound.actor, &poses, &opts.out)?)
+    let driven = drive_track(
+        &bound,
+        &opts.driver,
+        &track,
+        opts.live,
+        opts.filter.as_ref(),
+    )
+    .with_context(|| format!("{}: driving", opts.landmarks.display()))?;
+    write_frames(&bound.actor, &driven.poses, &opts.out)?;
+    Ok(driven)
 }
 
-/// `sinew eval driver`: the driver on a performance folder against its meshes.
-pub fn eval_driver(model: &Path, driver: &Path, target: &Path) -> Result<DriverMeasure> {
+/// `sinew eval driver`: the driver on a performance folder against its meshes, under the live
+/// `settings`.
+pub fn eval_driver(
+    model: &Path,
+    driver: &Path,
+    target: &Path,
+    settings: Settings,
+) -> Result<DriverMeasure> {
     let actor_bytes = read_actor(model)?;
     let driver_bytes = crate::io::container::read(driver)?;
     let bound = bind(model, &actor_bytes, driver, &driver_bytes)?;
@@ -217,7 +234,14 @@ pub fn eval_driver(model: &Path, driver: &Path, target: &Path) -> Result<DriverM
     );
     let placement = super::track::Placement::of(model, &bound.actor, &bound.driver)?;
     let track = super::track::read(target, bound.driver.space(), None, 0.0, placement)?;
-    Ok(measure(&bound, driver, &track, &perf, perf.unit.mm())?)
+    Ok(measure(
+        &bound,
+        driver,
+        &track,
+        &perf,
+        perf.unit.mm(),
+        settings,
+    )?)
 }
 
 /// `sinew fit --start driver`'s starts: the driver at `driver_path` bound to the actor at `model`
@@ -234,7 +258,7 @@ pub fn driven_starts(
     let bound = bind(model, &bytes, driver_path, &driver_bytes)?;
     let placement = super::track::Placement::of(model, &bound.actor, &bound.driver)?;
     let track = super::track::read(target, bound.driver.space(), None, 0.0, placement)?;
-    let poses = poses(&bound, driver_path, &track, None)
+    let poses = poses(&bound, driver_path, &track, Settings::OFF, None)
         .with_context(|| format!("{}: driving", target.display()))?;
     let starts = poses
         .iter()

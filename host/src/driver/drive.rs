@@ -1,12 +1,15 @@
 //! `sinew drive`: a landmark track played through the core's driver onto its actor, one OBJ per
-//! frame and a picture strip. A lost frame holds the last pose (the rest pose before the first
-//! found one); the optional One Euro filter smooths the driven poses.
+//! frame and a picture strip, every frame through `sinew_core::live` (the calibration on the
+//! first found frames, the lost-frame rules): a frame the tracker lost, or one the rules find
+//! lost, holds the last pose (the rest pose before the first found one); the optional One Euro
+//! filter smooths the poses.
 
 use std::path::{Path, PathBuf};
 
 use sinew_core::aim::AimActor;
 use sinew_core::driver::{Driver, finish_pose, play};
 use sinew_core::filter::OneEuro;
+use sinew_core::live::{Live, Outcome, Settings};
 use sinew_core::replay::ReplayError;
 use sinew_core::{EvalError, FormatError};
 
@@ -110,27 +113,89 @@ pub fn bind<'a>(
     Ok(Bound { actor, driver })
 }
 
-/// The rest pose: identity head and jaw, zero coefficients.
-pub fn rest_pose(shapes: usize) -> Vec<f32> {
-    let mut p = vec![0.0; 18 + shapes];
-    for i in [0, 4, 9, 13] {
-        p[i] = 1.0;
-    }
-    p
+/// A calibration whose frames' offsets deviate from their mean by more than this (face sizes,
+/// root mean square, `Live::calibration_deviation`) was not made at rest: above what a
+/// tracker's noise of up to 4 px gives at rest (docs/FIT.md, "Live driving").
+pub const UNSTEADY: f32 = 0.15;
+/// A calibration frame was not at rest when its deviation (`Live::deviation`) is more than
+/// this many times the calibration's median frame's and above [`UNSTEADY_FLOOR`]: the noise
+/// of a tracker moves every frame alike, a face that moved moves a few.
+pub const UNSTEADY_RATIO: f32 = 2.0;
+/// Frame deviations below this (face sizes, 1.75 mm on the ICT actor) are never flagged.
+pub const UNSTEADY_FLOOR: f32 = 0.05;
+
+/// The calibration frames whose deviations (`frame_deviation`, in the order of `frames`) say the
+/// face was not at rest ([`UNSTEADY_RATIO`], [`UNSTEADY_FLOOR`]).
+pub fn unsteady_frames(frames: &[usize], frame_deviation: &[f32]) -> Vec<usize> {
+    let mut sorted = frame_deviation.to_vec();
+    sorted.sort_by(f32::total_cmp);
+    let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+    let limit = (UNSTEADY_RATIO * median).max(UNSTEADY_FLOOR);
+    (frames.iter().zip(frame_deviation))
+        .filter(|(_, d)| **d > limit)
+        .map(|(f, _)| *f)
+        .collect()
 }
 
-/// Every frame's pose for `track` (`driver_path` named in errors): driven where the track has
-/// landmarks, the last pose held where it lost them, filtered when `filter` is given.
+/// What the calibration found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CalibrationReport {
+    /// The track's frames it took.
+    pub frames: Vec<usize>,
+    /// The root mean square deviation of their offsets from the mean, in face sizes.
+    pub deviation: f32,
+    /// Each frame's deviation, in face sizes.
+    pub frame_deviation: Vec<f32>,
+    /// The frames where the face was not at rest ([`unsteady_frames`]).
+    pub unsteady: Vec<usize>,
+    /// The face size the deviations are in units of, the actor's unit.
+    pub face_size: f32,
+}
+
+/// A track driven: each frame's pose and what became of the frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Driven {
+    /// Per frame, the pose played (`[18 + M]`).
+    pub poses: Vec<Vec<f32>>,
+    /// Per frame, what became of it.
+    pub outcomes: Vec<Outcome>,
+    /// Per frame driven (accepted or lost), its residual in face sizes (`Live::residual`).
+    pub residuals: Vec<Option<f32>>,
+    /// The calibration, once complete.
+    pub calibration: Option<CalibrationReport>,
+}
+
+impl Driven {
+    /// The frames lost to the rules (found by the tracker, refused by `sinew_core::live`).
+    pub fn lost(&self) -> Vec<usize> {
+        (self.outcomes.iter().enumerate())
+            .filter(|(_, o)| matches!(o, Outcome::Lost(_)))
+            .map(|(f, _)| f)
+            .collect()
+    }
+
+    /// The frames the tracker lost (no landmarks).
+    pub fn missing(&self) -> Vec<usize> {
+        (self.outcomes.iter().enumerate())
+            .filter(|(_, o)| **o == Outcome::Missing)
+            .map(|(f, _)| f)
+            .collect()
+    }
+}
+
+/// Every frame of `track` through the core's live step under `settings` (`driver_path` named in
+/// errors), filtered when `filter` is given.
 ///
 /// # Errors
 /// [`DriveError::Space`] for a track of the other space; [`DriveError::Frame`] for a frame the
-/// core refuses.
-pub fn poses(
+/// core refuses, or settings it refuses (frame 0).
+pub fn drive_track(
     bound: &Bound<'_>,
     driver_path: &Path,
     track: &Track,
+    settings: Settings,
     filter: Option<&OneEuro>,
-) -> Result<Vec<Vec<f32>>, DriveError> {
+) -> Result<Driven, DriveError> {
     let d = &bound.driver;
     if track.space != d.space() {
         return Err(DriveError::Space {
@@ -139,28 +204,81 @@ pub fn poses(
             driver: d.space().name(),
         });
     }
-    let mut scratch = vec![0.0; d.scratch_len()];
-    let mut last = rest_pose(d.shape_count());
-    let mut state = vec![0.0; OneEuro::state_len(d.output_len())];
-    let mut out = Vec::with_capacity(track.frames.len());
-    for (frame, landmarks) in track.frames.iter().enumerate() {
-        if let Some(l) = landmarks {
-            let mut pose = vec![0.0; d.output_len()];
-            d.drive(l, &mut scratch, &mut pose)
-                .map_err(|source| DriveError::Frame { frame, source })?;
-            if let Some(f) = filter {
-                f.apply(&mut state, &mut pose)
-                    .map_err(|e| DriveError::Frame {
-                        frame,
-                        source: e.into(),
-                    })?;
-                finish_pose(&mut pose);
-            }
-            last = pose;
+    let live = Live::new(d, &bound.actor, settings)
+        .map_err(|source| DriveError::Frame { frame: 0, source })?;
+    let mut state = vec![0.0; live.state_len()];
+    let mut scratch = vec![0.0; live.scratch_len()];
+    let mut smooth = vec![0.0; OneEuro::state_len(d.output_len())];
+    let mut driven = Driven {
+        poses: Vec::with_capacity(track.frames.len()),
+        outcomes: Vec::with_capacity(track.frames.len()),
+        residuals: Vec::with_capacity(track.frames.len()),
+        calibration: None,
+    };
+    let mut calibration_frames = Vec::new();
+    for (frame, (landmarks, &time)) in track.frames.iter().zip(&track.times).enumerate() {
+        let mut pose = vec![0.0; d.output_len()];
+        let outcome = live
+            .step(
+                &mut state,
+                landmarks.as_deref(),
+                time,
+                &mut scratch,
+                &mut pose,
+            )
+            .map_err(|source| DriveError::Frame { frame, source })?;
+        if outcome == Outcome::Calibrating {
+            calibration_frames.push(frame);
         }
-        out.push(last.clone());
+        if let Some(f) = filter {
+            f.apply(&mut smooth, &mut pose)
+                .map_err(|e| DriveError::Frame {
+                    frame,
+                    source: e.into(),
+                })?;
+            finish_pose(&mut pose);
+        }
+        driven.poses.push(pose);
+        driven.outcomes.push(outcome);
+        let judged = matches!(outcome, Outcome::Driven | Outcome::Lost(_));
+        driven
+            .residuals
+            .push(judged.then(|| live.last_residual(&state)));
     }
-    Ok(out)
+    if let Some(deviation) = live.calibration_deviation(&state) {
+        let frame_deviation = calibration_frames
+            .iter()
+            .map(|&frame| {
+                let l = track.frames[frame].as_deref().unwrap_or(&[]);
+                live.deviation(&state, l, &mut scratch)
+                    .map(Option::unwrap_or_default)
+                    .map_err(|source| DriveError::Frame { frame, source })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let unsteady = unsteady_frames(&calibration_frames, &frame_deviation);
+        driven.calibration = Some(CalibrationReport {
+            frames: calibration_frames,
+            deviation,
+            frame_deviation,
+            unsteady,
+            face_size: live.face_size(),
+        });
+    }
+    Ok(driven)
+}
+
+/// Every frame's pose for `track` under `settings` ([`drive_track`]).
+///
+/// # Errors
+/// As [`drive_track`].
+pub fn poses(
+    bound: &Bound<'_>,
+    driver_path: &Path,
+    track: &Track,
+    settings: Settings,
+    filter: Option<&OneEuro>,
+) -> Result<Vec<Vec<f32>>, DriveError> {
+    Ok(drive_track(bound, driver_path, track, settings, filter)?.poses)
 }
 
 /// The actor posed by each of `poses` through the core, `[V]` positions per frame.

@@ -20,7 +20,13 @@ pub struct Track {
     pub space: Space,
     /// Per frame, `[68 × dims]` or `None`.
     pub frames: Vec<Option<Vec<f32>>>,
+    /// Per frame, its time stamp in seconds: a CSV's `timestamp` column (frames 1/30 s apart
+    /// where it has none), a performance's frame rate. Each at least 1 ms after the last.
+    pub times: Vec<f32>,
 }
+
+/// The frame rate a CSV without time stamps is taken at.
+pub const DEFAULT_FPS: f32 = 30.0;
 
 /// Why a track cannot be read for a driver.
 #[derive(Debug, thiserror::Error)]
@@ -77,6 +83,18 @@ pub enum TrackError {
         /// What the unit parser said.
         #[source]
         source: crate::io::units::UnknownUnit,
+    },
+    /// A frame whose time stamp is not at least 1 ms after the last frame's.
+    #[error("{}: row {row}: timestamp {time} s is not at least 1 ms after the last row's ({last} s)", path.display())]
+    Time {
+        /// The track.
+        path: PathBuf,
+        /// The row (1-based; the header is row 1).
+        row: usize,
+        /// Its time stamp.
+        time: f32,
+        /// The last row's.
+        last: f32,
     },
     /// A performance (or actor) whose landmark list is not 68 long, or names a vertex its meshes
     /// lack.
@@ -170,6 +188,7 @@ pub fn read(
         return performance(path, space);
     }
     let rows = openface::read(path)?;
+    let times = times(path, &rows)?;
     let lost = |row: &openface::OpenFaceFrame| !row.success || row.confidence < min_confidence;
     if space == Space::World {
         if rows[0].world.is_empty() {
@@ -201,7 +220,11 @@ pub fn read(
                 })
             })
             .collect();
-        return Ok(Track { space, frames });
+        return Ok(Track {
+            space,
+            frames,
+            times,
+        });
     }
     if rows[0].pixels.is_empty() {
         return Err(TrackError::NotTwoD {
@@ -229,7 +252,32 @@ pub fn read(
             Ok(Some(out))
         })
         .collect::<Result<Vec<_>, TrackError>>()?;
-    Ok(Track { space, frames })
+    Ok(Track {
+        space,
+        frames,
+        times,
+    })
+}
+
+/// The rows' time stamps (`DEFAULT_FPS` apart where the file has none), checked to rise by at
+/// least 1 ms from row to row.
+fn times(path: &Path, rows: &[openface::OpenFaceFrame]) -> Result<Vec<f32>, TrackError> {
+    let times: Vec<f32> = rows
+        .iter()
+        .enumerate()
+        .map(|(f, r)| r.timestamp.unwrap_or(f as f32 / DEFAULT_FPS))
+        .collect();
+    for (i, w) in times.windows(2).enumerate() {
+        if w[1] - w[0] < 1e-3 {
+            return Err(TrackError::Time {
+                path: path.to_owned(),
+                row: i + 3,
+                time: w[1],
+                last: w[0],
+            });
+        }
+    }
+    Ok(times)
 }
 
 /// A performance folder's track: its 2D pixels through its camera, or its meshes' landmark
@@ -257,6 +305,7 @@ fn performance(dir: &Path, space: Space) -> Result<Track, TrackError> {
     };
     let frames = (0..m.frames)
         .map(|f| match space {
+            _ if m.tracker_lost(f) => Ok(None),
             Space::Image => {
                 let pixels: Vec<f32> = m.landmarks.pixels[f].iter().flatten().copied().collect();
                 let mut out = vec![0.0; 2 * LANDMARKS];
@@ -278,7 +327,12 @@ fn performance(dir: &Path, space: Space) -> Result<Track, TrackError> {
             )),
         })
         .collect::<Result<Vec<_>, TrackError>>()?;
-    Ok(Track { space, frames })
+    let times = (0..m.frames).map(|f| f as f32 / m.fps).collect();
+    Ok(Track {
+        space,
+        frames,
+        times,
+    })
 }
 
 #[cfg(test)]
@@ -315,6 +369,7 @@ mod tests {
                 world: seen(&face(f)),
                 confidence: 0.95,
                 success: f != 0,
+                timestamp: None,
             })
             .collect();
         let dir = tempfile::tempdir().unwrap();

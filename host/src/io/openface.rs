@@ -2,7 +2,7 @@
 //! landmarks' pixels in the columns `x_0 … x_67`, `y_0 … y_67` (`-2Dfp`), their 3D positions in
 //! millimetres in the camera's frame (x right, y down, z away from the camera) in `X_0 … X_67`,
 //! `Y_0 … Y_67`, `Z_0 … Z_67` (`-3Dfp`), the tracker's `confidence` in [0, 1] and `success` (0:
-//! the face was lost in that frame). A file holds the 2D or the 3D landmarks or both; a set whose
+//! the face was lost in that frame), and `timestamp` in seconds where present. A file holds the 2D or the 3D landmarks or both; a set whose
 //! columns are partly there is an error naming the first missing one. Column names may carry the
 //! spaces OpenFace writes after each comma; other columns are ignored. Every value read must be
 //! a finite number; every error names the file, the row (1-based, the header is row 1) and the
@@ -30,6 +30,8 @@ pub struct OpenFaceFrame {
     pub confidence: f32,
     /// Whether the tracker found the face.
     pub success: bool,
+    /// The frame's time stamp in seconds (the `timestamp` column), where the file has one.
+    pub timestamp: Option<f32>,
 }
 
 /// A CSV that cannot be read as an OpenFace 2.0 landmark track.
@@ -177,6 +179,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Vec<OpenFaceFrame>, OpenFaceErro
     }
     let confidence = column("confidence")?;
     let success = column("success")?;
+    let timestamp = column("timestamp").ok();
     let mut frames = Vec::new();
     for (index, line) in lines {
         let row = index + 1;
@@ -225,6 +228,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Vec<OpenFaceFrame>, OpenFaceErro
             world: values(&spatial)?,
             confidence: value(confidence)?,
             success: value(success)? != 0.0,
+            timestamp: timestamp.map(value).transpose()?,
         });
     }
     if frames.is_empty() {
@@ -241,7 +245,8 @@ type LandmarkSet = fn(&OpenFaceFrame) -> &[f32];
 /// An OpenFace 2.0 CSV of `frames` (each with its pixels `[68, 2]` and 3D landmarks `[68, 3]`
 /// where the first frame has them, its confidence and success), taken at `fps` frames per
 /// second, with the columns OpenFace writes before the landmarks (`frame` from 1, `face_id`,
-/// `timestamp` in seconds to the millisecond as OpenFace rounds it, `confidence`, `success`).
+/// `timestamp` in seconds to the millisecond as OpenFace rounds it, the frame's own or `f / fps`,
+/// `confidence`, `success`).
 /// Values are written in Rust's shortest form, which reads back to the same `f32` bits
 /// ([`parse`], C's `strtof`).
 pub fn write_csv(frames: &[OpenFaceFrame], fps: f32) -> String {
@@ -268,7 +273,7 @@ pub fn write_csv(frames: &[OpenFaceFrame], fps: f32) -> String {
         s.push_str(&format!(
             "{}, 0, {:.3}, {}, {}",
             f + 1,
-            f as f32 / fps,
+            frame.timestamp.unwrap_or(f as f32 / fps),
             frame.confidence,
             u8::from(frame.success)
         ));
@@ -295,7 +300,19 @@ mod tests {
             world: Vec::new(),
             confidence: 0.9,
             success: true,
+            timestamp: None,
         }
+    }
+
+    /// The frames read back, their time stamps (which the writer adds) left out.
+    fn untimed(frames: Vec<OpenFaceFrame>) -> Vec<OpenFaceFrame> {
+        frames
+            .into_iter()
+            .map(|f| OpenFaceFrame {
+                timestamp: None,
+                ..f
+            })
+            .collect()
     }
 
     #[test]
@@ -303,7 +320,19 @@ mod tests {
         let mut frames = vec![frame(0.0), frame(1.5)];
         frames[1].success = false;
         let csv = write_csv(&frames, 30.0);
-        assert_eq!(parse(Path::new("t.csv"), &csv).unwrap(), frames);
+        let read = parse(Path::new("t.csv"), &csv).unwrap();
+        assert_eq!(
+            read.iter().map(|f| f.timestamp).collect::<Vec<_>>(),
+            [Some(0.0), Some(0.033)]
+        );
+        assert_eq!(untimed(read), frames);
+        // A frame's own time stamp is written as it is.
+        frames[1].timestamp = Some(0.25);
+        let csv = write_csv(&frames, 30.0);
+        assert_eq!(
+            parse(Path::new("t.csv"), &csv).unwrap()[1].timestamp,
+            Some(0.25)
+        );
     }
 
     #[test]
@@ -314,7 +343,7 @@ mod tests {
                 .map(|i| -40.0 + i as f32 * 0.5 + f as f32)
                 .collect();
         }
-        let both = parse(Path::new("t.csv"), &write_csv(&frames, 30.0)).unwrap();
+        let both = untimed(parse(Path::new("t.csv"), &write_csv(&frames, 30.0)).unwrap());
         assert_eq!(both, frames);
         // The landmark-major order: landmark 1's X, Y, Z follow landmark 0's.
         assert_eq!(both[0].world[3..6], [-38.5, -38.0, -37.5]);
@@ -323,7 +352,7 @@ mod tests {
         }
         let csv = write_csv(&frames, 30.0);
         assert!(!csv.contains(" x_0") && csv.contains(" Z_67"));
-        assert_eq!(parse(Path::new("t.csv"), &csv).unwrap(), frames);
+        assert_eq!(untimed(parse(Path::new("t.csv"), &csv).unwrap()), frames);
         // A set partly there names its first missing column.
         let cut = csv.replacen(", Y_5,", ", Q_5,", 1);
         let e = parse(Path::new("t.csv"), &cut).unwrap_err();

@@ -134,6 +134,80 @@ pub struct Manifest {
     pub camera: Camera,
     /// The 2D landmark tracks.
     pub landmarks: Landmarks,
+    /// Frames at rest, looking at the camera, at the start (0 in performances made before the
+    /// option existed).
+    #[serde(default)]
+    pub rest_frames: usize,
+    /// The tracker's convention the 2D track carries, if any.
+    #[serde(default)]
+    pub convention: Option<ConventionRecord>,
+    /// The tracker's failures the 2D track carries (frames its landmarks are misread on).
+    #[serde(default)]
+    pub failures: Vec<FailureRun>,
+}
+
+impl Manifest {
+    /// Whether the tracker found no face in frame `f` (a [`Failure::Lost`] failure): the 2D
+    /// track's row says `success` 0 there.
+    pub fn tracker_lost(&self, f: usize) -> bool {
+        self.failures
+            .iter()
+            .any(|x| x.failure == Failure::Lost && x.covers(f))
+    }
+}
+
+/// A track's tracker convention (`training::tracker::Convention`): how it was drawn and the
+/// offsets.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ConventionRecord {
+    /// Its seed.
+    pub seed: u64,
+    /// The contour's amplitude, mm.
+    pub amplitude_mm: f32,
+    /// Per landmark its offset from the landmark vertex in the face's frame, in the meshes' unit.
+    pub offsets: Vec<[f64; 3]>,
+}
+
+/// How a tracker fails on a frame (`training::tracker` draws them).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Failure {
+    /// The face read smaller than it is, about the landmarks' centre: the head seems further
+    /// away.
+    Smaller {
+        /// The scale, below 1.
+        factor: f64,
+    },
+    /// The face found elsewhere in the image: every landmark moved by this many pixels.
+    Elsewhere {
+        /// The move, pixels.
+        shift: [f64; 2],
+    },
+    /// The points scattered about their places (motion blur): noise of this many pixels.
+    Scattered {
+        /// The noise's standard deviation, pixels.
+        pixels: f64,
+    },
+    /// No face found (OpenFace's `success` 0); the points are left as they were.
+    Lost,
+}
+
+/// One failure: what, and the frames it lasts.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FailureRun {
+    /// The first frame.
+    pub first: usize,
+    /// How many frames.
+    pub frames: usize,
+    /// What the tracker does on them.
+    pub failure: Failure,
+}
+
+impl FailureRun {
+    /// Whether `frame` is one of its frames.
+    pub fn covers(&self, frame: usize) -> bool {
+        (self.first..self.first + self.frames).contains(&frame)
+    }
 }
 
 #[derive(Debug, thiserror::Error)]

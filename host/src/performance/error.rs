@@ -27,6 +27,27 @@ pub enum InvalidPerformanceConfig {
     /// A camera with no positive focal length, distance or image size.
     #[error("the camera needs a positive focal length, distance and image size")]
     Camera,
+    /// A convention amplitude that is negative or not finite.
+    #[error("--convention-mm must be finite and not negative, not {0}")]
+    ConventionMm(f32),
+    /// Frames at rest that leave no frame to perform.
+    #[error("--rest-frames {rest} leaves none of the {frames} frames to perform")]
+    RestFrames {
+        /// The frames at rest asked for.
+        rest: usize,
+        /// The frames.
+        frames: usize,
+    },
+    /// More failures than the frames after the rest have room for.
+    #[error(
+        "--failures {failures}: {frames} frames have no room for them (each with a quarter second apart)"
+    )]
+    Failures {
+        /// The failures asked for.
+        failures: usize,
+        /// The frames.
+        frames: usize,
+    },
 }
 
 /// A performance or neutral that could not be generated.

@@ -14,3 +14,4 @@ pub mod rotation;
 pub mod sine;
 pub mod tensor;
 pub mod tolerance;
+pub mod tracker;
