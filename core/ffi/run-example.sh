@@ -5,7 +5,8 @@
 # the printed hash lists against tests/data/*.hashes. Exits non-zero on a build error, a
 # warning, a failed call, a frame that differs from its recording, or any line that differs from
 # the golden list; then drives the golden actor from the golden OpenFace track with the golden
-# landmark driver (examples/drive.c) and diffs its hashes, unfiltered and filtered.
+# landmark driver (examples/drive.c) and diffs its hashes, unfiltered and filtered, and live from
+# the golden live track with the calibration and the lost-frame rules (examples/live.c).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -21,6 +22,9 @@ cargo build -p sinew-ffi --release --locked
 "$CC" -std=c11 -Wall -Wextra -Werror -pedantic -O2 -Icore/ffi/include \
   core/ffi/examples/drive.c "$CARGO_TARGET_DIR/release/libsinew.a" \
   -lm -lpthread -ldl -o "$out/drive"
+"$CC" -std=c11 -Wall -Wextra -Werror -pedantic -O2 -Icore/ffi/include \
+  core/ffi/examples/live.c "$CARGO_TARGET_DIR/release/libsinew.a" \
+  -lm -lpthread -ldl -o "$out/live"
 
 for name in aim-procedural aim-ict s2d-ict; do
   "$out/replay" tests/data "$name" >"$out/$name.hashes"
@@ -41,3 +45,8 @@ done
 "$out/drive" tests/data driver-ict aim-ict >"$out/driver-ict.hashes"
 diff -u <(grep -v '^#' tests/data/driver-ict.hashes) "$out/driver-ict.hashes"
 echo "driver-ict on aim-ict: $(grep -vc '^#' "$out/driver-ict.hashes") lines match tests/data/driver-ict.hashes"
+
+# Live driving: the track and the settings its hash list names, every outcome, pose and frame.
+"$out/live" tests/data driver-ict-live driver-ict aim-ict >"$out/driver-ict-live.hashes"
+diff -u <(grep -v '^#' tests/data/driver-ict-live.hashes) "$out/driver-ict-live.hashes"
+echo "driver-ict live on aim-ict: $(grep -vc '^#' "$out/driver-ict-live.hashes") lines match tests/data/driver-ict-live.hashes"

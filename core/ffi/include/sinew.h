@@ -54,6 +54,20 @@ typedef enum SinewStatus {
   SINEW_STATUS_NOT_FOUND = 10,
 } SinewStatus;
 
+// What became of one frame (`sinew_live_step`).
+typedef enum SinewLiveOutcome {
+  // Driven and accepted: the pose is the frame's.
+  SINEW_LIVE_OUTCOME_DRIVEN = 0,
+  // Taken into the calibration: the pose is the rest pose.
+  SINEW_LIVE_OUTCOME_CALIBRATING = 1,
+  // No landmarks: the pose is the last accepted one (the rest pose before any).
+  SINEW_LIVE_OUTCOME_MISSING = 2,
+  // Lost: the driven landmarks lie too far from the track's; the last pose holds.
+  SINEW_LIVE_OUTCOME_LOST_RESIDUAL = 3,
+  // Lost: the head moved or turned faster than a head does; the last pose holds.
+  SINEW_LIVE_OUTCOME_LOST_JUMP = 4,
+} SinewLiveOutcome;
+
 // What a model or replay handle holds.
 typedef enum SinewKind {
   // An AIM actor (`sinew bake`): posed per frame from head, jaw and coefficients.
@@ -148,6 +162,45 @@ typedef struct SinewFilter {
   // The cutoff of the speed's own low-pass, Hz (above 0; 1 is usual).
   float d_cutoff;
 } SinewFilter;
+
+// Live driving's settings (`sinew_core::live::Settings`): a limit of 0 turns its rule off.
+// `sinew_live_defaults` gives the measured defaults.
+typedef struct SinewLive {
+  // Found frames taken as the face at rest looking at the camera (0: no calibration; at most
+  // 1000). They are played at rest.
+  uint32_t calibrate_frames;
+  // The largest residual of a found frame (the driven landmarks' root mean square distance
+  // from the track's, in units of the face's size in the image); above it the frame is lost.
+  float max_residual;
+  // The fastest the face's centre moves, in face sizes per second.
+  float max_speed;
+  // The fastest the head turns, radians per second.
+  float max_turn;
+  // Seconds after which a run of frames lost to a jump is taken as the head's real motion.
+  float reacquire;
+} SinewLive;
+
+// The buffers live driving needs, from `sinew_live_info`.
+typedef struct SinewLiveInfo {
+  // Floats of the state (zeros: a session that has seen nothing).
+  size_t state_floats;
+  // Floats of scratch `sinew_live_step` needs.
+  size_t scratch_floats;
+  // The actor's face size in its unit (the rest spread of the nose and eyes), the unit of the
+  // residual and the speed.
+  float face_size;
+} SinewLiveInfo;
+
+// Where a calibration stands, from `sinew_live_calibration`.
+typedef struct SinewLiveCalibration {
+  // Found frames taken so far.
+  uint32_t frames;
+  // Whether it is complete.
+  bool complete;
+  // Once complete, the root mean square deviation of its frames' offsets from their mean, in
+  // face sizes (the tracker's noise at rest; more where the face moved); 0 before.
+  float deviation;
+} SinewLiveCalibration;
 
 // A model's sizes, from [`sinew_model_info`]. Counts that do not apply to the kind are 0.
 typedef struct SinewModelInfo {
@@ -369,6 +422,68 @@ enum SinewStatus sinew_driver_play(const struct SinewDriver *driver,
                                    size_t normals_len,
                                    uint64_t *hash,
                                    struct SinewError *err);
+
+// Writes the core's default settings, calibrating on `calibrate_frames` frames, to `*out`.
+//
+// # Safety
+// `out` points to a writable `SinewLive`; `err` is NULL or points to a writable `SinewError`.
+enum SinewStatus sinew_live_defaults(uint32_t calibrate_frames,
+                                     struct SinewLive *out,
+                                     struct SinewError *err);
+
+// Writes the buffer sizes live driving of `driver` on `model` (the driver's actor) needs to
+// `*out`.
+//
+// # Safety
+// `driver` and `model` are live handles; `out` points to a writable `SinewLiveInfo`; `err` is
+// NULL or points to a writable `SinewError`.
+enum SinewStatus sinew_live_info(const struct SinewDriver *driver,
+                                 const struct SinewModel *model,
+                                 struct SinewLiveInfo *out,
+                                 struct SinewError *err);
+
+// One frame of live driving (`sinew_core::live::Live::step`): `landmarks` (`input_len` floats,
+// as `sinew_driver_pose` takes them; NULL when the tracker found no face) taken at `time`
+// seconds → the pose to play in `pose` (`pose_len` floats: the rest pose while calibrating, the
+// frame's when driven, the last accepted one when lost or missing) and, when `outcome` is not
+// NULL, what became of the frame. `state` (`state_floats` of `sinew_live_info`; zeros to start)
+// carries the calibration and the held pose from frame to frame. `SINEW_STATUS_INVALID_INPUT`
+// naming `settings.<field>` for a setting that is not finite or outside `[0, 1e3]`, `time[0]`
+// for a time stamp that is not finite, outside ±1e5 or less than 1 ms after the last frame's,
+// `landmarks[i]` as `sinew_driver_pose`; nothing changes then.
+//
+// # Safety
+// `driver`, `model` are live handles, `settings` points to a `SinewLive`; `landmarks` is NULL
+// or points to `landmarks_len` floats; `state`, `scratch` and `pose` point to the stated number
+// of writable floats, overlapping no other argument; `outcome` is NULL or points to a writable
+// `SinewLiveOutcome`; `err` is NULL or points to a writable `SinewError`.
+enum SinewStatus sinew_live_step(const struct SinewDriver *driver,
+                                 const struct SinewModel *model,
+                                 const struct SinewLive *settings,
+                                 const float *landmarks,
+                                 size_t landmarks_len,
+                                 float time,
+                                 float *state,
+                                 size_t state_len,
+                                 float *scratch,
+                                 size_t scratch_len,
+                                 float *pose,
+                                 size_t pose_len,
+                                 enum SinewLiveOutcome *outcome,
+                                 struct SinewError *err);
+
+// Where the calibration of a live `state` stands, into `*out`.
+//
+// # Safety
+// As `sinew_live_step` for `driver`, `model`, `settings` and `state` (read only); `out` points
+// to a writable `SinewLiveCalibration`; `err` is NULL or points to a writable `SinewError`.
+enum SinewStatus sinew_live_calibration(const struct SinewDriver *driver,
+                                        const struct SinewModel *model,
+                                        const struct SinewLive *settings,
+                                        const float *state,
+                                        size_t state_len,
+                                        struct SinewLiveCalibration *out,
+                                        struct SinewError *err);
 
 // Writes the content hash of the model's bytes (xxh64, `sinew_core::replay::model_hash`) to
 // `*hash`: the hash that replays and fitted performances name, and `sinew inspect` reports.

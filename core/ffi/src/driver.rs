@@ -25,7 +25,7 @@ use crate::status::{Fail, Result, SinewError, SinewStatus, guard};
 /// [`sinew_driver_free`]. It does not keep the model's handle.
 #[derive(Debug)]
 pub struct SinewDriver {
-    driver: Driver<'static>,
+    pub(crate) driver: Driver<'static>,
     vertex_count: usize,
 }
 
@@ -98,7 +98,7 @@ impl SinewDriver {
 
     /// The actor of `model`, checked to be this driver's: the content hash (computed once when
     /// each was opened; `sinew_driver_open` checked the rest against these very bytes).
-    fn actor<'m>(&self, model: &'m SinewModel) -> Result<&'m AimActor<'static>> {
+    pub(crate) fn actor<'m>(&self, model: &'m SinewModel) -> Result<&'m AimActor<'static>> {
         let actor = model.aim()?;
         if model.hash != self.driver.model_hash() || actor.vertex_count() != self.vertex_count {
             return Err(mismatch(

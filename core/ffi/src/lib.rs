@@ -14,6 +14,7 @@
 
 mod abi;
 mod driver;
+mod live;
 mod meta;
 mod model;
 mod performance;
@@ -29,6 +30,10 @@ pub use driver::{
     SinewDriver, SinewDriverInfo, SinewFilter, SinewIntrinsics, sinew_driver_filter,
     sinew_driver_filter_reset, sinew_driver_free, sinew_driver_info, sinew_driver_open,
     sinew_driver_pixels, sinew_driver_play, sinew_driver_pose,
+};
+pub use live::{
+    SinewLive, SinewLiveCalibration, SinewLiveInfo, SinewLiveOutcome, sinew_live_calibration,
+    sinew_live_defaults, sinew_live_info, sinew_live_step,
 };
 pub use meta::{
     sinew_model_content_hash, sinew_model_meta, sinew_model_metadata, sinew_model_shape_name,
