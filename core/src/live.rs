@@ -165,7 +165,12 @@ impl<'d, 'a> Live<'d, 'a> {
     /// The state's length: 20 values, the 68 offsets (3 each), the held pose (`18 + M`). A state
     /// of zeros has seen nothing.
     pub const fn state_len(&self) -> usize {
-        HELD + self.driver.output_len()
+        Self::state_len_of(self.driver)
+    }
+
+    /// [`Self::state_len`] of any live driving of `driver` (it depends on the driver alone).
+    pub const fn state_len_of(driver: &Driver<'_>) -> usize {
+        HELD + driver.output_len()
     }
 
     /// Scratch values [`Self::step`] needs: the driver's, the corrected landmarks, two poses.

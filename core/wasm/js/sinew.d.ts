@@ -199,6 +199,42 @@ export interface DriverFilter {
   reset(): void;
 }
 
+/** Live driving's settings (sinew-core's `live::Settings`); a limit of 0 turns its rule off. */
+export interface LiveSettings {
+  /** Found frames taken as the face at rest looking at the camera (0: no calibration; at most 1000). */
+  calibrateFrames?: number;
+  /** The largest residual of a found frame, in face sizes in the image (default 0.2). */
+  maxResidual?: number;
+  /** The fastest the face's centre moves, face sizes a second (default 40). */
+  maxSpeed?: number;
+  /** The fastest the head turns, radians a second (default 8). */
+  maxTurn?: number;
+  /** Seconds after which a run of jumps is the head's real motion (default 0.5). */
+  reacquire?: number;
+}
+
+/** What became of a frame of live driving. */
+export type LiveOutcome = "driven" | "calibrating" | "missing" | "lost-residual" | "lost-jump";
+
+/** Live driving's state over one driver and its actor (`Driver.live`). */
+export interface DriverLive {
+  /**
+   * One frame: its landmarks (or `null`: no face) at `time` seconds. `pose` is the pose to play
+   * (the rest pose while calibrating, the last accepted one when lost or missing); `residual` the
+   * last found frame's, in face sizes. Throws an `InputError` naming `settings`, `time` or
+   * `landmarks`; nothing changes then.
+   */
+  step(landmarks: Floats | null, time: number): { outcome: LiveOutcome; pose: Float32Array; residual: number };
+  /** Found frames the calibration has taken. */
+  readonly calibratedFrames: number;
+  /** Whether the calibration is complete. */
+  readonly calibrated: boolean;
+  /** The calibration's deviation in face sizes once complete, else `null`. */
+  readonly deviation: number | null;
+  /** Forgets every frame seen: the calibration starts again. */
+  reset(): void;
+}
+
 /**
  * A validated landmark driver (`sinew train driver`) bound to the AIM actor it was trained for:
  * one frame of a tracker's 68 landmarks to the actor's pose, sinew-core's `Driver::drive`.
@@ -221,6 +257,10 @@ export class Driver {
   pose(landmarks: Floats): Float32Array;
   /** A One Euro filter over this driver's poses. */
   filter(settings: FilterSettings): DriverFilter;
+  /** Live driving on `model` (the driver's actor): calibration and lost-frame rules. */
+  live(model: Model, settings?: LiveSettings): DriverLive;
+  /** The core's default live settings, calibrating on `calibrateFrames` frames. */
+  static liveDefaults(calibrateFrames?: number): Required<LiveSettings>;
   /** `[vertexCount * 3]` `model` (the driver's actor) posed by `pose`. */
   play(model: Model, pose: Floats): Float32Array;
   /** The frame hash of `model` posed by `pose`: positions then normals (sinew-core's `driver::pose_hash`). */

@@ -600,6 +600,34 @@ export class Driver extends Handle {
     return new DriverFilter(this, Float32Array.of(minCutoff, beta, dCutoff), Number(this.#info.state));
   }
 
+  /**
+   * Live driving from a real tracker on `model` (the driver's actor): the calibration on the
+   * first found frames and the lost-frame rules (docs/FIT.md "Live driving"), its state kept
+   * here. `settings`: `{ calibrateFrames, maxResidual, maxSpeed, maxTurn, reacquire }`, each
+   * missing one the core's default (`Driver.liveDefaults`); a limit of 0 turns its rule off.
+   */
+  live(model, settings = {}) {
+    modelHandle(model);
+    const d = Driver.liveDefaults(0);
+    const values = Float32Array.of(
+      settings.calibrateFrames ?? d.calibrateFrames,
+      settings.maxResidual ?? d.maxResidual,
+      settings.maxSpeed ?? d.maxSpeed,
+      settings.maxTurn ?? d.maxTurn,
+      settings.reacquire ?? d.reacquire,
+    );
+    return new DriverLive(this, model, values, Number(this.#info.live));
+  }
+
+  /** The core's default live settings, calibrating on `calibrateFrames` frames. */
+  static liveDefaults(calibrateFrames = 0) {
+    if (!Number.isInteger(calibrateFrames) || calibrateFrames < 0) {
+      throw new RangeError(`sinew: calibrateFrames is a whole number, got ${calibrateFrames}`);
+    }
+    const v = takeF32(exports().sinew_live_defaults(calibrateFrames));
+    return { calibrateFrames: v[0], maxResidual: v[1], maxSpeed: v[2], maxTurn: v[3], reacquire: v[4] };
+  }
+
   /** `model` (the driver's actor) posed by `pose`: positions, x y z per vertex. */
   play(model, pose) {
     const m = modelHandle(model);
@@ -612,6 +640,66 @@ export class Driver extends Handle {
     const m = modelHandle(model);
     put(f32Bytes(floats(pose, "pose")));
     return takeText(exports().sinew_driver_hash(this._h, m));
+  }
+}
+
+/** What became of a frame of live driving, by the core's code. */
+const OUTCOMES = ["driven", "calibrating", "missing", "lost-residual", "lost-jump"];
+
+/** Live driving's state over one driver and its actor (`Driver.live`). */
+class DriverLive {
+  #driver;
+  #model;
+  #settings;
+  #state;
+  #calibrated = 0;
+  #deviation = null;
+
+  constructor(driver, model, settings, stateLength) {
+    this.#driver = driver;
+    this.#model = model;
+    this.#settings = settings;
+    this.#state = new Float32Array(stateLength);
+  }
+
+  /**
+   * One frame: its landmarks (`inputLength` values, or `null` when the tracker found no face)
+   * taken at `time` seconds. Returns `{ outcome, pose, residual }`: `outcome` is "calibrating"
+   * (the pose is the rest pose), "driven", "missing", "lost-residual" or "lost-jump" (the last
+   * pose held); `residual` the last found frame's, in face sizes.
+   */
+  step(landmarks, time) {
+    const found = landmarks !== null && landmarks !== undefined;
+    const l = found ? floats(landmarks, "landmarks") : new Float32Array(0);
+    put(f32Bytes(this.#settings), f32Bytes(l), f32Bytes(this.#state));
+    const out = takeF32(
+      exports().sinew_driver_live(this.#driver._h, modelHandle(this.#model), time, found ? 1 : 0, l.length),
+    );
+    const p = this.#driver.poseLength;
+    this.#calibrated = out[1];
+    this.#deviation = out[2] < 0 ? null : out[2];
+    this.#state = out.slice(4 + p);
+    return { outcome: OUTCOMES[out[0]], pose: out.slice(4, 4 + p), residual: out[3] };
+  }
+
+  /** Found frames the calibration has taken. */
+  get calibratedFrames() {
+    return this.#calibrated;
+  }
+  /** Whether the calibration is complete (always, without one). */
+  get calibrated() {
+    return this.#calibrated >= this.#settings[0];
+  }
+  /** The calibration's deviation in face sizes once complete (`null` before or without one). */
+  get deviation() {
+    return this.#deviation;
+  }
+
+  /** Forgets every frame seen: the calibration starts again. */
+  reset() {
+    this.#state.fill(0);
+    this.#calibrated = 0;
+    this.#deviation = null;
   }
 }
 

@@ -9,6 +9,7 @@ use sinew_core::aim::AimActor;
 use sinew_core::driver::{self, Driver as CoreDriver, Intrinsics, LANDMARKS};
 use sinew_core::error::Argument;
 use sinew_core::filter::OneEuro;
+use sinew_core::live::{Live, Settings};
 
 use crate::error::{Error, Refused};
 use crate::model::{Kind, Model, ModelInner, check_len};
@@ -30,7 +31,25 @@ pub struct Driver {
 }
 
 /// The names the JavaScript API gives the core's arguments in the driver's calls.
-const NAMES: &[(Argument, &str)] = &[(Argument::Weights, "coefficients")];
+const NAMES: &[(Argument, &str)] = &[
+    (Argument::Weights, "coefficients"),
+    (Argument::Live, "settings"),
+];
+
+/// One frame of live driving ([`Driver::live_step`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LiveFrame {
+    /// What became of the frame ([`sinew_core::live::Outcome::code`]).
+    pub outcome: u32,
+    /// The pose to play.
+    pub pose: Vec<f32>,
+    /// Found frames the calibration has taken.
+    pub calibrated: u32,
+    /// The calibration's deviation once complete (face sizes), else -1.
+    pub deviation: f32,
+    /// The last found frame's residual (face sizes).
+    pub residual: f32,
+}
 
 impl Driver {
     /// Validates `bytes` as a landmark driver and checks it against `model`, the actor it was
@@ -183,6 +202,69 @@ impl Driver {
         // The time-stamped step takes its rate from the stamps; 1 Hz only fills the setting.
         let filter = OneEuro::new(min_cutoff, beta, d_cutoff, 1.0)?;
         driver::filter_pose(&filter, state, time, pose).map_err(|e| Error::eval(e, NAMES))
+    }
+
+    /// Values of live driving's state ([`Live::state_len_of`]).
+    pub fn live_state_len(&self) -> usize {
+        Live::state_len_of(self.core())
+    }
+
+    /// One frame of live driving on `model` (this driver's actor) under `settings` (calibrate
+    /// frames, max residual, max speed, max turn, reacquire: [`Settings`]): `landmarks` (or
+    /// `None`: no face) at `time` seconds, updating `state` ([`Self::live_state_len`], zeros to
+    /// start) ([`Live::step`]).
+    ///
+    /// # Errors
+    /// Another model; lengths; an `InputError` naming `settings[i]` (a value not finite, outside
+    /// `[0, 1e3]`, or a frame count above 1000 or not whole), `time[0]` or `landmarks[i]`.
+    /// Nothing changes then.
+    pub fn live_step(
+        &self,
+        model: &Model,
+        settings: &[f32],
+        landmarks: Option<&[f32]>,
+        time: f32,
+        state: &mut [f32],
+    ) -> Result<LiveFrame, Error> {
+        let actor = self.actor(model)?;
+        check_len("settings", settings.len(), 5)?;
+        let [frames, max_residual, max_speed, max_turn, reacquire] =
+            [0, 1, 2, 3, 4].map(|i| settings.get(i).copied().unwrap_or(0.0));
+        // A frame count is a whole number; the core checks its range.
+        let whole = frames.is_finite() && frames >= 0.0 && frames == (frames as u32) as f32;
+        if !whole {
+            let kind = if frames.is_finite() {
+                sinew_core::error::InputErrorKind::OutOfRange
+            } else {
+                sinew_core::error::InputErrorKind::NonFinite
+            };
+            let e = sinew_core::InputError::new(Argument::Live, 0, kind);
+            return Err(Error::eval(e.into(), NAMES));
+        }
+        let settings = Settings {
+            calibrate_frames: frames as u32,
+            max_residual,
+            max_speed,
+            max_turn,
+            reacquire,
+        };
+        let live = Live::new(self.core(), actor, settings).map_err(|e| Error::eval(e, NAMES))?;
+        check_len("state", state.len(), live.state_len())?;
+        if let Some(l) = landmarks {
+            check_len("landmarks", l.len(), self.input_len())?;
+        }
+        let mut scratch = vec![0.0; live.scratch_len()];
+        let mut pose = vec![0.0; self.pose_len()];
+        let outcome = live
+            .step(state, landmarks, time, &mut scratch, &mut pose)
+            .map_err(|e| Error::eval(e, NAMES))?;
+        Ok(LiveFrame {
+            outcome: outcome.code(),
+            pose,
+            calibrated: live.calibrated_frames(state),
+            deviation: live.calibration_deviation(state).unwrap_or(-1.0),
+            residual: live.last_residual(state),
+        })
     }
 
     /// `model` (this driver's actor) posed by `pose`: positions, x y z per vertex.

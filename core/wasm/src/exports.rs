@@ -367,13 +367,14 @@ pub extern "C" fn sinew_info(handle: i32) -> i32 {
                 m.noise_len()
             )),
             Some(Object::Driver(d)) => Ok(format!(
-                "kind=driver\nspace={}\ninputs={}\npose={}\nshapes={}\nmodel={:016x}\nstate={}\n",
+                "kind=driver\nspace={}\ninputs={}\npose={}\nshapes={}\nmodel={:016x}\nstate={}\nlive={}\n",
                 d.space(),
                 d.input_len(),
                 d.pose_len(),
                 d.shape_count(),
                 d.model_hash(),
-                d.filter_state_len()
+                d.filter_state_len(),
+                d.live_state_len()
             )),
             None => Err(stale(handle)),
         }

@@ -106,3 +106,90 @@ test("the driver refuses NaN landmarks, bad pixels, late time stamps and another
   assert.throws(() => Driver.load(data("fit-ict.sinew"), model), /not a landmark driver/);
   for (const m of [driver, model, other, decoder]) m.free();
 });
+
+/** driver-ict-live.hashes: the track, the `live` settings and every `KIND FRAME VALUE` line. */
+function liveList() {
+  const list = { lines: new Map() };
+  for (const line of data("driver-ict-live.hashes").toString("utf8").split("\n")) {
+    if (line.startsWith("#") || line === "") continue;
+    const w = line.split(" ");
+    if (w[0] === "track") {
+      list.track = w[1];
+      list.camera = { fx: Number(w[2]), fy: Number(w[3]), cx: Number(w[4]), cy: Number(w[5]) };
+    } else if (w[0] === "live") {
+      list.settings = {
+        calibrateFrames: Number(w[1]),
+        maxResidual: Number(w[2]),
+        maxSpeed: Number(w[3]),
+        maxTurn: Number(w[4]),
+        reacquire: Number(w[5]),
+      };
+    } else {
+      list.lines.set(`${w[0]} ${w[1]}`, w[2]);
+    }
+  }
+  assert.ok(list.track && list.settings, "driver-ict-live.hashes names its track and settings");
+  return list;
+}
+
+test("driver-ict drives aim-ict live: every outcome, pose and frame as driver-ict-live.hashes lists", () => {
+  const list = liveList();
+  const model = Model.load(data("aim-ict.sinew"));
+  const driver = Driver.load(data("driver-ict.sinew"), model);
+  // The list's settings are the core's defaults (as f32, which the list prints shortest).
+  const f32 = Object.fromEntries(Object.entries(list.settings).map(([k, v]) => [k, Math.fround(v)]));
+  assert.deepEqual(Driver.liveDefaults(list.settings.calibrateFrames), f32);
+  const live = driver.live(model, { calibrateFrames: list.settings.calibrateFrames });
+  const [header, ...rows] = data(list.track).toString("utf8").trim().split("\n");
+  const names = header.split(",").map((c) => c.trim());
+  const success = names.indexOf("success");
+  const frames = track(list.track);
+  assert.equal(3 * frames.length, list.lines.size);
+  frames.forEach(({ time, pixels }, f) => {
+    const found = Number(rows[f].split(",")[success]) !== 0;
+    const { outcome, pose } = live.step(found ? Driver.pixels(pixels, list.camera) : null, time);
+    assert.equal(outcome, list.lines.get(`outcome ${f}`), `frame ${f}`);
+    assert.equal(frameHash(pose), list.lines.get(`pose ${f}`), `frame ${f}`);
+    assert.equal(driver.frameHash(model, pose), list.lines.get(`frame ${f}`), `frame ${f}`);
+    assert.equal(live.calibratedFrames, Math.min(f + 1, list.settings.calibrateFrames));
+    assert.equal(live.deviation !== null, f + 1 >= list.settings.calibrateFrames);
+  });
+  // A reset starts the calibration again: the first frame calibrates once more.
+  live.reset();
+  assert.equal(live.calibratedFrames, 0);
+  assert.equal(live.step(Driver.pixels(frames[0].pixels, list.camera), 0).outcome, "calibrating");
+});
+
+test("live driving refuses bad settings, stale time stamps and NaN landmarks, changing nothing", () => {
+  const list = liveList();
+  const model = Model.load(data("aim-ict.sinew"));
+  const driver = Driver.load(data("driver-ict.sinew"), model);
+  const frames = track(list.track);
+  const first = Driver.pixels(frames[0].pixels, list.camera);
+  const refused = (settings, message) =>
+    assert.throws(
+      () => driver.live(model, settings).step(first, 0),
+      (e) => e instanceof InputError && e.argument === "settings" && e.message === message,
+    );
+  refused({ maxSpeed: -1 }, "settings[2] is outside [0, 1e3]");
+  refused({ maxResidual: NaN }, "settings[1] is NaN or infinite");
+  refused({ calibrateFrames: 2.5 }, "settings[0] is outside [0, 1e3]");
+  refused({ calibrateFrames: 5000 }, "settings[0] is outside [0, 1e3]");
+  const live = driver.live(model, { calibrateFrames: 2 });
+  live.step(first, 0);
+  assert.throws(
+    () => live.step(null, 0.0005),
+    (e) => e instanceof InputError && e.argument === "time",
+  );
+  const nan = Float32Array.from(first);
+  nan[5] = NaN;
+  assert.throws(
+    () => live.step(nan, 1),
+    (e) => e instanceof InputError && e.argument === "landmarks" && e.index === 5,
+  );
+  // Nothing changed: the next frame is still the calibration's second.
+  assert.equal(live.calibratedFrames, 1);
+  assert.equal(live.step(first, 1).outcome, "calibrating");
+  assert.equal(live.calibrated, true);
+  assert.throws(() => driver.live(Model.load(data("aim-procedural.sinew"))).step(first, 0), /driver was trained for the actor/);
+});

@@ -84,3 +84,49 @@ pub extern "C" fn sinew_driver_hash(driver: i32, model: i32) -> i32 {
         Ok(format!("{hash:016x}").into_bytes())
     }))
 }
+
+/// One frame of live driving ([`Driver::live_step`]) on `model` at `time`; the I/O area holds the
+/// five settings, the landmarks when `found` is 1 (`landmarks_len` values), then the state.
+/// Result (`f32`): the outcome's code, the frames the calibration has taken, its deviation (-1
+/// before it completes), the last residual, the pose (`pose_len`), then the new state.
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_driver_live(
+    driver: i32,
+    model: i32,
+    time: f32,
+    found: u32,
+    landmarks_len: u32,
+) -> i32 {
+    let values = io_f32s();
+    finish(with_on_model(driver, model, |d: &Driver, m| {
+        let (settings, rest) = split_at(&values, 5)?;
+        let (landmarks, state) = if found == 1 {
+            let (l, s) = split_at(rest, landmarks_len)?;
+            (Some(l), s)
+        } else {
+            (None, rest)
+        };
+        let mut state = state.to_vec();
+        let f = d.live_step(m, settings, landmarks, time, &mut state)?;
+        let head = [
+            f.outcome as f32,
+            f.calibrated as f32,
+            f.deviation,
+            f.residual,
+        ];
+        Ok(f32_bytes(&[&head[..], &f.pose, &state].concat()))
+    }))
+}
+
+/// The core's default live settings calibrating on `frames` frames
+/// (`sinew_core::live::Settings::defaults`). Result: the five values (`f32`).
+// Safety: exported under its own name; no other symbol in the module is called so.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_live_defaults(frames: u32) -> i32 {
+    finish(Ok(f32_bytes(
+        &sinew_core::live::Settings::defaults(frames).values(),
+    )))
+}
