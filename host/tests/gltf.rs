@@ -42,6 +42,27 @@ fn frames(actor: &AimActor<'_>) -> Vec<Frame> {
         .collect()
 }
 
+/// Every morph weight the animation keys lies in [0, 1], the range of a DCC's sliders (Blender
+/// clamps its shape keys there).
+fn keyed_weights_are_sliders(g: &Gltf) {
+    for anim in &g.root.animations {
+        for ch in &anim.channels {
+            if ch.target.path
+                == json::validation::Checked::Valid(json::animation::Property::MorphTargetWeights)
+            {
+                let out = g.accessor(anim.samplers[ch.sampler.value()].output);
+                if let Some((i, w)) = out
+                    .iter()
+                    .enumerate()
+                    .find(|(_, w)| !(0.0..=1.0).contains(*w))
+                {
+                    panic!("keyed morph weight {i} is {w}, outside [0, 1]");
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn exported_rig_poses_as_the_core_plays() {
     let bytes = golden();
@@ -49,6 +70,7 @@ fn exported_rig_poses_as_the_core_plays() {
     let frames = frames(&actor);
     let (file, summary) = glb(&actor, &frames, &Options::default()).unwrap();
     let g = Gltf::parse(&file);
+    keyed_weights_are_sliders(&g);
     let names = g.root.meshes[0].extras.as_ref().unwrap().get();
     assert!(
         names.contains("\"jawOpen\"") && names.contains("\"noseSneer_R\""),
@@ -64,7 +86,13 @@ fn exported_rig_poses_as_the_core_plays() {
     let m = actor.shape_count();
     let compensation = summary.jaw_compensation_targets;
     assert!(
-        (1..=MAX_JAW_COMPENSATION).contains(&compensation),
+        (1..=MAX_JAW_COMPENSATION).contains(&summary.jaw_compensation_directions),
+        "{}",
+        summary.jaw_compensation_directions
+    );
+    assert!(
+        (summary.jaw_compensation_directions..=2 * summary.jaw_compensation_directions)
+            .contains(&compensation),
         "{compensation}"
     );
     assert!(summary.jaw_compensation_residual_mm <= JAW_COMPENSATION_TOLERANCE_M * 1e3);
@@ -95,9 +123,10 @@ fn exported_rig_poses_as_the_core_plays() {
     assert!(worst_named > 0.1, "{worst_named} cm");
     eprintln!(
         "glTF rig vs sinew-core on {} frames of the golden ICT actor: max |Δ| {worst_core:.3e} cm \
-         with {compensation} compensation targets ({:.2e} mm left), {worst_named:.3e} cm without; \
-         {} of {v} jaw weights clamped (max {:.4})",
+         with {compensation} compensation targets from {} directions ({:.2e} mm left), \
+         {worst_named:.3e} cm without; {} of {v} jaw weights clamped (max {:.4})",
         frames.len(),
+        summary.jaw_compensation_directions,
         summary.jaw_compensation_residual_mm,
         summary.clamped_weights,
         summary.max_clamp
@@ -342,7 +371,9 @@ fn an_unruly_animation_reports_what_compensation_leaves() {
         })
         .collect();
     let (file, summary) = glb(&actor, &frames, &Options::default()).unwrap();
-    assert_eq!(summary.jaw_compensation_targets, MAX_JAW_COMPENSATION);
+    assert_eq!(summary.jaw_compensation_directions, MAX_JAW_COMPENSATION);
+    assert!(summary.jaw_compensation_targets <= 2 * MAX_JAW_COMPENSATION);
+    keyed_weights_are_sliders(&Gltf::parse(&file));
     let left_cm = summary.jaw_compensation_residual_mm / 10.0;
     assert!(left_cm < 0.05, "{left_cm} cm");
     let posed = pose_gltf(&Gltf::parse(&file));
@@ -357,5 +388,58 @@ fn an_unruly_animation_reports_what_compensation_leaves() {
         }
     }
     assert!(worst <= left_cm + 1e-4, "{worst} cm, {left_cm} cm reported");
-    eprintln!("200 unruly frames: {worst:.3e} cm, {left_cm:.3e} cm reported");
+    eprintln!(
+        "200 unruly frames: {} compensation targets from {} directions, {worst:.3e} cm, \
+         {left_cm:.3e} cm reported",
+        summary.jaw_compensation_targets, summary.jaw_compensation_directions
+    );
+}
+
+/// A pose file's coefficients may lie outside [0, 1] (a fit, an artist's exaggeration): the
+/// named targets are keyed held to [0, 1] and the compensation carries the rest, so the rig still
+/// poses as the core does and every keyed weight stays a slider's.
+#[test]
+fn coefficients_outside_the_sliders_range_are_carried_by_the_compensation() {
+    let bytes = golden();
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let mut frames = frames(&actor);
+    let m = actor.shape_count();
+    for (f, frame) in frames.iter_mut().enumerate() {
+        // Every third shape swings from −0.5 to 1.5.
+        for j in (0..m).step_by(3) {
+            frame.weights[j] = 2.0 * frame.weights[j] - 0.5;
+        }
+        if f == 0 {
+            frame.weights[1] = 1.25;
+        }
+    }
+    let outside = frames
+        .iter()
+        .flat_map(|f| &f.weights)
+        .filter(|w| !(0.0..=1.0).contains(*w))
+        .count();
+    let (file, summary) = glb(&actor, &frames, &Options::default()).unwrap();
+    assert_eq!(summary.coefficients_outside_unit, outside);
+    assert!(outside > 30, "{outside}");
+    let g = Gltf::parse(&file);
+    keyed_weights_are_sliders(&g);
+    assert!(summary.jaw_compensation_residual_mm <= JAW_COMPENSATION_TOLERANCE_M * 1e3);
+    let posed = pose_gltf(&g);
+    let v = actor.vertex_count();
+    let mut core = vec![0.0f32; 3 * v];
+    for (f, (frame, gl)) in frames.iter().zip(&posed).enumerate() {
+        let pose = actor.pose_from_9d(&frame.jaw, &frame.head).unwrap();
+        actor.pose(&pose, &frame.weights, &mut core).unwrap();
+        let gl_units: Vec<f32> = gl.iter().map(|x| (x / 0.01) as f32).collect();
+        if let Some((i, a, b)) = GLTF_RIG.first_violation(&gl_units, &core) {
+            panic!("frame {f}, value {i}: glTF {a}, core {b}");
+        }
+    }
+    eprintln!(
+        "{outside} coefficients outside [0, 1]: {} compensation targets from {} directions, \
+         {:.2e} mm left",
+        summary.jaw_compensation_targets,
+        summary.jaw_compensation_directions,
+        summary.jaw_compensation_residual_mm
+    );
 }

@@ -15,6 +15,7 @@ use sinew_core::aim::AimActor;
 use sinew_core::InputError;
 use sinew_core::linalg::Mat3;
 
+use super::jaw::keyed_weight;
 use super::place::Place;
 use crate::aim::play::Frame;
 use crate::io::glb::Builder;
@@ -47,7 +48,8 @@ fn continuous(q: [f32; 4], before: Option<&[f32]>) -> [f32; 4] {
 }
 
 /// Adds the animation over `frames` (keyed at i / fps; the first again at N / fps when
-/// `looped`); each keyframe's morph weights are the frame's, then `extra` zeros for targets the
+/// `looped`); each keyframe's morph weights are the frame's held to [0, 1]
+/// (`super::jaw::keyed_weight`; the compensation carries the rest), then `extra` zeros for targets the
 /// animation does not drive, then the frame's `compensation` weights (`super::jaw`; one list
 /// per frame, or none). A frame whose head or jaw the core refuses is returned with its index.
 #[allow(clippy::too_many_arguments)]
@@ -72,7 +74,7 @@ pub(crate) fn animate(
     let (mut jt, mut jr, mut ht, mut hr) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for (key, f) in keys.iter().enumerate() {
         let frame = key % frames.len();
-        weights.extend_from_slice(&f.weights);
+        weights.extend(f.weights.iter().map(|&w| keyed_weight(w)));
         weights.extend(std::iter::repeat_n(0.0, extra));
         if let Some(c) = compensation.get(frame) {
             weights.extend_from_slice(c);

@@ -17,8 +17,12 @@
 //! Coordinates are in metres (glTF's unit) from the artefact's `units`; the axes (x to the
 //! actor's left, y up, z forward) are glTF's already.
 //!
-//! - With frames, up to [`MAX_JAW_COMPENSATION`] more morph targets (`jawCompensation1`, …)
-//!   keyed by the animation, counted in the mesh's `extras.sinewCompensationTargets`.
+//! - With frames, more morph targets (`jawCompensation1`, …; one or two for each of at most
+//!   [`MAX_JAW_COMPENSATION`] directions) keyed by the animation, counted in the mesh's
+//!   `extras.sinewCompensationTargets`.
+//! - Every keyed morph weight lies in [0, 1], where a DCC's sliders clamp (Blender's shape
+//!   keys): a coefficient outside is keyed held to [0, 1] ([`keyed_weight`]) and the
+//!   compensation targets carry the rest.
 //!
 //! glTF morphs before it skins, where AIM eq. 17 adds the correctives after the jaw's LBS, and
 //! glTF's skin weights lie in [0, 1] where the learned k may stray outside: `super::jaw` makes up
@@ -38,7 +42,8 @@ pub use super::animation::quaternion;
 use super::animation::{Animated, animate};
 use super::jaw::{Compensation, Skin, compensate, shape_deltas};
 pub use super::jaw::{
-    MAX_TARGETS as MAX_JAW_COMPENSATION, TOLERANCE_M as JAW_COMPENSATION_TOLERANCE_M, joint_weight,
+    MAX_DIRECTIONS as MAX_JAW_COMPENSATION, TOLERANCE_M as JAW_COMPENSATION_TOLERANCE_M,
+    joint_weight, keyed_weight,
 };
 pub use super::names::{Names, Targets};
 use super::place::{Place, PlaceError};
@@ -249,8 +254,15 @@ pub struct Summary {
     /// Largest |k − clamp(k)|.
     pub max_clamp: f32,
     /// Morph targets that make the animation's frames pose as in the core despite glTF's
-    /// morphing before skinning (`jawCompensation1`, …; `super::jaw`).
+    /// morphing before skinning and the named targets' weights held to [0, 1]
+    /// (`jawCompensation1`, …; `super::jaw`).
     pub jaw_compensation_targets: usize,
+    /// The directions those targets come from: each one target, or two where the frames take
+    /// it both ways.
+    pub jaw_compensation_directions: usize,
+    /// Frame coefficients outside [0, 1], keyed held to [0, 1] with the compensation carrying
+    /// the rest (0 for captures, whose channels lie in [0, 1]).
+    pub coefficients_outside_unit: usize,
     /// The largest displacement, in mm, that they leave uncompensated in any frame and vertex.
     pub jaw_compensation_residual_mm: f64,
     /// Metres per model unit.
@@ -642,6 +654,12 @@ pub fn glb(
         clamped_weights: clamped,
         max_clamp,
         jaw_compensation_targets: compensation.targets.len(),
+        jaw_compensation_directions: compensation.directions,
+        coefficients_outside_unit: frames
+            .iter()
+            .flat_map(|f| &f.weights)
+            .filter(|&&w| keyed_weight(w) != w)
+            .count(),
         jaw_compensation_residual_mm: compensation.residual_m * 1000.0,
         metres_per_unit: scale,
         unplayable: Vec::new(),

@@ -17,10 +17,14 @@
 //!    the remainder of the pose's other shapes and weights (docs/ENGINES.md gives it).
 //! 2. **The animation** ([`compensate`]): for each frame, the displacement glTF needs before
 //!    skinning, `X* = A_c⁻¹((k − k_c)(T_b(s0) − s0) + Σ w_j e_j)` (with `k_c` the clamped
-//!    weight), less what the named targets give, `Σ w_j d_j`, is the frame's remainder. The
-//!    remainders span few directions (the jaw turns about one hinge), so the fewest directions,
-//!    at most [`MAX_TARGETS`], that leave every frame within [`TOLERANCE_M`] become morph
-//!    targets (`jawCompensation1`, …) keyed with each frame's coordinates in them. The worst
+//!    weight), less what the named targets give, `Σ w̄_j d_j`, is the frame's remainder. The
+//!    named targets are keyed with `w̄_j`, the coefficient held to [0, 1] ([`keyed_weight`]),
+//!    since a DCC's sliders clamp there (Blender's shape keys); what lies beyond is part of the
+//!    remainder. The remainders span few directions (the jaw turns about one hinge), so the
+//!    fewest directions, at most [`MAX_DIRECTIONS`], that leave every frame within
+//!    [`TOLERANCE_M`] are kept, and each becomes one or two morph targets (`jawCompensation1`,
+//!    …): its positive part and its negative part, each scaled to the largest coordinate the
+//!    frames take along it, so that every frame keys it with a weight in [0, 1]. The worst
 //!    remainder left is reported. Without frames there is nothing to compensate.
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
@@ -30,11 +34,20 @@ use sinew_core::tensor::F32s;
 
 use crate::aim::play::Frame;
 
-/// The remainder, in metres, below which a frame needs no compensation target of its own.
-pub const TOLERANCE_M: f64 = 1e-5;
+/// The remainder, in metres, below which a frame needs no compensation target of its own: half
+/// of the 0.01 mm within which engines and DCCs must pose an export as the core does, leaving
+/// the other half to f32 rounding.
+pub const TOLERANCE_M: f64 = 5e-6;
 
-/// The most compensation targets an animation gets.
-pub const MAX_TARGETS: usize = 32;
+/// The most compensation directions an animation gets; each is one target, or two where the
+/// frames take it both ways.
+pub const MAX_DIRECTIONS: usize = 32;
+
+/// The morph weight a named target is keyed with for a coefficient `w`: held to [0, 1], the
+/// range of a DCC's sliders; the compensation carries the rest (module docs).
+pub fn keyed_weight(w: f32) -> f32 {
+    w.clamp(0.0, 1.0)
+}
 
 /// The glTF skin weight of a learned k: clamped into [0, 1], since glTF's weights are convex.
 pub fn joint_weight(k: f32) -> f32 {
@@ -140,10 +153,14 @@ pub(crate) fn shape_deltas(
 /// The compensation targets of an animation and their weights.
 #[derive(Debug, Default)]
 pub(crate) struct Compensation {
-    /// Each target's displacements `[V, 3]` (actor units), scaled to at most one unit a vertex.
+    /// Each target's displacements `[V, 3]` (actor units): a direction's positive or negative
+    /// part, scaled to the frames' largest coordinate along it that way.
     pub(crate) targets: Vec<Vec<f32>>,
-    /// Each frame's weights of the targets.
+    /// Each frame's weights of the targets, each in [0, 1].
     pub(crate) weights: Vec<Vec<f32>>,
+    /// The directions the targets come from (fewer than the targets where some are taken both
+    /// ways).
+    pub(crate) directions: usize,
     /// The largest displacement left uncompensated in any frame and vertex, in metres.
     pub(crate) residual_m: f64,
 }
@@ -155,9 +172,12 @@ pub(crate) struct Compensation {
 /// The frames' remainders `R` (`[3V, F]`, one column a frame) are streamed, never held: a
 /// randomised range finder (Halko, Martinsson and Tropp 2011, with one power iteration; the
 /// random test matrix from a fixed seed, so an export is reproducible) finds the
-/// [`MAX_TARGETS`] + 8 directions that carry most of them, ordered by their singular values, and
-/// the fewest leading directions that leave every frame within [`TOLERANCE_M`] become the
-/// targets (all [`MAX_TARGETS`] where none do; the summary reports what is left).
+/// [`MAX_DIRECTIONS`] + 8 directions that carry most of them, ordered by their singular values,
+/// and the fewest leading directions that leave every frame within [`TOLERANCE_M`] are kept (all
+/// [`MAX_DIRECTIONS`] where none do; the summary reports what is left). Each kept direction
+/// becomes a target for its positive coordinates and one for its negative coordinates, each
+/// scaled so that the frames' largest coordinate that way is weight 1; a part no frame takes is
+/// left out.
 pub(crate) fn compensate(
     actor: &AimActor<'_>,
     skin: &Skin,
@@ -167,7 +187,7 @@ pub(crate) fn compensate(
 ) -> Result<Compensation, (usize, InputError)> {
     use rand_core::{RngCore, SeedableRng};
     let rows = 3 * skin.vertices();
-    let width = (MAX_TARGETS + 8).min(frames.len());
+    let width = (MAX_DIRECTIONS + 8).min(frames.len());
     let each = |visit: &mut dyn FnMut(usize, Vec<f64>)| -> Result<(), (usize, InputError)> {
         for (f, frame) in frames.iter().enumerate() {
             visit(
@@ -225,28 +245,49 @@ pub(crate) fn compensate(
         coordinates.push(c);
     })?;
     let tolerance = TOLERANCE_M / metres;
-    let count = (0..=width.min(MAX_TARGETS))
+    let count = (0..=width.min(MAX_DIRECTIONS))
         .find(|n| left[*n] <= tolerance)
-        .unwrap_or(width.min(MAX_TARGETS));
+        .unwrap_or(width.min(MAX_DIRECTIONS));
     let mut out = Compensation {
         residual_m: left[count] * metres,
+        directions: count,
         ..Compensation::default()
     };
-    let mut scales = Vec::with_capacity(count);
-    for column in directions.column_iter().take(count) {
-        let d: Vec<f64> = column.iter().copied().collect();
-        let s = worst(&d);
-        out.targets.push(d.iter().map(|x| (x / s) as f32).collect());
-        scales.push(s);
+    // Direction n's positive part is the target `top · q_n`, keyed `c / top` where the frame's
+    // coordinate c is positive (0 elsewhere); its negative part `−bottom · q_n`, keyed
+    // `−c / bottom` where c is negative. Their sum is `c q_n` in every frame, and between two
+    // keys too: linear interpolation of the two weights interpolates c.
+    let mut parts: Vec<(usize, f64)> = Vec::with_capacity(2 * count);
+    for n in 0..count {
+        let top = coordinates.iter().map(|c| c[n]).fold(0.0, f64::max);
+        let bottom = coordinates.iter().map(|c| -c[n]).fold(0.0, f64::max);
+        for (sign, reach) in [(1.0, top), (-1.0, bottom)] {
+            if reach > 0.0 {
+                let scale = sign * reach;
+                out.targets.push(
+                    directions
+                        .column(n)
+                        .iter()
+                        .map(|x| (x * scale) as f32)
+                        .collect(),
+                );
+                parts.push((n, scale));
+            }
+        }
     }
     out.weights = coordinates
         .iter()
-        .map(|c| c.iter().zip(&scales).map(|(c, s)| (c * s) as f32).collect())
+        .map(|c| {
+            parts
+                .iter()
+                .map(|&(n, scale)| ((c[n] / scale).max(0.0) as f32).min(1.0))
+                .collect()
+        })
         .collect();
     Ok(out)
 }
 
-/// `X* − Σ w_j d_j` for one frame (module docs), `[V, 3]`.
+/// `X* − Σ w̄_j d_j` for one frame (module docs), `[V, 3]`.
 fn remainder(
     actor: &AimActor<'_>,
     skin: &Skin,
@@ -265,10 +306,10 @@ fn remainder(
         let mut e = (moved - s0) * (skin.k[i] - skin.clamped[i]);
         let mut given = Vector3::zeros();
         for (j, w) in frame.weights.iter().enumerate().take(m) {
-            let w = f64::from(*w);
-            e += skin.corrective(i, j) * w;
+            e += skin.corrective(i, j) * f64::from(*w);
             let at = (i * m + j) * 3;
-            given += Vector3::from_fn(|c, _| f64::from(deltas[at + c])) * w;
+            given +=
+                Vector3::from_fn(|c, _| f64::from(deltas[at + c])) * f64::from(keyed_weight(*w));
         }
         let need = skin.undo(i, &r) * e - given;
         out.extend_from_slice(need.as_slice());

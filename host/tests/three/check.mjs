@@ -71,6 +71,14 @@ if (!face) fail(`${args.glb}: no skinned mesh "face"`);
 if (gltf.animations.length !== 1) fail(`${args.glb}: ${gltf.animations.length} animations, expected 1`);
 const clip = gltf.animations[0];
 const times = clip.tracks[0].times;
+// Every keyed morph weight lies in [0, 1], where a DCC's sliders clamp (Blender's shape keys).
+for (const track of clip.tracks) {
+  if (!track.name.endsWith('.morphTargetInfluences')) continue;
+  const bad = track.values.findIndex((w) => !(w >= 0 && w <= 1));
+  if (bad >= 0) {
+    fail(`${args.glb}: ${track.name} keys weight ${track.values[bad]} (value ${bad}), outside [0, 1]`);
+  }
+}
 
 const names = (await readdir(args.frames)).filter((n) => /^frame_\d+\.obj$/.test(n)).sort();
 if (names.length === 0) fail(`${args.frames}: no frame_NNNNN.obj files`);
