@@ -142,11 +142,6 @@ impl<'a> SpiralConv<'a> {
         self.spirals
     }
 
-    /// Input features per source vertex.
-    pub fn in_features(&self) -> usize {
-        self.in_f
-    }
-
     /// Output features per vertex.
     pub fn out_features(&self) -> usize {
         self.out_f

@@ -1,5 +1,6 @@
-//! The real face-data folder (`$SINEW_DATA` or `../shared/data`), for the commands' defaults,
-//! the tests and the benchmarks.
+//! The real face-data folder (`$SINEW_DATA` or `../shared/data`) of the tests and the
+//! benchmarks (feature `test-support`): a data test skips where it is absent, or fails under
+//! `SINEW_REQUIRE_DATA=1`.
 
 use std::path::{Path, PathBuf};
 

@@ -233,16 +233,6 @@ pub struct Actor {
     pub source: String,
 }
 
-impl Actor {
-    /// Shape `i` as a mesh with the template's topology.
-    ///
-    /// # Panics
-    /// If `i` is not below `shapes.len()`.
-    pub fn shape_mesh(&self, i: usize) -> Mesh {
-        self.template.with_positions(self.shapes[i].clone())
-    }
-}
-
 /// An opened ICT-FaceKit folder: the neutral mesh and landmark data in memory, the expression and
 /// identity files listed (read on demand, as all of them together are ~250 MB of text).
 #[derive(Debug)]

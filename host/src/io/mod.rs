@@ -5,6 +5,7 @@
 pub mod arkit;
 pub mod atomic;
 pub mod container;
+#[cfg(any(test, feature = "test-support"))]
 pub mod data;
 pub mod dataset;
 pub mod decoder_face;

@@ -63,5 +63,6 @@ pub mod protocol;
 pub mod report;
 pub mod spirals;
 pub mod symmetry;
+#[cfg(any(test, feature = "test-support"))]
 pub mod synthetic;
 pub mod train;
