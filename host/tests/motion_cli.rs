@@ -303,7 +303,7 @@ fn generate_and_interpolate(dir: &std::path::Path, model: &std::path::Path) {
     let dec = sinew_core::s2d::S2dDecoder::from_bytes(&bytes).unwrap();
     let pos: Vec<f32> = dec.neutral().iter().collect();
     let neutral = dir.join("neutral.obj");
-    // The golden decoder stores no triangles; any faces do for the strip's pictures.
+    // A face of the decoder's vertices given as the neutral (any faces do for the strip).
     let n = pos.len() as u32 / 3;
     let mesh = sinew_host::io::mesh::Mesh::new(
         sinew_host::io::mesh::points(pos),

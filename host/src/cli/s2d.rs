@@ -46,6 +46,21 @@ pub(crate) enum S2d {
         #[arg(long)]
         out: PathBuf,
     },
+    /// A decoder baked without its template's triangles (from 2026-11-23 to 2026-11-26) written
+    /// again with them, taken from the pairs it was trained on, so that `sinew generate` and
+    /// `sinew interpolate` decode onto its own face without --neutral. Every other section is
+    /// kept, so it decodes to the same bits; its content hash changes.
+    AddTriangles {
+        /// The baked S2D decoder without triangles.
+        #[arg(long)]
+        model: PathBuf,
+        /// The pairs folder the decoder was trained on (from `sinew data s2d-pairs`).
+        #[arg(long)]
+        pairs: PathBuf,
+        /// Output .sinew file.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Expression neutralisation: an expressive face in, its neutral out (the decoder maps the
     /// face's landmarks onto the template's neutral landmarks).
     Neutralize {
@@ -255,6 +270,15 @@ pub(crate) fn run(cmd: S2d) -> Result<()> {
                 out.display(),
                 model.display(),
                 face.positions.len(),
+                face.polygons.len()
+            );
+        }
+        S2d::AddTriangles { model, pairs, out } => {
+            let face = sinew_host::s2d::apply::add_triangles(&model, &pairs, &out)?;
+            println!(
+                "{}: {} with its template's {} triangles",
+                out.display(),
+                model.display(),
                 face.polygons.len()
             );
         }

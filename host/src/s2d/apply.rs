@@ -1,6 +1,7 @@
 //! S2D's applications (paper section 4.4) through the core's decoder: expression neutralisation
 //! (`sinew s2d neutralize`) and expression transfer of a landmark motion onto another identity
-//! (`sinew s2d transfer`). Every mesh must have the decoder's template topology; the landmarks
+//! (`sinew s2d transfer`); a decoder's own face (`sinew s2d template`), and the triangles of that
+//! face added to a decoder baked without them (`sinew s2d add-triangles`). Every mesh must have the decoder's template topology; the landmarks
 //! are the decoder's own (`s2d.lmk`).
 
 use std::path::{Path, PathBuf};
@@ -8,7 +9,8 @@ use std::path::{Path, PathBuf};
 use sinew_core::error::FormatError;
 use sinew_core::s2d::S2dDecoder;
 
-use crate::io::container::ContainerError;
+use crate::io::atomic::AtomicWriteError;
+use crate::io::container::{ContainerError, SinewWriter, WriterError};
 use crate::io::mesh::{Mesh, MeshError};
 
 /// A neutralisation or transfer that was refused or failed; each names the file concerned.
@@ -80,6 +82,18 @@ pub enum ApplyError {
     /// A pairs folder that cannot be read (the error names the file).
     #[error(transparent)]
     Pairs(#[from] crate::io::dataset::DataSetError),
+    /// A decoder that carries its template's triangles already.
+    #[error("{}: the decoder carries its template's triangles already", path.display())]
+    HasTriangles {
+        /// The decoder file.
+        path: PathBuf,
+    },
+    /// A decoder that cannot be laid out again with its triangles.
+    #[error(transparent)]
+    Layout(#[from] WriterError),
+    /// A decoder that cannot be written (the error names the file).
+    #[error(transparent)]
+    Write(#[from] AtomicWriteError),
 }
 
 /// `sinew s2d template`: the face a decoder decodes onto by default, its template neutral with
@@ -100,6 +114,56 @@ pub fn write_template(model: &Path, pairs: Option<&Path>, out: &Path) -> Result<
     };
     face.write(out)?;
     Ok(face)
+}
+
+/// `sinew s2d add-triangles`: the decoder at `model`, baked without its template's triangles
+/// (from 2026-11-23 to 2026-11-26), written to `out` with them (`s2d.h0.tri`), taken from
+/// `pairs`, the pairs folder it was trained on, whose template must have the decoder's vertices
+/// bit for bit. Everything else is kept as it was ([`with_triangles`]), so the new file decodes
+/// to the same bits; it then decodes onto its own face without a `--neutral`. Returns the face.
+pub fn add_triangles(model: &Path, pairs: &Path, out: &Path) -> Result<Mesh, ApplyError> {
+    use crate::io::decoder_face::{self, DecoderFaceError};
+    let bytes = crate::io::container::read(model)?;
+    match decoder_face::template(model, &bytes) {
+        Err(DecoderFaceError::NoTriangles { .. }) => {}
+        Ok(_) => {
+            return Err(ApplyError::HasTriangles {
+                path: model.to_owned(),
+            });
+        }
+        Err(e) => return Err(e.into()),
+    }
+    let set = super::data::PairSet::read(pairs)?;
+    let file = pairs.join(super::data::DATA_FILE);
+    let face = decoder_face::template_like(model, &bytes, &file, &set.template)?;
+    let with = with_triangles(model, &bytes, &face)?;
+    crate::io::atomic::write(out, &with)?;
+    Ok(face)
+}
+
+/// The decoder in `bytes` (read from `model`) with `face`'s triangles as its template's
+/// (`s2d.h0.tri`, after every section it has): the kind, flags, metadata and every other section
+/// as they were, so that it decodes to the same bits. `face` must be the decoder's template
+/// (`io::decoder_face::template_like` checks it).
+pub fn with_triangles(model: &Path, bytes: &[u8], face: &Mesh) -> Result<Vec<u8>, ApplyError> {
+    let not_a_decoder = |source| ApplyError::NotADecoder {
+        path: model.to_owned(),
+        source,
+    };
+    S2dDecoder::from_bytes(bytes).map_err(not_a_decoder)?;
+    let file = sinew_core::SinewFile::from_bytes(bytes).map_err(not_a_decoder)?;
+    let mut w = SinewWriter::from_file(&file)?;
+    let triangles = face.triangles();
+    let flat: Vec<u32> = triangles.iter().flatten().copied().collect();
+    w.u32s(
+        crate::io::decoder_face::TRIANGLES,
+        &[triangles.len(), 3],
+        &flat,
+    )?;
+    let with = w.to_bytes()?;
+    // The core must accept what the host writes.
+    S2dDecoder::from_bytes(&with).map_err(not_a_decoder)?;
+    Ok(with)
 }
 
 /// The step of decoding that the core refused.
