@@ -241,3 +241,73 @@ fn softplus_thickness_is_positive_and_the_core_agrees() {
         );
     }
 }
+
+/// A run that aims for an accuracy stops at the first check that meets it, having measured what
+/// the baked actor measures; resumed there, it stops at once; a target out of reach runs every
+/// step and says by how much it missed.
+#[test]
+fn training_stops_at_its_target_and_says_why() {
+    use sinew_host::aim::target::{Ending, Target};
+    let _serial = SERIAL
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let set = small_set();
+    let config = tiny_config(60);
+    let with = |dir: &std::path::Path, resume: bool, target: Target| {
+        let mut options = aim_train_options(dir, resume, None);
+        options.target = Some(target);
+        train(&set, &config, &options).unwrap()
+    };
+    // Out of reach: every step runs, a check every 10.
+    let far = tempfile::tempdir().unwrap();
+    let unreachable = Target {
+        mean_mm: 1e-6,
+        p95_mm: 1e-6,
+        every: 10,
+        ..Target::default()
+    };
+    let all = with(far.path(), false, unreachable.clone());
+    assert!(all.complete);
+    assert_eq!(all.ending, Ending::Steps);
+    assert_eq!(all.state.steps_done, 60);
+    let steps: Vec<usize> = all.state.checks.iter().map(|c| c.step).collect();
+    assert_eq!(steps, [10, 20, 30, 40, 50, 60]);
+    let checks = &all.state.checks;
+    let missed = unreachable.shortfall(&checks[5], Some(&checks[4]));
+    assert!(missed[0].starts_with("mean "), "{missed:?}");
+    // The last check measures what the baked actor's report measures.
+    let actor_bytes = baked(&all.model, &set, all.state.normalisation);
+    let actor = AimActor::from_bytes(&actor_bytes).unwrap();
+    let report = shape_errors(&actor, &set.names, &set.shapes, set.mm_per_unit).unwrap();
+    let mean = checks[5].mean_mm;
+    assert!(
+        (mean - report.overall.mean).abs() <= 1e-3 * report.overall.mean,
+        "checked {mean} mm, baked {} mm",
+        report.overall.mean
+    );
+
+    // A target the run meets part way: the accuracy of the check at step 30, loose enough for
+    // the jaw. The same run (bit-reproducible) stops at the first check that meets it.
+    let target = Target {
+        mean_mm: checks[2].mean_mm,
+        p95_mm: checks[2].p95_mm.max(checks[2].mean_mm),
+        jaw_settle_degrees: 180.0,
+        every: 10,
+        ..Target::default()
+    };
+    let first = (0..checks.len())
+        .find(|&i| target.met(&checks[i], i.checked_sub(1).map(|p| &checks[p])))
+        .unwrap();
+    assert!(first <= 2 && checks[first].step < 60, "{checks:?}");
+    let near = tempfile::tempdir().unwrap();
+    let stopped = with(near.path(), false, target.clone());
+    assert!(stopped.complete);
+    assert_eq!(stopped.ending, Ending::Target);
+    assert_eq!(stopped.state.steps_done, checks[first].step);
+    assert_eq!(stopped.state.checks[..], checks[..=first]);
+    // Resumed with the same target, it is already there: no step, no new check.
+    let again = with(near.path(), true, target);
+    assert_eq!(again.ending, Ending::AlreadyMet);
+    assert_eq!(again.state.steps_done, checks[first].step);
+    assert_eq!(again.state.checks.len(), first + 1);
+}

@@ -64,6 +64,7 @@ pub fn train_aim(
     out: &Outputs,
     resume: Option<&Path>,
     quiet: bool,
+    target: Option<crate::aim::target::Target>,
 ) -> Result<Report> {
     let options = TrainOptions {
         backend,
@@ -71,6 +72,7 @@ pub fn train_aim(
         resume: resume.is_some(),
         stop_after: None,
         quiet,
+        target,
     };
     Ok(run(set, config, &options, out)?)
 }

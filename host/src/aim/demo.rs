@@ -81,6 +81,7 @@ pub fn demo(out: &Path, config: &AimConfig, quiet: bool) -> Result<Report, DemoE
         resume: false,
         stop_after: None,
         quiet,
+        target: None,
     };
     let report = run(&set, config, &options, &outputs)?;
 

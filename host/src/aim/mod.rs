@@ -16,6 +16,7 @@ pub mod model;
 pub mod play;
 pub mod procedural;
 pub mod run;
+pub mod target;
 #[cfg(any(test, feature = "test-support"))]
 pub mod testing;
 pub mod train;

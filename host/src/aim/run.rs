@@ -110,6 +110,14 @@ pub struct Report {
     pub backend: crate::training::backend::Backend,
     /// The baked model file.
     pub model: String,
+    /// What ended the training (`target` or `steps`; absent when only measuring).
+    pub ended: Option<super::target::Ending>,
+    /// The accuracy the run aimed for, if any.
+    pub target: Option<super::target::Target>,
+    /// The accuracy checks made on the way.
+    pub checks: Vec<super::target::Check>,
+    /// How far the last check was from the target, when the step limit came first.
+    pub missed: Vec<String>,
 }
 
 /// Where a run writes.
@@ -134,6 +142,7 @@ pub fn run(
         model,
         state,
         complete,
+        ending,
     } = train(set, config, options)?;
     if !complete {
         return Err(RunError::Incomplete {
@@ -168,7 +177,7 @@ pub fn run(
             .as_bytes(),
     )?;
 
-    let report = evaluate(
+    let mut report = evaluate(
         &bytes,
         set,
         config,
@@ -177,6 +186,18 @@ pub fn run(
         state.steps_done,
         &out.model,
     )?;
+    if let Some(target) = &options.target {
+        report.missed = match (&ending, state.checks.as_slice()) {
+            (super::target::Ending::Steps, [.., previous, last]) => {
+                target.shortfall(last, Some(previous))
+            }
+            (super::target::Ending::Steps, [last]) => target.shortfall(last, None),
+            _ => Vec::new(),
+        };
+    }
+    report.ended = Some(ending);
+    report.target.clone_from(&options.target);
+    report.checks = state.checks.clone();
     crate::io::atomic::write(
         &out.report,
         serde_json::to_string_pretty(&report)
@@ -250,6 +271,10 @@ pub fn evaluate(
         config: config.clone(),
         backend,
         model: model.display().to_string(),
+        ended: None,
+        target: None,
+        checks: Vec::new(),
+        missed: Vec::new(),
     })
 }
 

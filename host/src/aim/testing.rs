@@ -38,5 +38,6 @@ pub fn aim_train_options(
         resume,
         stop_after,
         quiet: true,
+        target: None,
     }
 }

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::config::{InvalidConfig, JawInit};
 use super::model::{AimNet, IDENTITY_9D, normalisation, normalise};
+use super::target::{Check, Ending, Target, measure};
 use super::{AimConfig, InvalidTrainingSet, TrainingSet};
 use crate::io::mesh::MeshError;
 use crate::training::backend::Backend;
@@ -55,6 +56,9 @@ pub enum TrainError {
         /// The loss terms logged at it ([`TERMS`] order).
         terms: [f32; 6],
     },
+    /// The accuracy target makes no sense.
+    #[error(transparent)]
+    Target(#[from] super::target::InvalidTarget),
     /// Ctrl-C stopped the run after a checkpoint.
     #[error(
         "interrupted at step {step}; checkpoint saved in {} (continue with --resume)",
@@ -134,6 +138,10 @@ pub struct CheckpointState {
     /// weights are `model.bpk` and `optim.bpk`).
     #[serde(flatten)]
     pub files: WeightFiles,
+    /// The accuracy checks so far, when the run aims for a target (none in checkpoints written
+    /// before targets).
+    #[serde(default)]
+    pub checks: Vec<Check>,
 }
 
 /// Options of one training run.
@@ -149,6 +157,8 @@ pub struct TrainOptions {
     pub stop_after: Option<usize>,
     /// Hide the progress bar.
     pub quiet: bool,
+    /// Stop once this accuracy is reached ([`super::target`]); `None` runs every step.
+    pub target: Option<Target>,
 }
 
 /// A finished (or stopped) training run.
@@ -158,8 +168,10 @@ pub struct Trained {
     pub model: AimNet,
     /// Checkpoint state at the end.
     pub state: CheckpointState,
-    /// Whether all configured iterations ran.
+    /// Whether the run is finished: its target met, or all configured iterations run.
     pub complete: bool,
+    /// What ended it, when complete.
+    pub ending: Ending,
 }
 
 /// The random draws of one step, from a generator seeded by (seed, step) alone.
@@ -496,6 +508,7 @@ pub fn train(
         jaw_pivot: set.jaw_pivot,
         metadata: super::bake::metadata(set, config).map_err(TrainError::Metadata)?,
         files: WeightFiles::default(),
+        checks: Vec::new(),
     };
     if options.resume {
         let (n, o, s) = load_checkpoint(dir, net, optim, &device)?;
@@ -504,6 +517,23 @@ pub fn train(
     } else {
         // The template travels with the checkpoint so that `sinew bake` needs nothing else.
         set.template.write(&dir.join("template.obj"))?;
+    }
+
+    if let Some(target) = &options.target {
+        target.validate()?;
+        // A resumed run may already be where its target asks: measured before any step.
+        if options.resume
+            && state
+                .checks
+                .last()
+                .is_none_or(|c| c.step != state.steps_done)
+        {
+            let check = measure(&net.clone().valid(), set, norm, state.steps_done);
+            state.checks.push(check);
+        }
+        if options.resume && target_met(target, &state.checks) {
+            return Ok(finished(net, state, Ending::AlreadyMet));
+        }
     }
 
     crate::training::interrupt::watch_ctrl_c();
@@ -515,6 +545,7 @@ pub fn train(
     let last = options
         .stop_after
         .map_or(config.iterations, |n| (first + n).min(config.iterations));
+    let mut met = false;
     for step in first..last {
         let lr = config.lr_at(step);
         let terms;
@@ -540,10 +571,36 @@ pub fn train(
             ));
             state.history.push(record);
         }
+        if let Some(target) = &options.target
+            && (state.steps_done.is_multiple_of(target.every)
+                || state.steps_done == config.iterations)
+        {
+            let check = measure(&net.clone().valid(), set, norm, state.steps_done);
+            if !options.quiet {
+                let line = format!(
+                    "step {}: mean {:.3} mm, p95 {:.3} mm{}",
+                    check.step,
+                    check.mean_mm,
+                    check.p95_mm,
+                    check
+                        .jaw_open_degrees
+                        .map_or(String::new(), |d| format!(", jawOpen {d:.2}°"))
+                );
+                // A hidden bar (stderr not a terminal) prints nothing of its own.
+                if bar.is_hidden() {
+                    eprintln!("{line}");
+                } else {
+                    bar.println(line);
+                }
+            }
+            state.checks.push(check);
+            met = target_met(target, &state.checks);
+        }
         bar.inc(1);
         let interrupt = crate::training::interrupt::take_stop_request();
         if state.steps_done.is_multiple_of(config.checkpoint_every)
             || interrupt
+            || met
             || state.steps_done == last
         {
             state.seconds = seconds_before + start.elapsed().as_secs_f64();
@@ -556,15 +613,34 @@ pub fn train(
                 dir: dir.clone(),
             });
         }
+        if met {
+            break;
+        }
     }
     bar.finish_and_clear();
     state.seconds = seconds_before + start.elapsed().as_secs_f64();
-    let complete = state.steps_done >= config.iterations;
-    Ok(Trained {
+    let ending = if met { Ending::Target } else { Ending::Steps };
+    Ok(finished(net, state, ending))
+}
+
+/// Whether the last of `checks` meets `target` (the one before it tells whether the jaw moved).
+fn target_met(target: &Target, checks: &[Check]) -> bool {
+    match checks {
+        [.., previous, last] => target.met(last, Some(previous)),
+        [last] => target.met(last, None),
+        [] => false,
+    }
+}
+
+/// The run as it stands, ended by `ending` (complete when the target is met or every step ran).
+fn finished(net: AimNet, state: CheckpointState, ending: Ending) -> Trained {
+    let complete = ending != Ending::Steps || state.steps_done >= state.config.iterations;
+    Trained {
         model: net.valid(),
         state,
         complete,
-    })
+        ending,
+    }
 }
 
 /// Writes a checkpoint into `dir`: `model-<step>.bpk`, `optim-<step>.bpk`, then `state.json`

@@ -8,6 +8,7 @@ use clap::{Args, Subcommand};
 use sinew_host::aim::AimConfig;
 use sinew_host::aim::config::{JawInit, Schedule};
 use sinew_host::aim::run::Outputs;
+use sinew_host::aim::target::{Ending, Target};
 use sinew_host::training::backend::Backend;
 
 /// `sinew demo`.
@@ -118,9 +119,12 @@ pub(crate) struct TrainAim {
     /// Output JSON report.
     #[arg(long)]
     report: PathBuf,
-    /// Optimisation steps (overrides the configuration).
-    #[arg(long)]
+    /// Optimisation steps (overrides the configuration): the schedule's length, and the most
+    /// the run takes when it aims for an accuracy (`--steps` is the same).
+    #[arg(long, visible_alias = "steps")]
     iterations: Option<usize>,
+    #[command(flatten)]
+    target: TargetArgs,
     /// JSON configuration file (fields of AimConfig; missing ones take their defaults).
     #[arg(long)]
     config: Option<PathBuf>,
@@ -181,6 +185,47 @@ pub(crate) enum Edit {
         #[arg(long)]
         out: PathBuf,
     },
+}
+
+/// The accuracy `train aim` stops at (docs/AIM.md, "Training to an accuracy").
+#[derive(Debug, Args)]
+pub(crate) struct TargetArgs {
+    /// Stop once the mean per-vertex error over the training shapes is at most this (mm).
+    #[arg(long, default_value_t = Target::default().mean_mm)]
+    target_mean: f64,
+    /// ... and its 95th percentile at most this (mm).
+    #[arg(long, default_value_t = Target::default().p95_mm)]
+    target_p95: f64,
+    /// ... and jawOpen's learned jaw moved by at most this since the last check (degrees).
+    #[arg(long, default_value_t = Target::default().jaw_settle_degrees)]
+    target_jaw_settle: f64,
+    /// ... and jawOpen's learned jaw turns by at least this (degrees; 0: no least opening).
+    #[arg(long, default_value_t = Target::default().jaw_degrees)]
+    target_jaw_degrees: f64,
+    /// Steps between two accuracy checks.
+    #[arg(long, default_value_t = Target::default().every)]
+    check_every: usize,
+    /// Run every step, without accuracy checks.
+    #[arg(long, conflicts_with_all = ["target_mean", "target_p95", "target_jaw_settle", "target_jaw_degrees", "check_every"])]
+    no_target: bool,
+}
+
+impl TargetArgs {
+    /// The target asked for, checked (`None` with `--no-target`).
+    fn target(&self) -> Result<Option<Target>> {
+        if self.no_target {
+            return Ok(None);
+        }
+        let target = Target {
+            mean_mm: self.target_mean,
+            p95_mm: self.target_p95,
+            jaw_settle_degrees: self.target_jaw_settle,
+            jaw_degrees: self.target_jaw_degrees,
+            every: self.check_every,
+        };
+        target.validate()?;
+        Ok(Some(target))
+    }
 }
 
 /// The jaw options of `train aim` and `demo`.
@@ -253,6 +298,7 @@ pub(crate) fn demo(args: DemoArgs) -> Result<()> {
 /// `sinew train aim`.
 pub(crate) fn train(args: TrainAim) -> Result<()> {
     let config = config_for(&args)?;
+    let target = args.target.target()?;
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
     let (set, said) = match (&args.rig, &args.data) {
         (Some(path), _) => {
@@ -291,7 +337,24 @@ pub(crate) fn train(args: TrainAim) -> Result<()> {
         &outputs,
         args.resume.as_deref(),
         args.quiet,
+        target,
     )?;
+    match (&report.ended, report.missed.is_empty()) {
+        (Some(Ending::Target), _) => eprintln!(
+            "the target was met at step {} of at most {}",
+            report.iterations, config.iterations
+        ),
+        (Some(Ending::AlreadyMet), _) => eprintln!(
+            "the checkpoint at step {} already meets the target: no step taken",
+            report.iterations
+        ),
+        (Some(Ending::Steps), false) => eprintln!(
+            "all {} steps ran without meeting the target: {}",
+            report.iterations,
+            report.missed.join("; ")
+        ),
+        _ => {}
+    }
     println!(
         "{}: mean {:.3} mm, p95 {:.3} mm, max {:.3} mm over {} shapes in {:.0} s",
         args.out.display(),
