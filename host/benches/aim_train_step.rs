@@ -12,7 +12,7 @@ use criterion::{Criterion, criterion_group};
 use sinew_host::aim::AimConfig;
 use sinew_host::aim::data::training_set;
 use sinew_host::aim::model::normalisation;
-use sinew_host::aim::train::{init, step_once};
+use sinew_host::aim::train::{StepRows, init, step_once, step_rows};
 use sinew_host::training::backend::Backend;
 
 fn bench(c: &mut Criterion) {
@@ -54,6 +54,101 @@ fn bench(c: &mut Criterion) {
         })
     });
     group.finish();
+    arithmetic_rate(
+        &set,
+        &config,
+        norm,
+        &device,
+        net.take().expect("model"),
+        &mut optim,
+    );
+}
+
+/// Multiply-adds of one row through a SIREN 3 → hidden × layers → `out`.
+fn mlp_macs(config: &AimConfig, out: usize) -> f64 {
+    let h = config.hidden as f64;
+    3.0 * h + (config.layers.saturating_sub(1)) as f64 * h * h + h * out as f64
+}
+
+/// The floating-point operations of one training step: the matrix products of its network rows
+/// (2 per multiply-add), forward, and twice that backward (the gradients with respect to the
+/// activations and to the weights): 3 × forward. The element-wise work (sines, the losses, Adam's
+/// update) is left out: it is a few per cent of the products' at this width.
+fn step_flops(rows: StepRows, config: &AimConfig, shapes: usize) -> f64 {
+    let all =
+        mlp_macs(config, 3) * 2.0 + mlp_macs(config, 1) * 2.0 + mlp_macs(config, 3 * (shapes - 1));
+    let forward = rows.distinct as f64 * all
+        + 2.0 * rows.symmetry as f64 * mlp_macs(config, 3)
+        + (rows.forehead + rows.jaw) as f64 * mlp_macs(config, 1);
+    3.0 * 2.0 * forward
+}
+
+/// The machine's peak f32 rate: cores × clock × FLOPs a cycle (two fused multiply-add pipes of
+/// 256 bits, 8 lanes × 2 operations each, on a core with AVX2 and FMA; AMD's Zen 4 runs
+/// AVX-512 on the same 256-bit pipes). The clock is `/proc/cpuinfo`'s `cpu MHz` of the first core.
+fn peak_flops() -> Option<(f64, usize, f64, f64)> {
+    let cores = std::thread::available_parallelism().ok()?.get();
+    let info = std::fs::read_to_string("/proc/cpuinfo").ok()?;
+    let mhz: f64 = info
+        .lines()
+        .find(|l| l.starts_with("cpu MHz"))?
+        .split(':')
+        .nth(1)?
+        .trim()
+        .parse()
+        .ok()?;
+    #[cfg(target_arch = "x86_64")]
+    let per_cycle = if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+        32.0
+    } else {
+        8.0
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let per_cycle = 8.0;
+    Some((cores as f64 * mhz * 1e6 * per_cycle, cores, mhz, per_cycle))
+}
+
+/// The step as a fraction of the machine's peak: its FLOPs counted, the median of 20 more steps
+/// timed (after criterion's warm-up and samples), against [`peak_flops`].
+fn arithmetic_rate(
+    set: &sinew_host::aim::TrainingSet,
+    config: &AimConfig,
+    norm: [f32; 4],
+    device: &burn::tensor::Device,
+    mut net: sinew_host::aim::model::AimNet,
+    optim: &mut burn::optim::ModuleOptimizer,
+) {
+    let mut seconds = Vec::new();
+    let mut flops = Vec::new();
+    for step in 10_000..10_020 {
+        flops.push(step_flops(
+            step_rows(set, config, step),
+            config,
+            set.shapes.len(),
+        ));
+        let start = std::time::Instant::now();
+        let (n, terms) = step_once(net, optim, set, config, norm, step, device);
+        let _ = sinew_host::training::nn::to_vec(terms);
+        seconds.push(start.elapsed().as_secs_f64());
+        net = n;
+    }
+    seconds.sort_by(f64::total_cmp);
+    let median = seconds[seconds.len() / 2];
+    let per_step = flops.iter().sum::<f64>() / flops.len() as f64;
+    println!(
+        "aim/train_step: {:.2} GFLOP a step (matrix products, forward and backward), median {:.1} ms of 20 steps: {:.1} GFLOP/s",
+        per_step * 1e-9,
+        median * 1e3,
+        per_step / median * 1e-9
+    );
+    if let Some((peak, cores, mhz, per_cycle)) = peak_flops() {
+        println!(
+            "aim/train_step: {:.1} % of the peak {:.1} GFLOP/s ({cores} cores × {:.3} GHz × {per_cycle} FLOP a cycle)",
+            100.0 * per_step / median / peak,
+            peak * 1e-9,
+            mhz * 1e-3
+        );
+    }
 }
 
 /// The activation alone, forward and backward over one 4096×256 layer: burn's element-wise `sin`

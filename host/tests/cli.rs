@@ -377,3 +377,57 @@ fn flags_beat_the_environment_which_beats_the_default() {
     assert!(bones(&["--templates", s(&b)], &[("SINEW_DATA", s(&a))]).contains(s(&b)));
     assert!(ok(&["bones", "fit", "--help"]).contains("SINEW_DATA"));
 }
+
+/// Accuracy targets that cannot be met or make no sense are refused before any work, naming the
+/// option.
+#[test]
+fn train_aim_refuses_targets_that_make_no_sense() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a.sinew");
+    let report = dir.path().join("a.json");
+    for (flags, says) in [
+        (
+            &["--target-mean", "-0.1"][..],
+            "--target-mean -0.1: an error target is a positive number",
+        ),
+        (&["--target-p95", "inf"][..], "--target-p95 inf"),
+        (
+            &["--target-mean", "0.2", "--target-p95", "0.1"][..],
+            "--target-p95 0.1 is below --target-mean 0.2",
+        ),
+        (
+            &["--target-jaw-degrees", "-5"][..],
+            "--target-jaw-degrees -5",
+        ),
+        (&["--check-every", "0"][..], "--check-every 0"),
+    ] {
+        let mut args = vec![
+            "train",
+            "aim",
+            "--data",
+            "no-such-kit",
+            "--out",
+            s(&out),
+            "--report",
+            s(&report),
+        ];
+        args.extend_from_slice(flags);
+        let e = err(&args);
+        assert!(e.contains(says), "{flags:?}: {e}");
+        assert!(!out.exists() && !report.exists());
+    }
+    let e = err(&[
+        "train",
+        "aim",
+        "--data",
+        "no-such-kit",
+        "--out",
+        s(&out),
+        "--report",
+        s(&report),
+        "--no-target",
+        "--target-mean",
+        "0.2",
+    ]);
+    assert!(e.contains("--no-target"), "{e}");
+}

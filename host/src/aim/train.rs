@@ -243,6 +243,33 @@ fn draw(set: &TrainingSet, config: &AimConfig, step: usize) -> Draw {
     }
 }
 
+/// How many network rows step `step` evaluates: the distinct sample points (every network), the
+/// symmetry term's points (B, twice: the point and its mirror), and the forehead's and the jaw
+/// term's points (K). What a step's arithmetic is counted from (the `aim_train_step` benchmark's
+/// FLOPs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StepRows {
+    /// Distinct sample points, each through all five networks.
+    pub distinct: usize,
+    /// Symmetry points, each through B at the point and at its mirror image.
+    pub symmetry: usize,
+    /// Forehead points (K).
+    pub forehead: usize,
+    /// Jaw-constrained points (K), 0 without L_J.
+    pub jaw: usize,
+}
+
+/// The rows step `step` of a run of `config` on `set` evaluates ([`StepRows`]).
+pub fn step_rows(set: &TrainingSet, config: &AimConfig, step: usize) -> StepRows {
+    let d = draw(set, config, step);
+    StepRows {
+        distinct: distinct_points(&d.points, set.vertices()).0.len(),
+        symmetry: d.symmetry.len(),
+        forehead: d.forehead.len(),
+        jaw: d.jaw.len(),
+    }
+}
+
 /// The distinct entries of `points` (vertex indices below `vertices`) in order of first
 /// appearance, and for each entry its position in that list.
 fn distinct_points(points: &[u32], vertices: usize) -> (Vec<u32>, Vec<i64>) {

@@ -191,16 +191,16 @@ pub(crate) enum Edit {
 #[derive(Debug, Args)]
 pub(crate) struct TargetArgs {
     /// Stop once the mean per-vertex error over the training shapes is at most this (mm).
-    #[arg(long, default_value_t = Target::default().mean_mm)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = Target::default().mean_mm)]
     target_mean: f64,
     /// ... and its 95th percentile at most this (mm).
-    #[arg(long, default_value_t = Target::default().p95_mm)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = Target::default().p95_mm)]
     target_p95: f64,
     /// ... and jawOpen's learned jaw moved by at most this since the last check (degrees).
-    #[arg(long, default_value_t = Target::default().jaw_settle_degrees)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = Target::default().jaw_settle_degrees)]
     target_jaw_settle: f64,
     /// ... and jawOpen's learned jaw turns by at least this (degrees; 0: no least opening).
-    #[arg(long, default_value_t = Target::default().jaw_degrees)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = Target::default().jaw_degrees)]
     target_jaw_degrees: f64,
     /// Steps between two accuracy checks.
     #[arg(long, default_value_t = Target::default().every)]

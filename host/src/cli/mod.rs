@@ -100,8 +100,8 @@ enum Command {
 
 #[derive(Debug, Subcommand)]
 enum Train {
-    /// Learn an AIM actor from ICT-FaceKit blendshapes.
-    Aim(aim::TrainAim),
+    /// Learn an AIM actor from ICT-FaceKit blendshapes or a studio's rig, to an accuracy.
+    Aim(Box<aim::TrainAim>),
     /// Train S2D-Dec on pairs from `sinew data s2d-pairs` under a cross-validation protocol,
     /// bake each fold's model, and compare it with the PCA baselines on the held-out pairs
     /// (report JSON, and a cumulative-error PNG beside it).
@@ -139,7 +139,7 @@ enum Eval {
 pub(crate) fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Demo(args) => aim::demo(args),
-        Command::Train(Train::Aim(args)) => aim::train(args),
+        Command::Train(Train::Aim(args)) => aim::train(*args),
         Command::Train(Train::S2d(args)) => s2d::train(args),
         Command::Train(Train::Motion(args)) => motion::train(args),
         Command::Train(Train::Driver(args)) => driver::train(args),
