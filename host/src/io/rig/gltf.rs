@@ -109,6 +109,7 @@ fn parse(path: &Path) -> Result<Parsed, RigReadError> {
     // The policy above decided on every required extension; the crate's validation knows only
     // its own few, so it checks the rest of the file without them.
     json.extensions_required.clear();
+    positions_in_range(&json).map_err(invalid)?;
     let document = gltf::Document::from_json(json).map_err(|e| match e {
         gltf::Error::Validation(list) => invalid(
             list.iter()
@@ -125,6 +126,28 @@ fn parse(path: &Path) -> Result<Parsed, RigReadError> {
         blob: parsed.blob,
         extensions,
     })
+}
+
+/// Every primitive's `POSITION` names an accessor of the file. The crate's validation checks
+/// every other index of the document, but reads the `POSITION` accessor's bounds by indexing,
+/// so a file whose index lies past the accessors would panic there instead of being refused.
+fn positions_in_range(json: &gltf::json::Root) -> Result<(), String> {
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(index) = primitive.attributes.get(&position)
+                && index.value() >= json.accessors.len()
+            {
+                return Err(format!(
+                    "meshes[{m}].primitives[{p}].attributes[\"POSITION\"]: accessor {} is past \
+                     the file's {} accessors",
+                    index.value(),
+                    json.accessors.len()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// A mesh's name in messages and reports: its own, else `mesh N`.
