@@ -61,6 +61,9 @@ fn read_edited(name: &str, edit: impl FnOnce(&mut Value)) -> Result<RigFile, Rig
         .unwrap_or_else(|_| panic!("{name}: reading panicked"))
 }
 
+/// An edit of a document's JSON.
+type Edit = Box<dyn FnOnce(&mut Value)>;
+
 /// The indices of the rig's document past the end of their lists: refused, naming the file and
 /// the item.
 #[test]
@@ -70,7 +73,7 @@ fn indices_past_their_lists_are_refused_by_item() {
     assert_eq!(plain.shape_names, ["a", "b"]);
 
     let primitive = "/meshes/0/primitives/0";
-    let cases: Vec<(&str, &str, Box<dyn FnOnce(&mut Value)>)> = vec![
+    let cases: Vec<(&str, &str, Edit)> = vec![
         (
             "position",
             "attributes[\"POSITION\"]: accessor 99",
