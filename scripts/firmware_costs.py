@@ -41,6 +41,10 @@ DRIVER_COST = re.compile(r"^driver cost (\S+) frame (\d+) \(instructions\): (.*)
 DRIVER_HEADER = re.compile(
     r"^sinew-firmware-sim(?:-riscv)?: [^,]+, (\S+): (\d+) vertices, (\d+) shapes, (\d+) landmarks, (\d+) frames"
 )
+LIVE_COST = re.compile(r"^live cost (\S+) frame (\d+) \(instructions\): (.*)$")
+LIVE_HEADER = re.compile(
+    r"^sinew-firmware-sim(?:-riscv)?: [^,]+, (\S+): (\d+) vertices, (\d+) shapes, (\d+) frames, calibrating on (\d+)"
+)
 STACK = re.compile(r"^stack high-water (\d+) bytes")
 
 
@@ -62,7 +66,17 @@ def parse(text: str):
     costs, frames, sizes, stack = {}, {}, {}, None
     current = None
     for line in text.splitlines():
-        if m := DRIVER_HEADER.match(line):
+        if m := LIVE_HEADER.match(line):
+            # Three checks a row (outcome, pose, frame): the step's cost is measured apart
+            # (live_costs), and its checks are kept out of the whole-frame table.
+            current = "live:" + m.group(1)
+            sizes[current] = (int(m.group(2)), int(m.group(3)), int(m.group(4)), int(m.group(5)))
+            frames[current] = []
+        elif m := LIVE_COST.match(line):
+            costs["live:" + m.group(1).rsplit(".", 1)[0]] = dict(
+                kv.split("=") for kv in m.group(3).split()
+            )
+        elif m := DRIVER_HEADER.match(line):
             # Four checks a row of two kinds: its phases are measured apart (driver_costs), and
             # its checks are kept out of the whole-frame table.
             current = "driver:" + m.group(1)
@@ -194,6 +208,18 @@ def main() -> None:
                 f"| {name} (live driver, {k} landmarks → {v:,} vertices, {m} correctives) | {label} | "
                 f"{mil(int(arm_costs[key][phase]))} | {mil(int(rv_costs[key][phase]))} |"
             )
+    live_names = {
+        "calibrate": "one calibration step: the driver on the raw landmarks, the head on the steady landmarks, the offsets taken in",
+        "step": "one live step after the calibration: the driver twice (raw, then calibrated), the head, the offsets taken off, the residual, the jump check",
+    }
+    for key in (a for a in arm_costs if a.startswith("live:")):
+        name = key.removeprefix("live:")
+        v, m, _, n = sizes[f"live:{name}.f32"]
+        for phase, label in live_names.items():
+            lines.append(
+                f"| {name} (live track, calibrating on {n} frames; {v:,} vertices, {m} correctives) | {label} | "
+                f"{mil(int(arm_costs[key][phase]))} | {mil(int(rv_costs[key][phase]))} |"
+            )
     lines += [
         "",
         "Whole frames as the replays run them (f32 and fast: pose + normals + hash; q16: pose +",
@@ -205,14 +231,14 @@ def main() -> None:
         "| replay | Cortex-M4F | RISC-V |",
         "|---|---|---|",
     ]
-    for name in (n for n in arm_frames if not n.startswith("driver:")):
+    for name in (n for n in arm_frames if not n.startswith(("driver:", "live:"))):
         a, r = arm_frames[name], rv_frames.get(name, [])
         lines.append(f"| {name} | {mil(sum(a) / len(a))} | {mil(sum(r) / len(r))} |")
     lines += [
         "",
         "Cortex-M4F image (`firmware-sim/cortex-m`, release; both golden actors in flash, the ICT one",
         "with its Q16.16 cache, the golden S2D decoder, the golden motion generator and the golden",
-        "landmark driver with its track; the S2D replay",
+        "landmark driver with its track and its live track; the S2D replay",
         f"decodes in the shared frame arena, {s2d_values:,} of its {ARENA:,} values, the generated",
         f"sequence uses {motion_values:,} of them):",
         "",

@@ -1,5 +1,6 @@
-// Runs the golden AIM and S2D replays, the golden fitted performance and the golden generated
-// sequence compiled to wasm32-unknown-unknown under node.
+// Runs the golden AIM and S2D replays, the golden fitted performance, the golden generated
+// sequence, the golden driver's track and the live track compiled to wasm32-unknown-unknown
+// under node.
 //
 // Usage: node run.mjs [path/to/sinew_firmware_wasm.wasm]
 // Without a path it looks in ../target (run.sh's shared target directory), then ./target.
@@ -112,5 +113,20 @@ console.log(
   `sinew-firmware-wasm: ${driverChecks.length - driverBad}/${driverChecks.length} driven-track checks bit-identical to the host`,
 );
 if (driver !== 0 || driverBad !== 0 || driverChecks.length === 0) {
+  process.exit(1);
+}
+// The live track: three checks a row, the outcome, the pose and the frame (reported as 4:0…).
+const liveStart = frames.length;
+const live = instance.exports.sinew_replay_live() >>> 0;
+if (live === LOAD_ERROR) {
+  console.error("sinew-firmware-wasm: the live track could not load the driver, the actor, the track or the hash list");
+  process.exit(1);
+}
+const liveChecks = frames.slice(liveStart);
+const liveBad = liveChecks.filter((f) => !f.ok).length;
+console.log(
+  `sinew-firmware-wasm: ${liveChecks.length - liveBad}/${liveChecks.length} live-track checks bit-identical to the host`,
+);
+if (live !== 0 || liveBad !== 0 || liveChecks.length === 0) {
   process.exit(1);
 }

@@ -15,6 +15,7 @@ use sinew_core::filter::OneEuro;
 use sinew_core::hash::frame_hash;
 use sinew_core::replay::{FrameCheck, ReplayError};
 
+use crate::track::Track;
 use crate::{Error, Golden, ICT, MAX_VERTICES, Scratch, Summary, summarise};
 
 /// The golden driver's run: `model` is the actor it drives, `replay` the pinned hash list; the
@@ -28,8 +29,23 @@ pub const DRIVER_GOLDENS: [Golden; 1] = [Golden {
     replay: include_bytes!("../../../tests/data/driver-ict.hashes"),
 }];
 
-/// The golden landmark driver of the ICT actor.
+/// The golden landmark driver of the ICT actor. Read only through [`load`]: a `const` places a
+/// copy of its bytes in the image for each function that names it.
 pub const DRIVER: &[u8] = include_bytes!("../../../tests/data/driver-ict.sinew");
+
+/// Validates `model` and the golden driver ([`DRIVER`]) and checks that the driver was trained
+/// for the actor (content hash): the start of the driven and the live runs.
+pub fn load(model: &'static [u8]) -> Result<(AimActor<'static>, Driver<'static>), Error> {
+    let actor = AimActor::from_bytes(model).map_err(Error::Model)?;
+    let driver = Driver::from_bytes(DRIVER).map_err(Error::Model)?;
+    driver.check_actor(model, &actor).map_err(Error::Playback)?;
+    if actor.vertex_count() > MAX_VERTICES {
+        return Err(Error::TooManyVertices {
+            vertices: actor.vertex_count(),
+        });
+    }
+    Ok((actor, driver))
+}
 
 /// The golden track, the OpenFace CSV the hash list's `track` line names.
 pub const DRIVER_TRACK: &[u8] = include_bytes!("../../../tests/data/driver-ict.csv");
@@ -98,72 +114,6 @@ impl DriverList {
     }
 }
 
-/// An OpenFace 2.0 CSV read in place: the columns of the time stamp and of the first x and y.
-#[derive(Clone, Copy, Debug)]
-pub struct Track {
-    text: &'static str,
-    time: usize,
-    x: usize,
-    y: usize,
-    /// Rows after the header.
-    pub rows: usize,
-}
-
-impl Track {
-    /// Finds the `timestamp`, `x_0` and `y_0` columns of the header (`x_1` … follow `x_0`, as
-    /// OpenFace writes them); `None` for text that is not UTF-8 or lacks them.
-    pub fn parse(bytes: &'static [u8]) -> Option<Self> {
-        let text = core::str::from_utf8(bytes).ok()?;
-        let mut lines = text.lines().filter(|l| !l.trim().is_empty());
-        let header = lines.next()?;
-        let column = |name: &str| header.split(',').position(|c| c.trim() == name);
-        let (time, x, y) = (column("timestamp")?, column("x_0")?, column("y_0")?);
-        // The 68th landmark's columns end the runs that start at x_0 and y_0.
-        let named = |c: usize| header.split(',').nth(c).map(str::trim);
-        if named(x + LANDMARKS - 1) != Some("x_67") || named(y + LANDMARKS - 1) != Some("y_67") {
-            return None;
-        }
-        Some(Self {
-            text,
-            time,
-            x,
-            y,
-            rows: lines.count(),
-        })
-    }
-
-    /// Row `row`'s time stamp and its 68 `[u, v]` pixels into `pixels`; `None` if the row is
-    /// missing or a value is not a number.
-    pub fn row(&self, row: usize, pixels: &mut [f32]) -> Option<f32> {
-        let line = self
-            .text
-            .lines()
-            .filter(|l| !l.trim().is_empty())
-            .nth(row + 1)?;
-        let mut time = None;
-        let mut seen = 0;
-        for (c, cell) in line.split(',').enumerate() {
-            let at = if c == self.time {
-                None
-            } else if (self.x..self.x + LANDMARKS).contains(&c) {
-                Some(2 * (c - self.x))
-            } else if (self.y..self.y + LANDMARKS).contains(&c) {
-                Some(2 * (c - self.y) + 1)
-            } else {
-                continue;
-            };
-            // core's parser rounds the decimal text to the nearest f32, as the host's does.
-            let v: f32 = cell.trim().parse().ok()?;
-            match at {
-                None => time = Some(v),
-                Some(i) => *pixels.get_mut(i)? = v,
-            }
-            seen += 1;
-        }
-        (seen == 1 + 2 * LANDMARKS).then_some(time?)
-    }
-}
-
 /// The golden driver in progress: an iterator over every row's four checks, so that a firmware
 /// can time each on its own.
 #[derive(Debug)]
@@ -172,7 +122,7 @@ pub struct DriverRun<'s> {
     driver: Driver<'static>,
     list: DriverList,
     filter: OneEuro,
-    track: Track,
+    track: Track<'static>,
     /// The next check: row `next / 4`, check `next % 4`.
     next: usize,
     time: f32,
@@ -184,22 +134,13 @@ impl<'s> DriverRun<'s> {
     /// trained for the actor (content hash) and that everything fits in `scratch`; the filter
     /// starts reset.
     pub fn new(golden: &Golden, scratch: &'s mut Scratch) -> Result<Self, Error> {
-        let actor = AimActor::from_bytes(golden.model).map_err(Error::Model)?;
-        let driver = Driver::from_bytes(DRIVER).map_err(Error::Model)?;
-        driver
-            .check_actor(golden.model, &actor)
-            .map_err(Error::Playback)?;
+        let (actor, driver) = load(golden.model)?;
         let list = DriverList::parse(golden.replay).ok_or(Error::HashList)?;
-        let track = Track::parse(DRIVER_TRACK).ok_or(Error::Track { row: 0 })?;
+        let track = Track::parse(DRIVER_TRACK, LANDMARKS).ok_or(Error::Track { row: 0 })?;
         let [min_cutoff, beta, d_cutoff] = list.filter;
         // The time-stamped step takes its rate from the stamps; 1 Hz only fills the setting.
         let filter = OneEuro::new(min_cutoff, beta, d_cutoff, 1.0)
             .map_err(|e| Error::Playback(ReplayError::Input(e)))?;
-        if actor.vertex_count() > MAX_VERTICES {
-            return Err(Error::TooManyVertices {
-                vertices: actor.vertex_count(),
-            });
-        }
         if needed(&driver) > scratch.performance.len() {
             return Err(Error::ScratchTooSmall {
                 values: needed(&driver),

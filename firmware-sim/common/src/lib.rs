@@ -41,11 +41,13 @@ extern crate std;
 
 pub mod driver;
 pub mod kernels;
+pub mod live;
 pub mod motion;
 pub mod performance;
 pub mod s2d;
 pub mod suite;
 pub mod target;
+pub mod track;
 
 use core::fmt;
 

@@ -1,12 +1,14 @@
 //! Every golden a target plays, as suites a firmware loops over in one way: the AIM replays
 //! ([`Replay`]), the S2D replay ([`S2dRun`]), the fitted performance ([`PerformanceRun`]) and
-//! the generated sequence ([`MotionRun`]) and the driven track ([`DriverRun`]),
+//! the generated sequence ([`MotionRun`]), the driven track ([`DriverRun`]) and the live run
+//! ([`LiveRun`]),
 //! each started with [`Run::new`], described for the log by its `Display` and played frame by
 //! frame as an iterator.
 
 use core::fmt;
 
 use crate::driver::{DRIVER_GOLDENS, DriverRun};
+use crate::live::{LIVE_GOLDENS, LiveRun};
 use crate::motion::{MOTION_GOLDENS, MotionRun};
 use crate::performance::{PERFORMANCE_GOLDENS, PerformanceRun};
 use crate::s2d::S2dRun;
@@ -25,16 +27,19 @@ pub enum Suite {
     Motion,
     /// The live driver's track ([`DRIVER_GOLDENS`]).
     Driver,
+    /// The live track through the calibration and the lost-frame rules ([`LIVE_GOLDENS`]).
+    Live,
 }
 
 impl Suite {
     /// Every suite, in the order the targets play them.
-    pub const ALL: [Self; 5] = [
+    pub const ALL: [Self; 6] = [
         Self::Aim,
         Self::S2d,
         Self::Performance,
         Self::Motion,
         Self::Driver,
+        Self::Live,
     ];
 
     /// The suite's goldens.
@@ -45,6 +50,7 @@ impl Suite {
             Self::Performance => &PERFORMANCE_GOLDENS,
             Self::Motion => &MOTION_GOLDENS,
             Self::Driver => &DRIVER_GOLDENS,
+            Self::Live => &LIVE_GOLDENS,
         }
     }
 
@@ -56,6 +62,7 @@ impl Suite {
             Self::Performance => "fitted-performance frames",
             Self::Motion => "generated-sequence frames",
             Self::Driver => "driven-track checks",
+            Self::Live => "live-track checks",
         }
     }
 }
@@ -75,6 +82,8 @@ pub enum Run<'s> {
     Motion(MotionRun<'s>),
     /// A driven track.
     Driver(DriverRun<'s>),
+    /// A live track.
+    Live(LiveRun<'s>),
 }
 
 impl<'s> Run<'s> {
@@ -86,6 +95,7 @@ impl<'s> Run<'s> {
             Suite::Performance => Self::Performance(PerformanceRun::new(golden, scratch)?),
             Suite::Motion => Self::Motion(MotionRun::new(golden, scratch)?),
             Suite::Driver => Self::Driver(DriverRun::new(golden, scratch)?),
+            Suite::Live => Self::Live(LiveRun::new(golden, scratch)?),
         })
     }
 }
@@ -135,6 +145,18 @@ impl fmt::Display for Run<'_> {
                 sinew_core::driver::LANDMARKS,
                 r.rows()
             ),
+            Self::Live(r) => {
+                let s = r.settings();
+                write!(
+                    f,
+                    "{} vertices, {} shapes, {} frames, calibrating on {}, 3 checks a frame \
+                     (outcome, pose, frame)",
+                    r.actor().vertex_count(),
+                    r.actor().shape_count(),
+                    r.rows(),
+                    s.calibrate_frames
+                )
+            }
         }
     }
 }
@@ -149,6 +171,7 @@ impl Iterator for Run<'_> {
             Self::Performance(r) => r.next(),
             Self::Motion(r) => r.next(),
             Self::Driver(r) => r.next(),
+            Self::Live(r) => r.next(),
         }
     }
 }

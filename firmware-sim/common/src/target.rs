@@ -10,6 +10,7 @@ use core::fmt;
 
 use crate::driver::{DRIVER_GOLDENS, driver_costs};
 use crate::kernels::{KernelScratch, check_kernels};
+use crate::live::{LIVE_GOLDENS, live_costs};
 use crate::motion::{MOTION_GOLDENS, motion_costs};
 use crate::s2d::s2d_costs;
 use crate::suite::{Run, Suite};
@@ -79,8 +80,8 @@ fn check_kernel_hashes<T: Target>(target: &mut T, kernels: &mut KernelScratch) -
     }
 }
 
-/// The AIM replays, the S2D replay, the fitted performance, the generated sequence and the
-/// driven track, in the same frame buffers, each frame's check and instructions printed: whether
+/// The AIM replays, the S2D replay, the fitted performance, the generated sequence, the
+/// driven track and the live track, in the same frame buffers, each frame's check and instructions printed: whether
 /// every frame matched, or `None` when a golden could not be played.
 fn check_goldens<T: Target>(target: &mut T, scratch: &mut Scratch) -> Option<bool> {
     let mut passed = true;
@@ -160,6 +161,11 @@ fn costs<T: Target>(target: &mut T, scratch: &mut Scratch) -> bool {
         && DRIVER_GOLDENS.iter().all(|g| {
             cost(target, "driver cost", g, |t| {
                 driver_costs(g, f, scratch, || t.now())
+            })
+        })
+        && LIVE_GOLDENS.iter().all(|g| {
+            cost(target, "live cost", g, |t| {
+                live_costs(g, f, scratch, || t.now())
             })
         })
 }
@@ -260,7 +266,13 @@ mod tests {
         }
         // Each frame line carries its count: two calls of `now` apart.
         assert!(host.out.iter().any(|l| l.ends_with("  1 instructions")));
-        for cost in ["cost aim-ict.f32", "s2d cost", "motion cost", "driver cost"] {
+        for cost in [
+            "cost aim-ict.f32",
+            "s2d cost",
+            "motion cost",
+            "driver cost",
+            "live cost",
+        ] {
             assert!(has(cost), "no `{cost}` line");
         }
     }

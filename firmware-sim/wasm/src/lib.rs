@@ -2,7 +2,9 @@
 //! exports [`sinew_replay`], which plays every golden AIM replay, and [`sinew_replay_s2d`], the
 //! golden S2D replay (`tests/data/*.replay.sinew`), and [`sinew_replay_performance`], the golden
 //! fitted performance (`tests/data/fit-ict.sinew`), and [`sinew_replay_motion`], the golden
-//! generated sequence (`tests/data/motion-ict.sinew` through the S2D decoder), with
+//! generated sequence (`tests/data/motion-ict.sinew` through the S2D decoder), and
+//! [`sinew_replay_driver`] and [`sinew_replay_live`], the golden driver's track and live track,
+//! with
 //! `sinew-core` and returns how many frames' hashes differ from those recorded on the x86_64
 //! host. Each frame is also handed to the host through the import `sinew.report`, so `run.mjs`
 //! can print it.
@@ -112,6 +114,17 @@ pub extern "C" fn sinew_replay_motion() -> u32 {
 #[unsafe(no_mangle)]
 pub extern "C" fn sinew_replay_driver() -> u32 {
     play(Suite::Driver, |_| 5000)
+}
+
+/// Plays the golden live track through the calibration and the lost-frame rules (three checks a
+/// row: the outcome, the pose, the frame); returns the number of mismatching checks, or
+/// [`LOAD_ERROR`]. Checks are reported with 4000 added to the row number.
+// Safety: `no_mangle` exports the function under its own name; no other symbol in the module
+// is called `sinew_replay_live`.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn sinew_replay_live() -> u32 {
+    play(Suite::Live, |_| 4000)
 }
 
 /// Runs the core kernel suite on seeded weights; returns the number of cases whose hash differs
