@@ -10,6 +10,7 @@ mod driver;
 mod export;
 mod fit;
 mod motion;
+mod render;
 mod replay;
 mod rig;
 mod s2d;
@@ -96,6 +97,10 @@ enum Command {
     /// through its driver in sinew-core: one OBJ per frame and strip.png; a lost frame holds
     /// the last pose.
     Drive(driver::DriveArgs),
+    /// Photograph a performance's frames through its camera with a lit skin shading that face
+    /// trackers take for a face: frame_00000.png, … and performance.y4m (the video a browser's
+    /// fake camera, ffmpeg or MediaPipe reads).
+    Render(render::RenderArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -172,5 +177,6 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
         Command::Generate(args) => motion::generate(args),
         Command::Interpolate(args) => motion::interpolate(args),
         Command::View(args) => view::run(args),
+        Command::Render(args) => render::run(args),
     }
 }

@@ -1,5 +1,6 @@
 //! Files in and out: meshes (OBJ, PLY), the ICT-FaceKit reader, ARKit captures (Live Link Face CSV), landmark tracks (OpenFace 2.0 CSV), performance folders, the `.sinew` writer and
-//! inspector, the data-set folders (manifest and numbers), the real-data folder, a baked S2D decoder's template face, and atomic outputs. The lowest layer of the host: it imports
+//! inspector, the data-set folders (manifest and numbers), the real-data folder, a baked S2D decoder's template face, atomic outputs, and
+//! `y4m` video. The lowest layer of the host: it imports
 //! nothing else of the crate.
 
 pub mod arkit;
@@ -17,3 +18,4 @@ pub mod openface;
 pub mod performance;
 pub mod rig;
 pub mod units;
+pub mod y4m;
