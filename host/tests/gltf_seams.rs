@@ -5,6 +5,7 @@
 mod common;
 
 use common::gltf::{Gltf, axis_angle, golden, pose_gltf};
+use common::procedural_actor;
 use gltf_json as json;
 use sinew_core::aim::AimActor;
 use sinew_host::aim::play::Frame;
@@ -41,30 +42,6 @@ fn seamed(mesh: &mut sinew_host::io::mesh::Mesh) {
     }
     mesh.uvs = uvs;
     mesh.polygon_uvs = corners;
-}
-
-/// An untrained actor of the procedural face with `metadata` (its caches are whatever the
-/// network gives: the export's layout, not the learning, is under test).
-fn procedural_actor(
-    set: &sinew_host::aim::TrainingSet,
-    metadata: Vec<(String, String)>,
-) -> Vec<u8> {
-    use sinew_host::aim::bake::{BakeInput, bake};
-    let config = sinew_host::aim::testing::small_aim_config(1);
-    let device = sinew_host::training::backend::Backend::Flex
-        .device(0)
-        .unwrap();
-    let net = sinew_host::aim::model::AimNet::new(&config, set.shapes.len(), &device);
-    let triangles = set.template.triangles();
-    let input = BakeInput {
-        points: &set.template.positions,
-        triangles: &triangles,
-        jaw_pivot: set.jaw_pivot,
-        normalisation: sinew_host::aim::model::normalisation(&set.template.positions),
-        playback_only: true,
-        metadata,
-    };
-    bake(&net, &input, &device).unwrap().0
 }
 
 /// Checks an export split at seams against the mesh it came from: `corners` (per exported

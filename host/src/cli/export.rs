@@ -43,6 +43,11 @@ pub(crate) struct GltfArgs {
     /// side, such as `browInnerUp`), for engines that bind ARKit's blendshapes by name.
     #[arg(long, value_enum, default_value_t = NameStyle::Actor)]
     names: NameStyle,
+    /// The glTF or VRM rig the actor was learned from: its other meshes (eyes, teeth),
+    /// materials and textures are carried into the export, so that it replaces the character in
+    /// a scene; the report lists what is not carried.
+    #[arg(long)]
+    rig: Option<PathBuf>,
     /// Make the animation loop: key the first frame again one frame after the last, so that a
     /// repeating engine never jumps (the clip lasts frames / fps).
     #[arg(long = "loop")]
@@ -80,8 +85,13 @@ pub(crate) fn run(cmd: Export) -> Result<()> {
                 },
                 looped: args.looped,
             };
-            let summary =
-                sinew_host::export::gltf::export(&args.model, &args.out, frames, &options)?;
+            let summary = sinew_host::export::gltf::export(
+                &args.model,
+                &args.out,
+                frames,
+                &options,
+                args.rig.as_deref(),
+            )?;
             if !summary.unplayable.is_empty() {
                 eprintln!(
                     "the actor cannot play these capture channels: {}",

@@ -14,6 +14,9 @@
 //!   metadata `uv`, with vertices split at seams (`super::place`).
 //! - Morph target names the actor's, or ARKit's ([`Names`], `super::names`).
 //!
+//! - With the glTF rig the actor was learned from (`--rig`), the rest of the character: its
+//!   other meshes under the head joint, its materials, textures and images (`super::carry`).
+//!
 //! Coordinates are in metres (glTF's unit) from the artefact's `units`; the axes (x to the
 //! actor's left, y up, z forward) are glTF's already.
 //!
@@ -28,169 +31,26 @@
 //! glTF's skin weights lie in [0, 1] where the learned k may stray outside: `super::jaw` makes up
 //! for both, and `training::tolerance::GLTF_RIG` gives what is left.
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use gltf_json as json;
-use json::validation::Checked::Valid;
 use serde::Serialize;
-use sinew_core::FormatError;
 use sinew_core::aim::AimActor;
-use sinew_core::replay::ReplayError;
 
 pub use super::animation::quaternion;
 use super::animation::{Animated, animate};
-use super::jaw::{Compensation, Skin, compensate, shape_deltas};
+pub use super::error::{ExportError, GltfError};
+use super::face::{Shapes, write_bones, write_face, write_skeleton};
 pub use super::jaw::{
     MAX_DIRECTIONS as MAX_JAW_COMPENSATION, TOLERANCE_M as JAW_COMPENSATION_TOLERANCE_M,
     joint_weight, keyed_weight,
 };
 pub use super::names::{Names, Targets};
 use super::place::{Place, PlaceError};
-use crate::aim::arkit::ArkitError;
-use crate::aim::play::{Frame, PoseFile, PoseFileError, corrective_names};
-use crate::geometry::uv::UvError;
-use crate::io::atomic::AtomicWriteError;
-use crate::io::container::ContainerError;
-use crate::io::glb::{Builder, GlbError};
-use crate::io::rig::COMPENSATION_KEY;
+use crate::aim::play::{Frame, PoseFile};
+use crate::io::glb::Builder;
+use crate::io::rig::Scenery;
 use crate::io::units::UnknownUnit;
-
-/// Why `sinew export gltf` failed; every variant names the file.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum ExportError {
-    /// A frame rate that is not a positive number.
-    #[error("--fps must be a positive number, got {fps}")]
-    Fps {
-        /// The rate given.
-        fps: f32,
-    },
-    /// The model or performance file could not be read or is no `.sinew` artefact.
-    #[error(transparent)]
-    Container(#[from] ContainerError),
-    /// The model is not an AIM actor.
-    #[error("{}", path.display())]
-    NotAnActor {
-        /// The model file.
-        path: PathBuf,
-        /// What the core said.
-        #[source]
-        source: FormatError,
-    },
-    /// The pose file is unreadable or does not fit the actor.
-    #[error(transparent)]
-    Poses(#[from] PoseFileError),
-    /// The capture could not be read or mapped onto the actor.
-    #[error(transparent)]
-    Arkit(#[from] ArkitError),
-    /// The performance file is not a fitted performance.
-    #[error("{}: not a fitted performance", path.display())]
-    NotAPerformance {
-        /// The performance file.
-        path: PathBuf,
-        /// What the core said.
-        #[source]
-        source: FormatError,
-    },
-    /// A performance fitted to another actor.
-    #[error("{}", path.display())]
-    OtherActor {
-        /// The performance file.
-        path: PathBuf,
-        /// What the core said.
-        #[source]
-        source: ReplayError,
-    },
-    /// A local fit, whose coefficients glTF's per-mesh morph weights cannot carry.
-    #[error(
-        "{}: a local fit's coefficients vary over the face, which glTF's per-mesh morph \
-         weights cannot carry; fit with --global for an engine, or write the meshes with \
-         sinew play --performance",
-        path.display()
-    )]
-    LocalFit {
-        /// The performance file.
-        path: PathBuf,
-    },
-    /// A performance frame whose coefficients or transforms cannot be read.
-    #[error("{}: frame {frame} unreadable", path.display())]
-    Frame {
-        /// The performance file.
-        path: PathBuf,
-        /// The frame.
-        frame: usize,
-    },
-    /// The actor could not be laid out as glTF.
-    #[error("{}: cannot export", path.display())]
-    Gltf {
-        /// The model file.
-        path: PathBuf,
-        /// Why.
-        #[source]
-        source: GltfError,
-    },
-    /// The `.glb` could not be written.
-    #[error(transparent)]
-    Write(#[from] AtomicWriteError),
-}
-
-/// Why an actor could not be laid out as a glTF rig.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum GltfError {
-    /// The artefact's `units` metadata names no known unit.
-    #[error(transparent)]
-    Units(#[from] UnknownUnit),
-    /// A cache section of the wrong shape or type.
-    #[error("{name}")]
-    Section {
-        /// The section.
-        name: String,
-        /// What the core said.
-        #[source]
-        source: FormatError,
-    },
-    /// The core refused the jaw transform learned for a shape (`train.jaw`).
-    #[error("the jaw transform learned for {shape}")]
-    LearnedJaw {
-        /// The shape.
-        shape: String,
-        /// What the core said.
-        #[source]
-        source: sinew_core::InputError,
-    },
-    /// The core refused a frame's head or jaw (a degenerate or out-of-range transform).
-    #[error("frame {frame}")]
-    Frame {
-        /// The frame.
-        frame: usize,
-        /// What the core said.
-        #[source]
-        source: sinew_core::InputError,
-    },
-    /// The glTF document could not be serialised.
-    #[error(transparent)]
-    Json(#[from] serde_json::Error),
-    /// The container could not be laid out.
-    #[error(transparent)]
-    Glb(#[from] GlbError),
-    /// The actor's record of its rig is broken.
-    #[error(transparent)]
-    Rig(#[from] crate::rig::record::RecordError),
-    /// The actor's texture coordinates (metadata `uv`) do not fit it.
-    #[error(transparent)]
-    Uv(#[from] UvError),
-}
-
-impl From<crate::io::glb::BuildError> for GltfError {
-    fn from(e: crate::io::glb::BuildError) -> Self {
-        match e {
-            crate::io::glb::BuildError::Json(e) => Self::Json(e),
-            crate::io::glb::BuildError::Glb(e) => Self::Glb(e),
-        }
-    }
-}
 
 /// Where the animation's frames come from.
 #[derive(Clone, Copy, Debug)]
@@ -267,6 +127,11 @@ pub struct Summary {
     pub jaw_compensation_residual_mm: f64,
     /// Metres per model unit.
     pub metres_per_unit: f32,
+    /// Meshes carried from the rig beside the face (`--rig`: eyes, teeth).
+    pub carried_meshes: usize,
+    /// What the rig has that the export does not carry (`--rig`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub dropped: Vec<String>,
     /// Capture channels the actor cannot play (ARKit frames only).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub unplayable: Vec<String>,
@@ -280,6 +145,7 @@ pub fn export(
     out: &Path,
     frames: Frames<'_>,
     options: &Options,
+    rig: Option<&Path>,
 ) -> Result<Summary, ExportError> {
     let fps = options.fps;
     if !(fps.is_finite() && fps > 0.0) {
@@ -299,10 +165,26 @@ pub fn export(
         }
         Frames::Performance(p) => (performance_frames(&bytes, &actor, p)?, Vec::new()),
     };
-    let (glb, mut summary) = glb(&actor, &poses, options).map_err(|source| ExportError::Gltf {
+    let in_model = |source| ExportError::Gltf {
         path: model.to_path_buf(),
         source,
-    })?;
+    };
+    let scenery = match rig {
+        Some(path) if path.is_dir() => {
+            return Err(ExportError::ObjRig {
+                path: path.to_owned(),
+            });
+        }
+        Some(path) => {
+            let record =
+                crate::aim::play::rig_record(&actor).map_err(|e| in_model(GltfError::Rig(e)))?;
+            let mesh = record.as_ref().map(|r| r.mesh.as_str());
+            Some(Scenery::read(path, mesh).map_err(ExportError::Rig)?)
+        }
+        None => None,
+    };
+    let (glb, mut summary) =
+        glb_carrying(&actor, &poses, options, scenery.as_ref()).map_err(in_model)?;
     crate::io::atomic::write(out, &glb)?;
     summary.unplayable = unplayable;
     Ok(summary)
@@ -357,27 +239,6 @@ pub fn metres_per_unit(actor: &AimActor<'_>) -> Result<f32, UnknownUnit> {
     }
 }
 
-fn node(name: &str) -> json::Node {
-    json::Node {
-        name: Some(name.to_string()),
-        ..Default::default()
-    }
-}
-
-/// Unit vertex normals of `positions` (`[V, 3]`); a vertex in no triangle gets +z (glTF requires
-/// unit normals on every vertex).
-fn unit_normals(actor: &AimActor<'_>, positions: &[f32]) -> Vec<f32> {
-    let mut n = vec![0.0; positions.len()];
-    // The buffers have the actor's vertex count, so the core cannot refuse them.
-    let _ = actor.normals(positions, &mut n);
-    for v in n.chunks_exact_mut(3) {
-        if v.iter().all(|x| *x == 0.0) {
-            v[2] = 1.0;
-        }
-    }
-    n
-}
-
 /// The `.glb` bytes of `actor` with an animation of `frames` (none when empty), as `options`
 /// say.
 pub fn glb(
@@ -385,241 +246,48 @@ pub fn glb(
     frames: &[Frame],
     options: &Options,
 ) -> Result<(Vec<u8>, Summary), GltfError> {
-    use json::accessor::{ComponentType, Type};
-    use json::buffer::Target::ArrayBuffer;
-    let v = actor.vertex_count();
-    let m = actor.shape_count();
+    glb_carrying(actor, frames, options, None)
+}
+
+/// [`glb`], carrying the rest of the character (`scenery`: the other meshes, materials and
+/// textures of the glTF rig the actor was learned from; `super::carry`) when given.
+pub fn glb_carrying(
+    actor: &AimActor<'_>,
+    frames: &[Frame],
+    options: &Options,
+    scenery: Option<&Scenery>,
+) -> Result<(Vec<u8>, Summary), GltfError> {
     let scale = metres_per_unit(actor)?;
     let place = Place::of(actor, scale).map_err(|e| match e {
         PlaceError::Rig(e) => GltfError::Rig(e),
         PlaceError::Uv(e) => GltfError::Uv(e),
     })?;
-    let v_out = place.vertices();
-    let file = actor.file();
-    let section = |name: &str, shape: &[u32]| {
-        file.f32_tensor(name, shape)
-            .map_err(|source| GltfError::Section {
-                name: name.to_string(),
-                source,
-            })
-    };
-    let (v32, m32) = (v as u32, m as u32);
-    let correctives = section("cache.e", &[v32, m32, 3])?;
-    let rest: Vec<f32> = actor.rest().iter().collect();
-    let skin = Skin::of(actor, &correctives);
-    let shape_names = corrective_names(actor);
-    // Every shape's target is undone by its own learned jaw, which the core's rule gives it
-    // alone at weight 1 (`sinew_core::jaw`).
-    let learned: Vec<(usize, [f32; 9])> = actor.learned_jaws().map_or_else(Vec::new, |jaws| {
-        (0..jaws.shape_count())
-            .map(|s| (s, jaws.shape(s)))
-            .collect()
-    });
-    let deltas =
-        shape_deltas(actor, &skin, &learned).map_err(|(s, source)| GltfError::LearnedJaw {
-            shape: shape_names[s].clone(),
-            source,
-        })?;
-    let compensation = if frames.is_empty() {
-        Compensation::default()
-    } else {
-        compensate(actor, &skin, &deltas, frames, f64::from(scale))
-            .map_err(|(frame, source)| GltfError::Frame { frame, source })?
-    };
+    let shapes = Shapes::of(actor, frames, scale, options.names)?;
     let mut b = Builder::new();
-
-    // Base mesh.
-    let normals = unit_normals(actor, &rest);
-    let positions = place.points(&place.spread(&rest, 3));
-    let normals_out = place.normals(&place.spread(&normals, 3));
-    let pos = b.floats(&positions, Type::Vec3, true, Some(ArrayBuffer));
-    let nrm = b.floats(&normals_out, Type::Vec3, false, Some(ArrayBuffer));
-    let indices = b.indices(place.triangles());
-    let uvs = place
-        .uvs()
-        .map(|uv| b.floats(&uv, Type::Vec2, false, Some(ArrayBuffer)));
-
-    // Skin weights: k on the jaw (joint 1), 1 − k on the head (joint 0). A vertex wholly on one
-    // joint names only that joint, since glTF's validator warns of joints used with zero weight.
-    let mut weights = Vec::with_capacity(4 * v);
-    let mut joint_ids = Vec::with_capacity(4 * v);
-    let (mut clamped, mut max_clamp) = (0, 0.0f32);
-    for k in actor.skinning_weights().iter() {
-        let w = joint_weight(k);
-        if w != k {
-            clamped += 1;
-            max_clamp = max_clamp.max((w - k).abs());
-        }
-        let (j, ws) = if w == 0.0 {
-            ([0u8, 0, 0, 0], [1.0, 0.0, 0.0, 0.0])
-        } else if w == 1.0 {
-            ([1, 0, 0, 0], [1.0, 0.0, 0.0, 0.0])
-        } else {
-            ([1, 0, 0, 0], [w, 1.0 - w, 0.0, 0.0])
-        };
-        joint_ids.extend_from_slice(&j);
-        weights.extend_from_slice(&ws);
-    }
-    let joints_view = b.view(&place.spread(&joint_ids, 4), Some(ArrayBuffer));
-    let joints = b.accessor(
-        joints_view,
-        v_out,
-        ComponentType::U8,
-        Type::Vec4,
-        None,
-        None,
-    );
-    let skin_weights = b.floats(
-        &place.spread(&weights, 4),
-        Type::Vec4,
-        false,
-        Some(ArrayBuffer),
-    );
-
-    // Morph targets: each shape's displacement (its corrective compensated for its learned jaw,
-    // `super::jaw`) and the normal change it makes, then each combined ARKit target's
-    // (the sum of its shapes'), then the animation's jaw compensation.
-    let named = Targets::of(&shape_names, options.names);
-    let sums: Vec<Vec<usize>> = (0..m)
-        .map(|j| vec![j])
-        .chain(named.combined.iter().map(|(_, shapes)| shapes.clone()))
-        .collect();
-    let mut targets = Vec::with_capacity(sums.len());
-    let mut shaped = rest.clone();
-    for shapes in &sums {
-        let delta: Vec<f32> = (0..v)
-            .flat_map(|i| (0..3).map(move |c| (i, c)))
-            .map(|(i, c)| shapes.iter().map(|&j| deltas[(i * m + j) * 3 + c]).sum())
-            .collect();
-        for ((s, r), d) in shaped.iter_mut().zip(&rest).zip(&delta) {
-            *s = r + d;
-        }
-        let moved = place.normals(&place.spread(&unit_normals(actor, &shaped), 3));
-        let dn: Vec<f32> = moved.iter().zip(&normals_out).map(|(a, b)| a - b).collect();
-        let dp = place.offsets(&place.spread(&delta, 3));
-        targets.push(json::mesh::MorphTarget {
-            positions: Some(b.floats(&dp, Type::Vec3, true, Some(ArrayBuffer))),
-            normals: Some(b.floats(&dn, Type::Vec3, false, Some(ArrayBuffer))),
-            tangents: None,
-        });
-    }
-    // The compensation moves positions only: its normal change is far below shading's notice.
-    if !compensation.targets.is_empty() {
-        let zeros = b.floats(&vec![0.0; 3 * v_out], Type::Vec3, false, Some(ArrayBuffer));
-        for t in &compensation.targets {
-            let dp = place.offsets(&place.spread(t, 3));
-            targets.push(json::mesh::MorphTarget {
-                positions: Some(b.floats(&dp, Type::Vec3, true, Some(ArrayBuffer))),
-                normals: Some(zeros),
-                tangents: None,
-            });
-        }
-    }
-    let mut names = named.all_names();
-    names.extend((0..compensation.targets.len()).map(super::jaw::target_name));
-    let primitive = |attributes: BTreeMap<_, _>, targets| json::mesh::Primitive {
-        attributes,
-        extensions: None,
-        extras: None,
-        indices: Some(indices),
-        material: None,
-        mode: Valid(json::mesh::Mode::Triangles),
-        targets,
+    let rig = match scenery {
+        Some(scenery) => Some((scenery, rig_transform(actor, scenery)?)),
+        None => None,
     };
-    let skinned = |p, n| {
-        BTreeMap::from([
-            (Valid(json::mesh::Semantic::Positions), p),
-            (Valid(json::mesh::Semantic::Normals), n),
-            (Valid(json::mesh::Semantic::Joints(0)), joints),
-            (Valid(json::mesh::Semantic::Weights(0)), skin_weights),
-        ])
-    };
-    let targets_len = targets.len();
-    let mut face_attributes = skinned(pos, nrm);
-    if let Some(uv) = uvs {
-        face_attributes.insert(Valid(json::mesh::Semantic::TexCoords(0)), uv);
-    }
-    let mut extras = serde_json::json!({ "targetNames": names });
-    if !compensation.targets.is_empty() {
-        extras[COMPENSATION_KEY] = compensation.targets.len().into();
-    }
-    let face = b.root.push(json::Mesh {
-        extensions: None,
-        extras: Some(serde_json::value::to_raw_value(&extras)?),
-        name: Some("face".into()),
-        primitives: vec![primitive(face_attributes, Some(targets))],
-        weights: Some(vec![0.0; targets_len]),
-    });
-
-    // Joints: head (root) and jaw at the pivot.
-    let pivot = actor.jaw_pivot();
-    let pivot_out = place.points(&[pivot.x, pivot.y, pivot.z]);
-    let pivot_m = [pivot_out[0], pivot_out[1], pivot_out[2]];
-    let jaw = b.root.push(json::Node {
-        translation: Some(pivot_m),
-        ..node("jaw")
-    });
-    let head = b.root.push(json::Node {
-        children: Some(vec![jaw]),
-        ..node("head")
-    });
-    #[rustfmt::skip]
-    let ibm: [f32; 32] = [
-        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
-        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0,
-        -pivot_m[0], -pivot_m[1], -pivot_m[2], 1.0,
-    ];
-    let ibm = b.floats(&ibm, Type::Mat4, false, None);
-    let skin = b.root.push(json::Skin {
-        extensions: None,
-        extras: None,
-        inverse_bind_matrices: Some(ibm),
-        joints: vec![head, jaw],
-        name: Some("face".into()),
-        skeleton: Some(head),
-    });
-    let face_node = b.root.push(json::Node {
-        mesh: Some(face),
-        skin: Some(skin),
-        ..node("face")
-    });
-    // A rig's node transform sits above the skeleton, so that the face stands where the rig
-    // stood in its scene.
-    let root = match place.node_transform() {
-        Some(matrix) => b.root.push(json::Node {
-            children: Some(vec![head]),
-            matrix: Some(matrix),
-            ..node("rig")
-        }),
-        None => head,
-    };
-    let mut scene_nodes = vec![root, face_node];
-
+    let face_material = scenery.and_then(super::carry::face_material);
+    let face = write_face(&mut b, actor, &place, &shapes, face_material);
+    let skeleton = write_skeleton(&mut b, actor, &place, &face);
+    let mut scene_nodes = vec![skeleton.root, skeleton.face_node];
     if options.bones {
-        let bone: Vec<f32> = section("cache.b0", &[v32, 3])?.iter().collect();
-        let bn = place.normals(&place.spread(&unit_normals(actor, &bone), 3));
-        let bp = place.points(&place.spread(&bone, 3));
-        let bpos = b.floats(&bp, Type::Vec3, true, Some(ArrayBuffer));
-        let bnrm = b.floats(&bn, Type::Vec3, false, Some(ArrayBuffer));
-        let mesh = b.root.push(json::Mesh {
-            extensions: None,
-            extras: None,
-            name: Some("bones".into()),
-            primitives: vec![primitive(skinned(bpos, bnrm), None)],
-            weights: None,
-        });
-        scene_nodes.push(b.root.push(json::Node {
-            mesh: Some(mesh),
-            skin: Some(skin),
-            ..node("bones")
-        }));
+        scene_nodes.push(write_bones(&mut b, actor, &place, &face, skeleton.skin)?);
     }
-
+    let mut carried = None;
+    if let Some((scenery, transform)) = rig {
+        let (nodes, lists) = super::carry::carry(&mut b, scenery, &transform).ok_or_else(|| {
+            crate::rig::record::RecordError::Invalid("its node transform cannot be inverted".into())
+        })?;
+        attach(&mut b, skeleton.head, nodes);
+        carried = Some(lists);
+    }
     if !frames.is_empty() {
         let nodes = Animated {
-            face: face_node,
-            jaw,
-            head,
+            face: skeleton.face_node,
+            jaw: skeleton.jaw,
+            head: skeleton.head,
         };
         animate(
             &mut b,
@@ -627,10 +295,10 @@ pub fn glb(
             frames,
             options.fps,
             options.looped,
-            named.combined.len(),
-            &compensation.weights,
+            shapes.named.combined.len(),
+            &shapes.compensation.weights,
             &place,
-            pivot_m,
+            skeleton.pivot,
             &nodes,
         )
         .map_err(|(frame, source)| GltfError::Frame { frame, source })?;
@@ -642,35 +310,79 @@ pub fn glb(
         nodes: scene_nodes,
     });
     b.root.scene = Some(scene);
-    let glb = b.finish()?;
+    let glb = match &carried {
+        Some(lists) => b.finish_edited(|doc| lists.apply(doc))?,
+        None => b.finish()?,
+    };
     let summary = Summary {
-        vertices: v_out,
+        vertices: place.vertices(),
         seam_copies: place.seam_copies(),
-        texture_coordinates: uvs.is_some(),
-        morph_targets: targets_len,
-        combined_targets: named.combined.iter().map(|(n, _)| n.clone()).collect(),
+        texture_coordinates: face.uvs,
+        morph_targets: face.targets,
+        combined_targets: shapes
+            .named
+            .combined
+            .iter()
+            .map(|(n, _)| n.clone())
+            .collect(),
         frames: frames.len(),
         keyframes: super::animation::keyframes(frames, options.looped).len(),
-        clamped_weights: clamped,
-        max_clamp,
-        jaw_compensation_targets: compensation.targets.len(),
-        jaw_compensation_directions: compensation.directions,
+        clamped_weights: face.clamped,
+        max_clamp: face.max_clamp,
+        jaw_compensation_targets: shapes.compensation.targets.len(),
+        jaw_compensation_directions: shapes.compensation.directions,
         coefficients_outside_unit: frames
             .iter()
             .flat_map(|f| &f.weights)
             .filter(|&&w| keyed_weight(w) != w)
             .count(),
-        jaw_compensation_residual_mm: compensation.residual_m * 1000.0,
+        jaw_compensation_residual_mm: shapes.compensation.residual_m * 1000.0,
         metres_per_unit: scale,
+        carried_meshes: carried.as_ref().map_or(0, |c| c.meshes),
+        dropped: scenery.map_or_else(Vec::new, |s| s.dropped.clone()),
         unplayable: Vec::new(),
         bytes: glb.len(),
     };
     Ok((glb, summary))
 }
 
+/// The rig's node transform, the scenery checked against the actor: it must be that of the
+/// glTF rig the actor records, with as many skin vertices.
+fn rig_transform(actor: &AimActor<'_>, scenery: &Scenery) -> Result<[[f64; 4]; 4], GltfError> {
+    let mismatch = |what: String| GltfError::Rig(crate::rig::record::RecordError::Invalid(what));
+    let Some(record) = crate::aim::play::rig_record(actor)? else {
+        return Err(mismatch(
+            "the actor was not learned from a rig, so there is no rig to carry".into(),
+        ));
+    };
+    if record.welded.len() != scenery.skin_vertices {
+        return Err(mismatch(format!(
+            "the rig's skin mesh {:?} has {} vertices where the actor's rig had {}",
+            record.mesh,
+            scenery.skin_vertices,
+            record.welded.len()
+        )));
+    }
+    Ok(record.node_transform)
+}
+
+/// Makes `children` children of `parent`.
+fn attach(
+    b: &mut Builder,
+    parent: json::Index<json::Node>,
+    children: Vec<json::Index<json::Node>>,
+) {
+    if children.is_empty() {
+        return;
+    }
+    let node = &mut b.root.nodes[parent.value()];
+    node.children.get_or_insert_with(Vec::new).extend(children);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::container::ContainerError;
 
     #[test]
     fn bad_inputs_are_refused_by_name() {
@@ -690,10 +402,10 @@ mod tests {
             fps: 0.0,
             ..Options::default()
         };
-        let err = export(&model, &out, Frames::None, &zero).unwrap_err();
+        let err = export(&model, &out, Frames::None, &zero, None).unwrap_err();
         assert!(matches!(err, ExportError::Fps { .. }), "{err}");
         let missing = dir.path().join("missing.sinew");
-        let err = export(&missing, &out, Frames::None, &Options::default()).unwrap_err();
+        let err = export(&missing, &out, Frames::None, &Options::default(), None).unwrap_err();
         assert!(
             matches!(&err, ExportError::Container(ContainerError::Read { path, .. }) if *path == missing),
             "{err}"
@@ -704,6 +416,7 @@ mod tests {
             &out,
             Frames::Performance(&model),
             &Options::default(),
+            None,
         )
         .unwrap_err();
         assert!(
@@ -712,8 +425,24 @@ mod tests {
         );
         let poses = dir.path().join("poses.json");
         std::fs::write(&poses, "{\"frames\": [{\"weights\": [1e40]}]}").unwrap();
-        let err = export(&model, &out, Frames::Poses(&poses), &Options::default()).unwrap_err();
+        let err = export(
+            &model,
+            &out,
+            Frames::Poses(&poses),
+            &Options::default(),
+            None,
+        )
+        .unwrap_err();
         assert!(matches!(err, ExportError::Poses(_)), "{err}");
+        let err = export(
+            &model,
+            &out,
+            Frames::None,
+            &Options::default(),
+            Some(dir.path()),
+        )
+        .unwrap_err();
+        assert!(matches!(err, ExportError::ObjRig { .. }), "{err}");
         assert!(!out.exists());
     }
 

@@ -3,6 +3,9 @@
 //! whose actors and pose frames it reads; below the command line.
 
 mod animation;
+mod carry;
+mod error;
+mod face;
 pub mod gltf;
 mod jaw;
 pub mod names;

@@ -132,7 +132,23 @@ impl Builder {
     }
 
     /// The `.glb` bytes: the one buffer declared, the JSON serialised, both chunks laid out.
-    pub fn finish(mut self) -> Result<Vec<u8>, BuildError> {
+    pub fn finish(self) -> Result<Vec<u8>, BuildError> {
+        self.finish_with(None::<fn(&mut serde_json::Value)>)
+    }
+
+    /// [`Builder::finish`], the serialised JSON edited by `edit` first: for what the typed
+    /// document cannot hold as another file wrote it (a rig's materials, their extensions).
+    pub fn finish_edited(
+        self,
+        edit: impl FnOnce(&mut serde_json::Value),
+    ) -> Result<Vec<u8>, BuildError> {
+        self.finish_with(Some(edit))
+    }
+
+    fn finish_with(
+        mut self,
+        edit: Option<impl FnOnce(&mut serde_json::Value)>,
+    ) -> Result<Vec<u8>, BuildError> {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
@@ -143,7 +159,15 @@ impl Builder {
             extensions: None,
             extras: None,
         });
-        let text = json::serialize::to_vec(&self.root)?;
+        // Without an edit the document is serialised as it is, its keys in the crate's order.
+        let text = match edit {
+            None => json::serialize::to_vec(&self.root)?,
+            Some(edit) => {
+                let mut doc = serde_json::to_value(&self.root)?;
+                edit(&mut doc);
+                serde_json::to_vec(&doc)?
+            }
+        };
         Ok(write(&text, &self.bin)?)
     }
 }

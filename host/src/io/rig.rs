@@ -11,12 +11,14 @@ use std::path::Path;
 mod file;
 mod gltf;
 mod obj;
+mod scenery;
 mod write;
 pub use file::{
     Avatar, DroppedExpression, Expression, ExpressionProblem, ExtensionUse, IDENTITY, RigFile,
     RigFormat, RigReadError, Treatment,
 };
 pub use gltf::COMPENSATION_KEY;
+pub use scenery::{Image, Part, PartPrimitive, Scenery};
 pub use write::RigWriteError;
 
 impl RigFile {
@@ -35,5 +37,20 @@ impl RigFile {
         };
         rig.check()?;
         Ok(rig)
+    }
+}
+
+impl Scenery {
+    /// What the glTF rig at `path` holds besides its skin mesh (the mesh named `mesh`, else the
+    /// one [`RigFile::read`] picks); an OBJ folder or other path is no glTF rig.
+    pub fn read(path: &Path, mesh: Option<&str>) -> Result<Self, RigReadError> {
+        let lower = path.to_string_lossy().to_ascii_lowercase();
+        if [".glb", ".gltf", ".vrm"].iter().any(|e| lower.ends_with(e)) {
+            gltf::scenery(path, mesh)
+        } else {
+            Err(RigReadError::UnknownKind {
+                path: path.to_owned(),
+            })
+        }
     }
 }

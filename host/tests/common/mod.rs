@@ -82,3 +82,27 @@ pub fn distances(a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, f64) {
         d.iter().copied().fold(0.0, f64::max),
     )
 }
+
+/// An untrained actor of the procedural face with `metadata` (its caches are whatever the
+/// network gives: the export's layout, not the learning, is under test).
+pub fn procedural_actor(
+    set: &sinew_host::aim::TrainingSet,
+    metadata: Vec<(String, String)>,
+) -> Vec<u8> {
+    use sinew_host::aim::bake::{BakeInput, bake};
+    let config = sinew_host::aim::testing::small_aim_config(1);
+    let device = sinew_host::training::backend::Backend::Flex
+        .device(0)
+        .unwrap();
+    let net = sinew_host::aim::model::AimNet::new(&config, set.shapes.len(), &device);
+    let triangles = set.template.triangles();
+    let input = BakeInput {
+        points: &set.template.positions,
+        triangles: &triangles,
+        jaw_pivot: set.jaw_pivot,
+        normalisation: sinew_host::aim::model::normalisation(&set.template.positions),
+        playback_only: true,
+        metadata,
+    };
+    bake(&net, &input, &device).unwrap().0
+}

@@ -6,15 +6,16 @@
 //! `target_N`; a VRM avatar's shapes are its expressions instead. Quantised attributes
 //! (`KHR_mesh_quantization`) are dequantised, meshopt-compressed views decoded, sparse accessors
 //! applied, and the node transforms above the mesh multiplied out (skinned meshes sit in their
-//! bind pose, where the spec ignores the node's transform). Other meshes (eyes, teeth) are not
-//! read, nor the targets a Sinew export adds to compensate its animation
-//! (`extras.sinewCompensationTargets`, the last N).
+//! bind pose, where the spec ignores the node's transform). Other meshes (eyes, teeth), materials
+//! and images are read only for an export to carry ([`scenery`]). The targets a Sinew export
+//! adds to compensate its animation (`extras.sinewCompensationTargets`, the last N) are not read.
 
 use std::path::Path;
 
 use gltf::mesh::Mode;
 
 use super::file::{Avatar, ExtensionUse, IDENTITY, RigFile, RigFormat, RigReadError};
+use super::scenery::{Image, Part, PartPrimitive, Scenery, image_type};
 use crate::io::mesh::Mesh;
 use crate::io::units::Unit;
 
@@ -68,6 +69,186 @@ pub(super) fn read(path: &Path, wanted: Option<&str>) -> Result<RigFile, RigRead
         units: Some(Unit::Metre),
         extensions,
         avatar,
+    })
+}
+
+/// What the glTF rig at `path` holds besides its skin mesh (`wanted`, else the one [`read`]
+/// picks): the other meshes in their scene place, the materials and what they use.
+pub(super) fn scenery(path: &Path, wanted: Option<&str>) -> Result<Scenery, RigReadError> {
+    let Parsed {
+        document,
+        json,
+        blob,
+        ..
+    } = parse(path)?;
+    let data = Data::load(path, &document, blob)?;
+    let avatar = vrm::Expressions::read(path, &json, &document)?;
+    let skin = skin_mesh(path, &document, wanted, avatar.as_ref())?;
+    let invalid = |reason: String| RigReadError::Gltf {
+        path: path.to_owned(),
+        reason,
+    };
+    let raw: serde_json::Value =
+        serde_json::from_slice(&json).map_err(|e| invalid(e.to_string()))?;
+    let list = |key: &str| -> Vec<serde_json::Value> {
+        raw.get(key)
+            .and_then(serde_json::Value::as_array)
+            .cloned()
+            .unwrap_or_default()
+    };
+    let mut dropped = Vec::new();
+    let skin_materials: std::collections::BTreeSet<Option<usize>> =
+        skin.primitives().map(|p| p.material().index()).collect();
+    if skin_materials.len() > 1 {
+        dropped.push(format!(
+            "the materials of {}'s primitives after the first (the face is one primitive)",
+            name_of(&skin)
+        ));
+    }
+    let mut skin_vertices = 0;
+    for p in skin.primitives() {
+        skin_vertices += p.get(&gltf::Semantic::Positions).map_or(0, |a| a.count());
+    }
+    let worlds = worlds(&document);
+    let mut parts = Vec::new();
+    for &(n, world) in &worlds {
+        let Some(node) = document.nodes().nth(n) else {
+            continue;
+        };
+        let Some(mesh) = node.mesh().filter(|m| m.index() != skin.index()) else {
+            continue;
+        };
+        let name = node
+            .name()
+            .or(mesh.name())
+            .map_or_else(|| format!("node {n}"), str::to_owned);
+        if target_count(&mesh) > 0 {
+            dropped.push(format!("{name}: its morph targets (carried at rest)"));
+        }
+        if node.skin().is_some() {
+            dropped.push(format!(
+                "{name}: its skin (carried in its bind pose, following the head)"
+            ));
+        }
+        let world = placement(&node, world, &worlds, &data)?;
+        let mut primitives = Vec::new();
+        for (pi, primitive) in mesh.primitives().enumerate() {
+            let attribute = |what: String| RigReadError::Attribute {
+                path: path.to_owned(),
+                mesh: name_of(&mesh),
+                primitive: pi,
+                what,
+            };
+            let Some(position) = primitive.get(&gltf::Semantic::Positions) else {
+                return Err(attribute("no POSITION attribute".into()));
+            };
+            if primitive.mode() != Mode::Triangles {
+                dropped.push(format!(
+                    "{name}: primitive {pi} ({:?}, not triangles)",
+                    primitive.mode()
+                ));
+                continue;
+            }
+            let positions = triples(&data.read(&position, Role::Position)?);
+            let count = positions.len();
+            let triangles = triangles(&primitive, &data, count, 0)
+                .map_err(|e| match e {
+                    Triangles::Read(e) => e,
+                    Triangles::Bad(what) => attribute(what),
+                })?
+                .concat();
+            let normals = match primitive.get(&gltf::Semantic::Normals) {
+                Some(a) => Some(triples(&data.read(&a, Role::Normal)?)),
+                None => None,
+            };
+            let uvs = match primitive.get(&gltf::Semantic::TexCoords(0)) {
+                Some(a) => Some(
+                    data.read(&a, Role::TexCoord)?
+                        .chunks_exact(2)
+                        .map(|c| [c[0], c[1]])
+                        .collect::<Vec<_>>(),
+                ),
+                None => None,
+            };
+            if normals.as_ref().is_some_and(|n| n.len() != count)
+                || uvs.as_ref().is_some_and(|u| u.len() != count)
+            {
+                return Err(attribute(format!(
+                    "NORMAL or TEXCOORD_0 of another length than its {count} positions"
+                )));
+            }
+            primitives.push(PartPrimitive {
+                positions,
+                normals,
+                uvs,
+                triangles,
+                material: primitive.material().index(),
+            });
+        }
+        parts.push(Part {
+            name,
+            world,
+            primitives,
+        });
+    }
+    let mut images = Vec::new();
+    for image in document.images() {
+        let i = image.index();
+        let (bytes, mime) = match image.source() {
+            gltf::image::Source::View { view, mime_type } => {
+                (data.view(&view)?.to_vec(), Some(mime_type.to_owned()))
+            }
+            gltf::image::Source::Uri { uri, mime_type } => (
+                accessor::read_uri(path, i, uri)?,
+                mime_type.map(str::to_owned),
+            ),
+        };
+        let mime_type = match mime.or_else(|| image_type(&bytes).map(str::to_owned)) {
+            Some(m) => m,
+            None => return Err(invalid(format!("image {i}: not PNG, JPEG, WebP or KTX2"))),
+        };
+        images.push(Image {
+            name: image.name().map(str::to_owned),
+            mime_type,
+            bytes,
+        });
+    }
+    let (materials, textures, samplers) = (list("materials"), list("textures"), list("samplers"));
+    let used_text = serde_json::json!([materials, textures, samplers]).to_string();
+    let required = list("extensionsRequired");
+    let mut extensions = Vec::new();
+    for name in list("extensionsUsed")
+        .iter()
+        .filter_map(serde_json::Value::as_str)
+    {
+        if used_text.contains(&format!("\"{name}\"")) {
+            extensions.push((name.to_owned(), required.contains(&name.into())));
+        } else if !matches!(
+            name,
+            "KHR_mesh_quantization" | "EXT_meshopt_compression" | "KHR_meshopt_compression"
+        ) {
+            dropped.push(format!("the extension {name}"));
+        }
+    }
+    for (key, what) in [
+        ("animations", "animation(s)"),
+        ("cameras", "camera(s)"),
+        ("skins", "skin(s) and their joints"),
+    ] {
+        if !list(key).is_empty() {
+            dropped.push(format!("{} {what}", list(key).len()));
+        }
+    }
+    Ok(Scenery {
+        skin_vertices,
+        skin_material: skin.primitives().next().and_then(|p| p.material().index()),
+        parts,
+        materials,
+        textures,
+        samplers,
+        images,
+        extensions,
+        dropped,
     })
 }
 
@@ -392,16 +573,27 @@ fn mul(a: &[[f64; 4]; 4], b: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
 }
 
 /// The scene transform of the first node (depth first from the default scene's roots, else
-/// every scene's) that holds `mesh`; the identity for an unplaced mesh. A skinned mesh is
-/// placed by its skin, where the spec ignores the node's own transform: at rest its first joint's
-/// scene transform times that joint's inverse bind matrix (the identity for most exporters;
-/// `KHR_mesh_quantization`'s dequantisation for a quantised skinned mesh).
+/// every scene's) that holds `mesh`; the identity for an unplaced mesh.
 fn node_transform(
     document: &gltf::Document,
     mesh: usize,
     data: &Data<'_>,
 ) -> Result<[[f64; 4]; 4], RigReadError> {
-    // Each node's scene transform, in depth-first order from the scenes' roots.
+    let worlds = worlds(document);
+    match worlds.iter().find_map(|&(n, w)| {
+        let node = document.nodes().nth(n)?;
+        node.mesh()
+            .is_some_and(|m| m.index() == mesh)
+            .then_some((node, w))
+    }) {
+        Some((node, world)) => placement(&node, world, &worlds, data),
+        None => Ok(IDENTITY),
+    }
+}
+
+/// Each node's scene transform, in depth-first order from the default scene's roots, else
+/// every scene's.
+fn worlds(document: &gltf::Document) -> Vec<(usize, [[f64; 4]; 4])> {
     fn visit(
         node: gltf::Node<'_>,
         parent: [[f64; 4]; 4],
@@ -427,22 +619,29 @@ fn node_transform(
     for root in scenes.iter().flat_map(gltf::Scene::nodes) {
         visit(root, IDENTITY, 0, &mut worlds);
     }
-    let world = |index: usize| worlds.iter().find(|(n, _)| *n == index).map(|(_, w)| *w);
-    let Some((node, placed)) = worlds.iter().find_map(|&(n, w)| {
-        let node = document.nodes().nth(n)?;
-        node.mesh()
-            .is_some_and(|m| m.index() == mesh)
-            .then_some((node, w))
-    }) else {
-        return Ok(IDENTITY);
-    };
+    worlds
+}
+
+/// Where `node`'s mesh stands in the scene: its scene transform `world`, or for a skinned mesh,
+/// whose node's transform the spec ignores, its bind pose: its first joint's scene transform
+/// times that joint's inverse bind matrix (the identity for most exporters;
+/// `KHR_mesh_quantization`'s dequantisation for a quantised skinned mesh).
+fn placement(
+    node: &gltf::Node<'_>,
+    world: [[f64; 4]; 4],
+    worlds: &[(usize, [[f64; 4]; 4])],
+    data: &Data<'_>,
+) -> Result<[[f64; 4]; 4], RigReadError> {
     let Some(skin) = node.skin() else {
-        return Ok(placed);
+        return Ok(world);
     };
     let Some(joint) = skin.joints().next() else {
         return Ok(IDENTITY);
     };
-    let joint_world = world(joint.index()).unwrap_or(IDENTITY);
+    let joint_world = worlds
+        .iter()
+        .find(|(n, _)| *n == joint.index())
+        .map_or(IDENTITY, |(_, w)| *w);
     let inverse_bind = match skin.inverse_bind_matrices() {
         Some(accessor) => {
             let m = data.read(&accessor, Role::InverseBind)?;

@@ -25,6 +25,8 @@ pub(super) enum Role {
     Position,
     /// `TEXCOORD_0`.
     TexCoord,
+    /// `NORMAL` (of a mesh carried beside the skin).
+    Normal,
     /// A morph target's `POSITION` (its `k`).
     TargetPosition(usize),
     /// A primitive's indices.
@@ -38,6 +40,7 @@ impl Role {
         match self {
             Self::Position => "POSITION".into(),
             Self::TexCoord => "TEXCOORD_0".into(),
+            Self::Normal => "NORMAL".into(),
             Self::TargetPosition(k) => format!("morph target {k} POSITION"),
             Self::Indices => "indices".into(),
             Self::InverseBind => "inverse bind matrices".into(),
@@ -47,7 +50,7 @@ impl Role {
     /// The accessor type the role needs.
     fn dimensions(self) -> Dimensions {
         match self {
-            Self::Position | Self::TargetPosition(_) => Dimensions::Vec3,
+            Self::Position | Self::Normal | Self::TargetPosition(_) => Dimensions::Vec3,
             Self::TexCoord => Dimensions::Vec2,
             Self::Indices => Dimensions::Scalar,
             Self::InverseBind => Dimensions::Mat4,
@@ -59,6 +62,8 @@ impl Role {
         use DataType::{F32, I8, I16, U8, U16, U32};
         match self {
             Self::Position | Self::TexCoord => !(data == U32 || data == F32 && normalized),
+            // Normals: FLOAT, or normalised BYTE or SHORT.
+            Self::Normal => data == F32 && !normalized || matches!(data, I8 | I16) && normalized,
             // Morph target deltas are signed: FLOAT, BYTE and SHORT, normalised or not.
             Self::TargetPosition(_) => {
                 matches!(data, F32 | I8 | I16) && !(data == F32 && normalized)
@@ -130,7 +135,7 @@ impl<'a> Data<'a> {
     }
 
     /// The bytes of buffer view `view`, decoded where meshopt compressed it.
-    fn view(&self, view: &gltf::buffer::View<'_>) -> Result<&[u8], RigReadError> {
+    pub(super) fn view(&self, view: &gltf::buffer::View<'_>) -> Result<&[u8], RigReadError> {
         let cell = &self.views[view.index()];
         if let Some(bytes) = cell.get() {
             return Ok(bytes);
@@ -370,7 +375,7 @@ fn component(bytes: &[u8], data: DataType, normalized: bool) -> f32 {
 }
 
 /// The bytes of buffer `index` at `uri`: a `data:` URI's payload or a file beside `path`.
-fn read_uri(path: &Path, index: usize, uri: &str) -> Result<Vec<u8>, RigReadError> {
+pub(super) fn read_uri(path: &Path, index: usize, uri: &str) -> Result<Vec<u8>, RigReadError> {
     let bad_uri = || RigReadError::BufferUri {
         path: path.to_owned(),
         buffer: index,
