@@ -65,6 +65,11 @@ pub(crate) struct TrainDriverArgs {
     /// Largest landmark noise drawn, pixels.
     #[arg(long, default_value_t = DriverConfig::default().noise)]
     noise_px: f64,
+    /// A tracker's convention drawn for each sample: smooth offsets of the landmarks from the
+    /// landmark vertices (`sinew data performance --convention`), this root mean square on the
+    /// contour in the actor's unit (0.2: 2 mm on an actor in centimetres; 0: none).
+    #[arg(long, default_value_t = DriverConfig::default().convention_amplitude)]
+    convention_amplitude: f64,
     /// Steps between checkpoints.
     #[arg(long, default_value_t = 1000)]
     checkpoint_every: usize,
@@ -90,6 +95,7 @@ pub(crate) fn train(args: TrainDriverArgs) -> Result<()> {
         lr: args.lr,
         lr_final: args.lr_final,
         noise: args.noise_px,
+        convention_amplitude: args.convention_amplitude,
         ..DriverConfig::default()
     };
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);

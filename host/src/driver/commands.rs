@@ -68,6 +68,15 @@ pub fn train_driver(opts: &TrainDriver) -> Result<TrainDriverReport> {
         config.steps > 0 && config.batch > 0 && config.hidden > 0 && opts.checkpoint_every > 0,
         "steps, batch, hidden units and the checkpoint interval must be positive"
     );
+    for (name, v) in [
+        ("--noise-px", config.noise),
+        ("--convention-amplitude", config.convention_amplitude),
+    ] {
+        ensure!(
+            v.is_finite() && v >= 0.0,
+            "{name} {v}: must be a finite number, 0 or more"
+        );
+    }
     let bytes = container::read(&opts.model)?;
     let actor = container::actor(&opts.model, &bytes)?;
     let vertices = super::landmark_vertices(&opts.model, &actor)?;

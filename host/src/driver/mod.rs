@@ -66,6 +66,10 @@ pub struct DriverConfig {
     pub noise_3d: f64,
     /// Chance that a sample loses a run of 3–10 landmarks to the tracker's shape prior.
     pub dropout: f64,
+    /// A tracker's convention drawn for each sample (`training::tracker::Convention`): its
+    /// contour amplitude in the actor's unit (0: the landmark vertices themselves).
+    #[serde(default)]
+    pub convention_amplitude: f64,
     /// Weight of the pose's own squared error beside the posed vertices' (both normalised).
     pub pose_weight: f64,
 }
@@ -91,6 +95,7 @@ impl Default for DriverConfig {
             noise: 3.0,
             noise_3d: 0.05,
             dropout: 0.2,
+            convention_amplitude: 0.2,
             pose_weight: 0.1,
         }
     }

@@ -1,7 +1,8 @@
 //! What a driver learns from: performances of the actor itself, drawn on the fly. Each sample is
 //! a random pose of the actor (coefficients, the jaw its training shapes move, a head within a
 //! webcam's reach), its 68 landmarks through the core's skinning, seen by a camera of random
-//! focal length with a tracker's noise and dropout, and the pose as the target.
+//! focal length with a tracker's noise and dropout, its landmarks off the vertices by a
+//! tracker's convention drawn for the sample (`training::tracker`), and the pose as the target.
 
 use sinew_core::aim::AimActor;
 use sinew_core::driver::{LANDMARKS, Space, finish_pose};
@@ -12,6 +13,7 @@ use sinew_core::tensor::F32s;
 
 use super::DriverConfig;
 use crate::training::random::Stream;
+use crate::training::tracker::Convention;
 
 /// The identity transform's 9 values.
 const IDENTITY_9: [f32; 9] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0];
@@ -160,12 +162,23 @@ impl Sampler {
         pose.extend(jaw);
         pose.extend(&weights);
         finish_pose(&mut pose);
-        let landmarks = self.landmarks(&pose);
+        let mut landmarks = self.landmarks(&pose);
         // A tracker's lost points fall back on its shape prior: the face at rest, same head.
         let mut rest_pose = pose.clone();
         rest_pose[9..18].copy_from_slice(&IDENTITY_9);
         rest_pose[18..].iter_mut().for_each(|w| *w = 0.0);
-        let prior = self.landmarks(&rest_pose);
+        let mut prior = self.landmarks(&rest_pose);
+        // A tracker's convention: its points off the landmark vertices in the face's frame,
+        // turned with the head (its prior follows it too).
+        if c.convention_amplitude > 0.0 {
+            let convention = Convention::draw(rng, c.convention_amplitude);
+            let turn = sinew_core::rotation::from_6d(&std::array::from_fn(|i| pose[i]));
+            for (l, o) in convention.offsets.iter().enumerate() {
+                let o = turn.mul_vec(Vec3::new(o[0] as f32, o[1] as f32, o[2] as f32));
+                landmarks[l] = landmarks[l] + o;
+                prior[l] = prior[l] + o;
+            }
+        }
         let dropped = if rng.unit() < c.dropout {
             let len = 3 + rng.below(8);
             let first = rng.below(LANDMARKS);
@@ -231,5 +244,74 @@ fn euler(a: f64, b: f64, g: f64) -> Mat3 {
     let col = |j: usize| Vec3::new(m[0][j] as f32, m[1][j] as f32, m[2][j] as f32);
     Mat3 {
         cols: [col(0), col(1), col(2)],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The contour's and the nose-and-eyes' root mean square offset of `a` from `b`.
+    fn offsets(a: &[f32], b: &[f32]) -> (f64, f64) {
+        let d = |l: usize| {
+            (0..3)
+                .map(|c| f64::from(a[3 * l + c] - b[3 * l + c]).powi(2))
+                .sum::<f64>()
+        };
+        let rms = |ls: &mut dyn Iterator<Item = usize>| {
+            let v: Vec<f64> = ls.map(d).collect();
+            (v.iter().sum::<f64>() / v.len() as f64).sqrt()
+        };
+        (rms(&mut (0..17)), rms(&mut (27..48)))
+    }
+
+    #[test]
+    fn each_sample_draws_its_own_convention_off_the_landmark_vertices_and_keeps_its_pose() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/aim-ict.sinew");
+        let bytes = std::fs::read(&path).unwrap();
+        let actor = crate::io::container::actor(&path, &bytes).unwrap();
+        let vertices = super::super::landmark_vertices(&path, &actor).unwrap();
+        // 3D landmarks without noise or dropout: what moves them is the convention alone.
+        let exact = DriverConfig {
+            input: Space::World,
+            noise_3d: 0.0,
+            dropout: 0.0,
+            convention_amplitude: 0.0,
+            ..DriverConfig::default()
+        };
+        let with = DriverConfig {
+            convention_amplitude: 0.4,
+            ..exact.clone()
+        };
+        let (plain, tracked) = (
+            Sampler::new(&actor, &vertices, &exact),
+            Sampler::new(&actor, &vertices, &with),
+        );
+        let (mut r0, mut r1) = (Stream::new(5, 0, 0), Stream::new(5, 0, 0));
+        let mut seen: Vec<Vec<f32>> = Vec::new();
+        let (mut contour, mut steady) = (0.0, 0.0);
+        let n = 20;
+        for _ in 0..n {
+            let (a, b) = (plain.sample(&mut r0), tracked.sample(&mut r1));
+            assert_eq!(
+                a.pose, b.pose,
+                "the convention moves the landmarks, not the pose"
+            );
+            let (c, s) = offsets(&b.input, &a.input);
+            contour += c / f64::from(n);
+            steady += s / f64::from(n);
+            let moved: Vec<f32> = b.input.iter().zip(&a.input).map(|(x, y)| x - y).collect();
+            assert!(!seen.contains(&moved), "a new convention for each sample");
+            seen.push(moved);
+            // The streams stay in step only while both draw the same; resynchronise.
+            r0 = r1.clone();
+        }
+        // 0.4 of the actor's unit (cm: 4 mm) on the contour; the nose and eyes a tenth of it.
+        assert!((0.2..0.8).contains(&contour), "contour {contour}");
+        assert!(
+            steady < 0.2 * contour,
+            "nose and eyes {steady} against {contour}"
+        );
     }
 }
