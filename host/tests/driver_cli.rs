@@ -518,6 +518,36 @@ fn drive_calibrates_reports_lost_frames_and_warns_of_a_moving_calibration() {
         said.contains("warning: the face was not at rest on calibration frames 3 (up to"),
         "{said}"
     );
+    // A calibration through which the face talks (the mouth 30 px down and up in turn): every
+    // frame deviates alike, so the warning names the whole calibration.
+    let mut rows = sinew_host::io::openface::read(Path::new(&track)).unwrap();
+    for (i, row) in rows[..6].iter_mut().enumerate() {
+        let shift = if i % 2 == 0 { 30.0 } else { -30.0 };
+        for l in 48..68 {
+            row.pixels[2 * l + 1] += shift;
+        }
+    }
+    let talking = dir.path().join("talking.csv");
+    std::fs::write(&talking, write_csv(&rows, 30.0)).unwrap();
+    let said = err_or_warn(&[
+        "drive",
+        "--model",
+        &actor,
+        "--driver",
+        &driver,
+        "--landmarks",
+        s(&talking),
+        "--intrinsics",
+        "1200,1200,320,240",
+        "--calibrate-frames",
+        "6",
+        "--out",
+        s(&dir.path().join("talking")),
+    ]);
+    assert!(
+        said.contains("warning: the face was not at rest during the calibration, frames 0-5 ("),
+        "{said}"
+    );
     // Bad settings name their flag and write nothing.
     let refused = dir.path().join("refused");
     for (flags, message) in [

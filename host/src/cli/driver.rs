@@ -227,9 +227,10 @@ fn report_frames(lost: &[usize], missing: &[usize], calibration: Option<Calibrat
             );
         } else if c.deviation > drive::UNSTEADY {
             eprintln!(
-                "warning: the face was not at rest during the calibration (its frames deviate by \
-                 {:.3} face sizes, more than {}): calibrate on frames where the face holds still \
-                 and neutral",
+                "warning: the face was not at rest during the calibration, frames {} (they \
+                 deviate by {:.3} face sizes, more than {}): calibrate on frames where the face \
+                 holds still and neutral",
+                ranges(c.frames),
                 c.deviation,
                 drive::UNSTEADY
             );
