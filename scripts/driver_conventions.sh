@@ -12,7 +12,8 @@
 # driver or performance already there is reused)
 # Environment: SINEW (the binary, default target/debug/sinew under CARGO_TARGET_DIR), SINEW_DATA
 # (the licensed data, default ../shared/data), STEPS (training steps, default the trainer's),
-# AMPLITUDES (the training conventions, default "0 0.2 0.4").
+# AMPLITUDES (the training conventions, default "0 0.2 0.4"). Prints, after the table, each
+# driver's mean head depth raw and calibrated (where a calibration moves the head).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -75,3 +76,18 @@ for d in amplitudes:
     print(f"{d}: failures calibrated: lost {f['lost_frames']}, missing {f['missing_frames']}, "
           f"performing {f['performing_error_mm']:.2f} mm")
 EOF
+python3 - "$out" "${amplitudes[@]}" <<'EOF2'
+import json, sys
+out, amplitudes = sys.argv[1], sys.argv[2:]
+# The head's mean depth (its translation's z, the actor's unit; negative: away from the camera)
+# over the frames after the rest, raw / calibrated: where a calibration moves the head.
+for d in amplitudes:
+    cells = []
+    for p in ("clean", "convention-101", "convention-102", "convention-103"):
+        z = []
+        for k in (0, 30):
+            poses = json.load(open(f"{out}/eval-{d}-{p}-{k}.json"))["poses"][30:]
+            z.append(sum(q[8] for q in poses) / len(poses))
+        cells.append(f"{p} {z[0]:.2f} / {z[1]:.2f}")
+    print(f"{d}: head depth raw / calibrated: " + "; ".join(cells))
+EOF2
