@@ -61,8 +61,13 @@ three_checks=()
   --arkit tests/data/arkit-each.csv --out "$gltf_dir/each" >/dev/null 2>&1
 "$sinew" export gltf --model tests/data/aim-ict.sinew --arkit tests/data/arkit-each.csv \
   --names arkit --out "$gltf_dir/each.glb" >/dev/null 2>&1
-glbs=("$gltf_dir/poses.glb" "$gltf_dir/arkit.glb" "$gltf_dir/each.glb")
-three_checks+=("poses poses.glb 0.01 0.02" "arkit arkit.glb 0.01 0.02" "each each.glb 0.01 0.02")
+# The same capture compressed for the web (--compress: EXT_meshopt_compression, lossless),
+# decoded by three.js's own meshopt decoder.
+"$sinew" export gltf --model tests/data/aim-ict.sinew \
+  --arkit tests/data/arkit-sample.csv --compress --out "$gltf_dir/arkit-compressed.glb" >/dev/null 2>&1
+glbs=("$gltf_dir/poses.glb" "$gltf_dir/arkit.glb" "$gltf_dir/each.glb" "$gltf_dir/arkit-compressed.glb")
+three_checks+=("poses poses.glb 0.01 0.02" "arkit arkit.glb 0.01 0.02" "each each.glb 0.01 0.02"
+  "arkit arkit-compressed.glb 0.01 0.02")
 # A studio rig as `sinew data rig` writes it (morph targets, UVs split at a seam, a node transform),
 # and an actor learned briefly from the same rig as an OBJ folder (texture coordinates per corner),
 # exported in the rig's frame.

@@ -48,6 +48,11 @@ pub(crate) struct GltfArgs {
     /// a scene; the report lists what is not carried.
     #[arg(long)]
     rig: Option<PathBuf>,
+    /// Compress the geometry and animation with EXT_meshopt_compression for web delivery
+    /// (lossless; required, without an uncompressed fallback: three.js and Babylon.js decode
+    /// it, Blender does not).
+    #[arg(long)]
+    compress: bool,
     /// Make the animation loop: key the first frame again one frame after the last, so that a
     /// repeating engine never jumps (the clip lasts frames / fps).
     #[arg(long = "loop")]
@@ -84,6 +89,7 @@ pub(crate) fn run(cmd: Export) -> Result<()> {
                     NameStyle::Arkit => Names::Arkit,
                 },
                 looped: args.looped,
+                compress: args.compress,
             };
             let summary = sinew_host::export::gltf::export(
                 &args.model,

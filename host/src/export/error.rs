@@ -146,6 +146,9 @@ pub enum GltfError {
     /// The container could not be laid out.
     #[error(transparent)]
     Glb(#[from] GlbError),
+    /// The geometry could not be compressed.
+    #[error(transparent)]
+    Compress(#[from] crate::io::glb_compress::CompressError),
     /// The actor's record of its rig is broken.
     #[error(transparent)]
     Rig(#[from] crate::rig::record::RecordError),
@@ -159,6 +162,7 @@ impl From<crate::io::glb::BuildError> for GltfError {
         match e {
             crate::io::glb::BuildError::Json(e) => Self::Json(e),
             crate::io::glb::BuildError::Glb(e) => Self::Glb(e),
+            crate::io::glb::BuildError::Compress(e) => Self::Compress(e),
         }
     }
 }

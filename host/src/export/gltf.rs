@@ -78,6 +78,9 @@ pub struct Options {
     /// Key the first frame again after the last, so that the animation loops without a jump
     /// (`super::animation`).
     pub looped: bool,
+    /// Compress the geometry and animation with `EXT_meshopt_compression`, losslessly
+    /// (`crate::io::glb_compress`).
+    pub compress: bool,
 }
 
 impl Default for Options {
@@ -87,6 +90,7 @@ impl Default for Options {
             bones: false,
             names: Names::Actor,
             looped: false,
+            compress: false,
         }
     }
 }
@@ -310,9 +314,16 @@ pub fn glb_carrying(
         nodes: scene_nodes,
     });
     b.root.scene = Some(scene);
-    let glb = match &carried {
-        Some(lists) => b.finish_edited(|doc| lists.apply(doc))?,
-        None => b.finish()?,
+    let glb = match (&carried, options.compress) {
+        (None, false) => b.finish()?,
+        (carried, compress) => b.finish_as(
+            |doc| {
+                if let Some(c) = carried {
+                    c.apply(doc);
+                }
+            },
+            compress,
+        )?,
     };
     let summary = Summary {
         vertices: place.vertices(),

@@ -132,23 +132,7 @@ impl Builder {
     }
 
     /// The `.glb` bytes: the one buffer declared, the JSON serialised, both chunks laid out.
-    pub fn finish(self) -> Result<Vec<u8>, BuildError> {
-        self.finish_with(None::<fn(&mut serde_json::Value)>)
-    }
-
-    /// [`Builder::finish`], the serialised JSON edited by `edit` first: for what the typed
-    /// document cannot hold as another file wrote it (a rig's materials, their extensions).
-    pub fn finish_edited(
-        self,
-        edit: impl FnOnce(&mut serde_json::Value),
-    ) -> Result<Vec<u8>, BuildError> {
-        self.finish_with(Some(edit))
-    }
-
-    fn finish_with(
-        mut self,
-        edit: Option<impl FnOnce(&mut serde_json::Value)>,
-    ) -> Result<Vec<u8>, BuildError> {
+    pub fn finish(mut self) -> Result<Vec<u8>, BuildError> {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
@@ -159,16 +143,34 @@ impl Builder {
             extensions: None,
             extras: None,
         });
-        // Without an edit the document is serialised as it is, its keys in the crate's order.
-        let text = match edit {
-            None => json::serialize::to_vec(&self.root)?,
-            Some(edit) => {
-                let mut doc = serde_json::to_value(&self.root)?;
-                edit(&mut doc);
-                serde_json::to_vec(&doc)?
-            }
-        };
+        let text = json::serialize::to_vec(&self.root)?;
         Ok(write(&text, &self.bin)?)
+    }
+
+    /// [`Builder::finish`], with the serialised JSON edited by `edit` first (for what the typed
+    /// document cannot hold as another file wrote it: a rig's materials and their extensions),
+    /// then, with `compress`, the geometry compressed with `EXT_meshopt_compression`
+    /// (`super::glb_compress`).
+    pub fn finish_as(
+        self,
+        edit: impl FnOnce(&mut serde_json::Value),
+        compress: bool,
+    ) -> Result<Vec<u8>, BuildError> {
+        let mut doc = serde_json::to_value(&self.root)?;
+        edit(&mut doc);
+        let mut bin = self.bin;
+        if compress {
+            bin = super::glb_compress::compress(&mut doc, &bin)?;
+        }
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        if doc["buffers"].as_array().is_none_or(Vec::is_empty) {
+            doc["buffers"] = serde_json::json!([{}]);
+        }
+        doc["buffers"][0] = serde_json::json!({"byteLength": bin.len()});
+        let text = serde_json::to_vec(&doc)?;
+        Ok(write(&text, &bin)?)
     }
 }
 
@@ -188,6 +190,9 @@ pub enum BuildError {
     /// The container could not be laid out.
     #[error(transparent)]
     Glb(#[from] GlbError),
+    /// The geometry could not be compressed.
+    #[error(transparent)]
+    Compress(#[from] super::glb_compress::CompressError),
 }
 
 /// Why bytes could not be laid out as, or read as, a binary glTF.

@@ -11,6 +11,7 @@ pub mod data;
 pub mod dataset;
 pub mod decoder_face;
 pub mod glb;
+pub mod glb_compress;
 pub mod ict;
 pub mod inspect;
 pub mod mesh;

@@ -17,6 +17,8 @@ import { join } from 'node:path';
 import { parseArgs } from 'node:util';
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+// three.js's own meshopt decoder, for exports written with --compress (EXT_meshopt_compression).
+import { MeshoptDecoder } from 'three/examples/jsm/libs/meshopt_decoder.module.js';
 
 const { values: args } = parseArgs({
   options: {
@@ -59,7 +61,7 @@ let gltf;
 try {
   const bytes = await readFile(args.glb);
   const buffer = bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength);
-  gltf = await new GLTFLoader().parseAsync(buffer, '');
+  gltf = await new GLTFLoader().setMeshoptDecoder(MeshoptDecoder).parseAsync(buffer, '');
 } catch (e) {
   fail(`${args.glb}: three.js cannot load it: ${e.message ?? e}`);
 }
