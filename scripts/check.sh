@@ -39,7 +39,7 @@ cargo test --workspace --locked
 # burn and everything under it a second time.
 sinew="$(cd "${CARGO_TARGET_DIR:-target}" && pwd)/debug/sinew"
 
-step "glTF: the golden ICT actor and a rig actor exported, Khronos validator, and posed by three.js as sinew play poses them"
+step "glTF: the golden ICT actor and a rig actor exported, Khronos validator, and posed by three.js and Blender as sinew play poses them"
 if ! command -v npm >/dev/null; then
   apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq nodejs npm >/dev/null
 fi
@@ -103,6 +103,22 @@ for check in "${three_checks[@]}"; do
   read -r frames glb unit tolerance <<<"$check"
   node host/tests/three/check.mjs --frames "$gltf_dir/$frames" --glb "$gltf_dir/$glb" \
     --obj-unit "$unit" --tolerance-mm "$tolerance"
+done
+# Blender 5 as a Python module (PyPI bpy, pinned in host/tests/blender/requirements.txt: a 357 MiB
+# wheel for CPython 3.11) poses the same exports through its own glTF importer, shape keys
+# clamped to their sliders, as sinew play does (host/tests/blender/check.py). Blender has no
+# meshopt decoder, so the compressed export is left out. SINEW_BPY_VENV names a venv to reuse.
+if ! command -v python3.11 >/dev/null; then
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3.11 python3.11-venv >/dev/null
+fi
+bpy_venv="${SINEW_BPY_VENV:-$gltf_dir/bpy}"
+[ -x "$bpy_venv/bin/python" ] || python3.11 -m venv "$bpy_venv"
+"$bpy_venv/bin/pip" install --quiet --disable-pip-version-check -r host/tests/blender/requirements.txt
+for check in "${three_checks[@]}"; do
+  read -r frames glb unit tolerance <<<"$check"
+  case "$glb" in *compressed*) continue ;; esac
+  "$bpy_venv/bin/python" host/tests/blender/check.py --frames "$gltf_dir/$frames" \
+    --glb "$gltf_dir/$glb" --obj-unit "$unit" --tolerance-mm "$tolerance" 2>&1 | grep -v '| INFO:'
 done
 rm -rf "$gltf_dir"
 
