@@ -89,8 +89,20 @@ if [ -d "$kit" ]; then
     --arkit tests/data/arkit-sample.csv --out "$gltf_dir/rig-arkit" >/dev/null 2>&1
   "$sinew" export gltf --model "$gltf_dir/rig-actor.sinew" --arkit tests/data/arkit-sample.csv \
     --out "$gltf_dir/rig-arkit.glb" >/dev/null 2>&1
-  glbs+=("$gltf_dir/rig.glb" "$gltf_dir/rig-actor.glb" "$gltf_dir/rig-arkit.glb")
-  three_checks+=("rig-actor rig-actor.glb 0.01 0.01" "rig-arkit rig-arkit.glb 0.01 0.02")
+  # A character: the sample rig with a textured eye mesh (host/tests/three/character.mjs), an
+  # actor learned from it, and its export carrying the eyes, material and texture (--rig).
+  node host/tests/three/character.mjs "$gltf_dir/rig.glb" "$gltf_dir/character.glb"
+  "$sinew" train aim --rig "$gltf_dir/character.glb" --templates "$data" \
+    --shapes jawOpen,mouthSmile_L --iterations 20 --quiet \
+    --out "$gltf_dir/character.sinew" --report "$gltf_dir/character.json" >/dev/null
+  "$sinew" play --model "$gltf_dir/character.sinew" \
+    --arkit tests/data/arkit-sample.csv --out "$gltf_dir/character" >/dev/null 2>&1
+  "$sinew" export gltf --model "$gltf_dir/character.sinew" --rig "$gltf_dir/character.glb" \
+    --arkit tests/data/arkit-sample.csv --out "$gltf_dir/character-export.glb" >/dev/null 2>&1
+  glbs+=("$gltf_dir/rig.glb" "$gltf_dir/rig-actor.glb" "$gltf_dir/rig-arkit.glb"
+    "$gltf_dir/character-export.glb")
+  three_checks+=("rig-actor rig-actor.glb 0.01 0.01" "rig-arkit rig-arkit.glb 0.01 0.02"
+    "character character-export.glb 1 0.02")
 elif [ "${SINEW_REQUIRE_DATA:-}" = 1 ]; then
   echo "no ICT-FaceKit at $kit (SINEW_REQUIRE_DATA=1)" >&2
   exit 1

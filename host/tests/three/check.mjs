@@ -57,6 +57,10 @@ async function readObj(path) {
   return { positions, corners };
 }
 
+// three.js's loader reaches for the browser's global `self` when a file has textures (a
+// character carried with --rig); in node the textures then fail to load, which this check,
+// about geometry, does not need.
+globalThis.self ??= globalThis;
 let gltf;
 try {
   const bytes = await readFile(args.glb);
