@@ -11,7 +11,7 @@ use sinew_core::live::{self, Settings};
 use sinew_host::driver::commands::{
     DriveCommand, TrainDriver, drive_command, eval_driver, train_driver,
 };
-use sinew_host::driver::{DriverConfig, drive};
+use sinew_host::driver::{DriverConfig, Tracker, drive};
 use sinew_host::training::backend::Backend;
 
 /// The landmarks a driver reads.
@@ -23,6 +23,10 @@ pub(crate) enum InputArg {
     /// 3D landmarks in the actor's unit and frame.
     #[value(name = "3d")]
     ThreeD,
+    /// MediaPipe Face Mesh's points (2D, at iBUG's 68 places), the actor's found by
+    /// registering MediaPipe's canonical face (--canonical-face).
+    #[value(name = "mediapipe")]
+    MediaPipe,
 }
 
 /// `sinew train driver`'s options.
@@ -38,9 +42,13 @@ pub(crate) struct TrainDriverArgs {
     /// JSON report (settings, landmark vertices, loss per step, time).
     #[arg(long)]
     report: Option<PathBuf>,
-    /// 2D (a webcam tracker's pixels) or 3D landmarks.
+    /// 2D (a webcam tracker's pixels), 3D landmarks, or MediaPipe Face Mesh's.
     #[arg(long, value_enum, default_value_t = InputArg::TwoD)]
     input: InputArg,
+    /// MediaPipe's canonical face (canonical_face_model.obj, 468 vertices, from MediaPipe's
+    /// mediapipe/modules/face_geometry/data), for --input mediapipe.
+    #[arg(long)]
+    canonical_face: Option<PathBuf>,
     /// Continue from this checkpoint folder (same settings and actor).
     #[arg(long)]
     resume: Option<PathBuf>,
@@ -85,8 +93,12 @@ pub(crate) struct TrainDriverArgs {
 pub(crate) fn train(args: TrainDriverArgs) -> Result<()> {
     let config = DriverConfig {
         input: match args.input {
-            InputArg::TwoD => Space::Image,
+            InputArg::TwoD | InputArg::MediaPipe => Space::Image,
             InputArg::ThreeD => Space::World,
+        },
+        tracker: match args.input {
+            InputArg::MediaPipe => Tracker::MediaPipe,
+            InputArg::TwoD | InputArg::ThreeD => Tracker::Ibug,
         },
         seed: args.seed,
         steps: args.steps,
@@ -108,6 +120,7 @@ pub(crate) fn train(args: TrainDriverArgs) -> Result<()> {
         checkpoint_every: args.checkpoint_every,
         backend: args.backend,
         quiet: args.quiet,
+        canonical_face: args.canonical_face,
     })?;
     println!(
         "{}: landmark driver ({} input), {} steps in {:.1} s, final loss {:.4}",
@@ -130,14 +143,16 @@ pub(crate) struct DriveArgs {
     #[arg(long)]
     driver: PathBuf,
     /// The track: an OpenFace 2.0 CSV (x_0…x_67, y_0…y_67 pixels, or for a 3D driver
-    /// X_0…Z_67 millimetres, with confidence and success) or a performance folder (its 2D
-    /// track, or its meshes' landmarks for a 3D driver).
+    /// X_0…Z_67 millimetres, with confidence and success), a performance folder (its 2D
+    /// track, or its meshes' landmarks for a 3D driver), or for a MediaPipe driver a MediaPipe
+    /// Face Mesh track (.jsonl, docs/FIT.md "MediaPipe Face Mesh").
     #[arg(long)]
     landmarks: PathBuf,
     /// Output folder: frame_00000.obj, … and strip.png.
     #[arg(long)]
     out: PathBuf,
-    /// The CSV's camera: focal lengths and principal point in pixels, FX,FY,CX,CY.
+    /// The CSV's camera: focal lengths and principal point in pixels, FX,FY,CX,CY (a
+    /// MediaPipe track without it: a webcam's, the focal length the image's width).
     #[arg(long, value_delimiter = ',')]
     intrinsics: Option<Vec<f32>>,
     /// A CSV row whose confidence is below this is a lost frame (it holds the last pose).
@@ -346,6 +361,14 @@ pub(crate) struct EvalDriverArgs {
     /// A performance folder (`sinew data performance`) on the actor.
     #[arg(long)]
     target: PathBuf,
+    /// A tracker's track of the performance's video (`sinew render`) to drive with instead of
+    /// the performance's own track: a MediaPipe track (.jsonl) or an OpenFace CSV, one frame
+    /// per performance frame.
+    #[arg(long)]
+    landmarks: Option<PathBuf>,
+    /// The track's camera, FX,FY,CX,CY (default: the performance's).
+    #[arg(long, value_delimiter = ',')]
+    intrinsics: Option<Vec<f32>>,
     /// JSON report.
     #[arg(long)]
     report: Option<PathBuf>,
@@ -355,10 +378,12 @@ pub(crate) struct EvalDriverArgs {
 
 /// `sinew eval driver`.
 pub(crate) fn eval(args: EvalDriverArgs) -> Result<()> {
+    let camera = intrinsics(args.intrinsics.as_deref())?;
     let m = eval_driver(
         &args.model,
         &args.driver,
         &args.target,
+        args.landmarks.as_deref().map(|p| (p, camera)),
         args.live.settings()?,
     )?;
     let calibration_frames: Vec<usize> = (m.outcomes.iter().enumerate())

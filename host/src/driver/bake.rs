@@ -57,6 +57,9 @@ pub fn bake(
             "source",
             "sinew train driver: synthetic performances of the actor itself",
         );
+    if config.tracker == super::Tracker::MediaPipe {
+        w.meta(super::mediapipe::META.0, super::mediapipe::META.1);
+    }
     let [lo, hi] = hash_words(inputs.actor_hash);
     w.u32s(MODEL_HASH, &[2], &[lo, hi])?;
     w.u32s(LANDMARK_VERTICES, &[inputs.vertices.len()], inputs.vertices)?;

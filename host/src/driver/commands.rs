@@ -41,6 +41,8 @@ pub struct TrainDriver {
     pub backend: Backend,
     /// No progress bar.
     pub quiet: bool,
+    /// MediaPipe's canonical face, for a driver that reads MediaPipe's points.
+    pub canonical_face: Option<PathBuf>,
 }
 
 /// The report of a run.
@@ -79,7 +81,23 @@ pub fn train_driver(opts: &TrainDriver) -> Result<TrainDriverReport> {
     }
     let bytes = container::read(&opts.model)?;
     let actor = container::actor(&opts.model, &bytes)?;
-    let vertices = super::landmark_vertices(&opts.model, &actor)?;
+    let vertices = match config.tracker {
+        super::Tracker::Ibug => super::landmark_vertices(&opts.model, &actor)?,
+        super::Tracker::MediaPipe => {
+            ensure!(
+                config.input == sinew_core::driver::Space::Image,
+                "a MediaPipe driver reads 2D landmarks"
+            );
+            let face = opts.canonical_face.as_deref().ok_or_else(|| {
+                anyhow!(
+                    "a MediaPipe driver needs MediaPipe's canonical face (--canonical-face \
+                     canonical_face_model.obj, from MediaPipe's \
+                     mediapipe/modules/face_geometry/data)"
+                )
+            })?;
+            super::mediapipe::actor_vertices(&opts.model, &actor, face)?
+        }
+    };
     let sampler = Sampler::new(&actor, &vertices, config);
     let norm = Normalisation::measure(&sampler, config.seed);
     let g = super::metric::gauss_newton(&actor)
@@ -203,9 +221,10 @@ pub fn drive_command(opts: &DriveCommand) -> Result<Driven> {
     let driver_bytes = crate::io::container::read(&opts.driver)?;
     let bound = bind(&opts.model, &actor_bytes, &opts.driver, &driver_bytes)?;
     let placement = super::track::Placement::of(&opts.model, &bound.actor, &bound.driver)?;
-    let track = super::track::read(
+    let track = read_track(
         &opts.landmarks,
-        bound.driver.space(),
+        &driver_bytes,
+        &bound,
         opts.intrinsics,
         opts.min_confidence,
         placement,
@@ -222,12 +241,52 @@ pub fn drive_command(opts: &DriveCommand) -> Result<Driven> {
     Ok(driven)
 }
 
+/// The track at `path` as the driver reads it: a MediaPipe driver's as MediaPipe writes it
+/// (`driver::mediapipe`), another's as `track::read` reads it. A track of the other tracker's
+/// landmarks is refused.
+fn read_track(
+    path: &Path,
+    driver_bytes: &[u8],
+    bound: &super::drive::Bound<'_>,
+    intrinsics: Option<Intrinsics>,
+    min_confidence: f32,
+    placement: super::track::Placement,
+) -> Result<super::track::Track, super::track::TrackError> {
+    use super::track::TrackError;
+    let jsonl = path.extension().is_some_and(|e| e == "jsonl");
+    if super::mediapipe::reads_mediapipe(driver_bytes) {
+        if path.is_dir() || !jsonl {
+            return Err(TrackError::Tracker {
+                path: path.to_owned(),
+                why: "the driver reads MediaPipe Face Mesh's points: give a MediaPipe track \
+                      (.jsonl, docs/FIT.md \"MediaPipe Face Mesh\")",
+            });
+        }
+        return super::mediapipe::read_track(path, intrinsics);
+    }
+    if jsonl {
+        return Err(TrackError::Tracker {
+            path: path.to_owned(),
+            why: "a MediaPipe track for a driver of iBUG's 68 landmarks: train one with \
+                  `sinew train driver --input mediapipe`",
+        });
+    }
+    super::track::read(
+        path,
+        bound.driver.space(),
+        intrinsics,
+        min_confidence,
+        placement,
+    )
+}
+
 /// `sinew eval driver`: the driver on a performance folder against its meshes, under the live
 /// `settings`.
 pub fn eval_driver(
     model: &Path,
     driver: &Path,
     target: &Path,
+    track: Option<(&Path, Option<Intrinsics>)>,
     settings: Settings,
 ) -> Result<DriverMeasure> {
     let actor_bytes = read_actor(model)?;
@@ -242,7 +301,27 @@ pub fn eval_driver(
         bound.actor.vertex_count()
     );
     let placement = super::track::Placement::of(model, &bound.actor, &bound.driver)?;
-    let track = super::track::read(target, bound.driver.space(), None, 0.0, placement)?;
+    let track = match track {
+        Some((path, intrinsics)) => {
+            let intrinsics = intrinsics.or(Some(Intrinsics {
+                fx: perf.manifest.camera.fx,
+                fy: perf.manifest.camera.fy,
+                cx: perf.manifest.camera.cx,
+                cy: perf.manifest.camera.cy,
+            }));
+            let t = read_track(path, &driver_bytes, &bound, intrinsics, 0.0, placement)?;
+            ensure!(
+                t.frames.len() == perf.manifest.frames,
+                "{}: {} frames, the performance {} has {}",
+                path.display(),
+                t.frames.len(),
+                target.display(),
+                perf.manifest.frames
+            );
+            t
+        }
+        None => read_track(target, &driver_bytes, &bound, None, 0.0, placement)?,
+    };
     Ok(measure(
         &bound,
         driver,

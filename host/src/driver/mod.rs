@@ -3,13 +3,15 @@
 //! pass, evaluated by `sinew_core::driver`. `sample`: the training frames drawn from the actor
 //! itself; `train`: the burn network, the Adam loop and its checkpoints; `bake`: the `drv.*`
 //! sections; `track`: landmark tracks (an OpenFace 2.0 CSV, a performance folder's 2D track or
-//! its meshes' 3D landmarks); `drive`: `sinew drive`, tracks played through the core; `measure`:
+//! its meshes' 3D landmarks); `mediapipe`: drivers that read MediaPipe Face Mesh (the
+//! canonical face registered onto the actor, the track as MediaPipe writes it); `drive`: `sinew drive`, tracks played through the core; `measure`:
 //! the driver against the offline fit on held-out performances.
 
 pub mod bake;
 pub mod commands;
 pub mod drive;
 pub mod measure;
+pub mod mediapipe;
 pub mod metric;
 pub mod sample;
 pub mod track;
@@ -72,6 +74,29 @@ pub struct DriverConfig {
     pub convention_amplitude: f64,
     /// Weight of the pose's own squared error beside the posed vertices' (both normalised).
     pub pose_weight: f64,
+    /// The tracker whose landmarks a 2D driver reads: iBUG's 68, or MediaPipe Face Mesh's points
+    /// at their places (`mediapipe::IBUG_POINTS`). Written only for MediaPipe's, so that
+    /// iBUG drivers' settings read as before.
+    #[serde(default, skip_serializing_if = "Tracker::is_ibug")]
+    pub tracker: Tracker,
+}
+
+/// The tracker whose landmarks a driver reads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Tracker {
+    /// iBUG's 68 (OpenFace 2.0, dlib, a performance folder's track).
+    #[default]
+    Ibug,
+    /// MediaPipe Face Mesh (`driver::mediapipe`).
+    MediaPipe,
+}
+
+impl Tracker {
+    /// Whether it is iBUG's 68.
+    pub fn is_ibug(&self) -> bool {
+        *self == Tracker::Ibug
+    }
 }
 
 impl Default for DriverConfig {
@@ -97,6 +122,7 @@ impl Default for DriverConfig {
             dropout: 0.2,
             convention_amplitude: 0.2,
             pose_weight: 0.1,
+            tracker: Tracker::Ibug,
         }
     }
 }
@@ -202,7 +228,7 @@ pub fn landmark_vertices(path: &Path, actor: &AimActor<'_>) -> Result<Vec<u32>, 
 }
 
 /// The index of the point of `points` nearest `p` and its distance (ties to the lower index).
-fn nearest(points: &[V3], p: V3) -> (u32, f64) {
+pub(crate) fn nearest(points: &[V3], p: V3) -> (u32, f64) {
     let (best, d2) = points
         .iter()
         .enumerate()

@@ -38,6 +38,17 @@ pub enum TrackError {
     /// The performance folder is broken (the error names the file).
     #[error(transparent)]
     Performance(#[from] PerformanceError),
+    /// The MediaPipe track is broken (the error names the file, row and point).
+    #[error(transparent)]
+    MediaPipe(#[from] crate::io::mediapipe::MediaPipeError),
+    /// A track of another tracker's landmarks than the driver reads.
+    #[error("{}: {why}", path.display())]
+    Tracker {
+        /// The track.
+        path: PathBuf,
+        /// Which landmarks each has.
+        why: &'static str,
+    },
     /// A CSV track without the camera's intrinsics.
     #[error("{}: an OpenFace track needs the camera's intrinsics (--intrinsics FX,FY,CX,CY)", path.display())]
     NoIntrinsics {
@@ -267,17 +278,24 @@ fn times(path: &Path, rows: &[openface::OpenFaceFrame]) -> Result<Vec<f32>, Trac
         .enumerate()
         .map(|(f, r)| r.timestamp.unwrap_or(f as f32 / DEFAULT_FPS))
         .collect();
+    check_times(path, &times, 2)?;
+    Ok(times)
+}
+
+/// Checks that `times` rise by at least 1 ms from frame to frame; `first_row` is the file's row
+/// (1-based) of frame 0, for the error.
+pub(crate) fn check_times(path: &Path, times: &[f32], first_row: usize) -> Result<(), TrackError> {
     for (i, w) in times.windows(2).enumerate() {
         if w[1] - w[0] < 1e-3 {
             return Err(TrackError::Time {
                 path: path.to_owned(),
-                row: i + 3,
+                row: i + 1 + first_row,
                 time: w[1],
                 last: w[0],
             });
         }
     }
-    Ok(times)
+    Ok(())
 }
 
 /// A performance folder's track: its 2D pixels through its camera, or its meshes' landmark
