@@ -86,14 +86,17 @@ const PNG: &[u8] = b"\x89PNG\r\n\x1a\nimage body of the skin's texture";
 /// The procedural face as a glTF rig: its skin mesh `head` under a turned and moved node, with
 /// a textured material (its texture coordinates transformed by `KHR_texture_transform`), and an
 /// `eyes` mesh of its own material under a parent node.
-fn rig_file(set: &sinew_host::aim::TrainingSet, node_transform: [[f64; 4]; 4]) -> (Value, Vec<u8>) {
+fn rig_file(
+    neutral: &sinew_host::io::mesh::Mesh,
+    node_transform: [[f64; 4]; 4],
+) -> (Value, Vec<u8>) {
     let rig = RigFile {
         path: "head".into(),
         format: RigFormat::Gltf,
         mesh_name: "head".into(),
-        neutral: set.template.clone(),
+        neutral: neutral.clone(),
         shape_names: vec!["a".into()],
-        deltas: vec![vec![[0.0, 0.001, 0.0]; set.template.positions.len()]],
+        deltas: vec![vec![[0.0, 0.001, 0.0]; neutral.positions.len()]],
         node_transform,
         units: Some(Unit::Metre),
         extensions: Vec::new(),
@@ -168,7 +171,7 @@ fn a_glb_rigs_other_meshes_and_materials_come_through_in_place() {
         [1.0, 0.0, 0.0, 0.0],
         [0.3, 1.2, -0.1, 1.0],
     ];
-    let (doc, bin) = rig_file(&set, node_transform);
+    let (doc, bin) = rig_file(&set.template, node_transform);
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("character.glb");
     let text = serde_json::to_vec(&doc).unwrap();
@@ -290,4 +293,301 @@ fn a_glb_rigs_other_meshes_and_materials_come_through_in_place() {
     let actor = AimActor::from_bytes(&plain).unwrap();
     let err = glb_carrying(&actor, &[], &Options::default(), Some(&scenery)).unwrap_err();
     assert!(err.to_string().contains("no rig"), "{err}");
+}
+
+/// Adds a mesh of one triangle at `points` (its node's own coordinates) on a new node `node` (its
+/// JSON: name, transform); returns the node's index.
+fn add_part(doc: &mut Value, bin: &mut Vec<u8>, points: &[[f32; 3]; 3], node: Value) -> usize {
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let bytes: Vec<u8> = points
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let views = doc["bufferViews"].as_array_mut().unwrap();
+    views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}));
+    let view = views.len() - 1;
+    bin.extend_from_slice(&bytes);
+    let lo: Vec<f32> = (0..3)
+        .map(|k| points.iter().map(|p| p[k]).fold(f32::INFINITY, f32::min))
+        .collect();
+    let hi: Vec<f32> = (0..3)
+        .map(|k| {
+            points
+                .iter()
+                .map(|p| p[k])
+                .fold(f32::NEG_INFINITY, f32::max)
+        })
+        .collect();
+    let accessors = doc["accessors"].as_array_mut().unwrap();
+    accessors.push(
+        json!({"bufferView": view, "componentType": 5126, "count": 3,
+        "type": "VEC3", "min": lo, "max": hi}),
+    );
+    let accessor = accessors.len() - 1;
+    let meshes = doc["meshes"].as_array_mut().unwrap();
+    meshes.push(
+        json!({"name": node["name"], "primitives": [{"attributes": {"POSITION": accessor}}]}),
+    );
+    let mut node = node;
+    node["mesh"] = json!(meshes.len() - 1);
+    let nodes = doc["nodes"].as_array_mut().unwrap();
+    nodes.push(node);
+    let index = nodes.len() - 1;
+    doc["buffers"][0]["byteLength"] = json!(bin.len());
+    index
+}
+
+/// Carried meshes that belong to the jaw ride the jaw joint (docs/ENGINES.md, "The rest of the
+/// character"): lower teeth, nearest the face where the actor learned to follow the jaw, and a
+/// mesh the rig hangs on a node named like a jaw; eyes, nearest where it learned to stay, ride
+/// the head. Through an animation that opens the jaw and turns the head, the lower teeth move
+/// as the core's jaw transform moves the face (T_g(T_b(x)), AIM eq. 17 with k = 1) and the eyes
+/// as its head transform, within 1 µm: f32 rounding of node matrices and keyed quaternions.
+#[test]
+fn lower_teeth_follow_the_jaw() {
+    use common::gltf::{Gltf, axis_angle, trs_matrix};
+    use sinew_core::linalg::Vec3;
+    // The golden ICT actor (its learned k follows the jaw about the chin and mouth), recorded
+    // as learned from a glTF rig in metres of its own vertices and triangles.
+    let golden = common::gltf::golden();
+    let learned = AimActor::from_bytes(&golden).unwrap();
+    let v = learned.vertex_count();
+    let scale = 0.01f32;
+    let polygons: Vec<Vec<u32>> = learned
+        .triangles()
+        .indices()
+        .iter()
+        .collect::<Vec<u32>>()
+        .chunks_exact(3)
+        .map(<[u32]>::to_vec)
+        .collect();
+    // The skin node turned a quarter about y and moved; the glTF rig in metres.
+    let node_transform = [
+        [0.0, 0.0, -1.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0, 0.0],
+        [0.3, 1.2, -0.1, 1.0],
+    ];
+    // The rig's own coordinates of a scene point (the node transform is rigid).
+    let own = |q: [f64; 3]| -> [f32; 3] {
+        let m = &node_transform;
+        let d: [f64; 3] = std::array::from_fn(|r| q[r] - m[3][r]);
+        std::array::from_fn(|c| (0..3).map(|r| m[c][r] * d[r]).sum::<f64>() as f32)
+    };
+    let skin = sinew_host::io::mesh::Mesh::new(
+        (0..v)
+            .map(|i| {
+                own(std::array::from_fn(|c| {
+                    f64::from(scale * learned.rest().at(3 * i + c))
+                }))
+            })
+            .collect(),
+        polygons.clone(),
+    );
+    let record = Record {
+        format: "gltf".into(),
+        mesh: "head".into(),
+        units: "m".parse().unwrap(),
+        up: "+y".parse().unwrap(),
+        forward: "+z".parse().unwrap(),
+        node_transform,
+        placement: sinew_host::io::rig::IDENTITY,
+        welded: (0..v as u32).collect(),
+        polygons,
+        uvs: Vec::new(),
+        polygon_uvs: Vec::new(),
+    };
+    let mut writer = sinew_host::io::container::SinewWriter::from_file(learned.file()).unwrap();
+    writer.meta(
+        sinew_host::rig::record::KEY,
+        serde_json::to_string(&record).unwrap(),
+    );
+    let bytes = writer.to_bytes().unwrap();
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    // A face vertex in the exported frame: the rig's own, in metres.
+    let rest = |i: usize| -> [f32; 3] { skin.positions[i] };
+    let k: Vec<f32> = actor
+        .skinning_weights()
+        .iter()
+        .map(sinew_host::export::gltf::joint_weight)
+        .collect();
+    // The vertices with the most and the least jaw, among those with no other vertex within
+    // a millimetre (where the lips meet at rest, an upper lip's vertex stands on a lower's).
+    let alone = |i: usize| {
+        (0..v).all(|j| {
+            j == i || {
+                let (a, b) = (rest(i), rest(j));
+                (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f32>() > 1e-6
+            }
+        })
+    };
+    let by_k = |most: bool| {
+        (0..v)
+            .filter(|&i| alone(i))
+            .max_by(|&a, &b| {
+                let o = k[a].total_cmp(&k[b]);
+                if most { o } else { o.reverse() }
+            })
+            .unwrap()
+    };
+    let (chin, brow) = (by_k(true), by_k(false));
+    assert!(k[chin] > 0.5 && k[brow] < 0.5, "{} {}", k[chin], k[brow]);
+    // Each mesh a triangle 0.1 mm about a face vertex, far nearer it than any other.
+    let about = |i: usize| -> [[f32; 3]; 3] {
+        let p = rest(i);
+        [
+            [p[0] + 1e-4, p[1], p[2] - 1e-4],
+            [p[0] - 1e-4, p[1], p[2] - 1e-4],
+            [p[0], p[1] + 1e-4, p[2] - 1e-4],
+        ]
+    };
+    let (mut doc, mut bin) = rig_file(&skin, node_transform);
+    let flat: Vec<f64> = node_transform.iter().flatten().copied().collect();
+    // The lower teeth and the eyelashes stand in the skin's frame, under the skin's transform;
+    // the tongue hangs below a node named like a jaw, beside the brow where the face learned to
+    // keep still, so that only the rig's hierarchy puts it on the jaw.
+    let teeth = add_part(
+        &mut doc,
+        &mut bin,
+        &about(chin),
+        json!({"name": "teethLower", "matrix": flat}),
+    );
+    let lashes = add_part(
+        &mut doc,
+        &mut bin,
+        &about(brow),
+        json!({"name": "lashes", "matrix": flat}),
+    );
+    let tongue = add_part(&mut doc, &mut bin, &about(brow), json!({"name": "tongue"}));
+    let nodes = doc["nodes"].as_array_mut().unwrap();
+    nodes.push(json!({"name": "Jaw_Bone", "children": [tongue], "matrix": flat}));
+    let jaw_bone = nodes.len() - 1;
+    for n in [teeth, lashes, jaw_bone] {
+        doc["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!(n));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("character.glb");
+    let text = serde_json::to_vec(&doc).unwrap();
+    std::fs::write(&path, sinew_host::io::glb::write(&text, &bin).unwrap()).unwrap();
+    let scenery = Scenery::read(&path, Some("head")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scenery.parts.len(), 4);
+
+    // The jaw opens by up to 0.3 rad and slides, the head turns and moves.
+    let id = sinew_host::aim::model::IDENTITY_9D;
+    let frames: Vec<sinew_host::aim::play::Frame> = (0..4)
+        .map(|f| {
+            let a = f as f64 / 3.0;
+            let mut jaw = [0.0f32; 9];
+            jaw[..6].copy_from_slice(&sinew_core::rotation::to_6d(&axis_angle(
+                [1.0, 0.0, 0.0],
+                0.3 * a,
+            )));
+            jaw[6..].copy_from_slice(&[0.0, -0.2 * a as f32, 0.1 * a as f32]);
+            let mut head = id;
+            head[..6].copy_from_slice(&sinew_core::rotation::to_6d(&axis_angle(
+                [0.0, 1.0, 0.0],
+                -0.2 * a,
+            )));
+            head[6..].copy_from_slice(&[1.0 * a as f32, 0.0, -2.0 * a as f32]);
+            sinew_host::aim::play::Frame {
+                head,
+                jaw,
+                weights: vec![0.5; actor.shape_count()],
+            }
+        })
+        .collect();
+    let (file, summary) =
+        glb_carrying(&actor, &frames, &Options::default(), Some(&scenery)).unwrap();
+    assert_eq!(summary.carried_meshes, 4);
+    let g = Gltf::parse(&file);
+    // The export's frame is the rig's own.
+    let face = g.attribute(gltf_json::mesh::Semantic::Positions);
+    assert_eq!(face.len(), 3 * v);
+    for i in 0..v {
+        for c in 0..3 {
+            assert!(
+                (face[3 * i + c] - f64::from(rest(i)[c])).abs() < 1e-6,
+                "{i}"
+            );
+        }
+    }
+    assert_eq!(summary.carried_on_jaw, ["teethLower", "tongue"]);
+    // The core's transforms act on the face frame: the scene in centimetres.
+    let metres = |x: Vec3| [x.x, x.y, x.z].map(|c| f64::from(c * scale));
+    let centimetres = |p: [f32; 3]| {
+        let q = apply(&node_transform, p);
+        Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) * (1.0 / scale)
+    };
+    let (out_text, _) = sinew_host::io::glb::read(&file).unwrap();
+    let out: Value = serde_json::from_slice(out_text).unwrap();
+    let index = |name: &str| {
+        out["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|n| n["name"] == name)
+            .unwrap()
+    };
+    let animated = [index("head"), index("jaw")];
+    // A node's scene transform at time t: animated joints by their keys, others by their JSON.
+    let world = |node: usize, t: f64| {
+        let mut chain = vec![node];
+        while let Some(parent) = out["nodes"].as_array().unwrap().iter().position(|n| {
+            n["children"]
+                .as_array()
+                .is_some_and(|c| c.contains(&json!(chain[chain.len() - 1])))
+        }) {
+            chain.push(parent);
+        }
+        chain
+            .iter()
+            .rev()
+            .fold(sinew_host::io::rig::IDENTITY, |m, &n| {
+                let own = if animated.contains(&n) {
+                    // `trs_matrix` is row-major; these matrices are column-major.
+                    let (tr, q) = g.trs(n, t);
+                    let m = trs_matrix(tr, q);
+                    std::array::from_fn(|c| std::array::from_fn(|r| m[r][c]))
+                } else {
+                    local(&out["nodes"][n])
+                };
+                mul(&m, &own)
+            })
+    };
+    let mut worst = 0.0f64;
+    for (f, frame) in frames.iter().enumerate() {
+        let t = f64::from(f as f32 / 30.0);
+        let pose = actor.pose_from_9d(&frame.jaw, &frame.head).unwrap();
+        for (name, at, on_jaw) in [
+            ("teethLower", chin, true),
+            ("lashes", brow, false),
+            ("tongue", brow, true),
+        ] {
+            let m = world(index(name), t);
+            for p in about(at) {
+                let x = centimetres(p);
+                let moved = if on_jaw { pose.jaw.apply(x) } else { x };
+                let want = metres(pose.head.apply(moved));
+                let got = apply(&m, p);
+                for c in 0..3 {
+                    worst = worst.max((want[c] - got[c]).abs());
+                }
+            }
+        }
+        if f == 3 {
+            // The open jaw moves the teeth by millimetres: a test that would catch them left
+            // on the head.
+            let x = centimetres(rest(chin));
+            let d = (pose.jaw.apply(x) - x).norm() * scale;
+            assert!(d > 1e-3, "{d} m");
+        }
+    }
+    assert!(worst < 1e-6, "worst {worst} m");
+    eprintln!("carried meshes on the jaw: worst {:.3e} m", worst);
 }

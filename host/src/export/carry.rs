@@ -1,7 +1,8 @@
 //! The rest of a glTF rig's character carried into its actor's export (`--rig`), so that the
 //! file replaces the character in a scene: each other mesh (eyes, teeth) as a child of the head
-//! joint, standing where it stood in the rig's scene at rest and following the head's motion;
-//! the materials, textures, samplers and images as the rig wrote them (their indices kept), and
+//! joint, or of the jaw joint where it belongs to the jaw ([`rides_jaw`]: lower teeth, tongue),
+//! standing where it stood in the rig's scene at rest and following the head's or the jaw's
+//! motion; the materials, textures, samplers and images as the rig wrote them (their indices kept), and
 //! the skin's material on the face. What cannot be carried is listed (`Scenery::dropped`).
 
 use std::collections::BTreeMap;
@@ -22,6 +23,8 @@ pub(super) struct Carried {
     pub extensions: Vec<(String, bool)>,
     /// The meshes carried.
     pub meshes: usize,
+    /// The carried meshes that ride the jaw joint, by name.
+    pub on_jaw: Vec<String>,
 }
 
 impl Carried {
@@ -79,18 +82,84 @@ pub(super) fn face_material(scenery: &Scenery) -> Option<json::Index<json::Mater
         .map(|_| json::Index::new(scenery.materials.len() as u32))
 }
 
-/// Writes `scenery`'s meshes as children of the head joint `head`, whose scene transform at rest
-/// is the rig's node transform `node_transform`; returns their nodes and what the document takes
-/// from the rig. `None` when the node transform cannot be inverted.
+/// The face at rest in the exported frame (the head joint's), as [`rides_jaw`] reads it.
+pub(super) struct FaceRest {
+    /// The actor's rest vertices.
+    pub points: Vec<[f64; 3]>,
+    /// Their jaw skin weights as glTF carries them (the learned k held to [0, 1]).
+    pub k: Vec<f64>,
+    /// The jaw pivot, the jaw joint's rest translation.
+    pub pivot: [f32; 3],
+}
+
+/// The share of the jaw above which a carried mesh rides the jaw joint: a mesh goes where most
+/// of it is.
+pub const JAW_SHARE: f64 = 0.5;
+
+/// Whether a carried mesh whose vertices stand at `points` (exported frame) rides the jaw: the
+/// rig hangs it on a jaw (`on_jaw`), or the mean, over its vertices, of the jaw weight of the
+/// face vertex nearest each exceeds [`JAW_SHARE`]. The nearest face vertex is looked for within
+/// one cell of a grid of an eighth of the face's largest extent (2 cm on a 16 cm face) around
+/// the vertex; a vertex with no face vertex that near counts as the head's. So lower teeth and
+/// a tongue, nearest the lower lip and chin, which the actor learned to follow the jaw, ride
+/// it; eyes, upper teeth and hair, nearest the lids, the upper lip or nothing, stay on the head.
+/// A carried mesh moves rigidly with the joint it rides: teeth and tongue are rigid with the
+/// jaw, and a blend would shear them.
+pub(super) fn rides_jaw(on_jaw: bool, points: &[[f64; 3]], face: &FaceRest) -> bool {
+    use crate::geometry::spatial::{Grid, cell_for};
+    if on_jaw {
+        return true;
+    }
+    if points.is_empty() || face.points.is_empty() {
+        return false;
+    }
+    let grid = Grid::new(&face.points, cell_for(&face.points, 8));
+    let total: f64 = points
+        .iter()
+        .map(|&p| {
+            grid.nearest_where(&face.points, p, |_| true)
+                .map_or(0.0, |(i, _)| face.k[i])
+        })
+        .sum();
+    total / points.len() as f64 > JAW_SHARE
+}
+
+/// `m` applied to the point `p`.
+fn apply(m: &[[f64; 4]; 4], p: [f32; 3]) -> [f64; 3] {
+    std::array::from_fn(|r| (0..3).map(|c| m[c][r] * f64::from(p[c])).sum::<f64>() + m[3][r])
+}
+
+/// The nodes written by [`carry`]: those to hang below the head joint and below the jaw joint.
+pub(super) struct Nodes {
+    /// Children of the head joint.
+    pub head: Vec<json::Index<json::Node>>,
+    /// Children of the jaw joint.
+    pub jaw: Vec<json::Index<json::Node>>,
+}
+
+/// Writes `scenery`'s meshes as children of the head joint, or of the jaw joint where they ride
+/// it ([`rides_jaw`] over `face`), the head's scene transform at rest being the rig's node
+/// transform `node_transform`; returns their nodes and what the document takes from the rig.
+/// `None` when the node transform cannot be inverted.
 pub(super) fn carry(
     b: &mut Builder,
     scenery: &Scenery,
     node_transform: &[[f64; 4]; 4],
-) -> Option<(Vec<json::Index<json::Node>>, Carried)> {
+    face: &FaceRest,
+) -> Option<(Nodes, Carried)> {
     use json::accessor::Type;
     use json::buffer::Target::ArrayBuffer;
     let to_head = inverse(node_transform)?;
-    let mut nodes = Vec::new();
+    // The jaw joint stands at the pivot in the head's frame, unturned: its rest frame is the
+    // head's moved by the pivot.
+    let p = face.pivot.map(f64::from);
+    let mut to_jaw = crate::io::rig::IDENTITY;
+    to_jaw[3] = [-p[0], -p[1], -p[2], 1.0];
+    let mut nodes = Nodes {
+        head: Vec::new(),
+        jaw: Vec::new(),
+    };
+    let mut on_jaw = Vec::new();
     let mut meshes = 0;
     for part in &scenery.parts {
         let mut primitives = Vec::new();
@@ -135,14 +204,27 @@ pub(super) fn carry(
             weights: None,
         });
         meshes += 1;
-        let local = mul(&to_head, &part.world);
+        let in_head = mul(&to_head, &part.world);
+        let points: Vec<[f64; 3]> = part
+            .primitives
+            .iter()
+            .flat_map(|p| p.positions.iter().map(|&x| apply(&in_head, x)))
+            .collect();
+        let jaw = rides_jaw(part.on_jaw, &points, face);
+        let local = if jaw { mul(&to_jaw, &in_head) } else { in_head };
         let matrix: [f32; 16] = std::array::from_fn(|k| local[k / 4][k % 4] as f32);
-        nodes.push(b.root.push(json::Node {
+        let node = b.root.push(json::Node {
             name: Some(part.name.clone()),
             mesh: Some(mesh),
             matrix: Some(matrix),
             ..Default::default()
-        }));
+        });
+        if jaw {
+            nodes.jaw.push(node);
+            on_jaw.push(part.name.clone());
+        } else {
+            nodes.head.push(node);
+        }
     }
     let mut images = Vec::new();
     for image in &scenery.images {
@@ -175,6 +257,7 @@ pub(super) fn carry(
             lists,
             extensions: scenery.extensions.clone(),
             meshes,
+            on_jaw,
         },
     ))
 }

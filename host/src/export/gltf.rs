@@ -15,7 +15,8 @@
 //! - Morph target names the actor's, or ARKit's ([`Names`], `super::names`).
 //!
 //! - With the glTF rig the actor was learned from (`--rig`), the rest of the character: its
-//!   other meshes under the head joint, its materials, textures and images (`super::carry`).
+//!   other meshes under the head joint, or the jaw joint for those that belong to the jaw
+//!   (lower teeth, tongue), its materials, textures and images (`super::carry`).
 //!
 //! Coordinates are in metres (glTF's unit) from the artefact's `units`; the axes (x to the
 //! actor's left, y up, z forward) are glTF's already.
@@ -133,6 +134,10 @@ pub struct Summary {
     pub metres_per_unit: f32,
     /// Meshes carried from the rig beside the face (`--rig`: eyes, teeth).
     pub carried_meshes: usize,
+    /// The carried meshes that ride the jaw joint (lower teeth, tongue), by name; the others
+    /// ride the head (`super::carry::rides_jaw`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub carried_on_jaw: Vec<String>,
     /// What the rig has that the export does not carry (`--rig`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub dropped: Vec<String>,
@@ -281,10 +286,30 @@ pub fn glb_carrying(
     }
     let mut carried = None;
     if let Some((scenery, transform)) = rig {
-        let (nodes, lists) = super::carry::carry(&mut b, scenery, &transform).ok_or_else(|| {
-            crate::rig::record::RecordError::Invalid("its node transform cannot be inverted".into())
-        })?;
-        attach(&mut b, skeleton.head, nodes);
+        let rest: Vec<f32> = (0..3 * actor.vertex_count())
+            .map(|i| actor.rest().at(i))
+            .collect();
+        let face_rest = super::carry::FaceRest {
+            points: place
+                .points(&rest)
+                .chunks_exact(3)
+                .map(|p| [p[0], p[1], p[2]].map(f64::from))
+                .collect(),
+            k: actor
+                .skinning_weights()
+                .iter()
+                .map(|k| f64::from(joint_weight(k)))
+                .collect(),
+            pivot: skeleton.pivot,
+        };
+        let (nodes, lists) = super::carry::carry(&mut b, scenery, &transform, &face_rest)
+            .ok_or_else(|| {
+                crate::rig::record::RecordError::Invalid(
+                    "its node transform cannot be inverted".into(),
+                )
+            })?;
+        attach(&mut b, skeleton.head, nodes.head);
+        attach(&mut b, skeleton.jaw, nodes.jaw);
         carried = Some(lists);
     }
     if !frames.is_empty() {
@@ -350,6 +375,7 @@ pub fn glb_carrying(
         jaw_compensation_residual_mm: shapes.compensation.residual_m * 1000.0,
         metres_per_unit: scale,
         carried_meshes: carried.as_ref().map_or(0, |c| c.meshes),
+        carried_on_jaw: carried.as_ref().map_or_else(Vec::new, |c| c.on_jaw.clone()),
         dropped: scenery.map_or_else(Vec::new, |s| s.dropped.clone()),
         unplayable: Vec::new(),
         bytes: glb.len(),

@@ -131,6 +131,7 @@ pub(super) fn scenery(path: &Path, wanted: Option<&str>) -> Result<Scenery, RigR
             ));
         }
         let world = placement(&node, world, &worlds, &data)?;
+        let on_jaw = on_jaw(&document, &node);
         let mut primitives = Vec::new();
         for (pi, primitive) in mesh.primitives().enumerate() {
             let attribute = |what: String| RigReadError::Attribute {
@@ -189,6 +190,7 @@ pub(super) fn scenery(path: &Path, wanted: Option<&str>) -> Result<Scenery, RigR
             name,
             world,
             primitives,
+            on_jaw,
         });
     }
     let mut images = Vec::new();
@@ -250,6 +252,40 @@ pub(super) fn scenery(path: &Path, wanted: Option<&str>) -> Result<Scenery, RigR
         extensions,
         dropped,
     })
+}
+
+/// Whether the rig hangs `node` on a jaw: it or a node above it is named like a jaw joint
+/// (`jaw` in the name, in any case: `Jaw`, `jaw_bone`, `J_Bip_C_Jaw`), or it is skinned and
+/// every joint of its skin is.
+fn on_jaw(document: &gltf::Document, node: &gltf::Node<'_>) -> bool {
+    let jaw_named = |n: &gltf::Node<'_>| {
+        n.name()
+            .is_some_and(|s| s.to_ascii_lowercase().contains("jaw"))
+    };
+    if let Some(skin) = node.skin() {
+        let mut joints = skin.joints().peekable();
+        if joints.peek().is_some() && joints.all(|j| jaw_named(&j)) {
+            return true;
+        }
+    }
+    // Up the parents; the depth bound keeps a broken (cyclic) node graph finite.
+    let mut at = node.index();
+    for _ in 0..=256 {
+        let Some(n) = document.nodes().nth(at) else {
+            return false;
+        };
+        if jaw_named(&n) {
+            return true;
+        }
+        match document
+            .nodes()
+            .find(|p| p.children().any(|c| c.index() == at))
+        {
+            Some(parent) => at = parent.index(),
+            None => return false,
+        }
+    }
+    false
 }
 
 /// A glTF file parsed and validated.

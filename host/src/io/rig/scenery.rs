@@ -1,7 +1,7 @@
 //! What a glTF rig holds besides its skin, so that an export can carry it: the other meshes
 //! (eyes, teeth, hair) as triangles in their scene place, the materials, textures, samplers and
-//! images as the file wrote them, and the skin's own material; with a list of what cannot be
-//! carried (other skins and their joints, animations, the VRM extension, cameras, lights).
+//! images as the file wrote them, and the skin's own material, and which meshes the rig hangs on
+//! a jaw; with a list of what cannot be carried (other skins and their joints, animations, the VRM extension, cameras, lights).
 
 /// The rest of a glTF rig's character.
 #[derive(Clone, Debug, Default)]
@@ -37,6 +37,9 @@ pub struct Part {
     pub world: [[f64; 4]; 4],
     /// Its triangle primitives.
     pub primitives: Vec<PartPrimitive>,
+    /// Whether the rig puts it on a jaw: its node or a node above it is named like a jaw joint
+    /// (`jaw` in the name, in any case), or every joint of its skin is.
+    pub on_jaw: bool,
 }
 
 /// One primitive of a carried mesh, its accessors read as numbers.
