@@ -591,3 +591,113 @@ fn lower_teeth_follow_the_jaw() {
     assert!(worst < 1e-6, "worst {worst} m");
     eprintln!("carried meshes on the jaw: worst {:.3e} m", worst);
 }
+
+/// A VRM 1.0 avatar's export keeps `VRMC_vrm`: the expressions the actor learned bound to their
+/// exported morph targets, the avatar's `meta`, a humanoid of the head and jaw joints; the
+/// expressions it did not learn listed in `dropped`. Read back as a rig, the export gives the
+/// learned shapes by expression.
+#[test]
+fn a_vrm_avatars_expressions_are_bound_to_the_learned_shapes() {
+    let set = sinew_host::aim::testing::procedural_training_set(8);
+    let v = set.template.positions.len();
+    let (mut doc, bin) = rig_file(&set.template, sinew_host::io::rig::IDENTITY);
+    let skin = doc["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| n["mesh"] == 0)
+        .unwrap();
+    doc["extensionsUsed"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!("VRMC_vrm"));
+    doc["extensions"] = json!({"VRMC_vrm": {"specVersion": "1.0",
+        "meta": {"name": "avatar", "licenseUrl": "https://vrm.dev/licenses/1.0/"},
+        "humanoid": {"humanBones": {"head": {"node": skin}}},
+        "expressions": {
+            "preset": {"aa": {"morphTargetBinds": [{"node": skin, "index": 0, "weight": 1.0}]},
+                       "blink": {"morphTargetBinds": [{"node": skin, "index": 0, "weight": 0.5}]}},
+            "custom": {"jawOpen": {"morphTargetBinds": [{"node": skin, "index": 0, "weight": 0.8}],
+                                   "isBinary": false}}}}});
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("avatar.vrm");
+    let text = serde_json::to_vec(&doc).unwrap();
+    std::fs::write(&path, sinew_host::io::glb::write(&text, &bin).unwrap()).unwrap();
+    let scenery = Scenery::read(&path, Some("head")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(scenery.vrm.is_some());
+
+    // The actor learned `aa` and `jawOpen` (its first two shapes), not `blink`.
+    let mut names = set.names.clone();
+    assert!(names.len() >= 3, "{names:?}");
+    names[1] = "aa".into();
+    names[2] = "jawOpen".into();
+    let record = Record {
+        format: "gltf".into(),
+        mesh: "head".into(),
+        units: "m".parse().unwrap(),
+        up: "+y".parse().unwrap(),
+        forward: "+z".parse().unwrap(),
+        node_transform: sinew_host::io::rig::IDENTITY,
+        placement: sinew_host::io::rig::IDENTITY,
+        welded: (0..v as u32).collect(),
+        polygons: set.template.polygons.clone(),
+        uvs: Vec::new(),
+        polygon_uvs: Vec::new(),
+    };
+    let bytes = procedural_actor(
+        &set,
+        vec![
+            ("units".into(), "m".into()),
+            ("shapes".into(), names.join(",")),
+            (
+                sinew_host::rig::record::KEY.into(),
+                serde_json::to_string(&record).unwrap(),
+            ),
+        ],
+    );
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let (file, summary) = glb_carrying(&actor, &[], &Options::default(), Some(&scenery)).unwrap();
+    let dropped = summary.dropped.join("\n");
+    assert!(dropped.contains("expression blink"), "{dropped}");
+    assert!(!dropped.contains("expression aa"), "{dropped}");
+    assert!(!dropped.contains("VRMC_vrm"), "{dropped}");
+    let (text, _) = sinew_host::io::glb::read(&file).unwrap();
+    let out: Value = serde_json::from_slice(text).unwrap();
+    let vrm = &out["extensions"]["VRMC_vrm"];
+    let face = out["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| n["name"] == "face")
+        .unwrap();
+    assert_eq!(
+        vrm["expressions"]["preset"]["aa"]["morphTargetBinds"],
+        json!([{"node": face, "index": 0, "weight": 1.0}])
+    );
+    assert_eq!(
+        vrm["expressions"]["custom"]["jawOpen"]["morphTargetBinds"][0]["index"],
+        1
+    );
+    assert_eq!(vrm["expressions"]["custom"]["jawOpen"]["isBinary"], false);
+    assert_eq!(vrm["meta"]["name"], "avatar");
+    assert!(
+        out["extensionsUsed"]
+            .as_array()
+            .unwrap()
+            .contains(&json!("VRMC_vrm"))
+    );
+
+    // Read back as a VRM rig: the learned shapes by expression, each its exported target.
+    let again = dir.path().join("export.vrm");
+    std::fs::write(&again, &file).unwrap();
+    let read = RigFile::read(&again, None).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(read.mesh_name, "face");
+    let mut got = read.shape_names.clone();
+    got.sort();
+    assert_eq!(got, ["aa", "jawOpen"]);
+    let avatar = read.avatar.as_ref().unwrap();
+    assert_eq!(avatar.version, "1.0");
+    for e in &avatar.expressions {
+        assert_eq!(e.binds, [(e.name.clone(), 1.0)], "{}", e.name);
+    }
+}

@@ -25,11 +25,16 @@ pub(super) struct Carried {
     pub meshes: usize,
     /// The carried meshes that ride the jaw joint, by name.
     pub on_jaw: Vec<String>,
+    /// Extensions of the document's root (a VRM avatar's `VRMC_vrm`, `super::vrm`), by name.
+    pub root_extensions: Vec<(String, serde_json::Value)>,
 }
 
 impl Carried {
     /// Puts the rig's lists into the finished document's JSON.
     pub(super) fn apply(&self, doc: &mut serde_json::Value) {
+        for (name, value) in &self.root_extensions {
+            doc["extensions"][name.as_str()] = value.clone();
+        }
         for (key, list) in &self.lists {
             if !list.is_empty() {
                 doc[*key] = serde_json::Value::Array(list.clone());
@@ -258,6 +263,7 @@ pub(super) fn carry(
             extensions: scenery.extensions.clone(),
             meshes,
             on_jaw,
+            root_extensions: Vec::new(),
         },
     ))
 }

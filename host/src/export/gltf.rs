@@ -16,7 +16,8 @@
 //!
 //! - With the glTF rig the actor was learned from (`--rig`), the rest of the character: its
 //!   other meshes under the head joint, or the jaw joint for those that belong to the jaw
-//!   (lower teeth, tongue), its materials, textures and images (`super::carry`).
+//!   (lower teeth, tongue), its materials, textures and images (`super::carry`); a VRM 1.0
+//!   avatar's `VRMC_vrm` with its expressions bound to the learned shapes (`super::vrm`).
 //!
 //! Coordinates are in metres (glTF's unit) from the artefact's `units`; the axes (x to the
 //! actor's left, y up, z forward) are glTF's already.
@@ -285,6 +286,7 @@ pub fn glb_carrying(
         scene_nodes.push(write_bones(&mut b, actor, &place, &face, skeleton.skin)?);
     }
     let mut carried = None;
+    let mut vrm_dropped = Vec::new();
     if let Some((scenery, transform)) = rig {
         let rest: Vec<f32> = (0..3 * actor.vertex_count())
             .map(|i| actor.rest().at(i))
@@ -310,6 +312,21 @@ pub fn glb_carrying(
             })?;
         attach(&mut b, skeleton.head, nodes.head);
         attach(&mut b, skeleton.jaw, nodes.jaw);
+        let mut lists = lists;
+        if let Some(vrm) = &scenery.vrm {
+            let shapes: Vec<Option<String>> = (0..actor.shape_count())
+                .map(|j| actor.shape_name(j).map(str::to_owned))
+                .collect();
+            let nodes = super::vrm::Nodes {
+                face: skeleton.face_node.value(),
+                head: skeleton.head.value(),
+                jaw: skeleton.jaw.value(),
+            };
+            let (extension, dropped) = super::vrm::rebind(vrm, &shapes, &nodes);
+            lists.root_extensions.push(("VRMC_vrm".into(), extension));
+            lists.extensions.push(("VRMC_vrm".into(), false));
+            vrm_dropped = dropped;
+        }
         carried = Some(lists);
     }
     if !frames.is_empty() {
@@ -376,7 +393,11 @@ pub fn glb_carrying(
         metres_per_unit: scale,
         carried_meshes: carried.as_ref().map_or(0, |c| c.meshes),
         carried_on_jaw: carried.as_ref().map_or_else(Vec::new, |c| c.on_jaw.clone()),
-        dropped: scenery.map_or_else(Vec::new, |s| s.dropped.clone()),
+        dropped: scenery
+            .map_or_else(Vec::new, |s| s.dropped.clone())
+            .into_iter()
+            .chain(vrm_dropped)
+            .collect(),
         unplayable: Vec::new(),
         bytes: glb.len(),
     };

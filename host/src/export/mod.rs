@@ -10,3 +10,4 @@ pub mod gltf;
 mod jaw;
 pub mod names;
 mod place;
+mod vrm;

@@ -219,11 +219,18 @@ pub(super) fn scenery(path: &Path, wanted: Option<&str>) -> Result<Scenery, RigR
     let used_text = serde_json::json!([materials, textures, samplers]).to_string();
     let required = list("extensionsRequired");
     let mut extensions = Vec::new();
+    let vrm = raw
+        .get("extensions")
+        .and_then(|e| e.get("VRMC_vrm"))
+        .filter(|v| v.is_object())
+        .cloned();
     for name in list("extensionsUsed")
         .iter()
         .filter_map(serde_json::Value::as_str)
     {
-        if used_text.contains(&format!("\"{name}\"")) {
+        if name == "VRMC_vrm" && vrm.is_some() {
+            // Kept by the export, its expressions bound again (`crate::export`).
+        } else if used_text.contains(&format!("\"{name}\"")) {
             extensions.push((name.to_owned(), required.contains(&name.into())));
         } else if !matches!(
             name,
@@ -250,6 +257,7 @@ pub(super) fn scenery(path: &Path, wanted: Option<&str>) -> Result<Scenery, RigR
         samplers,
         images,
         extensions,
+        vrm,
         dropped,
     })
 }

@@ -24,6 +24,9 @@ pub struct Scenery {
     /// Extensions the materials and textures use (`KHR_texture_transform`,
     /// `KHR_materials_emissive_strength`, …), with whether the file required each.
     pub extensions: Vec<(String, bool)>,
+    /// A VRM 1.0 avatar's `VRMC_vrm` extension as the file wrote it, for the export to keep
+    /// with its expressions bound again to the learned shapes.
+    pub vrm: Option<serde_json::Value>,
     /// What the rig has that is not carried, one line each.
     pub dropped: Vec<String>,
 }
