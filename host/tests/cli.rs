@@ -430,4 +430,23 @@ fn train_aim_refuses_targets_that_make_no_sense() {
         "0.2",
     ]);
     assert!(e.contains("--no-target"), "{e}");
+    // A prior that is not an actor, or missing, is refused naming the file, before any work.
+    let not_actor = dir.path().join("prior.sinew");
+    std::fs::write(&not_actor, b"SINEW but not really").unwrap();
+    for prior in [not_actor, dir.path().join("missing.sinew")] {
+        let e = err(&[
+            "train",
+            "aim",
+            "--data",
+            "no-such-kit",
+            "--out",
+            s(&out),
+            "--report",
+            s(&report),
+            "--prior",
+            s(&prior),
+        ]);
+        assert!(e.contains(s(&prior)), "{e}");
+        assert!(!out.exists() && !report.exists());
+    }
 }

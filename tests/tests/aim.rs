@@ -311,3 +311,133 @@ fn training_stops_at_its_target_and_says_why() {
     assert_eq!(again.state.steps_done, checks[first].step);
     assert_eq!(again.state.checks.len(), first + 1);
 }
+
+/// A run started from a prior begins exactly where the prior ended (its networks, normalisation
+/// and jaw transforms, shape by shape by name, in any order); a prior that cannot start the run
+/// (other network sizes or units, no networks, not an actor) is refused naming the file.
+#[test]
+fn a_prior_starts_a_run_where_it_ended() {
+    use sinew_host::aim::prior::{Prior, PriorError};
+    use sinew_host::aim::target::measure;
+    let _serial = SERIAL
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let set = small_set();
+    let config = tiny_config(30);
+    let dir = tempfile::tempdir().unwrap();
+    let trained = train(&set, &config, &aim_train_options(dir.path(), false, None)).unwrap();
+    let bake_with = |playback_only: bool| {
+        let tri = set.template.triangles();
+        let input = BakeInput {
+            points: &set.template.positions,
+            triangles: &tri,
+            jaw_pivot: set.jaw_pivot,
+            normalisation: trained.state.normalisation,
+            playback_only,
+            metadata: sinew_host::aim::bake::metadata(&set, &config).unwrap(),
+        };
+        let device = Backend::Flex.device(0).unwrap();
+        bake(&trained.model, &input, &device).unwrap().0
+    };
+    let path = dir.path().join("prior.sinew");
+    std::fs::write(&path, bake_with(false)).unwrap();
+    let prior = Prior::read(&path).unwrap();
+    assert_eq!(prior.normalisation, trained.state.normalisation);
+    let device = Backend::Flex.device(config.seed).unwrap();
+    let units = set.units.name();
+    let fresh_jaw = vec![sinew_host::aim::model::IDENTITY_9D; set.names.len() - 1];
+    let start = prior
+        .start(&config, &set.names, units, &fresh_jaw, &device)
+        .unwrap();
+    let (ended, began) = (
+        measure(&trained.model, &set, trained.state.normalisation, 30),
+        measure(&start, &set, prior.normalisation, 30),
+    );
+    assert_eq!(ended, began, "the start is the prior's end");
+
+    // Shapes are matched by name: with the correctives listed in reverse, E's outputs and the
+    // jaw transforms come reversed.
+    let mut reversed = set.names.clone();
+    reversed[1..].reverse();
+    let flipped = prior
+        .start(&config, &reversed, units, &fresh_jaw, &device)
+        .unwrap();
+    let m = set.names.len() - 1;
+    let x = sinew_host::training::nn::tensor(vec![0.1, -0.2, 0.3, 0.0, 0.5, -0.4], [2, 3], &device);
+    let e = |net: &sinew_host::aim::model::AimNet| {
+        sinew_host::training::nn::to_vec(net.predict(x.clone(), x.clone()).correctives)
+    };
+    let (a, b) = (e(&start), e(&flipped));
+    let jaw =
+        |net: &sinew_host::aim::model::AimNet| sinew_host::training::nn::to_vec(net.jaw.val());
+    let (ja, jb) = (jaw(&start), jaw(&flipped));
+    for j in 0..m {
+        for p in 0..2 {
+            let at = |v: &[f32], s: usize| v[(p * m + s) * 3..(p * m + s) * 3 + 3].to_vec();
+            assert_eq!(at(&a, j), at(&b, m - 1 - j), "shape {j}, point {p}");
+        }
+        assert_eq!(ja[9 * j..9 * j + 9], jb[9 * (m - 1 - j)..9 * (m - j)]);
+    }
+    // A shape the prior does not know starts fresh; one it knows keeps the prior's rows.
+    let mut renamed = set.names.clone();
+    renamed[1] = "notInThePrior".into();
+    let partly = prior
+        .start(&config, &renamed, units, &fresh_jaw, &device)
+        .unwrap();
+    let c = e(&partly);
+    assert_ne!(c[..3], a[..3]);
+    assert_eq!(c[3..3 * m], a[3..3 * m]);
+
+    // Refusals, each naming the file.
+    let named = |err: PriorError| {
+        let text = err.to_string();
+        assert!(text.contains(&path.display().to_string()), "{text}");
+        text
+    };
+    let wider = AimConfig {
+        hidden: config.hidden * 2,
+        ..config.clone()
+    };
+    let text = named(
+        prior
+            .start(&wider, &set.names, units, &fresh_jaw, &device)
+            .unwrap_err(),
+    );
+    assert!(text.contains("hidden"), "{text}");
+    let text = named(
+        prior
+            .start(&config, &set.names, "mm-not-the-run", &fresh_jaw, &device)
+            .unwrap_err(),
+    );
+    assert!(text.contains("mm-not-the-run"), "{text}");
+    let strangers: Vec<String> = set.names.iter().map(|n| format!("{n}X")).collect();
+    let text = named(
+        prior
+            .start(&config, &strangers, units, &fresh_jaw, &device)
+            .unwrap_err(),
+    );
+    assert!(text.contains("no shape"), "{text}");
+    std::fs::write(&path, bake_with(true)).unwrap();
+    let text = named(Prior::read(&path).unwrap_err());
+    assert!(text.contains("playback-only"), "{text}");
+    let whole = bake_with(false);
+    std::fs::write(&path, &whole[..whole.len() / 2]).unwrap();
+    named(Prior::read(&path).unwrap_err());
+
+    // A run with a prior records where it started, and its first check is the prior's end.
+    std::fs::write(&path, &whole).unwrap();
+    let again = tempfile::tempdir().unwrap();
+    let mut options = aim_train_options(again.path(), false, Some(0));
+    options.prior = Some(Prior::read(&path).unwrap());
+    let run = train(&set, &config, &options).unwrap();
+    assert_eq!(run.state.normalisation, prior.normalisation);
+    let recorded = run.state.metadata.iter().find(|(k, _)| k == "prior");
+    assert_eq!(
+        recorded.map(|(_, v)| v.as_str()),
+        Some(format!("prior.sinew ({m} of {m} shapes)").as_str())
+    );
+    assert_eq!(
+        measure(&run.model, &set, run.state.normalisation, 30),
+        began
+    );
+}

@@ -55,24 +55,37 @@ pub fn ict_training_set(
     Ok((set, said))
 }
 
-/// `sinew train aim`: trains (or resumes from `resume`, a checkpoint folder) and writes the
-/// outputs; checkpoints go to `MODEL.ckpt/` unless resuming.
+/// How `sinew train aim` runs, besides its set, configuration and outputs.
+#[derive(Debug, Default)]
+pub struct TrainAimRun<'a> {
+    /// Continue from this checkpoint folder (else checkpoints go to `MODEL.ckpt/`).
+    pub resume: Option<&'a Path>,
+    /// Hide the progress bar and the check lines.
+    pub quiet: bool,
+    /// Stop once this accuracy is reached.
+    pub target: Option<crate::aim::target::Target>,
+    /// Start from this actor's networks.
+    pub prior: Option<crate::aim::prior::Prior>,
+}
+
+/// `sinew train aim`: trains (or resumes) and writes the outputs.
 pub fn train_aim(
     set: &TrainingSet,
     config: &AimConfig,
     backend: Backend,
     out: &Outputs,
-    resume: Option<&Path>,
-    quiet: bool,
-    target: Option<crate::aim::target::Target>,
+    run_as: TrainAimRun<'_>,
 ) -> Result<Report> {
     let options = TrainOptions {
         backend,
-        checkpoint_dir: resume.map_or_else(|| checkpoint_dir_for(&out.model), Path::to_path_buf),
-        resume: resume.is_some(),
+        checkpoint_dir: run_as
+            .resume
+            .map_or_else(|| checkpoint_dir_for(&out.model), Path::to_path_buf),
+        resume: run_as.resume.is_some(),
         stop_after: None,
-        quiet,
-        target,
+        quiet: run_as.quiet,
+        target: run_as.target,
+        prior: run_as.prior,
     };
     Ok(run(set, config, &options, out)?)
 }

@@ -82,6 +82,7 @@ pub fn demo(out: &Path, config: &AimConfig, quiet: bool) -> Result<Report, DemoE
         stop_after: None,
         quiet,
         target: None,
+        prior: None,
     };
     let report = run(&set, config, &options, &outputs)?;
 

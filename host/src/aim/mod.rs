@@ -14,6 +14,7 @@ pub mod eval;
 pub mod face_template;
 pub mod model;
 pub mod play;
+pub mod prior;
 pub mod procedural;
 pub mod run;
 pub mod target;

@@ -123,20 +123,23 @@ impl Target {
         check.mean_mm <= self.mean_mm && check.p95_mm <= self.p95_mm && jaw
     }
 
-    /// How far `check` is from the target, in words ("mean 0.02 mm above 0.10 mm, …"); empty
+    /// How far `check` is from the target, in words ("mean 0.120 mm, 0.020 mm above its 0.100
+    /// mm target", …); empty
     /// when it meets it.
     pub fn shortfall(&self, check: &Check, previous: Option<&Check>) -> Vec<String> {
         let mut out = Vec::new();
         if check.mean_mm > self.mean_mm {
             out.push(format!(
-                "mean {:.3} mm above {:.3} mm",
+                "mean {:.3} mm, {:.3} mm above its {:.3} mm target",
+                check.mean_mm,
                 check.mean_mm - self.mean_mm,
                 self.mean_mm
             ));
         }
         if check.p95_mm > self.p95_mm {
             out.push(format!(
-                "p95 {:.3} mm above {:.3} mm",
+                "p95 {:.3} mm, {:.3} mm above its {:.3} mm target",
+                check.p95_mm,
                 check.p95_mm - self.p95_mm,
                 self.p95_mm
             ));
@@ -282,8 +285,14 @@ mod tests {
         );
         // Each criterion alone fails it, and the shortfall says which.
         for (c, words) in [
-            (check(500, 0.11, 0.24, Some(20.2)), "mean 0.010 mm above"),
-            (check(500, 0.09, 0.26, Some(20.2)), "p95 0.010 mm above"),
+            (
+                check(500, 0.11, 0.24, Some(20.2)),
+                "mean 0.110 mm, 0.010 mm above its 0.100 mm target",
+            ),
+            (
+                check(500, 0.09, 0.26, Some(20.2)),
+                "p95 0.260 mm, 0.010 mm above its 0.250 mm target",
+            ),
             (check(500, 0.09, 0.24, Some(21.0)), "still moving"),
         ] {
             assert!(!t.met(&c, Some(&before)), "{c:?}");

@@ -39,5 +39,6 @@ pub fn aim_train_options(
         stop_after,
         quiet: true,
         target: None,
+        prior: None,
     }
 }

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::config::{InvalidConfig, JawInit};
 use super::model::{AimNet, IDENTITY_9D, normalisation, normalise};
+use super::prior::{Prior, PriorError};
 use super::target::{Check, Ending, Target, measure};
 use super::{AimConfig, InvalidTrainingSet, TrainingSet};
 use crate::io::mesh::MeshError;
@@ -59,6 +60,9 @@ pub enum TrainError {
     /// The accuracy target makes no sense.
     #[error(transparent)]
     Target(#[from] super::target::InvalidTarget),
+    /// The prior actor cannot start this run.
+    #[error(transparent)]
+    Prior(#[from] PriorError),
     /// Ctrl-C stopped the run after a checkpoint.
     #[error(
         "interrupted at step {step}; checkpoint saved in {} (continue with --resume)",
@@ -159,6 +163,9 @@ pub struct TrainOptions {
     pub quiet: bool,
     /// Stop once this accuracy is reached ([`super::target`]); `None` runs every step.
     pub target: Option<Target>,
+    /// Start from this actor's networks instead of random weights ([`super::prior`]); a resumed
+    /// run continues from its checkpoint.
+    pub prior: Option<Prior>,
 }
 
 /// A finished (or stopped) training run.
@@ -516,14 +523,27 @@ pub fn train(
         .map_err(TrainError::backend)?;
     let dir = &options.checkpoint_dir;
     crate::io::atomic::create_folder(dir, "checkpoint folder")?;
-    let norm = normalisation(&set.template.positions);
-    // A resumed run replaces the initial jaw transforms with its checkpoint's.
-    let jaw = if options.resume {
-        vec![IDENTITY_9D; set.shapes.len() - 1]
-    } else {
-        initial_jaw(set, config)
+    // A resumed run replaces the initial model and normalisation with its checkpoint's.
+    let (mut net, mut norm) = match (&options.prior, options.resume) {
+        (_, true) => (
+            AimNet::with_jaw(config, &vec![IDENTITY_9D; set.shapes.len() - 1], &device),
+            normalisation(&set.template.positions),
+        ),
+        (Some(prior), false) => (
+            prior.start(
+                config,
+                &set.names,
+                set.units.name(),
+                &initial_jaw(set, config),
+                &device,
+            )?,
+            prior.normalisation,
+        ),
+        (None, false) => (
+            AimNet::with_jaw(config, &initial_jaw(set, config), &device),
+            normalisation(&set.template.positions),
+        ),
     };
-    let mut net = AimNet::with_jaw(config, &jaw, &device);
     let mut optim = AdamConfig::new().with_epsilon(1e-8).init();
     let mut state = CheckpointState {
         steps_done: 0,
@@ -537,9 +557,25 @@ pub fn train(
         files: WeightFiles::default(),
         checks: Vec::new(),
     };
+    if let (Some(prior), false) = (&options.prior, options.resume) {
+        // Where the run started, for the record (the prior's file name and what it shared).
+        state.metadata.push((
+            "prior".into(),
+            format!(
+                "{} ({} of {} shapes)",
+                prior.path().file_name().map_or_else(
+                    || prior.path().display().to_string(),
+                    |n| n.to_string_lossy().into_owned()
+                ),
+                prior.shared(&set.names),
+                set.names.len() - 1
+            ),
+        ));
+    }
     if options.resume {
         let (n, o, s) = load_checkpoint(dir, net, optim, &device)?;
         check_same_run(dir, &s, config, &set.names)?;
+        norm = s.normalisation;
         (net, optim, state) = (n, o, s);
     } else {
         // The template travels with the checkpoint so that `sinew bake` needs nothing else.

@@ -131,6 +131,11 @@ pub(crate) struct TrainAim {
     /// Continue from this checkpoint folder.
     #[arg(long)]
     resume: Option<PathBuf>,
+    /// Start from this actor's networks instead of random weights: any actor baked with its
+    /// networks (not --playback-only), such as an earlier training of the same or another face,
+    /// with the run's network sizes (docs/AIM.md, "Starting from a prior").
+    #[arg(long, conflicts_with = "resume")]
+    prior: Option<PathBuf>,
     /// Folder with skull.obj and jaw.obj aligned to the neutral (from `sinew bones fit`);
     /// without it the bones are fitted now from the template bones (--templates).
     #[arg(long)]
@@ -299,6 +304,12 @@ pub(crate) fn demo(args: DemoArgs) -> Result<()> {
 pub(crate) fn train(args: TrainAim) -> Result<()> {
     let config = config_for(&args)?;
     let target = args.target.target()?;
+    // Read before any work, so that a file that cannot start the run stops it at once.
+    let prior = args
+        .prior
+        .as_deref()
+        .map(sinew_host::aim::prior::Prior::read)
+        .transpose()?;
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
     let (set, said) = match (&args.rig, &args.data) {
         (Some(path), _) => {
@@ -335,9 +346,12 @@ pub(crate) fn train(args: TrainAim) -> Result<()> {
         &config,
         args.backend,
         &outputs,
-        args.resume.as_deref(),
-        args.quiet,
-        target,
+        sinew_host::aim::commands::TrainAimRun {
+            resume: args.resume.as_deref(),
+            quiet: args.quiet,
+            target,
+            prior,
+        },
     )?;
     match (&report.ended, report.missed.is_empty()) {
         (Some(Ending::Target), _) => eprintln!(

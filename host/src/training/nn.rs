@@ -94,6 +94,36 @@ impl Mlp {
             .fold(x, |x, (layer, &act)| activate(layer.forward(x), act))
     }
 
+    /// The MLP whose layers are `layers` (the core's layout, as [`Mlp::weights`] gives them).
+    pub fn from_weights(layers: &[LayerWeights], device: &Device) -> Self {
+        let linear = layers
+            .iter()
+            .map(|l| {
+                let mut layer = LinearConfig::new(l.inputs, l.outputs).init(device);
+                // The core stores one row per output; burn [inputs, outputs].
+                let mut weight = vec![0.0; l.inputs * l.outputs];
+                for (o, row) in l.weight.chunks_exact(l.inputs).enumerate() {
+                    for (i, &w) in row.iter().enumerate() {
+                        weight[i * l.outputs + o] = w;
+                    }
+                }
+                layer.weight = Param::from_tensor(Tensor::from_data(
+                    TensorData::new(weight, [l.inputs, l.outputs]),
+                    device,
+                ));
+                layer.bias = Some(Param::from_tensor(Tensor::from_data(
+                    TensorData::new(l.bias.clone(), [l.outputs]),
+                    device,
+                )));
+                layer
+            })
+            .collect();
+        Self {
+            layers: linear,
+            activations: layers.iter().map(|l| l.activation).collect(),
+        }
+    }
+
     /// The weights in the core's layout.
     pub fn weights(&self) -> Vec<LayerWeights> {
         self.layers
