@@ -480,7 +480,7 @@ fn a_rig_is_learned_and_played_back_in_its_own_frame() {
     }
     let model = d.join("actor.sinew");
     let report = d.join("report.json");
-    ok(&[
+    let train = [
         "train",
         "aim",
         "--rig",
@@ -496,9 +496,28 @@ fn a_rig_is_learned_and_played_back_in_its_own_frame() {
         "--iterations",
         "150",
         "--quiet",
-    ]);
+    ];
+    ok(&train);
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
     assert_eq!(r["shapes"], 7);
+    // It started from the built-in prior, at the prior's learning rate, and says so.
+    let meta = |key: &str| {
+        let bytes = std::fs::read(&model).unwrap();
+        let file = sinew_core::SinewFile::from_bytes(&bytes).unwrap();
+        file.metadata().get(key).map(str::to_owned)
+    };
+    assert_eq!(
+        meta("prior").as_deref(),
+        Some("prior-ict.sinew (6 of 6 shapes)")
+    );
+    let config: serde_json::Value = serde_json::from_str(&meta("config").unwrap()).unwrap();
+    assert_eq!(
+        config["lr"].as_f64(),
+        Some(sinew_host::aim::prior::LEARNING_RATE)
+    );
+    // Resumed without repeating the rate, the run keeps the one it began with.
+    let ckpt = d.join("actor.ckpt");
+    ok(&[&train[..], &["--resume", s(&ckpt)]].concat());
     let jaw = r["jaw_degrees"]
         .as_array()
         .unwrap()
@@ -523,6 +542,29 @@ fn a_rig_is_learned_and_played_back_in_its_own_frame() {
     ]);
     let e: serde_json::Value = serde_json::from_slice(&std::fs::read(&eval).unwrap()).unwrap();
     assert_eq!(e["mean_error_mm"], r["mean_error_mm"]);
+    // Baked again on another mesh, the actor no longer carries the rig record (which maps the
+    // rig's vertices onto the training template's); baked on its own template it does.
+    let own = sinew_host::io::mesh::Mesh::read(&ckpt.join("template.obj")).unwrap();
+    let moved = sinew_host::io::mesh::Mesh::new(
+        own.positions.iter().map(|p| p.map(|x| x * 1.001)).collect(),
+        own.polygons.clone(),
+    );
+    let other = d.join("other.obj");
+    moved.write(&other).unwrap();
+    let has_record = |path: &std::path::Path| {
+        let bytes = std::fs::read(path).unwrap();
+        let file = sinew_core::SinewFile::from_bytes(&bytes).unwrap();
+        file.metadata().get("rig").is_some()
+    };
+    for (template, kept) in [(None, true), (Some(&other), false)] {
+        let baked = d.join("rebaked.sinew");
+        let mut args = vec!["bake", "--checkpoint", s(&ckpt), "--out", s(&baked)];
+        if let Some(t) = template {
+            args.extend(["--template", s(t)]);
+        }
+        ok(&args);
+        assert_eq!(has_record(&baked), kept, "{template:?}");
+    }
     // The kit actor's golden fit retargeted onto the rig's actor (another topology, 4 of its 19
     // shapes): matched through the face template, each rig shape playing the kit shape of its
     // name; the rig's face moves as the kit actor's does at the same places.

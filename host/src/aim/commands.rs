@@ -178,6 +178,20 @@ pub fn bake(
     };
     let mut metadata = state.metadata.clone();
     metadata.retain(|(k, _)| k != crate::geometry::uv::KEY);
+    // The rig record maps the rig's vertices onto the training template's: an actor baked on
+    // another mesh cannot go back into the rig, so it does not carry the record.
+    if training
+        .as_ref()
+        .is_some_and(|t| t.positions != mesh.positions)
+        && metadata.iter().any(|(k, _)| k == crate::rig::record::KEY)
+    {
+        metadata.retain(|(k, _)| k != crate::rig::record::KEY);
+        eprintln!(
+            "{}: baked on another mesh than the rig's, so without the rig record (no export or \
+             play in the rig's own frame)",
+            out.display()
+        );
+    }
     metadata.extend(crate::aim::bake::uv_metadata(
         &metadata,
         &mesh,

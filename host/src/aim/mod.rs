@@ -9,6 +9,7 @@ pub mod config;
 pub mod data;
 pub mod demo;
 pub mod demo_face;
+mod draw;
 pub mod edit;
 pub mod eval;
 pub mod face_template;

@@ -64,6 +64,23 @@ pub enum PriorError {
     },
 }
 
+/// The learning rate a run started from a prior begins at, unless one is asked for: a quarter
+/// of a fresh run's, so that the first steps refine the prior's networks instead of shaking them
+/// (docs/results/AIM.md, "Time to an accuracy on a rig").
+pub const LEARNING_RATE: f64 = 5e-5;
+
+/// The metadata entry of an actor whose training started from a prior: the prior's file name and
+/// how many of the run's shapes it knew.
+pub const METADATA_KEY: &str = "prior";
+
+/// Where the built-in prior lives in the repository.
+pub const BUILTIN_PATH: &str = "host/data/prior-ict.sinew";
+
+/// The built-in prior's bytes: an actor trained by Sinew with its defaults on the ICT-FaceKit
+/// generic neutral as a rig (`sinew data rig`, all 53 shapes; NOTICE and docs/AIM.md give the
+/// commands), baked with its networks on a coarse face.
+const BUILTIN: &[u8] = include_bytes!("../../data/prior-ict.sinew");
+
 /// The networks' names in a baked actor and in [`AimNet`], in this order.
 const NETWORKS: [&str; 5] = ["net.b", "net.d", "net.n", "net.k", "net.e"];
 
@@ -183,6 +200,21 @@ impl Prior {
             thickness_activation,
             units: file.metadata().get("units").map(str::to_owned),
         })
+    }
+
+    /// The built-in prior ([`BUILTIN_PATH`]).
+    ///
+    /// # Errors
+    /// [`PriorError`] if the embedded file does not read (a build from a damaged checkout).
+    pub fn builtin() -> Result<Self, PriorError> {
+        Self::from_bytes(Path::new(BUILTIN_PATH), BUILTIN)
+    }
+
+    /// Whether the prior can start a run of `config` on the shapes `names` (the neutral first)
+    /// in `units`: the same network sizes, frequency, thickness activation and units, and a
+    /// shape in common.
+    pub fn fits(&self, config: &AimConfig, names: &[String], units: &str) -> bool {
+        self.check(config, units).is_ok() && self.shared(names) > 0
     }
 
     /// The file the prior was read from.

@@ -156,6 +156,14 @@ pub fn run(
         .map_err(TrainError::backend)?;
     let triangles = set.template.triangles();
     let mut recorded = metadata(set, config).map_err(RunError::Json)?;
+    // Where the run started, recorded in its checkpoint.
+    recorded.extend(
+        state
+            .metadata
+            .iter()
+            .filter(|(k, _)| k == crate::aim::prior::METADATA_KEY)
+            .cloned(),
+    );
     recorded.extend(
         crate::aim::bake::uv_metadata(&recorded, &set.template, &triangles, None)
             .map_err(RunError::Uv)?,

@@ -7,6 +7,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 use sinew_host::aim::AimConfig;
 use sinew_host::aim::config::{JawInit, Schedule};
+use sinew_host::aim::prior::Prior;
 use sinew_host::aim::run::Outputs;
 use sinew_host::aim::target::{Ending, Target};
 use sinew_host::training::backend::Backend;
@@ -131,11 +132,14 @@ pub(crate) struct TrainAim {
     /// Continue from this checkpoint folder.
     #[arg(long)]
     resume: Option<PathBuf>,
-    /// Start from this actor's networks instead of random weights: any actor baked with its
+    /// Start from this actor's networks instead of the built-in prior: any actor baked with its
     /// networks (not --playback-only), such as an earlier training of the same or another face,
     /// with the run's network sizes (docs/AIM.md, "Starting from a prior").
-    #[arg(long, conflicts_with = "resume")]
+    #[arg(long, conflicts_with_all = ["resume", "no_prior"])]
     prior: Option<PathBuf>,
+    /// Start from random weights, not from the built-in prior.
+    #[arg(long, conflicts_with = "resume")]
+    no_prior: bool,
     /// Folder with skull.obj and jaw.obj aligned to the neutral (from `sinew bones fit`);
     /// without it the bones are fitted now from the template bones (--templates).
     #[arg(long)]
@@ -302,14 +306,10 @@ pub(crate) fn demo(args: DemoArgs) -> Result<()> {
 
 /// `sinew train aim`.
 pub(crate) fn train(args: TrainAim) -> Result<()> {
-    let config = config_for(&args)?;
+    let mut config = config_for(&args)?;
     let target = args.target.target()?;
     // Read before any work, so that a file that cannot start the run stops it at once.
-    let prior = args
-        .prior
-        .as_deref()
-        .map(sinew_host::aim::prior::Prior::read)
-        .transpose()?;
+    let chosen = args.prior.as_deref().map(Prior::read).transpose()?;
     eprintln!("seed {} (override with --seed or SINEW_SEED)", config.seed);
     let (set, said) = match (&args.rig, &args.data) {
         (Some(path), _) => {
@@ -336,6 +336,35 @@ pub(crate) fn train(args: TrainAim) -> Result<()> {
         100.0 * set.constrained_fraction(),
         set.vertices()
     );
+    let prior = match chosen {
+        Some(p) => Some(p),
+        None if args.no_prior || args.resume.is_some() => None,
+        // The built-in prior starts every run it fits (sizes, units, a shape in common).
+        None => Some(Prior::builtin()?).filter(|p| p.fits(&config, &set.names, set.units.name())),
+    };
+    if args.lr.is_none() && args.config.is_none() {
+        // A run from a prior starts slower; a resumed one keeps the rate it began with.
+        if prior.is_some() {
+            config.lr = sinew_host::aim::prior::LEARNING_RATE;
+        } else if let Some(dir) = &args.resume {
+            config.lr = sinew_host::aim::train::read_state(dir)?.config.lr;
+        }
+        config.validate()?;
+    }
+    if let Some(p) = &prior {
+        eprintln!(
+            "starting from {} ({} of {} shapes known) at learning rate {:e}{}",
+            p.path().display(),
+            p.shared(&set.names),
+            set.names.len() - 1,
+            config.lr,
+            if args.prior.is_none() {
+                "; --no-prior starts from random weights"
+            } else {
+                ""
+            }
+        );
+    }
     let outputs = Outputs {
         model: args.out.clone(),
         report: args.report.clone(),
