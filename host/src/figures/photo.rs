@@ -1,6 +1,7 @@
 //! Photographs of a face through a pinhole camera (`sinew render`): a perspective rasteriser
 //! with a lit skin shading (albedo per vertex: skin, lips, brows, eyes; a key light, a fill light,
-//! ambient light and a soft highlight) on a dark background, so that a face detector and a
+//! ambient light and a soft highlight) and eyeballs behind the eye openings (`eyes`) on a dark
+//! background, so that a face detector and a
 //! landmark tracker take the picture for a face. It gives a performance's frames as PNG and as a
 //! `y4m` video, through the performance's own camera, so that a real tracker's landmarks can be
 //! compared with the performance's truth.
@@ -16,7 +17,7 @@ use crate::io::atomic::{self, AtomicWriteError, CreateFolderError};
 use crate::io::performance::{Camera, Performance, PerformanceError};
 use crate::io::y4m;
 
-/// Behind the face: a dark grey, so that holes in the mesh (the eyes, the open mouth) read as
+/// Behind the face: a dark grey, so that holes in the mesh (the open mouth) read as
 /// shadow.
 pub const BACKDROP: [u8; 3] = [58, 60, 66];
 /// The skin's albedo.
@@ -356,7 +357,16 @@ pub fn render_performance(dir: &Path, out: &Path, pngs: bool) -> Result<Rendered
     let written = atomic::write_with(&video, |w| {
         w.write_all(y4m::header(camera.width, camera.height, m.fps).as_bytes())?;
         for (f, positions) in perf.frames.iter().enumerate() {
-            let image = photograph(positions, &triangles, &albedo, &camera, SUPERSAMPLE);
+            let (mut positions, mut triangles, mut albedo) =
+                (positions.clone(), triangles.clone(), albedo.clone());
+            let landmarks: Vec<[f32; 3]> = m
+                .landmarks
+                .vertices
+                .iter()
+                .filter_map(|&v| positions.get(v as usize).copied())
+                .collect();
+            eyes::add_eyes(&mut positions, &mut triangles, &mut albedo, &landmarks);
+            let image = photograph(&positions, &triangles, &albedo, &camera, SUPERSAMPLE);
             y4m::write_frame(w, image.width, image.height, &image.rgb)?;
             if pngs {
                 let path = out.join(format!("frame_{f:05}.png"));
@@ -388,6 +398,8 @@ fn triangulate(polygons: &[Vec<u32>]) -> Vec<[u32; 3]> {
         .flat_map(|p| (2..p.len()).map(move |k| [p[0], p[k - 1], p[k]]))
         .collect()
 }
+
+mod eyes;
 
 #[cfg(test)]
 mod tests;

@@ -151,3 +151,45 @@ fn the_albedo_follows_the_landmarks() {
     bad[3] = u32::MAX;
     assert!(face_albedo(&face, &bad).iter().all(|&c| c == SKIN));
 }
+
+#[test]
+fn eyeballs_fill_the_eye_openings_behind_the_eyelids() {
+    // The 68 landmarks of a flat face at z = 0: eyes rings of radius 1 about (±2, 2), the
+    // chin at (0, -5), the nose's bridge at (0, 2).
+    let mut lm = vec![[0.0f32, 0.0, 0.0]; 68];
+    for (first, cx) in [(36, -2.0f32), (42, 2.0)] {
+        for k in 0..6 {
+            let a = std::f32::consts::PI - k as f32 / 6.0 * std::f32::consts::TAU;
+            lm[first + k] = [cx + a.cos(), 2.0 + a.sin(), 0.0];
+        }
+    }
+    lm[8] = [0.0, -5.0, 0.0];
+    lm[27] = [0.0, 2.0, 0.0];
+    let (mut positions, mut triangles, mut albedo) = (Vec::new(), Vec::new(), Vec::new());
+    eyes::add_eyes(&mut positions, &mut triangles, &mut albedo, &lm);
+    assert_eq!(albedo.len(), positions.len());
+    assert!(!triangles.is_empty());
+    // Every point of the eyeballs lies behind the eyelids.
+    assert!(positions.iter().all(|p| p[2] < 0.0), "an eyeball pokes out");
+    // Seen from the front: the pupil at each eye's centre, the iris about it, the sclera
+    // further out; nothing between the eyes.
+    let mut cam = camera();
+    cam.position = [0.0, 2.0, 30.0];
+    let img = photograph(&positions, &triangles, &albedo, &cam, 1);
+    let px = |x: f32, y: f32| {
+        let uv = cam.project([x, y, 0.0]).unwrap();
+        img.get(uv[0] as i64, uv[1] as i64).unwrap()
+    };
+    let bright = |c: [u8; 3]| c.iter().map(|&v| u32::from(v)).sum::<u32>();
+    for cx in [-2.0, 2.0] {
+        let (pupil, iris, sclera) = (px(cx, 2.0), px(cx + 0.3, 2.0), px(cx + 0.8, 2.0));
+        assert!(bright(pupil) < bright(iris), "{pupil:?} {iris:?}");
+        assert!(bright(iris) < bright(sclera), "{iris:?} {sclera:?}");
+        assert!(iris[0] > iris[2], "the iris is brown: {iris:?}");
+    }
+    assert_eq!(px(0.0, 2.0), BACKDROP);
+    // Without 68 landmarks, nothing is added.
+    let mut none = (Vec::new(), Vec::new(), Vec::new());
+    eyes::add_eyes(&mut none.0, &mut none.1, &mut none.2, &lm[..60]);
+    assert!(none.0.is_empty() && none.1.is_empty());
+}
