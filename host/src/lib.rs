@@ -2,7 +2,7 @@
 //! them into the `.sinew` format that `sinew-core` plays back, and inspects and renders results.
 //!
 //! The folders are the architecture, each layer importing only the layers below it
-//! (docs/ARCHITECTURE.md, "Code map"; `tests/tests/architecture.rs` keeps it so):
+//! (docs/ARCHITECTURE.md, "Code map"; `tests/tests/suite/architecture.rs` keeps it so):
 //! [`view`] above [`replay`] and [`export`], above [`aim`], [`s2d`], [`fit`], [`motion`],
 //! [`driver`] and [`performance`], above [`anatomy`], [`training`] and [`rig`], above
 //! [`figures`], above [`geometry`], above [`io`]; the binary's `cli` above them all.

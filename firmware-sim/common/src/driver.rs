@@ -2,7 +2,7 @@
 //! drives it from a 20-frame OpenFace 2.0 track (`tests/data/driver-ict.csv`, parsed here without
 //! allocation), each row's pixels through the camera of the hash list's `track` line, without and
 //! then with the One Euro filter of its `filter` line at the row's time stamp. Four checks a row,
-//! each against `tests/data/driver-ict.hashes`, the list `tests/tests/golden_driver.rs` pins:
+//! each against `tests/data/driver-ict.hashes`, the list `tests/tests/suite/golden_driver.rs` pins:
 //! the driven pose's hash, the posed frame's (positions then normals), and the same after the
 //! filter. Every step is the core's ([`Driver::drive`], [`driver::filter_pose`],
 //! [`driver::pose_hash`]), as on the host.

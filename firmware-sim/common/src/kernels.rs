@@ -1,7 +1,7 @@
 //! The golden kernel suite on every target: each core kernel (MLP with GELU/ELU, SIREN, spiral
 //! convolution, CSR product, eq. 17 skinning, vertex normals, 6D rotation, the jaw of a pose given
 //! by coefficients alone) on seeded weights and inputs, hashed and compared with `tests/data/kernels.hashes`, pinned on the x86_64 host by
-//! `tests/tests/golden_kernels.rs`.
+//! `tests/tests/suite/golden_kernels.rs`.
 //!
 //! The weights and inputs come from the same PCG32 stream as the host test's `sinew_tests::Rng`,
 //! drawn in the same order, into caller-owned buffers (no allocation). This duplicates the host
@@ -332,7 +332,7 @@ pub fn run_kernels(
 }
 
 /// Four learned jaw transforms (an opening, a smaller one, a sideways turn, a slight closing),
-/// as `tests/tests/golden_kernels.rs` writes them.
+/// as `tests/tests/suite/golden_kernels.rs` writes them.
 const JAWS: [[f32; 9]; 4] = [
     [1.0, 0.0, 0.0, 0.0, 0.94, 0.34, 0.0, -0.12, 0.05],
     [1.0, 0.0, 0.0, 0.0, 0.995, 0.1, 0.0, 0.0, 0.02],

@@ -4,7 +4,7 @@
 //! hands a device, [`Frames`]; a row whose `success` is 0 is a frame without landmarks), at the
 //! settings of its hash list's `live`
 //! line, each row at its time stamp. Three checks a row, each against
-//! `tests/data/driver-ict-live.hashes`, the list `tests/tests/golden_driver.rs` pins: what became
+//! `tests/data/driver-ict-live.hashes`, the list `tests/tests/suite/golden_driver.rs` pins: what became
 //! of the frame (calibrating, driven, missing, lost to the residual or to a jump), the hash of
 //! the pose played, and the posed frame's (positions then normals). Every step is the core's
 //! ([`Live::step`], [`driver::pose_hash`]), as on the host.

@@ -85,7 +85,7 @@ pub const GLTF_RIG: Tolerance = Tolerance {
              jawCompensation targets, export::jaw) to within 5e-6 m a vertex, and stores f32 \
              metres and f32 unit quaternions (an ulp or two of coordinates of order 10 cm). \
              Measured 7.7e-5 cm on the golden ICT actor over 30 frames with every shape playing, \
-             the jaw along its learned jawOpen (21°) and the head turning (host/tests/gltf.rs, \
+             the jaw along its learned jawOpen (21°) and the head turning (host/tests/suite/gltf.rs, \
              2026-12-01).",
 };
 

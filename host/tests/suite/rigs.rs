@@ -2,11 +2,9 @@
 //! a scene's frame and units, resolved by `sinew_host::rig` and `sinew rig inspect`; and bad
 //! rigs refused by name.
 
-mod common;
-
 use std::path::Path;
 
-use common::{err, ok, s};
+use crate::common::{err, ok, s};
 use sinew_host::io::rig::{RigFile, RigReadError};
 use sinew_host::io::units::Unit;
 use sinew_host::rig::sample::{Placement, Sample, sample};
@@ -570,8 +568,8 @@ fn a_rig_is_learned_and_played_back_in_its_own_frame() {
     // name; the rig's face moves as the kit actor's does at the same places.
     let retargeted = d.join("retarget");
     let (source, fit) = (
-        common::repo("tests/data/aim-ict.sinew"),
-        common::repo("tests/data/fit-ict.sinew"),
+        crate::common::repo("tests/data/aim-ict.sinew"),
+        crate::common::repo("tests/data/fit-ict.sinew"),
     );
     ok(&[
         "retarget",
@@ -644,7 +642,7 @@ fn a_rig_is_learned_and_played_back_in_its_own_frame() {
     // Played from a capture, each frame is the rig's own mesh: its vertex count (seams split),
     // its texture coordinates, its unit and place in the scene's node.
     let frames = d.join("frames");
-    let capture = common::repo("tests/data/arkit-sample.csv");
+    let capture = crate::common::repo("tests/data/arkit-sample.csv");
     ok(&[
         "play",
         "--model",
@@ -688,7 +686,7 @@ fn a_rig_is_learned_and_played_back_in_its_own_frame() {
     let degrees = r["jaw_degrees"].as_array().unwrap();
     eprintln!("learned jaws: {degrees:?}");
     let each = d.join("each.csv");
-    std::fs::write(&each, common::each_shape_capture(&names)).unwrap();
+    std::fs::write(&each, crate::common::each_shape_capture(&names)).unwrap();
     let each_frames = d.join("each");
     ok(&[
         "play",
@@ -717,7 +715,7 @@ fn a_rig_is_learned_and_played_back_in_its_own_frame() {
             .zip(&sample.file.deltas[k])
             .map(|(p, d)| std::array::from_fn(|c| p[c] + d[c]))
             .collect();
-        let (mean, max) = common::distances(&frame.positions, &want);
+        let (mean, max) = crate::common::distances(&frame.positions, &want);
         let (mean, max) = (mean * 1e3, max * 1e3);
         let trained = &per_shape[i + 1][1];
         let (train_mean, train_max) = (

@@ -12,8 +12,7 @@ use sinew_host::aim::model::IDENTITY_9D;
 use sinew_host::aim::play::corrective_names;
 use sinew_host::io::ict::IctFaceKit;
 
-mod common;
-use common::{distances, each_shape_capture, ok, repo, s};
+use crate::common::{distances, each_shape_capture, ok, repo, s};
 
 /// Millimetres per unit of the golden actor (centimetres).
 const MM: f64 = 10.0;

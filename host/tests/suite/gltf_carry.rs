@@ -3,9 +3,7 @@
 //! samplers and images come through with their indices, the face wears the skin's material, and
 //! what cannot be carried is listed.
 
-mod common;
-
-use common::procedural_actor;
+use crate::common::procedural_actor;
 use serde_json::{Value, json};
 use sinew_core::aim::AimActor;
 use sinew_host::export::gltf::{GltfError, Options, glb_carrying};
@@ -348,11 +346,11 @@ fn add_part(doc: &mut Value, bin: &mut Vec<u8>, points: &[[f32; 3]; 3], node: Va
 /// as its head transform, within 1 µm: f32 rounding of node matrices and keyed quaternions.
 #[test]
 fn lower_teeth_follow_the_jaw() {
-    use common::gltf::{Gltf, axis_angle, trs_matrix};
+    use crate::common::gltf::{Gltf, axis_angle, trs_matrix};
     use sinew_core::linalg::Vec3;
     // The golden ICT actor (its learned k follows the jaw about the chin and mouth), recorded
     // as learned from a glTF rig in metres of its own vertices and triangles.
-    let golden = common::gltf::golden();
+    let golden = crate::common::gltf::golden();
     let learned = AimActor::from_bytes(&golden).unwrap();
     let v = learned.vertex_count();
     let scale = 0.01f32;

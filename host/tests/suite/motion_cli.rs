@@ -4,8 +4,7 @@
 //! golden S2D decoder, Table 3's evaluation of the briefly trained generator, and clear errors on
 //! bad input.
 
-mod common;
-use common::{ok as ok_run, sinew};
+use crate::common::{ok as ok_run, sinew};
 
 use sinew_host::motion::data::{MotionSet, Split};
 

@@ -3,8 +3,7 @@
 
 use std::path::Path;
 
-mod common;
-use common::{err, ok, s};
+use crate::common::{err, ok, s};
 
 /// `train s2d --help` gives the default budget that runs without `--epochs`/`--folds`, from the
 /// constants the command uses, so the two cannot drift apart.

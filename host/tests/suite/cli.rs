@@ -5,8 +5,7 @@
 
 use std::process::{Command, Output};
 
-mod common;
-use common::{err, ok, s};
+use crate::common::{err, ok, s};
 
 #[test]
 fn demo_then_every_command_on_its_outputs() {

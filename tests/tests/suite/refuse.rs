@@ -15,7 +15,7 @@ use sinew_core::s2d::S2dDecoder;
 use sinew_core::{EvalError, FormatError};
 use sinew_tests::{map_f32, with_f32};
 
-const ACTOR: &[u8] = include_bytes!("../data/aim-procedural.sinew");
+const ACTOR: &[u8] = include_bytes!("../../data/aim-procedural.sinew");
 const IDENTITY: [f32; 9] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0];
 const MODES: [Mode; 3] = [Mode::F32, Mode::Q16, Mode::Fast];
 
@@ -337,7 +337,7 @@ fn the_worst_accepted_case_stays_finite_in_every_mode() {
 
 #[test]
 fn the_s2d_decoder_refuses_its_inputs_by_index() {
-    let decoder = S2dDecoder::from_bytes(include_bytes!("../data/s2d-ict.sinew")).unwrap();
+    let decoder = S2dDecoder::from_bytes(include_bytes!("../../data/s2d-ict.sinew")).unwrap();
     let mut input = vec![0.0f32; decoder.input_len()];
     let mut scratch = vec![0.0f32; decoder.scratch_len()];
     let mut out = vec![0.0f32; 3 * decoder.vertex_count()];
@@ -386,7 +386,7 @@ fn the_s2d_decoder_refuses_its_inputs_by_index() {
 #[test]
 fn the_motion_generator_refuses_a_nan_intensity() {
     let generator =
-        MotionGenerator::from_bytes(include_bytes!("../data/motion-ict.sinew")).unwrap();
+        MotionGenerator::from_bytes(include_bytes!("../../data/motion-ict.sinew")).unwrap();
     let mut scratch = vec![0.0f32; generator.scratch_len()];
     let mut curve = vec![0.0f32; generator.curve_len()];
     let neutral: Vec<f32> = (0..generator.dims()).map(|i| (i % 7) as f32).collect();
@@ -407,7 +407,7 @@ fn the_motion_generator_refuses_a_nan_intensity() {
 
 #[test]
 fn a_performance_with_a_degenerate_frame_is_refused_at_load() {
-    let fit = include_bytes!("../data/fit-ict.sinew");
+    let fit = include_bytes!("../../data/fit-ict.sinew");
     assert!(Performance::from_bytes(fit).is_ok());
     // Frame 2's jaw rotation (values 9..15 of its row of 18) with a zero first column.
     let mut bytes = fit.to_vec();
@@ -489,7 +489,7 @@ fn load_errors_name_the_section_line_and_value_at_fault() {
     );
 
     // A replay's mode: of a value no replay takes, absent, or one an S2D replay does not take.
-    let replay = include_bytes!("../data/aim-procedural.q16.replay.sinew");
+    let replay = include_bytes!("../../data/aim-procedural.q16.replay.sinew");
     let mode = |bytes: &[u8]| sinew_core::replay::AimReplay::from_bytes(bytes).unwrap_err();
     let err = mode(&with_text(replay, b"mode=q16", b"mode=q64"));
     assert_eq!(
@@ -498,7 +498,7 @@ fn load_errors_name_the_section_line_and_value_at_fault() {
     );
     let err = mode(&with_text(replay, b"mode=q16", b"node=q16"));
     assert_eq!(err.to_string(), "metadata has no mode entry");
-    let s2d = include_bytes!("../data/s2d-ict.replay.sinew");
+    let s2d = include_bytes!("../../data/s2d-ict.replay.sinew");
     let err = sinew_core::replay::S2dReplay::from_bytes(&with_text(s2d, b"mode=f32", b"mode=q16"))
         .unwrap_err();
     assert_eq!(
@@ -541,7 +541,7 @@ fn load_errors_name_the_section_line_and_value_at_fault() {
     );
 
     // A motion generator's content, named by its line.
-    let motion = include_bytes!("../data/motion-ict.sinew");
+    let motion = include_bytes!("../../data/motion-ict.sinew");
     let file = sinew_core::SinewFile::from_bytes(motion).unwrap();
     let line = 1 + file
         .metadata()

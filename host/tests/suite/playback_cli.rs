@@ -5,8 +5,7 @@
 use std::path::Path;
 use std::process::Command;
 
-mod common;
-use common::{err, ok, repo, s, sinew};
+use crate::common::{err, ok, repo, s, sinew};
 
 #[test]
 fn view_prints_its_address_first_serves_and_stops_after_its_deadline() {

@@ -2,10 +2,8 @@
 //! a rig actor's per corner (an OBJ rig's `vt`), and the kit's carried onto the golden actor, each
 //! split at seams with the morph targets and skin duplicated to match, read back from the `.glb`.
 
-mod common;
-
-use common::gltf::{Gltf, axis_angle, golden, pose_gltf};
-use common::procedural_actor;
+use crate::common::gltf::{Gltf, axis_angle, golden, pose_gltf};
+use crate::common::procedural_actor;
 use gltf_json as json;
 use sinew_core::aim::AimActor;
 use sinew_host::aim::play::Frame;

@@ -10,8 +10,7 @@ use sinew_host::driver::{DriverConfig, landmark_vertices};
 use sinew_host::io::openface::{OpenFaceFrame, write_csv};
 use sinew_host::training::random::Stream;
 
-mod common;
-use common::{err, ok, repo, s};
+use crate::common::{err, ok, repo, s};
 
 const TRAIN: [&str; 10] = [
     "--steps",
@@ -421,7 +420,7 @@ fn a_three_d_driver_drives_openface_millimetres_wherever_the_camera_stood() {
 
 /// Runs `sinew`, requires success and returns its standard error.
 fn err_or_warn(args: &[&str]) -> String {
-    let out = common::sinew(args);
+    let out = crate::common::sinew(args);
     assert!(
         out.status.success(),
         "{}",
@@ -444,7 +443,7 @@ fn drive_calibrates_reports_lost_frames_and_warns_of_a_moving_calibration() {
     let track = repo("tests/data/driver-ict-live.csv");
     let out = dir.path().join("live");
     let run = |calibrate: &str, out: &Path| {
-        common::sinew(&[
+        crate::common::sinew(&[
             "drive",
             "--model",
             &actor,

@@ -1,7 +1,7 @@
 //! What the command-line tests share: running the `sinew` binary of this build, and paths in the
 //! repository.
 
-#![allow(dead_code)] // each test binary uses its own part of it
+#![allow(dead_code)] // not every helper is used in every build of the suite
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -465,6 +465,87 @@ fn long_files_are_explained() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// The integration tests of `dir` that break the one-binary rule (docs/ARCHITECTURE.md, "One test
+/// binary per crate"): a `.rs` file directly in `dir` (its own binary), or a file of `dir/suite`
+/// that `suite/main.rs` leaves out (never compiled).
+fn test_binary_violations(dir: &Path) -> Vec<String> {
+    let rel = |p: &Path| p.strip_prefix(repo()).unwrap_or(p).display().to_string();
+    let mut failures = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return failures;
+    };
+    for entry in entries {
+        let p = entry.unwrap().path();
+        if p.is_file() && p.extension().is_some_and(|e| e == "rs") {
+            failures.push(format!(
+                "{}: a test binary of its own; make it a module of suite/main.rs",
+                rel(&p)
+            ));
+        }
+    }
+    let suite = dir.join("suite");
+    let main = std::fs::read_to_string(suite.join("main.rs")).unwrap_or_default();
+    let declared: BTreeSet<String> = code_lines(&main)
+        .iter()
+        .filter_map(|l| {
+            l.trim()
+                .strip_prefix("mod ")?
+                .strip_suffix(';')
+                .map(str::to_owned)
+        })
+        .collect();
+    let Ok(entries) = std::fs::read_dir(&suite) else {
+        failures.push(format!("{}: no suite/main.rs", rel(dir)));
+        return failures;
+    };
+    for entry in entries {
+        let p = entry.unwrap().path();
+        let name = p.file_stem().unwrap().to_string_lossy().into_owned();
+        let module = p.is_dir() || p.extension().is_some_and(|e| e == "rs");
+        if module && name != "main" && !declared.contains(&name) {
+            failures.push(format!(
+                "{}: not a module of suite/main.rs, so never compiled",
+                rel(&p)
+            ));
+        }
+    }
+    failures
+}
+
+#[test]
+fn integration_tests_are_one_binary_per_crate() {
+    let failures: Vec<String> = ["host/tests", "tests/tests"]
+        .iter()
+        .flat_map(|d| test_binary_violations(&repo().join(d)))
+        .collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn the_test_binary_check_finds_a_stray_file() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("suite")).unwrap();
+    std::fs::write(
+        dir.path().join("suite/main.rs"),
+        "mod kept;\n// mod commented;\n",
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("suite/kept.rs"), "").unwrap();
+    std::fs::write(dir.path().join("suite/commented.rs"), "").unwrap();
+    std::fs::write(dir.path().join("alone.rs"), "").unwrap();
+    let mut found = test_binary_violations(dir.path());
+    found.sort();
+    assert_eq!(found.len(), 2, "{found:?}");
+    assert!(
+        found[0].contains("alone.rs") && found[0].contains("of its own"),
+        "{found:?}"
+    );
+    assert!(
+        found[1].contains("commented.rs") && found[1].contains("never compiled"),
+        "{found:?}"
+    );
+}
+
 /// The files of the host's library that use `anyhow` outside their tests: only the edge may
 /// (`main.rs`, `cli/`, the `*/commands.rs` glue); `src` is the host's source folder.
 fn anyhow_outside_the_edge(src: &Path) -> Vec<String> {

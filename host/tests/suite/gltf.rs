@@ -4,9 +4,7 @@
 //! same frames on the golden ICT actor. The evaluator below reads only the .glb, so it checks
 //! what an engine would see.
 
-mod common;
-
-use common::gltf::{Gltf, axis_angle, golden, pose_gltf, pose_gltf_keeping};
+use crate::common::gltf::{Gltf, axis_angle, golden, pose_gltf, pose_gltf_keeping};
 use gltf_json as json;
 use sinew_core::aim::AimActor;
 use sinew_host::aim::play::Frame;

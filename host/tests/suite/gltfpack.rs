@@ -6,12 +6,10 @@
 //! `scripts/check.sh` installs gltfpack (`npm ci` in `host/tests/gltfpack`) before the tests;
 //! without it the test says so and skips, unless `SINEW_REQUIRE_DATA=1` (CI), where it fails.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::{ok, s};
+use crate::common::{ok, s};
 use sinew_host::io::rig::RigFile;
 use sinew_host::rig::sample::Placement;
 use sinew_host::rig::{Rig, RigOptions};
@@ -186,7 +184,7 @@ fn a_rig_through_gltfpack_reads_finds_its_landmarks_trains_and_plays() {
         s(&d.join("report.json")),
     ]);
     let frames = d.join("frames");
-    let capture = common::repo("tests/data/arkit-sample.csv");
+    let capture = crate::common::repo("tests/data/arkit-sample.csv");
     ok(&[
         "play",
         "--model",

@@ -6,8 +6,7 @@
 
 use std::path::PathBuf;
 
-mod common;
-use common::{repo, s, sinew};
+use crate::common::{repo, s, sinew};
 
 use sinew_core::aim::AimActor;
 use sinew_core::error::{BufferError, FormatError};

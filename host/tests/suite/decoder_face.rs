@@ -3,8 +3,7 @@
 //! the golden decoder and on a decoder baked without its template's triangles (as decoders were
 //! from 2026-11-23 to 2026-11-26), which `sinew s2d add-triangles` gives them.
 
-mod common;
-use common::{err, ok, s};
+use crate::common::{err, ok, s};
 
 use sinew_host::io::container::SinewWriter;
 use sinew_host::io::decoder_face::{self, TRIANGLES};
