@@ -147,7 +147,7 @@ fi
 bash core/wasm/build.sh
 node --test core/wasm/test/*.test.mjs
 
-step "sinew view: the page in headless chromium plays the golden replay, performance, live driver and S2D track (host/tests/view/e2e.mjs)"
+step "sinew view: the page in headless chromium plays the golden replay, performance, live driver and S2D track (host/tests/view/e2e.mjs), and drives the actor from a fake webcam through MediaPipe (webcam.mjs)"
 for tool in chromium npm; do
   if ! command -v "$tool" >/dev/null; then
     apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$tool" >/dev/null
@@ -155,6 +155,9 @@ for tool in chromium npm; do
 done
 (cd host/tests/view && npm ci --no-audit --no-fund)
 SINEW_BIN="$sinew" node host/tests/view/e2e.mjs
+# The webcam page on a rendered performance as chromium's fake camera, MediaPipe Face Mesh (npm)
+# tracking it in the page, the driven faces against the truth and against `sinew drive`.
+SINEW_BIN="$sinew" node host/tests/view/webcam.mjs
 
 step "firmware-sim: golden replays on Cortex-M4F, RISC-V (QEMU) and wasm (node)"
 bash firmware-sim/run.sh

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::Args;
 
 #[derive(Debug, Args)]
@@ -31,15 +31,31 @@ pub(crate) struct ViewArgs {
     #[arg(long)]
     neutral: Option<PathBuf>,
     /// A landmark driver of this actor (`sinew train driver`): the page plays `--landmarks`
-    /// through it, in the core compiled to WebAssembly.
-    #[arg(long, requires = "landmarks")]
+    /// through it, or with `--webcam` drives it live from the camera, in the core compiled to
+    /// WebAssembly.
+    #[arg(long)]
     driver: Option<PathBuf>,
+    /// Drive the actor live from the browser's camera: the page runs MediaPipe Face Mesh (from
+    /// `--tracker-dir`), calibrates on the first second and drives every frame through
+    /// `--driver`, a MediaPipe driver (`sinew train driver --input mediapipe`).
+    #[arg(long, requires = "driver", conflicts_with = "landmarks")]
+    webcam: bool,
+    /// The folder of MediaPipe Face Mesh's web files for `--webcam`: what `npm install
+    /// @mediapipe/face_mesh@0.4.1633559619` makes in the folder it runs in.
+    #[arg(
+        long,
+        env = "SINEW_TRACKER_DIR",
+        default_value = sinew_host::view::webcam::DEFAULT_TRACKER_DIR
+    )]
+    tracker_dir: PathBuf,
     /// The driver's track: an OpenFace 2.0 CSV (2D pixels through `--intrinsics`, or 3D
     /// landmarks for a 3D driver) or a performance folder, as `sinew drive` reads it; a lost
     /// frame holds the last pose.
     #[arg(long, requires = "driver")]
     landmarks: Option<PathBuf>,
-    /// The CSV's camera: focal lengths and principal point in pixels, FX,FY,CX,CY.
+    /// The track's or the webcam's camera: focal lengths and principal point in pixels,
+    /// FX,FY,CX,CY (for the webcam, default: the focal length the video's width, the principal
+    /// point at its centre).
     #[arg(long, value_delimiter = ',', requires = "driver")]
     intrinsics: Option<Vec<f32>>,
     /// A CSV row whose confidence is below this is a lost frame.
@@ -57,14 +73,30 @@ pub(crate) struct ViewArgs {
 /// `sinew view`.
 pub(crate) fn run(args: ViewArgs) -> Result<()> {
     let intrinsics = super::driver::intrinsics(args.intrinsics.as_deref())?;
-    let driver = match (&args.driver, &args.landmarks) {
-        (Some(driver), Some(landmarks)) => Some(sinew_host::view::DriverInputs {
-            driver,
-            landmarks,
-            intrinsics,
-            min_confidence: args.min_confidence,
-        }),
-        _ => None,
+    let (driver, webcam) = match (&args.driver, &args.landmarks) {
+        (Some(driver), Some(landmarks)) => (
+            Some(sinew_host::view::DriverInputs {
+                driver,
+                landmarks,
+                intrinsics,
+                min_confidence: args.min_confidence,
+            }),
+            None,
+        ),
+        (Some(driver), None) if args.webcam => (
+            None,
+            Some(sinew_host::view::WebcamInputs {
+                driver,
+                tracker: &args.tracker_dir,
+                intrinsics,
+            }),
+        ),
+        (Some(driver), None) => bail!(
+            "--driver {}: give the track it plays (--landmarks TRACK) or drive it from the \
+             camera (--webcam)",
+            driver.display()
+        ),
+        _ => (None, None),
     };
     let inputs = sinew_host::view::Inputs {
         model: &args.model,
@@ -74,6 +106,7 @@ pub(crate) fn run(args: ViewArgs) -> Result<()> {
         track: args.track.as_deref(),
         neutral: args.neutral.as_deref(),
         driver,
+        webcam,
     };
     Ok(sinew_host::view::view(
         inputs,

@@ -292,6 +292,22 @@ pub enum RenderError {
     /// The video could not be written.
     #[error(transparent)]
     Video(#[from] AtomicWriteError),
+    /// The picture is too small for the frame-number code (`--stamp`).
+    #[error(
+        "{}: the camera's image is {width}×{height}; the frame-number code needs at least {}×{}",
+        path.display(), STAMP_BITS * STAMP_CELL, STAMP_CELL
+    )]
+    TooSmallForStamp {
+        /// The performance's manifest.
+        path: PathBuf,
+        /// Its image width.
+        width: u32,
+        /// Its image height.
+        height: u32,
+    },
+    /// The frame rate asked for is not a positive finite number.
+    #[error("--fps {0}: a video's frame rate must be a positive number")]
+    FrameRate(f32),
     /// The camera's image has an odd side, which 4:2:0 video cannot hold whole.
     #[error("{}: the camera's image is {width}×{height}; a y4m video needs even sides", path.display())]
     OddSize {
@@ -320,24 +336,105 @@ pub struct Rendered {
 /// The video's file name in `sinew render`'s output folder.
 pub const VIDEO: &str = "performance.y4m";
 
+/// Bits of the frame-number code (`sinew render --stamp`): frame numbers modulo 2^16.
+pub const STAMP_BITS: u32 = 16;
+/// Side of one cell of the frame-number code, in pixels (whole 4:2:0 chroma blocks).
+pub const STAMP_CELL: u32 = 8;
+
+/// What `sinew render` makes besides the video.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// A PNG per frame as well.
+    pub pngs: bool,
+    /// The video's frame rate; `None` keeps the performance's. A slower video suits a tracker
+    /// slower than real time reading it as a camera.
+    pub fps: Option<f32>,
+    /// The frame-number code in the top-left corner of every frame ([`stamp`]).
+    pub stamp: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self {
+            pngs: true,
+            fps: None,
+            stamp: false,
+        }
+    }
+}
+
+/// Draws the frame-number code of frame `frame` into `image`: bit k of `frame` (least
+/// significant first, modulo 2^[`STAMP_BITS`]) as the k-th of a row of square cells of
+/// [`STAMP_CELL`] pixels along the top edge from the left corner, white for 1 and black for 0, so
+/// that whoever reads the picture as a camera (a browser test, a latency measurement) can tell
+/// which frame it is looking at. An image too small for the row is left alone.
+pub fn stamp(image: &mut Image, frame: usize) {
+    if image.width < STAMP_BITS * STAMP_CELL || image.height < STAMP_CELL {
+        return;
+    }
+    for k in 0..STAMP_BITS {
+        let value = if (frame >> k) & 1 == 1 { 255 } else { 0 };
+        for y in 0..STAMP_CELL {
+            for x in k * STAMP_CELL..(k + 1) * STAMP_CELL {
+                let i = 3 * (y as usize * image.width as usize + x as usize);
+                image.rgb[i..i + 3].fill(value);
+            }
+        }
+    }
+}
+
+/// The frame number [`stamp`] drew into `image`, read at each cell's centre (a cell is 1 where
+/// its luma is above mid-grey); `None` for an image too small to hold the code.
+pub fn read_stamp(image: &Image) -> Option<u32> {
+    if image.width < STAMP_BITS * STAMP_CELL || image.height < STAMP_CELL {
+        return None;
+    }
+    let c = STAMP_CELL / 2;
+    Some((0..STAMP_BITS).fold(0, |code, k| {
+        let i = 3 * (c as usize * image.width as usize + (k * STAMP_CELL + c) as usize);
+        let [r, g, b] = [image.rgb[i], image.rgb[i + 1], image.rgb[i + 2]].map(u32::from);
+        let luma = (299 * r + 587 * g + 114 * b) / 1000;
+        if luma > 127 { code | (1 << k) } else { code }
+    }))
+}
+
 /// `sinew render`: every frame of the performance in `dir` photographed through its camera, as
-/// `out/frame_00000.png`… (unless `pngs` is false) and `out/performance.y4m` at the
-/// performance's frame rate. The albedo is laid out on the first frame with the head's pose
-/// taken off.
+/// `out/frame_00000.png`… (unless `options.pngs` is false) and `out/performance.y4m` at the
+/// performance's frame rate or `options.fps`, each frame stamped with its number when
+/// `options.stamp` is set. The albedo is laid out on the first frame with the head's pose taken
+/// off.
 ///
 /// # Errors
 /// [`RenderError`], naming the file.
-pub fn render_performance(dir: &Path, out: &Path, pngs: bool) -> Result<Rendered, RenderError> {
+pub fn render_performance(
+    dir: &Path,
+    out: &Path,
+    options: RenderOptions,
+) -> Result<Rendered, RenderError> {
+    if let Some(fps) = options.fps
+        && !(fps.is_finite() && fps > 0.0)
+    {
+        return Err(RenderError::FrameRate(fps));
+    }
     let perf = Performance::read(dir)?;
     let m = &perf.manifest;
     let camera = m.camera;
+    let manifest = dir.join(crate::io::performance::MANIFEST);
     if camera.width % 2 != 0 || camera.height % 2 != 0 {
         return Err(RenderError::OddSize {
-            path: dir.join(crate::io::performance::MANIFEST),
+            path: manifest,
             width: camera.width,
             height: camera.height,
         });
     }
+    if options.stamp && (camera.width < STAMP_BITS * STAMP_CELL || camera.height < STAMP_CELL) {
+        return Err(RenderError::TooSmallForStamp {
+            path: manifest,
+            width: camera.width,
+            height: camera.height,
+        });
+    }
+    let pngs = options.pngs;
     atomic::create_folder(out, "output folder")?;
     let triangles = triangulate(&perf.polygons);
     let albedo = match (perf.frames.first(), m.parameters.first()) {
@@ -355,7 +452,8 @@ pub fn render_performance(dir: &Path, out: &Path, pngs: bool) -> Result<Rendered
     let video = out.join(VIDEO);
     let mut png_error = None;
     let written = atomic::write_with(&video, |w| {
-        w.write_all(y4m::header(camera.width, camera.height, m.fps).as_bytes())?;
+        let fps = options.fps.unwrap_or(m.fps);
+        w.write_all(y4m::header(camera.width, camera.height, fps).as_bytes())?;
         for (f, positions) in perf.frames.iter().enumerate() {
             let (mut positions, mut triangles, mut albedo) =
                 (positions.clone(), triangles.clone(), albedo.clone());
@@ -366,7 +464,10 @@ pub fn render_performance(dir: &Path, out: &Path, pngs: bool) -> Result<Rendered
                 .filter_map(|&v| positions.get(v as usize).copied())
                 .collect();
             eyes::add_eyes(&mut positions, &mut triangles, &mut albedo, &landmarks);
-            let image = photograph(&positions, &triangles, &albedo, &camera, SUPERSAMPLE);
+            let mut image = photograph(&positions, &triangles, &albedo, &camera, SUPERSAMPLE);
+            if options.stamp {
+                stamp(&mut image, f);
+            }
             y4m::write_frame(w, image.width, image.height, &image.rgb)?;
             if pngs {
                 let path = out.join(format!("frame_{f:05}.png"));

@@ -17,6 +17,20 @@ pub enum ViewError {
     /// The landmark driver is no driver, or one of another actor.
     #[error(transparent)]
     Driver(#[from] crate::driver::drive::DriveError),
+    /// The `--webcam` driver reads another tracker's points than MediaPipe Face Mesh's, which
+    /// the page runs.
+    #[error(
+        "{}: --webcam runs MediaPipe Face Mesh in the page, and this driver reads iBUG's 68 \
+         landmarks; train one for it with `sinew train driver --input mediapipe`",
+        path.display()
+    )]
+    NotAMediaPipeDriver {
+        /// The driver.
+        path: PathBuf,
+    },
+    /// MediaPipe Face Mesh's web files cannot be served from the folder named.
+    #[error(transparent)]
+    Tracker(#[from] super::webcam::TrackerMissing),
     /// The driver's track cannot be read for it (the error names the file, and a CSV's row and
     /// column).
     #[error(transparent)]

@@ -12,6 +12,7 @@ use sinew_core::performance::Performance;
 use sinew_core::replay::{AimReplay, check_model};
 
 use super::error::ViewError;
+use super::webcam::{self, WebcamConfig, WebcamInputs};
 use crate::aim::play::PoseFile;
 use crate::driver::track::{self, Placement};
 
@@ -19,6 +20,7 @@ use crate::driver::track::{self, Placement};
 const INDEX_HTML: &str = include_str!("web/index.html");
 const VIEWER_JS: &str = include_str!("web/viewer.js");
 const FACE_JS: &str = include_str!("web/face.js");
+const WEBCAM_JS: &str = include_str!("web/webcam.js");
 const STYLE_CSS: &str = include_str!("web/style.css");
 const SINEW_MJS: &str = include_str!("../../../core/wasm/js/sinew.mjs");
 /// The core compiled to WebAssembly from this checkout's sources by `host/build.rs`.
@@ -39,6 +41,9 @@ pub struct Entry {
 #[derive(Clone, Debug)]
 pub struct Site {
     entries: Vec<Entry>,
+    /// Whether the table serves MediaPipe Face Mesh (`--webcam`), whose scripts need a wider
+    /// content security policy.
+    tracker: bool,
 }
 
 /// What the page learns from `/config.json` for an AIM actor: which data files exist and their
@@ -52,6 +57,7 @@ struct Config<'a> {
     poses: Option<Described<'a>>,
     performance: Option<Described<'a>>,
     driver: Option<DriverConfig<'a>>,
+    webcam: Option<WebcamConfig>,
 }
 
 #[derive(Debug, Serialize)]
@@ -100,6 +106,8 @@ pub struct Inputs<'a> {
     pub neutral: Option<&'a Path>,
     /// A landmark driver of the actor and the track it plays.
     pub driver: Option<DriverInputs<'a>>,
+    /// A MediaPipe driver of the actor driven live from the browser's camera.
+    pub webcam: Option<WebcamInputs<'a>>,
 }
 
 /// A landmark driver and its track, as `sinew drive` reads them (docs/FIT.md, "Live driver").
@@ -247,6 +255,11 @@ impl Site {
                 json,
             ));
         }
+        let live = match &inputs.webcam {
+            Some(w) => Some(webcam::load(w, inputs.model, &model)?),
+            None => None,
+        };
+        let (webcam, webcam_entries) = live.unzip();
         let config = serde_json::to_vec(&Config {
             model: &model_name,
             kind: "aim",
@@ -275,6 +288,7 @@ impl Site {
                         space,
                     },
                 ),
+            webcam,
         })
         .map_err(ViewError::Json)?;
 
@@ -312,7 +326,12 @@ impl Site {
                 body: json.into(),
             });
         }
-        Self::new(entries)
+        let tracker = webcam_entries.is_some();
+        entries.extend(webcam_entries.into_iter().flatten());
+        Ok(Self {
+            tracker,
+            ..Self::new(entries)?
+        })
     }
 
     /// The table of `entries`, refused if one is empty (an embedded file missing from the build).
@@ -320,7 +339,20 @@ impl Site {
         if entries.iter().any(|e| e.body.is_empty()) {
             return Err(ViewError::EmptyEntry);
         }
-        Ok(Self { entries })
+        Ok(Self {
+            entries,
+            tracker: false,
+        })
+    }
+
+    /// The content security policy of every answer: [`super::server::POLICY`], or
+    /// [`super::server::POLICY_WITH_TRACKER`] where the page runs MediaPipe Face Mesh.
+    pub fn policy(&self) -> &'static str {
+        if self.tracker {
+            super::server::POLICY_WITH_TRACKER
+        } else {
+            super::server::POLICY
+        }
     }
 
     /// The file at exactly `path` (`/` for the page), if the table has it.
@@ -348,6 +380,11 @@ pub(super) fn page(config: &[u8], model: &[u8]) -> Vec<Entry> {
             "/face.js",
             "text/javascript; charset=utf-8",
             FACE_JS.as_bytes(),
+        ),
+        entry(
+            "/webcam.js",
+            "text/javascript; charset=utf-8",
+            WEBCAM_JS.as_bytes(),
         ),
         entry(
             "/style.css",

@@ -9,6 +9,7 @@ mod error;
 pub mod files;
 mod s2d;
 pub mod server;
+pub mod webcam;
 
 use std::time::{Duration, Instant};
 
@@ -17,6 +18,7 @@ use sinew_core::format::{ArtifactKind, SinewFile};
 pub use error::ViewError;
 pub use files::{DriverInputs, Inputs, Site};
 pub use server::Viewer;
+pub use webcam::WebcamInputs;
 
 impl Site {
     /// Reads and validates the data files and builds the table, for an AIM actor
@@ -88,6 +90,7 @@ mod tests {
             track: None,
             neutral: None,
             driver: None,
+            webcam: None,
         })
         .unwrap()
     }
@@ -210,6 +213,7 @@ mod tests {
             track: None,
             neutral: None,
             driver: None,
+            webcam: None,
         })
         .unwrap();
         let config: serde_json::Value =
@@ -239,6 +243,7 @@ mod tests {
             track: None,
             neutral: None,
             driver: None,
+            webcam: None,
         });
         assert!(
             matches!(&e, ViewError::NotViewable { path, .. } if *path == other),
@@ -255,6 +260,7 @@ mod tests {
             track: Some(&track),
             neutral: None,
             driver: None,
+            webcam: None,
         });
         assert!(
             matches!(&e, ViewError::S2dFileForActor { path, flag: "--track", .. } if *path == track),
@@ -268,6 +274,7 @@ mod tests {
             track: None,
             neutral: None,
             driver: None,
+            webcam: None,
         });
         assert!(
             matches!(&e, ViewError::DoesNotPlay { path, model: m, .. } if *path == other && *m == model),
@@ -281,6 +288,7 @@ mod tests {
             track: None,
             neutral: None,
             driver: None,
+            webcam: None,
         });
         assert!(matches!(e, ViewError::NotAnAimReplay { .. }), "{e}");
         let dir = tempfile::tempdir().unwrap();
@@ -294,6 +302,7 @@ mod tests {
             track: None,
             neutral: None,
             driver: None,
+            webcam: None,
         });
         assert!(
             matches!(&e, ViewError::Poses(crate::aim::play::PoseFileError::WeightCount { path, .. }) if *path == poses),
@@ -308,6 +317,7 @@ mod tests {
             track: None,
             neutral: None,
             driver: None,
+            webcam: None,
         });
         assert!(
             matches!(&e, ViewError::Container(crate::io::container::ContainerError::Read { path, .. }) if *path == missing),
@@ -324,6 +334,7 @@ mod tests {
             track: None,
             neutral: None,
             driver: None,
+            webcam: None,
         });
         assert!(
             matches!(&e, ViewError::Container(crate::io::container::ContainerError::Invalid { path, .. }) if *path == damaged),
@@ -341,6 +352,7 @@ mod tests {
             track: None,
             neutral: None,
             driver: None,
+            webcam: None,
         })
         .unwrap();
         let config: serde_json::Value =
@@ -383,6 +395,7 @@ mod tests {
                     intrinsics,
                     min_confidence: 0.5,
                 }),
+                webcam: None,
             })
         };
         let csv = data("driver-ict.csv");
@@ -444,6 +457,7 @@ mod tests {
                 track: None,
                 neutral: None,
                 driver: None,
+                webcam: None,
             })
             .unwrap_err()
         };

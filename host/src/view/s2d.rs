@@ -61,6 +61,7 @@ pub(super) fn load(inputs: Inputs<'_>, model: Vec<u8>) -> Result<Site, ViewError
         ("--poses", inputs.poses),
         ("--performance", inputs.performance),
         ("--driver", inputs.driver.map(|d| d.driver)),
+        ("--webcam --driver", inputs.webcam.map(|w| w.driver)),
     ] {
         if let Some(path) = path {
             return Err(ViewError::ActorFileForS2d {
@@ -170,6 +171,7 @@ mod tests {
             track: None,
             neutral: None,
             driver: None,
+            webcam: None,
         }
     }
 
@@ -241,6 +243,7 @@ mod tests {
             track: Some(&track),
             neutral: Some(&face),
             driver: None,
+            webcam: None,
             ..inputs(&model)
         })
         .unwrap();
@@ -315,6 +318,7 @@ mod tests {
         let e = err(Inputs {
             neutral: Some(&face),
             driver: None,
+            webcam: None,
             ..inputs(&model)
         });
         assert!(
@@ -326,6 +330,7 @@ mod tests {
         let e = err(Inputs {
             neutral: Some(&missing),
             driver: None,
+            webcam: None,
             ..inputs(&model)
         });
         assert!(

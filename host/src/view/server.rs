@@ -45,22 +45,26 @@ use super::files::Site;
 const POLL: Duration = Duration::from_millis(100);
 
 /// Headers on every answer: no caching (the files change with the command line), no type
-/// sniffing, no referrer, a content security policy that allows the page's own scripts and
-/// WebAssembly only, and cross-origin isolation, which gives the page's `performance.now()` its
-/// fine resolution for the per-frame times.
+/// sniffing, no referrer, cross-origin isolation, which gives the page's `performance.now()` its
+/// fine resolution for the per-frame times, and a content security policy ([`Site::policy`]).
 const HEADERS: &[(&str, &str)] = &[
     ("Cache-Control", "no-store"),
     ("X-Content-Type-Options", "nosniff"),
     ("Referrer-Policy", "no-referrer"),
-    (
-        "Content-Security-Policy",
-        "default-src 'self'; script-src 'self' 'wasm-unsafe-eval'; style-src 'self'; \
-         img-src 'self' data:; connect-src 'self'; frame-ancestors 'none'",
-    ),
     ("Cross-Origin-Opener-Policy", "same-origin"),
     ("Cross-Origin-Embedder-Policy", "require-corp"),
     ("Cross-Origin-Resource-Policy", "same-origin"),
 ];
+
+/// The content security policy: the page's own scripts and WebAssembly only.
+pub const POLICY: &str = "default-src 'self'; script-src 'self' 'wasm-unsafe-eval'; \
+     style-src 'self'; img-src 'self' data:; connect-src 'self'; frame-ancestors 'none'";
+
+/// The policy with `--webcam`: MediaPipe Face Mesh's Emscripten glue makes functions from
+/// strings, so its scripts (served from the same origin, like every script) need `unsafe-eval`.
+pub const POLICY_WITH_TRACKER: &str = "default-src 'self'; \
+     script-src 'self' 'wasm-unsafe-eval' 'unsafe-eval'; style-src 'self'; img-src 'self' data:; \
+     connect-src 'self'; frame-ancestors 'none'";
 
 /// An answer: the status, and a file of the table or a one-line text.
 #[derive(Debug, PartialEq, Eq)]
@@ -341,10 +345,10 @@ fn answer(
     *response.status_mut() =
         StatusCode::from_u16(reply.status).unwrap_or(StatusCode::INTERNAL_SERVER_ERROR);
     let headers = response.headers_mut();
-    for (name, value) in HEADERS
-        .iter()
-        .chain(&[("Content-Type", reply.content_type)])
-    {
+    for (name, value) in HEADERS.iter().chain(&[
+        ("Content-Security-Policy", site.policy()),
+        ("Content-Type", reply.content_type),
+    ]) {
         if let (Ok(name), Ok(value)) = (
             HeaderName::from_bytes(name.as_bytes()),
             HeaderValue::from_str(value),

@@ -74,6 +74,41 @@ fn view_names_a_bad_model_and_fails() {
     );
 }
 
+/// `--webcam` without MediaPipe's files says which command installs them; a driver with neither
+/// a track nor the webcam is refused naming both ways; a render's frame rate must be positive.
+#[test]
+fn view_webcam_names_what_is_missing() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = repo("tests/data/aim-ict.sinew");
+    let driver = repo("tests/data/driver-ict-mediapipe.sinew");
+    let empty = dir.path().join("tracker");
+    std::fs::create_dir(&empty).unwrap();
+    let e = err(&[
+        "view",
+        &model,
+        "--driver",
+        &driver,
+        "--webcam",
+        "--tracker-dir",
+        s(&empty),
+        "--port",
+        "0",
+    ]);
+    assert!(
+        e.contains(
+            "tracker: MediaPipe Face Mesh's web files are not there (face_mesh.js is missing)"
+        ) && e.contains("npm install @mediapipe/face_mesh@0.4.1633559619"),
+        "{e}"
+    );
+    let e = err(&["view", &model, "--driver", &driver, "--port", "0"]);
+    assert!(
+        e.contains("--landmarks TRACK") && e.contains("--webcam"),
+        "{e}"
+    );
+    let e = err(&["render", s(dir.path()), "--out", s(&empty), "--fps", "0"]);
+    assert!(e.contains("--fps 0"), "{e}");
+}
+
 #[test]
 fn play_arkit_and_export_gltf_on_the_golden_actor() {
     let dir = tempfile::tempdir().unwrap();

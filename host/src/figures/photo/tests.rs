@@ -193,3 +193,33 @@ fn eyeballs_fill_the_eye_openings_behind_the_eyelids() {
     eyes::add_eyes(&mut none.0, &mut none.1, &mut none.2, &lm[..60]);
     assert!(none.0.is_empty() && none.1.is_empty());
 }
+
+#[test]
+fn the_frame_number_code_reads_back_and_leaves_the_face_alone() {
+    let (positions, triangles) = square(0.0);
+    let camera = Camera {
+        width: 160,
+        height: 120,
+        cx: 80.0,
+        cy: 60.0,
+        ..camera()
+    };
+    let face = photograph(&positions, &triangles, &[], &camera, 1);
+    for frame in [0, 1, 2, 37, 255, 1000, 65_535, 65_536 + 5] {
+        let mut image = face.clone();
+        stamp(&mut image, frame);
+        assert_eq!(
+            read_stamp(&image),
+            Some(frame as u32 % 65_536),
+            "frame {frame}"
+        );
+        // Only the top row of cells changes.
+        let row = 3 * (STAMP_CELL * image.width) as usize;
+        assert_eq!(image.rgb[row..], face.rgb[row..], "frame {frame}");
+    }
+    let mut small = Image::new(STAMP_BITS * STAMP_CELL - 1, 64, BACKDROP);
+    let before = small.clone();
+    stamp(&mut small, 7);
+    assert_eq!(small, before);
+    assert_eq!(read_stamp(&small), None);
+}

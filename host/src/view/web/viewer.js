@@ -8,6 +8,7 @@
 
 import { init, Driver, Model, Performance, Replay, frameHash } from "./sinew.mjs";
 import { FaceView, vertexNormals } from "./face.js";
+import { startWebcam } from "./webcam.js";
 
 const $ = (id) => document.getElementById(id);
 const status = $("status");
@@ -179,6 +180,30 @@ async function main() {
   });
 
   show(() => posed(rig.pose()), null);
+
+  // The webcam starts in the background (the tracker loads, the browser asks for the camera);
+  // its test hooks appear when it runs, its failure is shown in its panel.
+  let webcam = null;
+  if (config.webcam) {
+    const driver = Driver.load(await bytes("driver.sinew"), model);
+    startWebcam({
+      config,
+      model,
+      driver,
+      show: (p, normals, coefficients) => {
+        positions = p;
+        view.draw(p, normals);
+        rig.setCoefficients(coefficients);
+      },
+    }).then(
+      (hooks) => (webcam = hooks),
+      (e) => {
+        $("webcam-status").textContent = `webcam: ${e.message ?? e}`;
+        $("webcam-status").classList.add("error");
+        webcam = { error: () => String(e.message ?? e), frames: () => [], started: () => false };
+      },
+    );
+  }
   const frames = sources.reduce((n, s) => n + s.count, 0);
   status.textContent =
     `${model.vertexCount} vertices, ${model.triangleCount} triangles, ${model.shapeCount} ` +
@@ -204,6 +229,8 @@ async function main() {
     playing: () => player.playing,
     /** The thickness heatmap's range as shown, e.g. "0 – 28.6 mm". */
     thicknessRange: () => heat.label,
+    /** The webcam's hooks (webcam.js) once it runs or has failed; null before. */
+    webcam: () => webcam,
   };
 }
 
