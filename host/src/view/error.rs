@@ -29,8 +29,22 @@ pub enum ViewError {
         path: PathBuf,
     },
     /// MediaPipe Face Mesh's web files cannot be served from the folder named.
-    #[error(transparent)]
-    Tracker(#[from] super::webcam::TrackerMissing),
+    #[error(
+        "{}: MediaPipe Face Mesh's web files are not there ({file} {problem}); install them with \
+         `npm install {package}` (into node_modules/@mediapipe/face_mesh of the folder it runs \
+         in) or name their folder with --tracker-dir",
+        dir.display()
+    )]
+    TrackerMissing {
+        /// The folder.
+        dir: PathBuf,
+        /// The first file that cannot be served.
+        file: &'static str,
+        /// What is wrong with it.
+        problem: String,
+        /// The npm package that holds the files, at its tested version.
+        package: &'static str,
+    },
     /// The driver's track cannot be read for it (the error names the file, and a CSV's row and
     /// column).
     #[error(transparent)]

@@ -26,6 +26,16 @@ const SINEW_MJS: &str = include_str!("../../../core/wasm/js/sinew.mjs");
 /// The core compiled to WebAssembly from this checkout's sources by `host/build.rs`.
 const SINEW_WASM: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/sinew_wasm.wasm"));
 
+/// The content security policy: the page's own scripts and WebAssembly only.
+pub const POLICY: &str = "default-src 'self'; script-src 'self' 'wasm-unsafe-eval'; \
+     style-src 'self'; img-src 'self' data:; connect-src 'self'; frame-ancestors 'none'";
+
+/// The policy with `--webcam`: MediaPipe Face Mesh's Emscripten glue makes functions from
+/// strings, so its scripts (served from the same origin, like every script) need `unsafe-eval`.
+pub const POLICY_WITH_TRACKER: &str = "default-src 'self'; \
+     script-src 'self' 'wasm-unsafe-eval' 'unsafe-eval'; style-src 'self'; img-src 'self' data:; \
+     connect-src 'self'; frame-ancestors 'none'";
+
 /// One file the server answers with.
 #[derive(Clone, Debug)]
 pub struct Entry {
@@ -256,7 +266,7 @@ impl Site {
             ));
         }
         let live = match &inputs.webcam {
-            Some(w) => Some(webcam::load(w, inputs.model, &model)?),
+            Some(w) => Some(webcam::load(w, file_name(w.driver), inputs.model, &model)?),
             None => None,
         };
         let (webcam, webcam_entries) = live.unzip();
@@ -327,7 +337,16 @@ impl Site {
             });
         }
         let tracker = webcam_entries.is_some();
-        entries.extend(webcam_entries.into_iter().flatten());
+        entries.extend(
+            webcam_entries
+                .into_iter()
+                .flatten()
+                .map(|(path, content_type, body)| Entry {
+                    path,
+                    content_type,
+                    body: body.into(),
+                }),
+        );
         Ok(Self {
             tracker,
             ..Self::new(entries)?
@@ -345,13 +364,13 @@ impl Site {
         })
     }
 
-    /// The content security policy of every answer: [`super::server::POLICY`], or
-    /// [`super::server::POLICY_WITH_TRACKER`] where the page runs MediaPipe Face Mesh.
+    /// The content security policy of every answer: [`POLICY`], or [`POLICY_WITH_TRACKER`]
+    /// where the page runs MediaPipe Face Mesh.
     pub fn policy(&self) -> &'static str {
         if self.tracker {
-            super::server::POLICY_WITH_TRACKER
+            POLICY_WITH_TRACKER
         } else {
-            super::server::POLICY
+            POLICY
         }
     }
 

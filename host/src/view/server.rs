@@ -56,16 +56,6 @@ const HEADERS: &[(&str, &str)] = &[
     ("Cross-Origin-Resource-Policy", "same-origin"),
 ];
 
-/// The content security policy: the page's own scripts and WebAssembly only.
-pub const POLICY: &str = "default-src 'self'; script-src 'self' 'wasm-unsafe-eval'; \
-     style-src 'self'; img-src 'self' data:; connect-src 'self'; frame-ancestors 'none'";
-
-/// The policy with `--webcam`: MediaPipe Face Mesh's Emscripten glue makes functions from
-/// strings, so its scripts (served from the same origin, like every script) need `unsafe-eval`.
-pub const POLICY_WITH_TRACKER: &str = "default-src 'self'; \
-     script-src 'self' 'wasm-unsafe-eval' 'unsafe-eval'; style-src 'self'; img-src 'self' data:; \
-     connect-src 'self'; frame-ancestors 'none'";
-
 /// An answer: the status, and a file of the table or a one-line text.
 #[derive(Debug, PartialEq, Eq)]
 pub struct Reply {

@@ -4,13 +4,12 @@
 //! compiled to WebAssembly (`web/webcam.js`). This part checks the driver and reads the tracker's
 //! files into the table at start-up; docs/VIEW.md, "A webcam".
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::Serialize;
 use sinew_core::driver::Intrinsics;
 
 use super::error::ViewError;
-use super::files::{Entry, file_name};
 use crate::driver::mediapipe::{IBUG_POINTS, reads_mediapipe};
 
 /// The npm package (Apache-2.0) whose web files the page runs, at the version the page is tested
@@ -91,30 +90,18 @@ pub(super) struct WebcamConfig {
     intrinsics: Option<[f32; 4]>,
 }
 
-/// Why `--tracker-dir` cannot be served.
-#[derive(Debug, thiserror::Error)]
-#[error(
-    "{}: MediaPipe Face Mesh's web files are not there ({file} {problem}); install them with \
-     `npm install {TRACKER_PACKAGE}` (into {DEFAULT_TRACKER_DIR} of the folder it runs in) or \
-     name their folder with --tracker-dir",
-    dir.display()
-)]
-pub struct TrackerMissing {
-    /// The folder.
-    pub dir: PathBuf,
-    /// The first file that cannot be served.
-    pub file: &'static str,
-    /// What is wrong with it.
-    pub problem: String,
-}
+/// A file to serve: its URL path, its type and its bytes.
+pub(super) type Served = (&'static str, &'static str, Vec<u8>);
 
 /// Checks the driver against the actor (`model` holds its bytes) and that it reads MediaPipe's
-/// points, reads the tracker's files, and gives the page's configuration and the files to serve.
+/// points, reads the tracker's files, and gives the page's configuration (the driver shown as
+/// `driver_name`) and the files to serve.
 pub(super) fn load(
     inputs: &WebcamInputs<'_>,
+    driver_name: String,
     model_path: &Path,
     model: &[u8],
-) -> Result<(WebcamConfig, Vec<Entry>), ViewError> {
+) -> Result<(WebcamConfig, Vec<Served>), ViewError> {
     let bytes = crate::io::container::read(inputs.driver)?;
     drop(crate::driver::drive::bind(
         model_path,
@@ -129,36 +116,27 @@ pub(super) fn load(
     }
     let mut entries = Vec::with_capacity(TRACKER_FILES.len() + 1);
     for &(file, path, content_type) in TRACKER_FILES {
-        let body = std::fs::read(inputs.tracker.join(file)).map_err(|e| TrackerMissing {
+        let missing = |problem: String| ViewError::TrackerMissing {
             dir: inputs.tracker.to_path_buf(),
             file,
-            problem: if e.kind() == std::io::ErrorKind::NotFound {
+            problem,
+            package: TRACKER_PACKAGE,
+        };
+        let body = std::fs::read(inputs.tracker.join(file)).map_err(|e| {
+            missing(if e.kind() == std::io::ErrorKind::NotFound {
                 "is missing".to_owned()
             } else {
                 format!("cannot be read: {e}")
-            },
+            })
         })?;
         if body.is_empty() {
-            return Err(TrackerMissing {
-                dir: inputs.tracker.to_path_buf(),
-                file,
-                problem: "is empty".to_owned(),
-            }
-            .into());
+            return Err(missing("is empty".to_owned()));
         }
-        entries.push(Entry {
-            path,
-            content_type,
-            body: body.into(),
-        });
+        entries.push((path, content_type, body));
     }
-    entries.push(Entry {
-        path: "/driver.sinew",
-        content_type: "application/octet-stream",
-        body: bytes.into(),
-    });
+    entries.push(("/driver.sinew", "application/octet-stream", bytes));
     let config = WebcamConfig {
-        driver: file_name(inputs.driver),
+        driver: driver_name,
         tracker: TRACKER_PACKAGE,
         points: IBUG_POINTS.to_vec(),
         intrinsics: inputs.intrinsics.map(|c| [c.fx, c.fy, c.cx, c.cy]),
@@ -168,7 +146,7 @@ pub(super) fn load(
 
 #[cfg(test)]
 mod tests {
-    use std::path::Path;
+    use std::path::{Path, PathBuf};
 
     use super::*;
     use crate::view::{Inputs, Site};

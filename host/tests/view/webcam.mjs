@@ -33,7 +33,7 @@ const tracker = join(here, "node_modules/@mediapipe/face_mesh");
 /** The performance: frames at rest (2 s of video), then 2 s of expressions and head motion. */
 const FRAMES = 40;
 const REST_FRAMES = 20;
-/** The video's rate: slower than real time, as a 2-core machine tracks about 10 frames a second. */
+/** The video's rate: slower than real time, as a 2-core machine tracks about 7 frames a second. */
 const VIDEO_FPS = 10;
 /** Seconds of camera the test watches: two passes of the looping video. */
 const WATCH_SECONDS = 9;
