@@ -82,6 +82,13 @@ pub const MAX_INPUT_SCALE: f32 = 1e6;
 /// The metadata key of a 2D driver's canonical camera centre (`x,y,z`, the actor's unit).
 pub const CAMERA: &str = "camera";
 
+/// The metadata key of the share of a 2D driver's own answer in the head's depth that the live
+/// calibration takes (`crate::live`; docs/FIT.md, "The head's depth"): a number from 0 to 1,
+/// 0 without the entry. A driver trained on trackers' conventions reads a face's depth through
+/// them and records a share; one trained without them is fooled by a convention's spread and
+/// records none, so its calibration finds the depth on the steady landmarks alone.
+pub const CALIBRATION_DEPTH: &str = "calibration_depth";
+
 /// Where a driver's landmarks live.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Space {
@@ -128,6 +135,7 @@ pub struct Driver<'a> {
     output: F32s<'a>,
     net: Mlp<'a>,
     camera: Option<Vec3>,
+    calibration_depth: f32,
 }
 
 impl<'a> Driver<'a> {
@@ -140,7 +148,8 @@ impl<'a> Driver<'a> {
     /// in (0, [`MAX_INPUT_SCALE`]], an output offset outside ±`MAX_COORDINATE`, an output scale
     /// outside ±`MAX_FACTOR`, a network that can exceed ±`MAX_NETWORK_VALUE` for inputs
     /// within ±[`MAX_INPUT`], or ([`FormatError::BadMetadata`]) a 2D driver without a
-    /// `camera` entry, or a `camera` entry that is not three numbers within ±`MAX_COORDINATE`.
+    /// `camera` entry, a `camera` entry that is not three numbers within ±`MAX_COORDINATE`, or
+    /// a [`CALIBRATION_DEPTH`] entry that is not a number from 0 to 1.
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self, FormatError> {
         let file = SinewFile::from_bytes_of_kind(bytes, ArtifactKind::Driver)?;
         let model = file.u32_tensor(MODEL_HASH, &[2])?;
@@ -194,6 +203,15 @@ impl<'a> Driver<'a> {
             None if space == Space::Image => return Err(metadata.bad_entry(CAMERA)),
             None => None,
         };
+        let calibration_depth = match metadata.get(CALIBRATION_DEPTH) {
+            Some(text) => text
+                .trim()
+                .parse::<f32>()
+                .ok()
+                .filter(|v| (0.0..=1.0).contains(v))
+                .ok_or_else(|| metadata.bad_entry(CALIBRATION_DEPTH))?,
+            None => 0.0,
+        };
         Ok(Self {
             model_hash: u64::from(model.at(0)) | (u64::from(model.at(1)) << 32),
             space,
@@ -203,7 +221,14 @@ impl<'a> Driver<'a> {
             output,
             net,
             camera,
+            calibration_depth,
         })
+    }
+
+    /// The share of this driver's own answer in the head's depth that the live calibration
+    /// takes ([`CALIBRATION_DEPTH`]; 0 without the entry).
+    pub const fn calibration_depth(&self) -> f32 {
+        self.calibration_depth
     }
 
     /// The canonical camera's centre (module documentation): always there for a 2D driver;

@@ -9,7 +9,9 @@
 //! rest: for each, the head pose is found that best places the actor's steady rest landmarks
 //! (nose and eyes, where trackers agree) on the tracker's (`head`: Gauss–Newton from the
 //! driver's answer to the raw landmarks, through the driver's canonical camera in 2D,
-//! [`crate::driver::Driver::camera`]), the actor's rest landmarks are placed under it, and the
+//! [`crate::driver::Driver::camera`]; its depth then taken part of the way toward the driver's
+//! answer where the driver records a share, [`crate::driver::Driver::calibration_depth`]), the
+//! actor's rest landmarks are placed under it, and the
 //! difference to the tracker's landmarks is carried into the face's frame (2D: each image
 //! difference lifted to the landmark's depth). Their mean is the tracker's convention, one offset
 //! per landmark in the actor's unit. From then on each frame's head is found the same way, the
@@ -576,7 +578,29 @@ impl<'d, 'a> Live<'d, 'a> {
             },
             Space::World => head::View::Space,
         };
-        head::fit(view, &rest, seen, start)
+        let fitted = head::fit(view, &rest, seen, start);
+        let share = self.driver.calibration_depth();
+        if share <= 0.0 || !matches!(self.driver.space(), Space::Image) {
+            return fitted;
+        }
+        // In an image the steady landmarks' spread gives the head's depth, and a tracker whose
+        // eyes sit off the actor's eyelids moves it (MediaPipe's by a centimetre); a driver
+        // trained on conventions reads the depth from all 68 points through them. The depth of
+        // the steady landmarks' centre is taken between the two, a weighted geometric mean with
+        // the driver's share, the fitted head slid along its line of sight to it.
+        let mut c = Vec3::ZERO;
+        for &p in &rest {
+            c = c + p;
+        }
+        c = c * (1.0 / rest.len() as f32);
+        let at_fit = fitted.rot.mul_vec(c) + fitted.trans;
+        let at_raw = start.rot.mul_vec(c) + start.trans;
+        let scale = libm::powf(self.depth(at_raw) / self.depth(at_fit), share);
+        if !scale.is_finite() {
+            return fitted;
+        }
+        let moved = self.camera + (at_fit - self.camera) * scale;
+        Rigid::new(fitted.rot, moved - fitted.rot.mul_vec(c))
     }
 
     /// A point's depth in front of the camera, at least the smallest.

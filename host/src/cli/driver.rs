@@ -179,6 +179,12 @@ pub(crate) struct LiveArgs {
     /// `0,0,0,0` all of them.
     #[arg(long, value_delimiter = ',', default_values_t = live::Settings::defaults(0).values()[1..].to_vec())]
     lost_rules: Vec<f32>,
+    /// The share of the driver's own answer in the calibrated head's depth, from 0 (the head
+    /// found on the nose and eyes alone) to 1, for this run in place of the one the driver
+    /// records (docs/FIT.md, "The head's depth"): a tracker whose eyes or nose sit off the
+    /// actor's may want more.
+    #[arg(long, value_name = "SHARE")]
+    calibration_depth: Option<f32>,
 }
 
 impl LiveArgs {
@@ -331,6 +337,7 @@ pub(crate) fn drive(args: DriveArgs) -> Result<()> {
         min_confidence: args.min_confidence,
         filter,
         live,
+        calibration_depth: args.live.calibration_depth,
     })?;
     report_frames(
         &driven.lost(),
@@ -385,6 +392,7 @@ pub(crate) fn eval(args: EvalDriverArgs) -> Result<()> {
         &args.target,
         args.landmarks.as_deref().map(|p| (p, camera)),
         args.live.settings()?,
+        args.live.calibration_depth,
     )?;
     let calibration_frames: Vec<usize> = (m.outcomes.iter().enumerate())
         .filter(|(_, o)| *o == "calibrating")

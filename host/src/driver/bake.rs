@@ -60,6 +60,12 @@ pub fn bake(
     if config.tracker == super::Tracker::MediaPipe {
         w.meta(super::mediapipe::META.0, super::mediapipe::META.1);
     }
+    if config.convention_amplitude > 0.0 && config.input == sinew_core::driver::Space::Image {
+        w.meta(
+            sinew_core::driver::CALIBRATION_DEPTH,
+            super::CALIBRATION_DEPTH_SHARE,
+        );
+    }
     let [lo, hi] = hash_words(inputs.actor_hash);
     w.u32s(MODEL_HASH, &[2], &[lo, hi])?;
     w.u32s(LANDMARK_VERTICES, &[inputs.vertices.len()], inputs.vertices)?;

@@ -211,6 +211,26 @@ pub struct DriveCommand {
     pub filter: Option<OneEuro>,
     /// The calibration and the lost-frame rules.
     pub live: Settings,
+    /// The driver's `calibration_depth` share replaced for this run (`--calibration-depth`).
+    pub calibration_depth: Option<f32>,
+}
+
+/// The driver at `path`, its `calibration_depth` entry (the share of its own answer in the
+/// calibrated head's depth, docs/FIT.md "The head's depth") replaced by `share` when given.
+pub fn read_driver(path: &Path, share: Option<f32>) -> Result<Vec<u8>> {
+    let bytes = container::read(path)?;
+    let Some(share) = share else {
+        return Ok(bytes);
+    };
+    ensure!(
+        (0.0..=1.0).contains(&share),
+        "--calibration-depth {share}: a share from 0 to 1"
+    );
+    let file = sinew_core::SinewFile::from_bytes(&bytes)
+        .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let mut w = container::SinewWriter::from_file(&file)?;
+    w.meta(sinew_core::driver::CALIBRATION_DEPTH, share);
+    Ok(w.to_bytes()?)
 }
 
 /// `sinew drive`: every frame's pose through the core, written as OBJs and `strip.png` once the
@@ -218,7 +238,7 @@ pub struct DriveCommand {
 /// each frame and the calibration.
 pub fn drive_command(opts: &DriveCommand) -> Result<Driven> {
     let actor_bytes = read_actor(&opts.model)?;
-    let driver_bytes = crate::io::container::read(&opts.driver)?;
+    let driver_bytes = read_driver(&opts.driver, opts.calibration_depth)?;
     let bound = bind(&opts.model, &actor_bytes, &opts.driver, &driver_bytes)?;
     let placement = super::track::Placement::of(&opts.model, &bound.actor, &bound.driver)?;
     let track = read_track(
@@ -281,16 +301,17 @@ fn read_track(
 }
 
 /// `sinew eval driver`: the driver on a performance folder against its meshes, under the live
-/// `settings`.
+/// `settings`, its `calibration_depth` share replaced by `share` when given.
 pub fn eval_driver(
     model: &Path,
     driver: &Path,
     target: &Path,
     track: Option<(&Path, Option<Intrinsics>)>,
     settings: Settings,
+    share: Option<f32>,
 ) -> Result<DriverMeasure> {
     let actor_bytes = read_actor(model)?;
-    let driver_bytes = crate::io::container::read(driver)?;
+    let driver_bytes = read_driver(driver, share)?;
     let bound = bind(model, &actor_bytes, driver, &driver_bytes)?;
     let perf = Performance::read(target)?;
     ensure!(

@@ -27,6 +27,12 @@ use crate::geometry::vec3::V3;
 use crate::rig::RigError;
 use crate::rig::template::FaceTemplate;
 
+/// The share of its own answer in the head's depth that a 2D driver trained on trackers'
+/// conventions asks the live calibration to take (`sinew_core::driver::CALIBRATION_DEPTH`):
+/// measured on held-out conventions and on MediaPipe Face Mesh's tracks (docs/FIT.md, "The
+/// head's depth").
+pub const CALIBRATION_DEPTH_SHARE: f32 = 1.0 / 3.0;
+
 /// `sinew train driver`'s settings (Sinew's own: no paper gives them).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DriverConfig {

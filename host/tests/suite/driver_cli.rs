@@ -582,3 +582,56 @@ fn drive_calibrates_reports_lost_frames_and_warns_of_a_moving_calibration() {
         assert!(!refused.exists());
     }
 }
+
+/// `--calibration-depth` replaces the driver's share of the calibrated head's depth for the run
+/// (docs/FIT.md, "The head's depth"): 0 drives the golden driver, which records none, exactly as
+/// without it; 1 moves the driven heads after the calibration and leaves the calibration's own
+/// frames at rest; a share outside 0 to 1 is refused.
+#[test]
+fn drive_takes_a_calibration_depth_share_for_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let actor = repo("tests/data/aim-ict.sinew");
+    let driver = repo("tests/data/driver-ict.sinew");
+    let track = repo("tests/data/driver-ict-live.csv");
+    let run = |extra: &[&str], name: &str| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "drive",
+            "--model",
+            &actor,
+            "--driver",
+            &driver,
+            "--landmarks",
+            &track,
+            "--intrinsics",
+            "1200,1200,320,240",
+            "--calibrate-frames",
+            "6",
+            "--out",
+            s(&out),
+        ];
+        args.extend_from_slice(extra);
+        let done = crate::common::sinew(&args);
+        (done, out)
+    };
+    let obj = |out: &Path, f: usize| std::fs::read(out.join(format!("frame_{f:05}.obj"))).unwrap();
+    let (plain, plain_out) = run(&[], "plain");
+    let (zero, zero_out) = run(&["--calibration-depth", "0"], "zero");
+    let (one, one_out) = run(&["--calibration-depth", "1"], "one");
+    for done in [&plain, &zero, &one] {
+        assert!(
+            done.status.success(),
+            "{}",
+            String::from_utf8_lossy(&done.stderr)
+        );
+    }
+    for f in [0, 5, 12, 30, 59] {
+        assert_eq!(obj(&plain_out, f), obj(&zero_out, f), "frame {f}");
+    }
+    assert_eq!(obj(&one_out, 3), obj(&plain_out, 3), "calibrating at rest");
+    assert_ne!(obj(&one_out, 30), obj(&plain_out, 30));
+    let (refused, _) = run(&["--calibration-depth", "1.5"], "refused");
+    assert!(!refused.status.success());
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert!(said.contains("--calibration-depth 1.5"), "{said}");
+}

@@ -41,8 +41,8 @@ const WATCH_SECONDS = 9;
  * Bounds on the driven faces against the truth, mean per-vertex distance in mm (measured
  * 2026-12-02: docs/VIEW.md, "A webcam"): over every driven frame, and the worst frame.
  */
-const MEAN_BOUND_MM = 15;
-const WORST_BOUND_MM = 25;
+const MEAN_BOUND_MM = 12;
+const WORST_BOUND_MM = 22;
 
 let passed = 0;
 function check(condition, what) {

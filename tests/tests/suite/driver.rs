@@ -3,18 +3,20 @@
 //! bits on every call, and refusal of a caller's non-finite landmarks.
 
 use burn::tensor::Device;
+use sinew_core::SinewFile;
 use sinew_core::aim::AimActor;
 use sinew_core::driver::{
-    DriveBuffers, Driver, Intrinsics, LANDMARKS, STEADY, Space, drive_frame_hash, features,
-    normalise_pixels,
+    CALIBRATION_DEPTH, DriveBuffers, Driver, Intrinsics, LANDMARKS, STEADY, Space,
+    drive_frame_hash, features, normalise_pixels,
 };
 use sinew_core::error::{Argument, Bound, InputError, InputErrorKind};
 use sinew_core::replay::{ReplayError, model_hash};
 use sinew_core::{EvalError, FormatError};
-use sinew_host::driver::DriverConfig;
+use sinew_host::SinewWriter;
 use sinew_host::driver::bake::{BakeInputs, bake};
 use sinew_host::driver::sample::Sampler;
 use sinew_host::driver::train::{Normalisation, network};
+use sinew_host::driver::{CALIBRATION_DEPTH_SHARE, DriverConfig};
 use sinew_host::training::random::Stream;
 use sinew_tests::golden_dir;
 
@@ -24,12 +26,24 @@ fn actor_bytes() -> Vec<u8> {
 
 /// A driver for the golden actor with random weights (16 hidden units), and the sampler.
 fn baked(actor: &[u8], edit: impl FnOnce(&mut Normalisation)) -> (Vec<u8>, Sampler) {
+    baked_with(
+        actor,
+        DriverConfig {
+            hidden: 16,
+            ..DriverConfig::default()
+        },
+        edit,
+    )
+}
+
+/// [`baked`] with other settings.
+fn baked_with(
+    actor: &[u8],
+    config: DriverConfig,
+    edit: impl FnOnce(&mut Normalisation),
+) -> (Vec<u8>, Sampler) {
     let a = AimActor::from_bytes(actor).unwrap();
     let vertices = sinew_host::driver::landmark_vertices(&golden_dir(), &a).unwrap();
-    let config = DriverConfig {
-        hidden: 16,
-        ..DriverConfig::default()
-    };
     let sampler = Sampler::new(&a, &vertices, &config);
     let mut norm = Normalisation::measure(&sampler, 1);
     edit(&mut norm);
@@ -227,4 +241,55 @@ fn a_driver_refuses_another_actor_and_bad_values() {
         Driver::from_bytes(&actor_bytes).unwrap_err(),
         FormatError::WrongKind
     );
+}
+
+/// A 2D driver trained on trackers' conventions records the share of its own answer in the
+/// calibrated head's depth, one trained without them records none (the calibration's head then
+/// as before); the core reads it and refuses an entry that is not a number from 0 to 1, naming
+/// the key.
+#[test]
+fn a_driver_records_its_calibration_depth_share() {
+    let actor_bytes = actor_bytes();
+    let (bytes, _) = baked(&actor_bytes, |_| {});
+    let driver = Driver::from_bytes(&bytes).unwrap();
+    assert_eq!(driver.calibration_depth(), CALIBRATION_DEPTH_SHARE);
+    let plain = DriverConfig {
+        hidden: 16,
+        convention_amplitude: 0.0,
+        ..DriverConfig::default()
+    };
+    let (bytes_plain, _) = baked_with(&actor_bytes, plain, |_| {});
+    let file = SinewFile::from_bytes(&bytes_plain).unwrap();
+    assert!(file.metadata().get(CALIBRATION_DEPTH).is_none());
+    assert_eq!(
+        Driver::from_bytes(&bytes_plain)
+            .unwrap()
+            .calibration_depth(),
+        0.0
+    );
+    for (value, ok) in [
+        ("0", true),
+        ("1", true),
+        ("0.25", true),
+        ("1.5", false),
+        ("-0.1", false),
+        ("NaN", false),
+        ("a third", false),
+    ] {
+        let file = SinewFile::from_bytes(&bytes).unwrap();
+        let mut w = SinewWriter::from_file(&file).unwrap();
+        w.meta(CALIBRATION_DEPTH, value);
+        let edited = w.to_bytes().unwrap();
+        match Driver::from_bytes(&edited) {
+            Ok(d) => {
+                assert!(ok, "{value} was read");
+                assert_eq!(d.calibration_depth(), value.parse::<f32>().unwrap());
+            }
+            Err(e) => {
+                assert!(!ok, "{value}: {e}");
+                assert!(matches!(e, FormatError::BadMetadata { .. }), "{e:?}");
+                assert!(e.to_string().contains(CALIBRATION_DEPTH), "{e}");
+            }
+        }
+    }
 }
