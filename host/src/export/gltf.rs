@@ -313,18 +313,24 @@ pub fn glb_carrying(
         attach(&mut b, skeleton.head, nodes.head);
         attach(&mut b, skeleton.jaw, nodes.jaw);
         let mut lists = lists;
+        let shapes: Vec<Option<String>> = (0..actor.shape_count())
+            .map(|j| actor.shape_name(j).map(str::to_owned))
+            .collect();
+        let vrm_nodes = super::vrm::Nodes {
+            face: skeleton.face_node.value(),
+            face_mesh: face.mesh.value(),
+            head: skeleton.head.value(),
+            jaw: skeleton.jaw.value(),
+        };
         if let Some(vrm) = &scenery.vrm {
-            let shapes: Vec<Option<String>> = (0..actor.shape_count())
-                .map(|j| actor.shape_name(j).map(str::to_owned))
-                .collect();
-            let nodes = super::vrm::Nodes {
-                face: skeleton.face_node.value(),
-                head: skeleton.head.value(),
-                jaw: skeleton.jaw.value(),
-            };
-            let (extension, dropped) = super::vrm::rebind(vrm, &shapes, &nodes);
+            let (extension, dropped) = super::vrm::rebind(vrm, &shapes, &vrm_nodes);
             lists.root_extensions.push(("VRMC_vrm".into(), extension));
             lists.extensions.push(("VRMC_vrm".into(), false));
+            vrm_dropped = dropped;
+        } else if let Some(vrm) = &scenery.vrm0 {
+            let (extension, dropped) = super::vrm::rebind_0x(vrm, &shapes, &vrm_nodes);
+            lists.root_extensions.push(("VRM".into(), extension));
+            lists.extensions.push(("VRM".into(), false));
             vrm_dropped = dropped;
         }
         carried = Some(lists);

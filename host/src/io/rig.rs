@@ -18,6 +18,7 @@ pub use file::{
     RigFormat, RigReadError, Treatment,
 };
 pub use gltf::COMPENSATION_KEY;
+pub use gltf::vrm_group_name_0x;
 pub use scenery::{Image, Part, PartPrimitive, Scenery};
 pub use write::RigWriteError;
 

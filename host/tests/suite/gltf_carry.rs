@@ -597,7 +597,6 @@ fn lower_teeth_follow_the_jaw() {
 #[test]
 fn a_vrm_avatars_expressions_are_bound_to_the_learned_shapes() {
     let set = sinew_host::aim::testing::procedural_training_set(8);
-    let v = set.template.positions.len();
     let (mut doc, bin) = rig_file(&set.template, sinew_host::io::rig::IDENTITY);
     let skin = doc["nodes"]
         .as_array()
@@ -625,34 +624,7 @@ fn a_vrm_avatars_expressions_are_bound_to_the_learned_shapes() {
     assert!(scenery.vrm.is_some());
 
     // The actor learned `aa` and `jawOpen` (its first two shapes), not `blink`.
-    let mut names = set.names.clone();
-    assert!(names.len() >= 3, "{names:?}");
-    names[1] = "aa".into();
-    names[2] = "jawOpen".into();
-    let record = Record {
-        format: "gltf".into(),
-        mesh: "head".into(),
-        units: "m".parse().unwrap(),
-        up: "+y".parse().unwrap(),
-        forward: "+z".parse().unwrap(),
-        node_transform: sinew_host::io::rig::IDENTITY,
-        placement: sinew_host::io::rig::IDENTITY,
-        welded: (0..v as u32).collect(),
-        polygons: set.template.polygons.clone(),
-        uvs: Vec::new(),
-        polygon_uvs: Vec::new(),
-    };
-    let bytes = procedural_actor(
-        &set,
-        vec![
-            ("units".into(), "m".into()),
-            ("shapes".into(), names.join(",")),
-            (
-                sinew_host::rig::record::KEY.into(),
-                serde_json::to_string(&record).unwrap(),
-            ),
-        ],
-    );
+    let bytes = avatar_actor(&set);
     let actor = AimActor::from_bytes(&bytes).unwrap();
     let (file, summary) = glb_carrying(&actor, &[], &Options::default(), Some(&scenery)).unwrap();
     let dropped = summary.dropped.join("\n");
@@ -695,6 +667,130 @@ fn a_vrm_avatars_expressions_are_bound_to_the_learned_shapes() {
     assert_eq!(got, ["aa", "jawOpen"]);
     let avatar = read.avatar.as_ref().unwrap();
     assert_eq!(avatar.version, "1.0");
+    for e in &avatar.expressions {
+        assert_eq!(e.binds, [(e.name.clone(), 1.0)], "{}", e.name);
+    }
+}
+
+/// An actor of the procedural set learned from a glTF rig in metres, its shapes 1 and 2 named
+/// `aa` and `jawOpen`.
+fn avatar_actor(set: &sinew_host::aim::TrainingSet) -> Vec<u8> {
+    let v = set.template.positions.len();
+    let mut names = set.names.clone();
+    assert!(names.len() >= 3, "{names:?}");
+    names[1] = "aa".into();
+    names[2] = "jawOpen".into();
+    let record = Record {
+        format: "gltf".into(),
+        mesh: "head".into(),
+        units: "m".parse().unwrap(),
+        up: "+y".parse().unwrap(),
+        forward: "+z".parse().unwrap(),
+        node_transform: sinew_host::io::rig::IDENTITY,
+        placement: sinew_host::io::rig::IDENTITY,
+        welded: (0..v as u32).collect(),
+        polygons: set.template.polygons.clone(),
+        uvs: Vec::new(),
+        polygon_uvs: Vec::new(),
+    };
+    procedural_actor(
+        set,
+        vec![
+            ("units".into(), "m".into()),
+            ("shapes".into(), names.join(",")),
+            (
+                sinew_host::rig::record::KEY.into(),
+                serde_json::to_string(&record).unwrap(),
+            ),
+        ],
+    )
+}
+
+/// A VRM 0.x avatar's export keeps `VRM`: the blend shape groups the actor learned (a preset
+/// under its VRM 1.0 name, a custom one by its own) bound to their exported morph targets at
+/// weight 100 on the face mesh, the avatar's `meta` and material properties, a humanoid of the
+/// head and jaw joints; the groups it did not learn listed in `dropped`. Read back as a rig, the
+/// export gives the learned shapes by group.
+#[test]
+fn a_vrm_0x_avatars_blend_shape_groups_are_bound_to_the_learned_shapes() {
+    let set = sinew_host::aim::testing::procedural_training_set(8);
+    let (mut doc, bin) = rig_file(&set.template, sinew_host::io::rig::IDENTITY);
+    let skin = doc["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| n["mesh"] == 0)
+        .unwrap();
+    doc["extensionsUsed"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!("VRM"));
+    doc["extensions"] = json!({"VRM": {"specVersion": "0.0", "exporterVersion": "UniVRM-0.99",
+        "meta": {"title": "avatar", "licenseName": "CC_BY"},
+        "humanoid": {"humanBones": [{"bone": "head", "node": skin}, {"bone": "hips", "node": skin}]},
+        "materialProperties": [{"name": "skin", "shader": "VRM/MToon"}],
+        "blendShapeMaster": {"blendShapeGroups": [
+            {"name": "A", "presetName": "a", "binds": [{"mesh": 0, "index": 0, "weight": 100}]},
+            {"name": "Blink", "presetName": "blink", "binds": [{"mesh": 0, "index": 0, "weight": 50}]},
+            {"name": "jawOpen", "presetName": "unknown", "isBinary": false,
+             "binds": [{"mesh": 0, "index": 0, "weight": 80}]}]}}});
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("avatar.vrm");
+    let text = serde_json::to_vec(&doc).unwrap();
+    std::fs::write(&path, sinew_host::io::glb::write(&text, &bin).unwrap()).unwrap();
+    let scenery = Scenery::read(&path, Some("head")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(scenery.vrm0.is_some() && scenery.vrm.is_none());
+
+    let bytes = avatar_actor(&set);
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let (file, summary) = glb_carrying(&actor, &[], &Options::default(), Some(&scenery)).unwrap();
+    let dropped = summary.dropped.join("\n");
+    assert!(dropped.contains("blend shape group blink"), "{dropped}");
+    assert!(!dropped.contains("group aa"), "{dropped}");
+    assert!(!dropped.contains("extension VRM"), "{dropped}");
+    assert!(
+        dropped.contains("humanoid's bones other than head and jaw"),
+        "{dropped}"
+    );
+    let (text, _) = sinew_host::io::glb::read(&file).unwrap();
+    let out: Value = serde_json::from_slice(text).unwrap();
+    let vrm = &out["extensions"]["VRM"];
+    let face = out["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["name"] == "face")
+        .unwrap();
+    let groups = vrm["blendShapeMaster"]["blendShapeGroups"]
+        .as_array()
+        .unwrap();
+    assert_eq!(groups.len(), 2);
+    assert_eq!(groups[0]["presetName"], "a");
+    assert_eq!(
+        groups[0]["binds"],
+        json!([{"mesh": face["mesh"], "index": 0, "weight": 100.0}])
+    );
+    assert_eq!(groups[1]["name"], "jawOpen");
+    assert_eq!(groups[1]["binds"][0]["index"], 1);
+    assert_eq!(vrm["meta"]["title"], "avatar");
+    assert_eq!(vrm["materialProperties"][0]["shader"], "VRM/MToon");
+    assert!(
+        out["extensionsUsed"]
+            .as_array()
+            .unwrap()
+            .contains(&json!("VRM"))
+    );
+
+    // Read back as a VRM 0.x rig: the learned shapes by group, each its exported target whole.
+    let again = dir.path().join("export.vrm");
+    std::fs::write(&again, &file).unwrap();
+    let read = RigFile::read(&again, None).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(read.mesh_name, "face");
+    let mut got = read.shape_names.clone();
+    got.sort();
+    assert_eq!(got, ["aa", "jawOpen"]);
+    let avatar = read.avatar.as_ref().unwrap();
+    assert_ne!(avatar.version, "1.0");
     for e in &avatar.expressions {
         assert_eq!(e.binds, [(e.name.clone(), 1.0)], "{}", e.name);
     }

@@ -24,6 +24,8 @@ mod extensions;
 mod meshopt;
 mod vrm;
 
+pub use vrm::group_name_0x as vrm_group_name_0x;
+
 use accessor::{Data, Role};
 
 /// The mesh `extras` key under which a Sinew export counts its compensation targets.
@@ -224,11 +226,16 @@ pub(super) fn scenery(path: &Path, wanted: Option<&str>) -> Result<Scenery, RigR
         .and_then(|e| e.get("VRMC_vrm"))
         .filter(|v| v.is_object())
         .cloned();
+    let vrm0 = raw
+        .get("extensions")
+        .and_then(|e| e.get("VRM"))
+        .filter(|v| v.is_object())
+        .cloned();
     for name in list("extensionsUsed")
         .iter()
         .filter_map(serde_json::Value::as_str)
     {
-        if name == "VRMC_vrm" && vrm.is_some() {
+        if (name == "VRMC_vrm" && vrm.is_some()) || (name == "VRM" && vrm0.is_some()) {
             // Kept by the export, its expressions bound again (`crate::export`).
         } else if used_text.contains(&format!("\"{name}\"")) {
             extensions.push((name.to_owned(), required.contains(&name.into())));
@@ -258,6 +265,7 @@ pub(super) fn scenery(path: &Path, wanted: Option<&str>) -> Result<Scenery, RigR
         images,
         extensions,
         vrm,
+        vrm0,
         dropped,
     })
 }

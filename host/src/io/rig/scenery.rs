@@ -27,6 +27,9 @@ pub struct Scenery {
     /// A VRM 1.0 avatar's `VRMC_vrm` extension as the file wrote it, for the export to keep
     /// with its expressions bound again to the learned shapes.
     pub vrm: Option<serde_json::Value>,
+    /// A VRM 0.x avatar's `VRM` extension as the file wrote it, for the export to keep with its
+    /// blend shape groups bound again to the learned shapes.
+    pub vrm0: Option<serde_json::Value>,
     /// What the rig has that is not carried, one line each.
     pub dropped: Vec<String>,
 }

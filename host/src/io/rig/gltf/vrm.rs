@@ -60,6 +60,25 @@ const PRESETS_0X: [(&str, &str); 18] = [
     ("neutral", "neutral"),
 ];
 
+/// The shape name the `k`-th VRM 0.x blend shape group is read under, and whether it is a
+/// preset: its preset's VRM 1.0 name (`a` is `aa`, `joy` is `happy`), else its own name, else
+/// `group k`. The export binds the group again by the same name (`crate::export`).
+pub fn group_name_0x(k: usize, group: &serde_json::Value) -> (String, bool) {
+    let name = group.get("name").and_then(|n| n.as_str()).unwrap_or("");
+    let preset = group
+        .get("presetName")
+        .and_then(|n| n.as_str())
+        .unwrap_or("unknown");
+    match PRESETS_0X
+        .iter()
+        .find(|(p, _)| p.eq_ignore_ascii_case(preset))
+    {
+        Some((_, v1)) => ((*v1).to_owned(), true),
+        None if !name.is_empty() => (name.to_owned(), false),
+        None => (format!("group {k}"), false),
+    }
+}
+
 /// One morph target bind.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Bind {
@@ -201,19 +220,7 @@ impl Expressions {
                     .iter()
                     .enumerate()
                 {
-                    let name = group.get("name").and_then(|n| n.as_str()).unwrap_or("");
-                    let preset = group
-                        .get("presetName")
-                        .and_then(|n| n.as_str())
-                        .unwrap_or("unknown");
-                    let (name, is_preset) = match PRESETS_0X
-                        .iter()
-                        .find(|(p, _)| p.eq_ignore_ascii_case(preset))
-                    {
-                        Some((_, v1)) => ((*v1).to_owned(), true),
-                        None if !name.is_empty() => (name.to_owned(), false),
-                        None => (format!("group {k}"), false),
-                    };
+                    let (name, is_preset) = group_name_0x(k, group);
                     let binds = binds(group, "binds", "mesh", 0.01, document)
                         .map_err(|w| problem(&name, w))?;
                     list.push(Parsed {
