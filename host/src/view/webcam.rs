@@ -167,8 +167,13 @@ mod tests {
     }
 
     fn load(driver: &str, tracker: &Path) -> Result<Site, ViewError> {
+        load_for("aim-ict.sinew", driver, tracker)
+    }
+
+    /// The site of actor `model` with `driver` and the tracker folder.
+    fn load_for(model: &str, driver: &str, tracker: &Path) -> Result<Site, ViewError> {
         Site::load(Inputs {
-            model: &data("aim-ict.sinew"),
+            model: &data(model),
             replay: None,
             poses: None,
             performance: None,
@@ -236,20 +241,11 @@ mod tests {
             matches!(&e, ViewError::NotAMediaPipeDriver { path } if path.ends_with("driver-ict.sinew")),
             "{e}"
         );
-        let other = Site::load(Inputs {
-            model: &data("aim-procedural.sinew"),
-            replay: None,
-            poses: None,
-            performance: None,
-            track: None,
-            neutral: None,
-            driver: None,
-            webcam: Some(WebcamInputs {
-                driver: &data("driver-ict-mediapipe.sinew"),
-                tracker: dir.path(),
-                intrinsics: None,
-            }),
-        })
+        let other = load_for(
+            "aim-procedural.sinew",
+            "driver-ict-mediapipe.sinew",
+            dir.path(),
+        )
         .unwrap_err()
         .to_string();
         assert!(other.contains("driver-ict-mediapipe.sinew"), "{other}");

@@ -442,23 +442,7 @@ fn drive_calibrates_reports_lost_frames_and_warns_of_a_moving_calibration() {
     );
     let track = repo("tests/data/driver-ict-live.csv");
     let out = dir.path().join("live");
-    let run = |calibrate: &str, out: &Path| {
-        crate::common::sinew(&[
-            "drive",
-            "--model",
-            &actor,
-            "--driver",
-            &driver,
-            "--landmarks",
-            &track,
-            "--intrinsics",
-            "1200,1200,320,240",
-            "--calibrate-frames",
-            calibrate,
-            "--out",
-            s(out),
-        ])
-    };
+    let run = |calibrate: &str, out: &Path| drive_live(&["--calibrate-frames", calibrate], out);
     let done = run("6", &out);
     assert!(done.status.success());
     let said = String::from_utf8_lossy(&done.stderr);
@@ -590,29 +574,11 @@ fn drive_calibrates_reports_lost_frames_and_warns_of_a_moving_calibration() {
 #[test]
 fn drive_takes_a_calibration_depth_share_for_the_run() {
     let dir = tempfile::tempdir().unwrap();
-    let actor = repo("tests/data/aim-ict.sinew");
-    let driver = repo("tests/data/driver-ict.sinew");
-    let track = repo("tests/data/driver-ict-live.csv");
     let run = |extra: &[&str], name: &str| {
         let out = dir.path().join(name);
-        let mut args = vec![
-            "drive",
-            "--model",
-            &actor,
-            "--driver",
-            &driver,
-            "--landmarks",
-            &track,
-            "--intrinsics",
-            "1200,1200,320,240",
-            "--calibrate-frames",
-            "6",
-            "--out",
-            s(&out),
-        ];
+        let mut args = vec!["--calibrate-frames", "6"];
         args.extend_from_slice(extra);
-        let done = crate::common::sinew(&args);
-        (done, out)
+        (drive_live(&args, &out), out)
     };
     let obj = |out: &Path, f: usize| std::fs::read(out.join(format!("frame_{f:05}.obj"))).unwrap();
     let (plain, plain_out) = run(&[], "plain");
@@ -634,4 +600,29 @@ fn drive_takes_a_calibration_depth_share_for_the_run() {
     assert!(!refused.status.success());
     let said = String::from_utf8_lossy(&refused.stderr);
     assert!(said.contains("--calibration-depth 1.5"), "{said}");
+}
+
+/// `sinew drive` of the golden actor and driver on the golden live track through its camera,
+/// into `out`, with `extra` arguments.
+fn drive_live(extra: &[&str], out: &Path) -> std::process::Output {
+    let (actor, driver) = (
+        repo("tests/data/aim-ict.sinew"),
+        repo("tests/data/driver-ict.sinew"),
+    );
+    let track = repo("tests/data/driver-ict-live.csv");
+    let mut args = vec![
+        "drive",
+        "--model",
+        &actor,
+        "--driver",
+        &driver,
+        "--landmarks",
+        &track,
+        "--intrinsics",
+        "1200,1200,320,240",
+        "--out",
+        s(out),
+    ];
+    args.extend_from_slice(extra);
+    crate::common::sinew(&args)
 }

@@ -596,43 +596,20 @@ fn lower_teeth_follow_the_jaw() {
 /// learned shapes by expression.
 #[test]
 fn a_vrm_avatars_expressions_are_bound_to_the_learned_shapes() {
-    let set = sinew_host::aim::testing::procedural_training_set(8);
-    let (mut doc, bin) = rig_file(&set.template, sinew_host::io::rig::IDENTITY);
-    let skin = doc["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .position(|n| n["mesh"] == 0)
-        .unwrap();
-    doc["extensionsUsed"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!("VRMC_vrm"));
-    doc["extensions"] = json!({"VRMC_vrm": {"specVersion": "1.0",
+    let dir = tempfile::tempdir().unwrap();
+    let (out, file, dropped) = exported_avatar(dir.path(), "VRMC_vrm", |skin| {
+        json!({"specVersion": "1.0",
         "meta": {"name": "avatar", "licenseUrl": "https://vrm.dev/licenses/1.0/"},
         "humanoid": {"humanBones": {"head": {"node": skin}}},
         "expressions": {
             "preset": {"aa": {"morphTargetBinds": [{"node": skin, "index": 0, "weight": 1.0}]},
                        "blink": {"morphTargetBinds": [{"node": skin, "index": 0, "weight": 0.5}]}},
             "custom": {"jawOpen": {"morphTargetBinds": [{"node": skin, "index": 0, "weight": 0.8}],
-                                   "isBinary": false}}}}});
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("avatar.vrm");
-    let text = serde_json::to_vec(&doc).unwrap();
-    std::fs::write(&path, sinew_host::io::glb::write(&text, &bin).unwrap()).unwrap();
-    let scenery = Scenery::read(&path, Some("head")).unwrap_or_else(|e| panic!("{e}"));
-    assert!(scenery.vrm.is_some());
-
-    // The actor learned `aa` and `jawOpen` (its first two shapes), not `blink`.
-    let bytes = avatar_actor(&set);
-    let actor = AimActor::from_bytes(&bytes).unwrap();
-    let (file, summary) = glb_carrying(&actor, &[], &Options::default(), Some(&scenery)).unwrap();
-    let dropped = summary.dropped.join("\n");
+                                   "isBinary": false}}}})
+    });
     assert!(dropped.contains("expression blink"), "{dropped}");
     assert!(!dropped.contains("expression aa"), "{dropped}");
     assert!(!dropped.contains("VRMC_vrm"), "{dropped}");
-    let (text, _) = sinew_host::io::glb::read(&file).unwrap();
-    let out: Value = serde_json::from_slice(text).unwrap();
     let vrm = &out["extensions"]["VRMC_vrm"];
     let face = out["nodes"]
         .as_array()
@@ -650,23 +627,66 @@ fn a_vrm_avatars_expressions_are_bound_to_the_learned_shapes() {
     );
     assert_eq!(vrm["expressions"]["custom"]["jawOpen"]["isBinary"], false);
     assert_eq!(vrm["meta"]["name"], "avatar");
+    read_back_avatar(dir.path(), &file, "1.0");
+}
+
+/// The procedural rig as a VRM avatar whose root extension `name` is `extension(skin node)`
+/// (the skin is mesh 0), and its actor ([`avatar_actor`]) exported with it (`--rig`): the
+/// export's JSON, its bytes and the report's `dropped` lines, the export listing the extension.
+fn exported_avatar(
+    dir: &std::path::Path,
+    name: &str,
+    extension: impl FnOnce(usize) -> Value,
+) -> (Value, Vec<u8>, String) {
+    let set = sinew_host::aim::testing::procedural_training_set(8);
+    let (mut doc, bin) = rig_file(&set.template, sinew_host::io::rig::IDENTITY);
+    let skin = doc["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| n["mesh"] == 0)
+        .unwrap();
+    doc["extensionsUsed"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!(name));
+    doc["extensions"] = json!({ name: extension(skin) });
+    let path = dir.join("avatar.vrm");
+    let text = serde_json::to_vec(&doc).unwrap();
+    std::fs::write(&path, sinew_host::io::glb::write(&text, &bin).unwrap()).unwrap();
+    let scenery = Scenery::read(&path, Some("head")).unwrap_or_else(|e| panic!("{e}"));
+    let kept = if name == "VRM" {
+        &scenery.vrm0
+    } else {
+        &scenery.vrm
+    };
+    assert!(kept.is_some(), "{name} not read");
+    let bytes = avatar_actor(&set);
+    let actor = AimActor::from_bytes(&bytes).unwrap();
+    let (file, summary) = glb_carrying(&actor, &[], &Options::default(), Some(&scenery)).unwrap();
+    let (text, _) = sinew_host::io::glb::read(&file).unwrap();
+    let out: Value = serde_json::from_slice(text).unwrap();
     assert!(
         out["extensionsUsed"]
             .as_array()
             .unwrap()
-            .contains(&json!("VRMC_vrm"))
+            .contains(&json!(name))
     );
+    (out, file, summary.dropped.join("\n"))
+}
 
-    // Read back as a VRM rig: the learned shapes by expression, each its exported target.
-    let again = dir.path().join("export.vrm");
-    std::fs::write(&again, &file).unwrap();
+/// The export `file` read back as a VRM `version` rig: the learned shapes by expression, each
+/// its exported target whole.
+fn read_back_avatar(dir: &std::path::Path, file: &[u8], version: &str) {
+    let again = dir.join("export.vrm");
+    std::fs::write(&again, file).unwrap();
     let read = RigFile::read(&again, None).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(read.mesh_name, "face");
     let mut got = read.shape_names.clone();
     got.sort();
     assert_eq!(got, ["aa", "jawOpen"]);
     let avatar = read.avatar.as_ref().unwrap();
-    assert_eq!(avatar.version, "1.0");
+    assert_eq!(avatar.version, version);
     for e in &avatar.expressions {
         assert_eq!(e.binds, [(e.name.clone(), 1.0)], "{}", e.name);
     }
@@ -713,19 +733,9 @@ fn avatar_actor(set: &sinew_host::aim::TrainingSet) -> Vec<u8> {
 /// export gives the learned shapes by group.
 #[test]
 fn a_vrm_0x_avatars_blend_shape_groups_are_bound_to_the_learned_shapes() {
-    let set = sinew_host::aim::testing::procedural_training_set(8);
-    let (mut doc, bin) = rig_file(&set.template, sinew_host::io::rig::IDENTITY);
-    let skin = doc["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .position(|n| n["mesh"] == 0)
-        .unwrap();
-    doc["extensionsUsed"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!("VRM"));
-    doc["extensions"] = json!({"VRM": {"specVersion": "0.0", "exporterVersion": "UniVRM-0.99",
+    let dir = tempfile::tempdir().unwrap();
+    let (out, file, dropped) = exported_avatar(dir.path(), "VRM", |skin| {
+        json!({"specVersion": "0.0", "exporterVersion": "UniVRM-0.99",
         "meta": {"title": "avatar", "licenseName": "CC_BY"},
         "humanoid": {"humanBones": [{"bone": "head", "node": skin}, {"bone": "hips", "node": skin}]},
         "materialProperties": [{"name": "skin", "shader": "VRM/MToon"}],
@@ -733,18 +743,8 @@ fn a_vrm_0x_avatars_blend_shape_groups_are_bound_to_the_learned_shapes() {
             {"name": "A", "presetName": "a", "binds": [{"mesh": 0, "index": 0, "weight": 100}]},
             {"name": "Blink", "presetName": "blink", "binds": [{"mesh": 0, "index": 0, "weight": 50}]},
             {"name": "jawOpen", "presetName": "unknown", "isBinary": false,
-             "binds": [{"mesh": 0, "index": 0, "weight": 80}]}]}}});
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("avatar.vrm");
-    let text = serde_json::to_vec(&doc).unwrap();
-    std::fs::write(&path, sinew_host::io::glb::write(&text, &bin).unwrap()).unwrap();
-    let scenery = Scenery::read(&path, Some("head")).unwrap_or_else(|e| panic!("{e}"));
-    assert!(scenery.vrm0.is_some() && scenery.vrm.is_none());
-
-    let bytes = avatar_actor(&set);
-    let actor = AimActor::from_bytes(&bytes).unwrap();
-    let (file, summary) = glb_carrying(&actor, &[], &Options::default(), Some(&scenery)).unwrap();
-    let dropped = summary.dropped.join("\n");
+             "binds": [{"mesh": 0, "index": 0, "weight": 80}]}]}})
+    });
     assert!(dropped.contains("blend shape group blink"), "{dropped}");
     assert!(!dropped.contains("group aa"), "{dropped}");
     assert!(!dropped.contains("extension VRM"), "{dropped}");
@@ -752,8 +752,6 @@ fn a_vrm_0x_avatars_blend_shape_groups_are_bound_to_the_learned_shapes() {
         dropped.contains("humanoid's bones other than head and jaw"),
         "{dropped}"
     );
-    let (text, _) = sinew_host::io::glb::read(&file).unwrap();
-    let out: Value = serde_json::from_slice(text).unwrap();
     let vrm = &out["extensions"]["VRM"];
     let face = out["nodes"]
         .as_array()
@@ -774,24 +772,5 @@ fn a_vrm_0x_avatars_blend_shape_groups_are_bound_to_the_learned_shapes() {
     assert_eq!(groups[1]["binds"][0]["index"], 1);
     assert_eq!(vrm["meta"]["title"], "avatar");
     assert_eq!(vrm["materialProperties"][0]["shader"], "VRM/MToon");
-    assert!(
-        out["extensionsUsed"]
-            .as_array()
-            .unwrap()
-            .contains(&json!("VRM"))
-    );
-
-    // Read back as a VRM 0.x rig: the learned shapes by group, each its exported target whole.
-    let again = dir.path().join("export.vrm");
-    std::fs::write(&again, &file).unwrap();
-    let read = RigFile::read(&again, None).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(read.mesh_name, "face");
-    let mut got = read.shape_names.clone();
-    got.sort();
-    assert_eq!(got, ["aa", "jawOpen"]);
-    let avatar = read.avatar.as_ref().unwrap();
-    assert_ne!(avatar.version, "1.0");
-    for e in &avatar.expressions {
-        assert_eq!(e.binds, [(e.name.clone(), 1.0)], "{}", e.name);
-    }
+    read_back_avatar(dir.path(), &file, "0.x");
 }
