@@ -88,16 +88,6 @@ pub enum ExportError {
         #[source]
         source: GltfError,
     },
-    /// An OBJ folder given to carry the rest of the character from.
-    #[error(
-        "{}: an OBJ rig's other groups and materials are not carried; --rig takes the glTF or \
-         VRM file the actor was learned from",
-        path.display()
-    )]
-    ObjRig {
-        /// The folder.
-        path: PathBuf,
-    },
     /// The rig given to carry the rest of the character from could not be read.
     #[error("the rig to carry the character from")]
     Rig(#[source] RigReadError),

@@ -180,11 +180,6 @@ pub fn export(
         source,
     };
     let scenery = match rig {
-        Some(path) if path.is_dir() => {
-            return Err(ExportError::ObjRig {
-                path: path.to_owned(),
-            });
-        }
         Some(path) => {
             let record =
                 crate::aim::play::rig_record(&actor).map_err(|e| in_model(GltfError::Rig(e)))?;
@@ -506,7 +501,10 @@ mod tests {
             Some(dir.path()),
         )
         .unwrap_err();
-        assert!(matches!(err, ExportError::ObjRig { .. }), "{err}");
+        // A folder is an OBJ rig; this one has no neutral.obj.
+        assert!(matches!(err, ExportError::Rig(_)), "{err}");
+        let source = std::error::Error::source(&err).map(ToString::to_string);
+        assert!(source.is_some_and(|s| s.contains("neutral.obj")), "{err}");
         assert!(!out.exists());
     }
 

@@ -49,6 +49,27 @@ enum Format {
     Ply,
 }
 
+/// The bytes of the mesh file at `path`, decompressed when it is gzip-compressed (by its `.gz`
+/// name or, without one, by its magic).
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, MeshError> {
+    let (_, gz) = format_of(path)?;
+    let raw = std::fs::read(path).map_err(|source| MeshError::Read {
+        path: path.to_owned(),
+        source,
+    })?;
+    if !(gz || raw.starts_with(&[0x1f, 0x8b])) {
+        return Ok(raw);
+    }
+    let mut out = Vec::with_capacity(raw.len() * 4);
+    flate2::read::MultiGzDecoder::new(raw.as_slice())
+        .read_to_end(&mut out)
+        .map_err(|source| MeshError::Gzip {
+            path: path.to_owned(),
+            source,
+        })?;
+    Ok(out)
+}
+
 /// Picks the format from the file name (`.obj`, `.ply`, either with `.gz`), and whether the
 /// file is gzip-compressed.
 fn format_of(path: &Path) -> Result<(Format, bool), MeshError> {
@@ -96,24 +117,8 @@ impl Mesh {
     ///
     /// Every error names the file; the result is validated (see [`Mesh::validate`]).
     pub fn read(path: &Path) -> Result<Mesh, MeshError> {
-        let (format, gz) = format_of(path)?;
-        let raw = std::fs::read(path).map_err(|source| MeshError::Read {
-            path: path.to_owned(),
-            source,
-        })?;
-        // Gzip is recognised by its magic too, so a compressed file without `.gz` still reads.
-        let bytes = if gz || raw.starts_with(&[0x1f, 0x8b]) {
-            let mut out = Vec::with_capacity(raw.len() * 4);
-            flate2::read::MultiGzDecoder::new(raw.as_slice())
-                .read_to_end(&mut out)
-                .map_err(|source| MeshError::Gzip {
-                    path: path.to_owned(),
-                    source,
-                })?;
-            out
-        } else {
-            raw
-        };
+        let (format, _) = format_of(path)?;
+        let bytes = read_bytes(path)?;
         let mesh = match format {
             Format::Obj => parse_obj(&bytes),
             Format::Ply => parse_ply(&bytes),

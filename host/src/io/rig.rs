@@ -42,12 +42,15 @@ impl RigFile {
 }
 
 impl Scenery {
-    /// What the glTF rig at `path` holds besides its skin mesh (the mesh named `mesh`, else the
-    /// one [`RigFile::read`] picks); an OBJ folder or other path is no glTF rig.
+    /// What the rig at `path` holds besides its skin mesh: a glTF rig's other meshes, materials
+    /// and textures (its skin the mesh named `mesh`, else the one [`RigFile::read`] picks), or
+    /// an OBJ folder's material and textures (`obj::scenery`).
     pub fn read(path: &Path, mesh: Option<&str>) -> Result<Self, RigReadError> {
         let lower = path.to_string_lossy().to_ascii_lowercase();
         if [".glb", ".gltf", ".vrm"].iter().any(|e| lower.ends_with(e)) {
             gltf::scenery(path, mesh)
+        } else if path.is_dir() {
+            obj::scenery(path)
         } else {
             Err(RigReadError::UnknownKind {
                 path: path.to_owned(),

@@ -15,6 +15,7 @@ mod gltf_carry;
 mod gltf_seams;
 mod gltfpack;
 mod motion_cli;
+mod obj_carry;
 mod playback_cli;
 mod retarget;
 mod rig_formats;

@@ -140,6 +140,14 @@ pub enum RigReadError {
         #[source]
         source: std::io::Error,
     },
+    /// An OBJ rig's material library or a texture it names could not be read.
+    #[error("{}: {reason}", path.display())]
+    Material {
+        /// The material library (`.mtl`).
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
     /// The glTF file could not be parsed (a truncated `.glb`, broken JSON, a broken index).
     #[error("{}: not a valid glTF 2.0 file: {reason}", path.display())]
     Gltf {

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use super::file::{IDENTITY, RigFile, RigFormat, RigReadError};
+use super::scenery::{Image, Scenery};
 use crate::io::mesh::Mesh;
 
 /// The mesh files of `dir`, as (name without `.obj`/`.obj.gz`, path), sorted by name.
@@ -77,4 +78,125 @@ pub(super) fn read(dir: &Path) -> Result<RigFile, RigReadError> {
         extensions: Vec::new(),
         avatar: None,
     })
+}
+
+/// What an OBJ-folder rig holds besides its skin: the material its faces use first, from the
+/// material library `neutral.obj` names (`mtllib`), as a glTF material (the diffuse colour and
+/// dissolve as its base colour, the diffuse map as its base colour texture, the bump or normal
+/// map as its normal texture), and the images those maps name, read from beside the library.
+/// Every other material the faces use is listed in `dropped`; the OBJ holds no other meshes
+/// apart from the skin (`neutral.obj` is the skin whole).
+pub(super) fn scenery(dir: &Path) -> Result<Scenery, RigReadError> {
+    let neutral_path = ["neutral.obj", "neutral.obj.gz"]
+        .iter()
+        .map(|n| dir.join(n))
+        .find(|p| p.is_file())
+        .unwrap_or_else(|| dir.join("neutral.obj"));
+    let neutral = Mesh::read(&neutral_path)?;
+    let bytes = crate::io::mesh::read_bytes(&neutral_path)?;
+    let text = String::from_utf8_lossy(&bytes);
+    let mut libraries = Vec::new();
+    let mut used: Vec<String> = Vec::new();
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("mtllib") => libraries.extend(words.map(str::to_owned)),
+            Some("usemtl") => {
+                let name = words.collect::<Vec<_>>().join(" ");
+                if !name.is_empty() && !used.contains(&name) {
+                    used.push(name);
+                }
+            }
+            _ => {}
+        }
+    }
+    let mut scenery = Scenery {
+        skin_vertices: neutral.positions.len(),
+        skin_material: None,
+        parts: Vec::new(),
+        materials: Vec::new(),
+        textures: Vec::new(),
+        samplers: Vec::new(),
+        images: Vec::new(),
+        extensions: Vec::new(),
+        vrm: None,
+        vrm0: None,
+        dropped: Vec::new(),
+    };
+    let Some(first) = used.first() else {
+        return Ok(scenery);
+    };
+    for other in &used[1..] {
+        scenery.dropped.push(format!(
+            "the material {other} (the face is one primitive with the first material its faces use)"
+        ));
+    }
+    for library in &libraries {
+        let path = neutral_path.parent().unwrap_or(dir).join(library);
+        let (materials, _) = tobj::load_mtl(&path).map_err(|e| RigReadError::Material {
+            path: path.clone(),
+            reason: format!("not a material library that can be read: {e}"),
+        })?;
+        let Some(m) = materials.iter().find(|m| &m.name == first) else {
+            continue;
+        };
+        let base = path.parent().unwrap_or(dir);
+        let mut image = |map: &str| -> Result<serde_json::Value, RigReadError> {
+            // A map statement's options (`-bm 1.0 file.png`) come before the file name.
+            let file = map.split_whitespace().last().unwrap_or(map);
+            let at = base.join(file);
+            let bytes = std::fs::read(&at).map_err(|e| RigReadError::Material {
+                path: path.clone(),
+                reason: format!("its texture {} cannot be read: {e}", at.display()),
+            })?;
+            let mime_type =
+                super::scenery::image_type(&bytes).ok_or_else(|| RigReadError::Material {
+                    path: path.clone(),
+                    reason: format!(
+                        "its texture {} is not PNG, JPEG, WebP or KTX2",
+                        at.display()
+                    ),
+                })?;
+            scenery.images.push(Image {
+                name: Some(file.to_owned()),
+                mime_type: mime_type.to_owned(),
+                bytes,
+            });
+            scenery
+                .textures
+                .push(serde_json::json!({"source": scenery.images.len() - 1}));
+            Ok(serde_json::json!({"index": scenery.textures.len() - 1}))
+        };
+        let [r, g, b] = m.diffuse.unwrap_or([1.0; 3]);
+        let alpha = m.dissolve.unwrap_or(1.0);
+        let colour = [r, g, b, alpha].map(|c| c.clamp(0.0, 1.0));
+        let mut pbr = serde_json::json!({
+            "baseColorFactor": colour,
+            "metallicFactor": 0.0,
+            "roughnessFactor": 1.0,
+        });
+        if let Some(map) = &m.diffuse_texture {
+            pbr["baseColorTexture"] = image(map)?;
+        }
+        let mut material = serde_json::json!({"name": m.name, "pbrMetallicRoughness": pbr});
+        let bump = m
+            .normal_texture
+            .clone()
+            .or_else(|| m.unknown_param.get("map_bump").cloned())
+            .or_else(|| m.unknown_param.get("bump").cloned());
+        if let Some(map) = bump {
+            material["normalTexture"] = image(&map)?;
+        }
+        if alpha < 1.0 {
+            material["alphaMode"] = "BLEND".into();
+        }
+        scenery.materials.push(material);
+        scenery.skin_material = Some(0);
+        return Ok(scenery);
+    }
+    scenery.dropped.push(format!(
+        "the material {first}: no material library of {} defines it",
+        neutral_path.display()
+    ));
+    Ok(scenery)
 }
