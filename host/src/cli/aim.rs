@@ -342,13 +342,20 @@ pub(crate) fn train(args: TrainAim) -> Result<()> {
         // The built-in prior starts every run it fits (sizes, units, a shape in common).
         None => Some(Prior::builtin()?).filter(|p| p.fits(&config, &set.names, set.units.name())),
     };
-    if args.lr.is_none() && args.config.is_none() {
-        // A run from a prior starts slower; a resumed one keeps the rate it began with.
-        if prior.is_some() {
-            config.lr = sinew_host::aim::prior::LEARNING_RATE;
-        } else if let Some(dir) = &args.resume {
-            config.lr = sinew_host::aim::train::read_state(dir)?.config.lr;
-        }
+    if args.config.is_none() {
+        // A run from a prior takes its own rate and shorter schedule; a resumed one keeps the
+        // rate and schedule it began with.
+        let resumed = match &args.resume {
+            Some(dir) if prior.is_none() => Some(sinew_host::aim::train::read_state(dir)?.config),
+            _ => None,
+        };
+        sinew_host::aim::prior::run_defaults(
+            &mut config,
+            args.lr.is_some(),
+            args.iterations.is_some(),
+            prior.is_some(),
+            resumed.as_ref(),
+        );
         config.validate()?;
     }
     if let Some(p) = &prior {
