@@ -386,17 +386,8 @@ fn lower_teeth_follow_the_jaw() {
         polygons.clone(),
     );
     let record = Record {
-        format: "gltf".into(),
-        mesh: "head".into(),
-        units: "m".parse().unwrap(),
-        up: "+y".parse().unwrap(),
-        forward: "+z".parse().unwrap(),
         node_transform,
-        placement: sinew_host::io::rig::IDENTITY,
-        welded: (0..v as u32).collect(),
-        polygons,
-        uvs: Vec::new(),
-        polygon_uvs: Vec::new(),
+        ..crate::common::plain_record("gltf", "head", v, polygons)
     };
     let mut writer = sinew_host::io::container::SinewWriter::from_file(learned.file()).unwrap();
     writer.meta(
@@ -700,19 +691,7 @@ fn avatar_actor(set: &sinew_host::aim::TrainingSet) -> Vec<u8> {
     assert!(names.len() >= 3, "{names:?}");
     names[1] = "aa".into();
     names[2] = "jawOpen".into();
-    let record = Record {
-        format: "gltf".into(),
-        mesh: "head".into(),
-        units: "m".parse().unwrap(),
-        up: "+y".parse().unwrap(),
-        forward: "+z".parse().unwrap(),
-        node_transform: sinew_host::io::rig::IDENTITY,
-        placement: sinew_host::io::rig::IDENTITY,
-        welded: (0..v as u32).collect(),
-        polygons: set.template.polygons.clone(),
-        uvs: Vec::new(),
-        polygon_uvs: Vec::new(),
-    };
+    let record = crate::common::plain_record("gltf", "head", v, set.template.polygons.clone());
     procedural_actor(
         set,
         vec![

@@ -11,7 +11,6 @@ use sinew_core::aim::AimActor;
 use sinew_host::export::gltf::{Options, glb_carrying};
 use sinew_host::figures::render::Image;
 use sinew_host::io::rig::Scenery;
-use sinew_host::rig::record::Record;
 
 /// An OBJ folder holding the procedural set's template as `neutral.obj` (its first half of
 /// polygons in material `skin`, the rest in `lips`), `head.mtl` and the skin's texture.
@@ -63,19 +62,7 @@ fn an_obj_rigs_material_and_texture_are_carried() {
     assert!(dropped.contains("the material lips"), "{dropped}");
 
     let v = set.template.positions.len();
-    let record = Record {
-        format: "obj".into(),
-        mesh: "neutral".into(),
-        units: "m".parse().unwrap(),
-        up: "+y".parse().unwrap(),
-        forward: "+z".parse().unwrap(),
-        node_transform: sinew_host::io::rig::IDENTITY,
-        placement: sinew_host::io::rig::IDENTITY,
-        welded: (0..v as u32).collect(),
-        polygons: set.template.polygons.clone(),
-        uvs: Vec::new(),
-        polygon_uvs: Vec::new(),
-    };
+    let record = crate::common::plain_record("obj", "neutral", v, set.template.polygons.clone());
     let bytes = procedural_actor(
         &set,
         vec![

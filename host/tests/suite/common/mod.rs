@@ -106,3 +106,27 @@ pub fn procedural_actor(
     };
     bake(&net, &input, &device).unwrap().0
 }
+
+/// The rig record of a rig in metres, +y up and facing +z, under no node transform, whose
+/// skin mesh `mesh` of format `format` is the `vertices` training vertices themselves (nothing
+/// welded) with `polygons` and no texture coordinates.
+pub fn plain_record(
+    format: &str,
+    mesh: &str,
+    vertices: usize,
+    polygons: Vec<Vec<u32>>,
+) -> sinew_host::rig::record::Record {
+    sinew_host::rig::record::Record {
+        format: format.into(),
+        mesh: mesh.into(),
+        units: "m".parse().unwrap(),
+        up: "+y".parse().unwrap(),
+        forward: "+z".parse().unwrap(),
+        node_transform: sinew_host::io::rig::IDENTITY,
+        placement: sinew_host::io::rig::IDENTITY,
+        welded: (0..vertices as u32).collect(),
+        polygons,
+        uvs: Vec::new(),
+        polygon_uvs: Vec::new(),
+    }
+}
