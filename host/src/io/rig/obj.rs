@@ -30,11 +30,7 @@ fn shape_files(dir: &Path) -> Result<Vec<(String, std::path::PathBuf)>, RigReadE
 }
 
 pub(super) fn read(dir: &Path) -> Result<RigFile, RigReadError> {
-    let neutral_path = ["neutral.obj", "neutral.obj.gz"]
-        .iter()
-        .map(|n| dir.join(n))
-        .find(|p| p.is_file())
-        .unwrap_or_else(|| dir.join("neutral.obj"));
+    let neutral_path = neutral_path(dir);
     let neutral = Mesh::read(&neutral_path)?;
     let shapes_dir = dir.join("shapes");
     let files = if shapes_dir.is_dir() {
@@ -87,11 +83,7 @@ pub(super) fn read(dir: &Path) -> Result<RigFile, RigReadError> {
 /// Every other material the faces use is listed in `dropped`; the OBJ holds no other meshes
 /// apart from the skin (`neutral.obj` is the skin whole).
 pub(super) fn scenery(dir: &Path) -> Result<Scenery, RigReadError> {
-    let neutral_path = ["neutral.obj", "neutral.obj.gz"]
-        .iter()
-        .map(|n| dir.join(n))
-        .find(|p| p.is_file())
-        .unwrap_or_else(|| dir.join("neutral.obj"));
+    let neutral_path = neutral_path(dir);
     let neutral = Mesh::read(&neutral_path)?;
     let bytes = crate::io::mesh::read_bytes(&neutral_path)?;
     let text = String::from_utf8_lossy(&bytes);
@@ -199,4 +191,14 @@ pub(super) fn scenery(dir: &Path) -> Result<Scenery, RigReadError> {
         neutral_path.display()
     ));
     Ok(scenery)
+}
+
+/// The folder's `neutral.obj` (or `neutral.obj.gz`); `neutral.obj` when neither is there, so
+/// that the error names the file expected.
+fn neutral_path(dir: &Path) -> std::path::PathBuf {
+    ["neutral.obj", "neutral.obj.gz"]
+        .iter()
+        .map(|n| dir.join(n))
+        .find(|p| p.is_file())
+        .unwrap_or_else(|| dir.join("neutral.obj"))
 }
