@@ -116,7 +116,7 @@ fn arithmetic_rate(
     norm: [f32; 4],
     device: &burn::tensor::Device,
     mut net: sinew_host::aim::model::AimNet,
-    optim: &mut burn::optim::ModuleOptimizer,
+    optim: &mut sinew_host::training::adam::Adam,
 ) {
     let mut seconds = Vec::new();
     let mut flops = Vec::new();

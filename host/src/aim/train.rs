@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use burn::module::Module;
-use burn::optim::{AdamConfig, GradientsParams};
+use burn::optim::GradientsParams;
 use burn::tensor::{Device, Int, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
 
@@ -18,6 +18,7 @@ use super::prior::{Prior, PriorError};
 use super::target::{Check, Ending, Target, measure};
 use super::{AimConfig, InvalidTrainingSet, TrainingSet};
 use crate::io::mesh::MeshError;
+use crate::training::adam::Adam;
 use crate::training::backend::Backend;
 use crate::training::checkpoint::{self, CheckpointError, InvalidState, STATE_FILE, WeightFiles};
 use crate::training::nn::to_vec;
@@ -353,7 +354,7 @@ fn objective(
 /// rate). Returns the updated model and the detached loss terms ([`TERMS`] order).
 pub fn step_once(
     net: AimNet,
-    optim: &mut burn::optim::ModuleOptimizer,
+    optim: &mut Adam,
     set: &TrainingSet,
     config: &AimConfig,
     norm: [f32; 4],
@@ -384,13 +385,13 @@ pub fn init(
     set: &TrainingSet,
     config: &AimConfig,
     backend: Backend,
-) -> Result<(AimNet, burn::optim::ModuleOptimizer, Device), TrainError> {
+) -> Result<(AimNet, Adam, Device), TrainError> {
     let device = backend
         .autodiff_device(config.seed)
         .map_err(TrainError::backend)?;
     Ok((
         AimNet::with_jaw(config, &initial_jaw(set, config), &device),
-        AdamConfig::new().with_epsilon(1e-8).init(),
+        Adam::new(1e-8),
         device,
     ))
 }
@@ -430,7 +431,7 @@ pub fn train(
             normalisation(&set.template.positions),
         ),
     };
-    let mut optim = AdamConfig::new().with_epsilon(1e-8).init();
+    let mut optim = Adam::new(1e-8);
     let mut state = CheckpointState {
         steps_done: 0,
         config: config.clone(),
@@ -598,7 +599,7 @@ fn finished(net: AimNet, state: CheckpointState, ending: Ending) -> Trained {
 pub fn save_checkpoint(
     dir: &Path,
     net: &AimNet,
-    optim: &burn::optim::ModuleOptimizer,
+    optim: &Adam,
     state: &mut CheckpointState,
 ) -> Result<(), CheckpointError> {
     let model = net
@@ -623,9 +624,9 @@ pub fn read_state(dir: &Path) -> Result<CheckpointState, CheckpointError> {
 pub fn load_checkpoint(
     dir: &Path,
     net: AimNet,
-    optim: burn::optim::ModuleOptimizer,
+    optim: Adam,
     device: &Device,
-) -> Result<(AimNet, burn::optim::ModuleOptimizer, CheckpointState), CheckpointError> {
+) -> Result<(AimNet, Adam, CheckpointState), CheckpointError> {
     let state = read_state(dir)?;
     let (model_path, optim_path, model, opt) = if state.files.is_legacy() {
         let read = |name: &str| {
@@ -655,12 +656,10 @@ pub fn load_checkpoint(
         AimNet::new(&state.config, state.names.len(), device)
     };
     let net = checkpoint::load_module(net, model_path, model, "the model")?;
-    let optim = optim
-        .from_bytes(burn::tensor::Bytes::from_bytes_vec(opt))
-        .map_err(|e| CheckpointError::Record {
-            path: optim_path,
-            detail: e.to_string(),
-        })?;
+    let optim = optim.load(opt, &net).map_err(|e| CheckpointError::Record {
+        path: optim_path,
+        detail: e.to_string(),
+    })?;
     Ok((net, optim, state))
 }
 
@@ -709,7 +708,7 @@ pub fn load_model(dir: &Path, backend: Backend) -> Result<(AimNet, CheckpointSta
         .device(state.config.seed)
         .map_err(TrainError::backend)?;
     let net = AimNet::new(&state.config, state.names.len(), &device);
-    let (net, _, state) = load_checkpoint(dir, net, AdamConfig::new().init(), &device)?;
+    let (net, _, state) = load_checkpoint(dir, net, Adam::default(), &device)?;
     Ok((net, state))
 }
 

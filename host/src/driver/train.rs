@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use burn::module::Module;
-use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::optim::GradientsParams;
 use burn::tensor::{Device, Tensor};
 use serde::{Deserialize, Serialize};
 use sinew_core::driver::MAX_INPUT;
@@ -15,6 +15,7 @@ use sinew_core::nn::Activation;
 
 use super::DriverConfig;
 use super::sample::{Sample, Sampler};
+use crate::training::adam::Adam;
 use crate::training::checkpoint::{self, CheckpointError, WeightFiles};
 use crate::training::nn::{Mlp, tensor, to_vec};
 use crate::training::random::Stream;
@@ -116,7 +117,7 @@ pub struct Run {
     /// The network.
     pub net: Mlp,
     /// Adam.
-    pub optim: ModuleOptimizer,
+    pub optim: Adam,
     /// Steps done.
     pub step: usize,
     /// The loss of every step.
@@ -136,7 +137,7 @@ impl Run {
     pub fn new(inputs: usize, outputs: usize, config: &DriverConfig, device: &Device) -> Self {
         Self {
             net: network(inputs, config.hidden, outputs, device),
-            optim: AdamConfig::new().init(),
+            optim: Adam::default(),
             step: 0,
             history: Vec::new(),
         }
@@ -283,9 +284,7 @@ pub fn load_checkpoint(
     let optim_path = dir.join(&state.files.optim_file);
     let optim = run
         .optim
-        .from_bytes(burn::tensor::Bytes::from_bytes_vec(
-            state.files.read_optim(dir)?,
-        ))
+        .load(state.files.read_optim(dir)?, &net)
         .map_err(|e| CheckpointError::Record {
             path: optim_path,
             detail: format!("{e:?}"),

@@ -22,7 +22,7 @@
 use std::time::Instant;
 
 use burn::module::Param;
-use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::optim::GradientsParams;
 use burn::tensor::{Distribution, Tensor};
 use serde::{Deserialize, Serialize};
 use sinew_core::aim::AimActor;
@@ -34,6 +34,7 @@ pub use crate::fit::setup::{Coefficients, Constrain, FitConfig, FitNet, Mode, St
 use crate::fit::checkpoint::{CHECKPOINT_FORMAT, Checkpointing, EVERY, FitState, target_crc};
 use crate::fit::setup::{fw_mlp, gelu_mlp};
 use crate::io::performance::Performance;
+use crate::training::adam::Adam;
 use crate::training::backend::Backend;
 use crate::training::nn::{LayerWeights, tensor, to_vec};
 
@@ -201,7 +202,7 @@ struct Setup {
     starts: Vec<[f32; 18]>,
     fx: Fixed,
     net: FitNet,
-    optim: ModuleOptimizer,
+    optim: Adam,
     result: FitResult,
     state: FitState,
 }
@@ -267,7 +268,7 @@ fn setup(
         ft: gelu_mlp(config.code, config.hidden, 18, &device),
         fw: fw_mlp(config, fw_inputs, m.max(1), &device),
     };
-    let optim: ModuleOptimizer = AdamConfig::new().with_epsilon(1e-8).init();
+    let optim = Adam::new(1e-8);
     let result = FitResult {
         config: config.clone(),
         mean_error_mm: 0.0,
@@ -325,7 +326,7 @@ fn checkpoint(
     step: usize,
     config: &FitConfig,
     net: &FitNet,
-    optim: &ModuleOptimizer,
+    optim: &Adam,
     result: &FitResult,
     state: &mut FitState,
     elapsed: f64,

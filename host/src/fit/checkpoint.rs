@@ -6,11 +6,11 @@
 use std::path::Path;
 
 use burn::module::Module;
-use burn::optim::ModuleOptimizer;
 use serde::{Deserialize, Serialize};
 
 use crate::fit::setup::{FitConfig, FitNet};
 use crate::io::performance::Performance;
+use crate::training::adam::Adam;
 use crate::training::checkpoint::{self, CheckpointError, InvalidState, WeightFiles};
 
 /// `format` of a fit checkpoint's `state.json`.
@@ -68,7 +68,7 @@ pub fn target_crc(perf: &Performance) -> String {
 pub fn save(
     dir: &Path,
     net: &FitNet,
-    optim: &ModuleOptimizer,
+    optim: &Adam,
     mut state: FitState,
 ) -> Result<(), CheckpointError> {
     std::fs::create_dir_all(dir).map_err(|source| CheckpointError::CreateDir {
@@ -92,18 +92,16 @@ pub fn save(
 pub fn load(
     dir: &Path,
     net: FitNet,
-    optim: ModuleOptimizer,
+    optim: Adam,
     expected: &FitState,
-) -> Result<(FitNet, ModuleOptimizer, FitState), CheckpointError> {
+) -> Result<(FitNet, Adam, FitState), CheckpointError> {
     let (state, _): (FitState, _) = checkpoint::read_state(dir, "a fit checkpoint state")?;
     check(&state, expected).map_err(|reason| checkpoint::invalid(dir, reason))?;
     let model_path = dir.join(&state.files.model_file);
     let net = checkpoint::load_module(net, model_path, state.files.read_model(dir)?, "this fit")?;
     let optim_path = dir.join(&state.files.optim_file);
     let optim = optim
-        .from_bytes(burn::tensor::Bytes::from_bytes_vec(
-            state.files.read_optim(dir)?,
-        ))
+        .load(state.files.read_optim(dir)?, &net)
         .map_err(|e| CheckpointError::Record {
             path: optim_path,
             detail: e.to_string(),

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::gan::{Critic, GanConfig, Generator, StepLosses};
 use super::train::{Run, TangentData};
+use crate::training::adam::AdamRecordError;
 use crate::training::checkpoint::{self, CheckpointError, WeightFiles};
 
 /// `format` of a checkpoint's `state.json`.
@@ -142,18 +143,17 @@ pub fn load_checkpoint(
     if end != opt.len() {
         return Err(CheckpointError::TrailingBytes { path: optim_path });
     }
-    let load = |o: burn::optim::ModuleOptimizer, b: Vec<u8>| {
-        o.from_bytes(burn::tensor::Bytes::from_bytes_vec(b))
-            .map_err(|e| CheckpointError::Record {
-                path: optim_path.clone(),
-                detail: format!("{e:?}"),
-            })
+    let record = |e: AdamRecordError| CheckpointError::Record {
+        path: optim_path.clone(),
+        detail: e.to_string(),
     };
+    let g_optim = run.g_optim.load(g, &nets.generator).map_err(record)?;
+    let c_optim = run.c_optim.load(c, &nets.critic).map_err(record)?;
     Ok(Run {
         generator: nets.generator,
         critic: nets.critic,
-        g_optim: load(run.g_optim, g)?,
-        c_optim: load(run.c_optim, c)?,
+        g_optim,
+        c_optim,
         step: state.steps_done,
         history: state.history,
         guide: run.guide,

@@ -11,7 +11,7 @@
 
 use burn::module::Module;
 use burn::nn::{Gru, GruConfig, Linear};
-use burn::optim::{AdamConfig, GradientsParams};
+use burn::optim::GradientsParams;
 use burn::tensor::activation::log_softmax;
 use burn::tensor::{Device, Tensor};
 use serde::{Deserialize, Serialize};
@@ -19,6 +19,7 @@ use sinew_core::srvf::FRAMES;
 
 use super::labels::best_labels;
 use super::srvf::{SrvfError, normalised_curve};
+use crate::training::adam::Adam;
 use crate::training::nn::{pytorch_linear, tensor, to_vec};
 use crate::training::random::Stream;
 
@@ -209,7 +210,7 @@ pub fn train(
         unit_scale(seqs),
         device,
     );
-    let mut optim = AdamConfig::new().init();
+    let mut optim = Adam::default();
     let mut losses = Vec::with_capacity(config.epochs);
     for epoch in 0..config.epochs {
         let (mut sum, mut count) = (0.0f64, 0usize);

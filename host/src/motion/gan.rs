@@ -21,13 +21,14 @@
 
 use burn::module::Module;
 use burn::nn::Linear;
-use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::optim::GradientsParams;
 use burn::tensor::{Device, Int, Tensor};
 use serde::{Deserialize, Serialize};
 use sinew_core::nn::Activation;
 use sinew_core::srvf::FRAMES;
 
 use super::guide::LabelGuide;
+use crate::training::adam::Adam;
 use crate::training::nn::{Mlp, pytorch_linear, tensor, to_vec};
 
 /// The training settings (the paper's where it gives them, section 4.2).
@@ -392,8 +393,8 @@ pub fn diversity_term(a: Tensor<2>, b: Tensor<2>, p: &Tensor<2>) -> Tensor<1> {
 }
 
 /// Adam with the reference's β = (0.5, 0.9).
-pub fn optimizer() -> ModuleOptimizer {
-    AdamConfig::new().with_beta_1(0.5).with_beta_2(0.9).init()
+pub fn optimizer() -> Adam {
+    Adam::default().with_betas(0.5, 0.9)
 }
 
 /// One batch: real tangent vectors, their one-hot labels, the generator's noise and the
@@ -438,7 +439,7 @@ fn scalar(t: Tensor<1>) -> f32 {
 pub fn critic_step(
     generator: &Generator,
     critic: Critic,
-    optim: &mut ModuleOptimizer,
+    optim: &mut Adam,
     batch: &Batch,
     p: &Tensor<2>,
     config: &GanConfig,
@@ -479,7 +480,7 @@ pub fn generator_step(
     generator: Generator,
     critic: &Critic,
     guide: Option<&LabelGuide>,
-    optim: &mut ModuleOptimizer,
+    optim: &mut Adam,
     batch: &Batch,
     p: &Tensor<2>,
     config: &GanConfig,

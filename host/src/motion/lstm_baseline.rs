@@ -8,7 +8,7 @@
 
 use burn::module::Module;
 use burn::nn::{Linear, Lstm, LstmConfig};
-use burn::optim::{AdamConfig, GradientsParams};
+use burn::optim::GradientsParams;
 use burn::tensor::{Device, Tensor};
 use sinew_core::srvf::FRAMES;
 
@@ -16,6 +16,7 @@ use super::classifier::{
     SequenceTraining, TrainingSetError, batches, check_training_set, stack, unit_scale,
 };
 use super::srvf::{SrvfError, normalise_frame};
+use crate::training::adam::Adam;
 use crate::training::nn::{pytorch_linear, tensor, to_vec};
 
 /// A label the generator was not trained on.
@@ -119,7 +120,7 @@ pub fn train(
     device.seed(config.seed);
     let scale = unit_scale(seqs);
     let mut model = LstmGenerator::new(classes, len / FRAMES, config.hidden, scale, device);
-    let mut optim = AdamConfig::new().init();
+    let mut optim = Adam::default();
     let mut losses = Vec::with_capacity(config.epochs);
     for epoch in 0..config.epochs {
         let (mut sum, mut count) = (0.0f64, 0usize);

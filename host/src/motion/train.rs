@@ -1,7 +1,6 @@
 //! Training Motion3DGAN: the training sequences as tangent vectors at the reference motion, and
 //! the loop of 4 critic steps per generator step (S2D section 4.2).
 
-use burn::optim::ModuleOptimizer;
 use burn::tensor::{Device, Tensor};
 use serde::{Deserialize, Serialize};
 use sinew_core::srvf::FRAMES;
@@ -14,6 +13,7 @@ use super::gan::{
 use super::guide::{GuideError, LabelGuide};
 use super::labels::one_hot;
 use super::srvf::{self, SrvfError};
+use crate::training::adam::Adam;
 use crate::training::nn::tensor;
 use crate::training::random::Stream;
 
@@ -228,9 +228,9 @@ pub struct Run {
     /// The critic.
     pub critic: Critic,
     /// The generator's Adam.
-    pub g_optim: ModuleOptimizer,
+    pub g_optim: Adam,
     /// The critic's Adam.
-    pub c_optim: ModuleOptimizer,
+    pub c_optim: Adam,
     /// Generator steps done.
     pub step: usize,
     /// Per generator step: the last critic step's losses with the generator's.

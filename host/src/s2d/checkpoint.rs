@@ -11,12 +11,12 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use burn::module::Module;
-use burn::optim::ModuleOptimizer;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use super::decoder::{DecoderConfig, S2dDecoder};
 use super::objective::{Sample, TrainConfig};
+use crate::training::adam::Adam;
 pub use crate::training::checkpoint::STATE_FILE;
 use crate::training::checkpoint::{self, CheckpointError, InvalidState, WeightFiles};
 
@@ -179,7 +179,7 @@ impl CheckpointState {
 pub fn save_checkpoint(
     dir: &Path,
     decoder: &S2dDecoder,
-    optim: &ModuleOptimizer,
+    optim: &Adam,
     state: &mut CheckpointState,
 ) -> Result<(), CheckpointError> {
     let model = decoder
@@ -220,9 +220,9 @@ pub fn read_state(dir: &Path) -> Result<CheckpointState, CheckpointError> {
 pub fn load_checkpoint(
     dir: &Path,
     decoder: S2dDecoder,
-    optim: ModuleOptimizer,
+    optim: Adam,
     current: &CheckpointState,
-) -> Result<(S2dDecoder, ModuleOptimizer, CheckpointState), CheckpointError> {
+) -> Result<(S2dDecoder, Adam, CheckpointState), CheckpointError> {
     let (state, stored) = read_state_json(dir)?;
     check_same_run(dir, &stored, current)?;
     let model_path = dir.join(&state.files.model_file);
@@ -235,7 +235,7 @@ pub fn load_checkpoint(
     let optim_path = dir.join(&state.files.optim_file);
     let opt = state.files.read_optim(dir)?;
     let optim = optim
-        .from_bytes(burn::tensor::Bytes::from_bytes_vec(opt))
+        .load(opt, &decoder)
         .map_err(|e| CheckpointError::Record {
             path: optim_path,
             detail: e.to_string(),

@@ -3,12 +3,11 @@
 //! sample. The training loop is [`super::train`]; its checkpoints ([`super::checkpoint`]) record
 //! the configuration.
 
-use burn::optim::decay::WeightDecayConfig;
-use burn::optim::{AdamConfig, ModuleOptimizer};
 use burn::tensor::Tensor;
 use serde::{Deserialize, Serialize};
 
 use super::decoder::InputNormalisation;
+use crate::training::adam::Adam;
 
 /// Centres a landmark set on its mean and scales it to unit Frobenius norm (the reference's
 /// per-set normalisation). A set with zero norm (all points equal) is only centred.
@@ -265,11 +264,8 @@ impl TrainConfig {
     /// Adam as PyTorch configures it for S2D (β = (0.9, 0.999), ε = 1e-8, L2 weight decay added
     /// to the gradient — burn's `WeightDecay` adds `penalty · θ`, as PyTorch's `Adam` does, not
     /// AdamW's decoupled decay).
-    pub fn optimizer(&self) -> ModuleOptimizer {
-        AdamConfig::new()
-            .with_epsilon(1e-8)
-            .with_weight_decay(Some(WeightDecayConfig::new(self.weight_decay)))
-            .init()
+    pub fn optimizer(&self) -> Adam {
+        Adam::new(1e-8).with_weight_decay(self.weight_decay)
     }
 
     pub(crate) fn validate(&self) -> Result<(), InvalidTrainConfig> {

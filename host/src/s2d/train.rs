@@ -8,13 +8,14 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use burn::module::{Module, ModuleMapper, ModuleVisitor, Param};
-use burn::optim::{GradientsParams, ModuleOptimizer};
+use burn::optim::GradientsParams;
 use burn::tensor::{Device, Tensor, TensorData};
 
 use super::checkpoint::{
     CheckpointState, DataFingerprint, STATE_FILE, load_checkpoint, save_checkpoint,
 };
 use super::decoder::S2dDecoder;
+use crate::training::adam::Adam;
 use crate::training::random::Stream;
 
 mod error;
@@ -126,7 +127,7 @@ impl ModuleVisitor for AddGradients<'_> {
 /// or on the machine's core count.
 pub fn step_once(
     decoder: S2dDecoder,
-    optim: &mut ModuleOptimizer,
+    optim: &mut Adam,
     batch: &Batch,
     weights: &Tensor<3>,
     variant: LossVariant,

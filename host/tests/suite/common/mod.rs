@@ -8,12 +8,22 @@ use std::process::{Command, Output};
 
 /// Runs `sinew` with `args`, without the environment's `SINEW_SEED`.
 pub fn sinew(args: &[&str]) -> Output {
+    sinew_with(args, &[])
+}
+
+/// Runs `sinew` with the environment variables `vars` set.
+pub fn sinew_with(args: &[&str], vars: &[(&str, &str)]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_sinew"))
         .args(args)
         .env_remove("SINEW_SEED")
+        .envs(vars.iter().copied())
         .output()
         .expect("run sinew")
 }
+
+/// What a resume sets so that touching burn's default device fails: a backend that does not
+/// exist (burn panics on it). A resumed run must read its state onto the device it trains on.
+pub const NO_DEFAULT_DEVICE: (&str, &str) = ("BURN_DEVICE", "no-such-backend");
 
 /// Runs `sinew`, requires success and returns its standard output.
 pub fn ok(args: &[&str]) -> String {
