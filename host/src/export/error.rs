@@ -24,18 +24,10 @@ pub enum ExportError {
         /// The rate given.
         fps: f32,
     },
-    /// The model or performance file could not be read or is no `.sinew` artefact.
+    /// The model or performance file could not be read, is no `.sinew` artefact, or the model
+    /// is not an AIM actor.
     #[error(transparent)]
     Container(#[from] ContainerError),
-    /// The model is not an AIM actor.
-    #[error("{}", path.display())]
-    NotAnActor {
-        /// The model file.
-        path: PathBuf,
-        /// What the core said.
-        #[source]
-        source: FormatError,
-    },
     /// The pose file is unreadable or does not fit the actor.
     #[error(transparent)]
     Poses(#[from] PoseFileError),

@@ -162,10 +162,7 @@ pub fn export(
         return Err(ExportError::Fps { fps });
     }
     let bytes = crate::io::container::read(model)?;
-    let actor = AimActor::from_bytes(&bytes).map_err(|source| ExportError::NotAnActor {
-        path: model.to_path_buf(),
-        source,
-    })?;
+    let actor = crate::io::container::actor(model, &bytes)?;
     let (poses, unplayable) = match frames {
         Frames::None => (Vec::new(), Vec::new()),
         Frames::Poses(p) => (PoseFile::read(p, actor.shape_count())?.frames, Vec::new()),

@@ -1,10 +1,10 @@
 //! A rig's 68 iBUG landmarks, found without a hand: the built-in face template placed on the
 //! rig's neutral from its conventions (the nose tip forward, the head's width), aligned by a
 //! similarity ICP, then deformed onto it by optimal-step non-rigid ICP (Amberg et al. 2007);
-//! each template landmark, carried by the deformation, lands on the closest point of the rig's
-//! surface. The registered template is kept: it is the dense correspondence between the rig and
-//! the kit. A landmarks file (68 vertex indices, or 68 positions in the rig's own frame) can be
-//! given instead.
+//! each template landmark, carried by the deformation, is the rig's landmark, bound to the rig's
+//! vertex nearest to it. The registered template is kept: it is the dense correspondence between
+//! the rig and the kit. A landmarks file (68 vertex indices, or 68 positions in the rig's own
+//! frame) can be given instead.
 
 use std::path::Path;
 
@@ -138,26 +138,30 @@ pub(crate) struct Target<'a> {
 }
 
 impl Target<'_> {
-    /// The landmark at the surface point closest to `scene`.
+    /// The landmark at `scene` (a template landmark carried by the registration, or a point a
+    /// landmarks file gives) and the welded vertex nearest to it. The point is kept where it is,
+    /// not snapped onto the surface: a landmark at an eye's or the mouth's corner lies in the
+    /// gap between the lids or lips (up to ~1.5 mm off the skin on the kit's identities), where
+    /// the closest point of the surface jumps between the two sides as the point moves by a
+    /// hundredth of a millimetre (so a rig re-ordered or re-quantised by an optimiser moved such
+    /// a landmark by 0.77 mm; kept, 0.02 mm).
     fn landmark_at(&self, scene: V3) -> Result<Landmark, RigError> {
-        let (point, _) = self
-            .surface
-            .closest(scene)
-            .ok_or_else(|| RigError::Registration {
-                path: self.path.to_owned(),
-                what: "the neutral has no vertices".into(),
-            })?;
-        let on = point.position;
-        let (welded, d) = self.surface.nearest_vertex(on).unwrap_or((0, 0.0));
+        let (welded, d) =
+            self.surface
+                .nearest_vertex(scene)
+                .ok_or_else(|| RigError::Registration {
+                    path: self.path.to_owned(),
+                    what: "the neutral has no vertices".into(),
+                })?;
         let position = self
             .conventions
-            .from_face(on)
+            .from_face(scene)
             .ok_or_else(|| RigError::NodeTransform {
                 path: self.path.to_owned(),
             })?;
         Ok(Landmark {
             position,
-            face: on,
+            face: scene,
             vertex: self.weld.first[welded],
             welded_vertex: welded as u32,
             vertex_distance_mm: d * 10.0,
