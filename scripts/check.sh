@@ -89,8 +89,10 @@ if [ -d "$kit" ]; then
     --arkit tests/data/arkit-sample.csv --out "$gltf_dir/rig-arkit" >/dev/null 2>&1
   "$sinew" export gltf --model "$gltf_dir/rig-actor.sinew" --arkit tests/data/arkit-sample.csv \
     --out "$gltf_dir/rig-arkit.glb" >/dev/null 2>&1
-  # A character: the sample rig with a textured eye mesh (host/tests/three/character.mjs), an
-  # actor learned from it, and its export carrying the eyes, material and texture (--rig).
+  # A character: the sample rig with a textured eye mesh and lower teeth
+  # (host/tests/three/character.mjs), an actor learned from it, and its export carrying the eyes,
+  # material and texture, and the teeth on the jaw joint (--rig); three.js and Blender also check
+  # that the carried meshes stand where the character has them.
   node host/tests/three/character.mjs "$gltf_dir/rig.glb" "$gltf_dir/character.glb"
   "$sinew" train aim --rig "$gltf_dir/character.glb" --templates "$data" \
     --shapes jawOpen,mouthSmile_L --iterations 20 --quiet \
@@ -98,11 +100,14 @@ if [ -d "$kit" ]; then
   "$sinew" play --model "$gltf_dir/character.sinew" \
     --arkit tests/data/arkit-sample.csv --out "$gltf_dir/character" >/dev/null 2>&1
   "$sinew" export gltf --model "$gltf_dir/character.sinew" --rig "$gltf_dir/character.glb" \
-    --arkit tests/data/arkit-sample.csv --out "$gltf_dir/character-export.glb" >/dev/null 2>&1
+    --arkit tests/data/arkit-sample.csv --out "$gltf_dir/character-export.glb" \
+    2>/dev/null >"$gltf_dir/character-export.json"
+  python3 -c 'import json, sys; s = json.load(open(sys.argv[1]))
+assert s["carried_meshes"] == 2 and s["carried_on_jaw"] == ["teethLower"], s' "$gltf_dir/character-export.json"
   glbs+=("$gltf_dir/rig.glb" "$gltf_dir/rig-actor.glb" "$gltf_dir/rig-arkit.glb"
     "$gltf_dir/character-export.glb")
   three_checks+=("rig-actor rig-actor.glb 0.01 0.01" "rig-arkit rig-arkit.glb 0.01 0.01"
-    "character character-export.glb 1 0.01")
+    "character character-export.glb 1 0.01 character.glb")
 elif [ "${SINEW_REQUIRE_DATA:-}" = 1 ]; then
   echo "no ICT-FaceKit at $kit (SINEW_REQUIRE_DATA=1)" >&2
   exit 1
@@ -111,10 +116,11 @@ else
 fi
 (cd host/tests/gltf && npm ci --no-audit --no-fund --silent && node validate.mjs "${glbs[@]}")
 (cd host/tests/three && npm ci --no-audit --no-fund --silent)
+# Each check: frames, export, OBJ unit, tolerance and, for a character, the rig it carried from.
 for check in "${three_checks[@]}"; do
-  read -r frames glb unit tolerance <<<"$check"
+  read -r frames glb unit tolerance original <<<"$check"
   node host/tests/three/check.mjs --frames "$gltf_dir/$frames" --glb "$gltf_dir/$glb" \
-    --obj-unit "$unit" --tolerance-mm "$tolerance"
+    --obj-unit "$unit" --tolerance-mm "$tolerance" ${original:+--original "$gltf_dir/$original"}
 done
 # Blender 5 as a Python module (PyPI bpy, pinned in host/tests/blender/requirements.txt: a 357 MiB
 # wheel for CPython 3.11) poses the same exports through its own glTF importer, shape keys
@@ -127,10 +133,11 @@ bpy_venv="${SINEW_BPY_VENV:-$gltf_dir/bpy}"
 [ -x "$bpy_venv/bin/python" ] || python3.11 -m venv "$bpy_venv"
 "$bpy_venv/bin/pip" install --quiet --disable-pip-version-check -r host/tests/blender/requirements.txt
 for check in "${three_checks[@]}"; do
-  read -r frames glb unit tolerance <<<"$check"
+  read -r frames glb unit tolerance original <<<"$check"
   case "$glb" in *compressed*) continue ;; esac
   "$bpy_venv/bin/python" host/tests/blender/check.py --frames "$gltf_dir/$frames" \
-    --glb "$gltf_dir/$glb" --obj-unit "$unit" --tolerance-mm "$tolerance" 2>&1 | grep -v '| INFO:'
+    --glb "$gltf_dir/$glb" --obj-unit "$unit" --tolerance-mm "$tolerance" \
+    ${original:+--original "$gltf_dir/$original"} 2>&1 | grep -v '| INFO:'
 done
 rm -rf "$gltf_dir"
 

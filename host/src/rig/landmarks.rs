@@ -153,12 +153,12 @@ impl Target<'_> {
                     path: self.path.to_owned(),
                     what: "the neutral has no vertices".into(),
                 })?;
-        let position = self
-            .conventions
-            .from_face(scene)
-            .ok_or_else(|| RigError::NodeTransform {
-                path: self.path.to_owned(),
-            })?;
+        let position =
+            self.conventions
+                .from_face(scene)
+                .ok_or_else(|| RigError::NodeTransform {
+                    path: self.path.to_owned(),
+                })?;
         Ok(Landmark {
             position,
             face: scene,

@@ -168,7 +168,6 @@ fn a_rig_through_gltfpack_reads_finds_its_landmarks_trains_and_plays() {
                 moved * 1e3
             );
         }
-        for (i, a) in apart.iter().enumerate() { if *a > 0.1 { eprintln!("DIAG {name} landmark {i}: {a:.4} mm; vertex {} vs {}, method {:?} vs {:?}", opened.landmarks.landmarks[i].vertex_distance_mm, found.landmarks.landmarks[i].vertex_distance_mm, opened.landmarks.method, found.landmarks.method); } }
         println!(
             "{name}: landmarks {mean:.4} mm from the unpacked rig's on average, {worst:.4} mm at most"
         );

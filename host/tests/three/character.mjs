@@ -1,7 +1,9 @@
 // Makes a character of a rig: copies a .glb and adds what a character has besides its face, an
 // `eyes` mesh (a textured triangle in front of the face, under a node of its own) with its
-// material, texture, sampler and a PNG image in the BIN chunk, so that `sinew export gltf --rig`
-// has something to carry. Usage: node character.mjs IN.glb OUT.glb
+// material, texture, sampler and a PNG image in the BIN chunk, and a `teethLower` mesh (a
+// triangle behind the lower lip, which the export hangs on the jaw joint), so that
+// `sinew export gltf --rig` has something to carry. Usage: node character.mjs IN.glb OUT.glb
+// (IN: a rig from `sinew data rig`, its skin in metres, y up, looking along +z).
 import { readFile, writeFile } from 'node:fs/promises';
 import { deflateSync } from 'node:zlib';
 
@@ -82,14 +84,51 @@ doc.meshes.push({
   name: 'eyes',
   primitives: [{ attributes: { POSITION: n - 3, TEXCOORD_0: n - 2 }, indices: n - 1, material: 0 }],
 });
-// The eyes sit where the face's node puts the face, through a node of their own.
+
+// The lower teeth: a triangle behind the lower lip, placed from the nose tip (the skin's
+// foremost vertex) by the face's width.
+const skin = new Float32Array(
+  bin.buffer.slice(
+    bin.byteOffset + doc.bufferViews[face.bufferView].byteOffset + (face.byteOffset ?? 0),
+    bin.byteOffset + doc.bufferViews[face.bufferView].byteOffset + (face.byteOffset ?? 0) + 12 * face.count,
+  ),
+);
+let tip = 0;
+for (let i = 1; i < face.count; i++) if (skin[3 * i + 2] > skin[3 * tip + 2]) tip = i;
+const nose = [0, 1, 2].map((k) => skin[3 * tip + k]);
+const teethPoints = [
+  [nose[0] + 0.08 * size, nose[1] - 0.2 * size, nose[2] - 0.15 * size],
+  [nose[0] - 0.08 * size, nose[1] - 0.2 * size, nose[2] - 0.15 * size],
+  [nose[0], nose[1] - 0.25 * size, nose[2] - 0.15 * size],
+];
+const teethPositions = view(Buffer.from(new Float32Array(teethPoints.flat()).buffer), 34962);
+const teethIndices = view(Buffer.from(new Uint16Array([0, 1, 2]).buffer), 34963);
+doc.accessors.push(
+  {
+    bufferView: teethPositions,
+    componentType: 5126,
+    count: 3,
+    type: 'VEC3',
+    min: [0, 1, 2].map((k) => Math.min(...teethPoints.map((p) => Math.fround(p[k])))),
+    max: [0, 1, 2].map((k) => Math.max(...teethPoints.map((p) => Math.fround(p[k])))),
+  },
+  { bufferView: teethIndices, componentType: 5123, count: 3, type: 'SCALAR' },
+);
+doc.meshes.push({
+  name: 'teethLower',
+  primitives: [{ attributes: { POSITION: doc.accessors.length - 2 }, indices: doc.accessors.length - 1 }],
+});
+
+// Each sits where the face's node puts the face, through a node of its own.
 const faceNode = doc.nodes.find((node) => node.mesh === 0);
-const eyes = { name: 'eyes', mesh: doc.meshes.length - 1 };
-for (const key of ['matrix', 'translation', 'rotation', 'scale']) {
-  if (faceNode[key]) eyes[key] = faceNode[key];
+for (const [name, mesh] of [['eyes', doc.meshes.length - 2], ['teethLower', doc.meshes.length - 1]]) {
+  const node = { name, mesh };
+  for (const key of ['matrix', 'translation', 'rotation', 'scale']) {
+    if (faceNode[key]) node[key] = faceNode[key];
+  }
+  doc.nodes.push(node);
+  doc.scenes[doc.scene ?? 0].nodes.push(doc.nodes.length - 1);
 }
-doc.nodes.push(eyes);
-doc.scenes[doc.scene ?? 0].nodes.push(doc.nodes.length - 1);
 bin = Buffer.concat([bin, Buffer.alloc((4 - (bin.length % 4)) % 4)]);
 doc.buffers[0].byteLength = bin.length;
 let json = Buffer.from(JSON.stringify(doc));

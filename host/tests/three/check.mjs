@@ -3,7 +3,13 @@
 // with GLTFLoader from its bytes (no browser), plays its animation with an AnimationMixer, and
 // each vertex is morphed and skinned on the CPU by three's own SkinnedMesh.getVertexPosition.
 //
+// With --original RIG.glb (the character an export with --rig carried meshes from), each mesh
+// of the original that the export carries (by name) must stand where it stood, vertex by vertex
+// in the scene, with the export's skeleton in its bind pose: the export drops into a scene in
+// place of the original.
+//
 // Usage: node check.mjs --glb FILE.glb --frames DIR --obj-unit METRES [--tolerance-mm MM]
+//                       [--original RIG.glb]
 //   DIR holds frame_00000.obj, … from `sinew play` of the frames the .glb was exported with;
 //   --obj-unit is the OBJ's unit in metres (0.01 for the kit's centimetres). A looping export
 //   (--loop) has one keyframe more than there are frames: it is compared with frame 0.
@@ -26,6 +32,7 @@ const { values: args } = parseArgs({
     frames: { type: 'string' },
     'obj-unit': { type: 'string' },
     'tolerance-mm': { type: 'string', default: '0.5' },
+    original: { type: 'string' },
   },
 });
 function fail(message) {
@@ -61,14 +68,16 @@ async function readObj(path) {
 // character carried with --rig); in node the textures then fail to load, which this check,
 // about geometry, does not need.
 globalThis.self ??= globalThis;
-let gltf;
-try {
-  const bytes = await readFile(args.glb);
-  const buffer = bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength);
-  gltf = await new GLTFLoader().setMeshoptDecoder(MeshoptDecoder).parseAsync(buffer, '');
-} catch (e) {
-  fail(`${args.glb}: three.js cannot load it: ${e.message ?? e}`);
+async function load(path) {
+  try {
+    const bytes = await readFile(path);
+    const buffer = bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength);
+    return await new GLTFLoader().setMeshoptDecoder(MeshoptDecoder).parseAsync(buffer, '');
+  } catch (e) {
+    fail(`${path}: three.js cannot load it: ${e.message ?? e}`);
+  }
 }
+const gltf = await load(args.glb);
 let face;
 gltf.scene.traverse((o) => {
   if (o.isSkinnedMesh && o.name === 'face') face = o;
@@ -133,10 +142,47 @@ for (let key = 0; key < times.length; key++) {
     if (!(mm <= worst.mm)) worst = { mm, key, vertex: i };
   }
 }
+
+// The carried meshes where the original had them, the export's skeleton in its bind pose.
+let carried = '';
+if (args.original) {
+  const original = await load(args.original);
+  original.scene.updateMatrixWorld(true);
+  action.stop();
+  gltf.scene.traverse((o) => o.isSkinnedMesh && o.skeleton.pose());
+  gltf.scene.updateMatrixWorld(true);
+  const meshes = (scene) => {
+    const byName = new Map();
+    scene.traverse((o) => o.isMesh && byName.set(o.name, o));
+    return byName;
+  };
+  const exported = meshes(gltf.scene);
+  const names = [];
+  let far = { mm: 0, name: '', vertex: 0 };
+  for (const [name, mesh] of meshes(original.scene)) {
+    const copy = exported.get(name);
+    if (!copy || name === 'face') continue;
+    const n = mesh.geometry.attributes.position.count;
+    if (copy.geometry.attributes.position.count !== n) {
+      fail(`${args.glb}: ${name} has ${copy.geometry.attributes.position.count} vertices, ${args.original} ${n}`);
+    }
+    const w = new THREE.Vector3();
+    for (let i = 0; i < n; i++) {
+      mesh.getVertexPosition(i, v).applyMatrix4(mesh.matrixWorld);
+      copy.getVertexPosition(i, w).applyMatrix4(copy.matrixWorld);
+      const mm = v.distanceTo(w) * 1000;
+      if (!(mm <= far.mm)) far = { mm, name, vertex: i };
+    }
+    names.push(name);
+  }
+  if (names.length === 0) fail(`${args.glb}: carries no mesh of ${args.original}`);
+  if (far.mm > worst.mm) worst = { ...far, key: 'bind pose', vertex: `${far.name} ${far.vertex}` };
+  carried = `; carried ${names.join(', ')} where ${args.original} has them within ${far.mm.toExponential(2)} mm`;
+}
 const within = worst.mm <= toleranceMm;
 console.log(
   `${args.glb}: three.js ${THREE.REVISION}, ${times.length} keyframes of ${count} vertices against ` +
     `${args.frames}: max ${worst.mm.toExponential(2)} mm (keyframe ${worst.key}, vertex ${worst.vertex}); ` +
-    `tolerance ${toleranceMm} mm: ${within ? 'ok' : 'FAILED'}`,
+    `tolerance ${toleranceMm} mm${carried}: ${within ? 'ok' : 'FAILED'}`,
 );
 process.exit(within ? 0 : 1);
