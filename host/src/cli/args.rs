@@ -48,9 +48,10 @@ pub(crate) struct RigReadArgs {
     /// The rig's up axis (+x, -x, +y, -y, +z, -z).
     #[arg(long, default_value = "+y", allow_hyphen_values = true)]
     pub(crate) up: Axis,
-    /// The axis the face looks along.
-    #[arg(long, default_value = "+z", allow_hyphen_values = true)]
-    pub(crate) forward: Axis,
+    /// The axis the face looks along (default: +z; -z for a VRM 0.x avatar, which faces -z by
+    /// its specification).
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) forward: Option<Axis>,
     /// The 68 iBUG landmarks as a JSON list of vertex indices or [x, y, z] positions in the
     /// rig's own frame (default: found by registering the built-in face template).
     #[arg(long)]

@@ -28,6 +28,16 @@ pub use error::RigError;
 /// A head's width (cm, across x in the face frame) taken as the size a unit guess aims for.
 const HEAD_WIDTH_CM: f64 = 16.0;
 
+/// The way a rig's face looks when no option says: glTF's front, +z (VRM 1.0's too), or −z for a
+/// VRM 0.x avatar, which that specification turns to face −z.
+pub fn default_forward(file: &RigFile) -> Axis {
+    if file.avatar.as_ref().is_some_and(|a| a.version == "0.x") {
+        Axis::NegZ
+    } else {
+        Axis::PosZ
+    }
+}
+
 /// How to read a rig: the options a command line gives.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RigOptions {
@@ -37,8 +47,9 @@ pub struct RigOptions {
     pub units: Option<Unit>,
     /// The up axis.
     pub up: Axis,
-    /// The forward axis.
-    pub forward: Axis,
+    /// The forward axis; `None`: the file's own, +z (glTF's front, VRM 1.0's), or −z for a VRM
+    /// 0.x avatar, which its specification turns to face −z.
+    pub forward: Option<Axis>,
     /// A file of the 68 landmarks (vertex indices or positions in the rig's own frame);
     /// `None`: found by registering the face template.
     pub landmarks: Option<PathBuf>,
@@ -50,7 +61,7 @@ impl Default for RigOptions {
             mesh: None,
             units: None,
             up: Axis::PosY,
-            forward: Axis::PosZ,
+            forward: None,
             landmarks: None,
         }
     }
@@ -81,22 +92,23 @@ impl Rig {
     /// placement.
     pub fn open(path: &Path, options: &RigOptions) -> Result<Self, RigError> {
         let file = RigFile::read(path, options.mesh.as_deref())?;
+        let forward = options.forward.unwrap_or_else(|| default_forward(&file));
         if crate::geometry::vec3::norm(crate::geometry::vec3::cross(
             options.up.vector(),
-            options.forward.vector(),
+            forward.vector(),
         )) < 0.5
         {
             return Err(RigError::Axes {
                 path: path.to_owned(),
                 up: options.up,
-                forward: options.forward,
+                forward,
             });
         }
         let mut conventions = Conventions {
             units: options.units.or(file.units).unwrap_or(Unit::Centimetre),
             units_guessed: options.units.is_none() && file.units.is_none(),
             up: options.up,
-            forward: options.forward,
+            forward,
             node_transform: file.node_transform,
             placement: IDENTITY,
         };

@@ -788,3 +788,74 @@ fn bad_vrm_binds_are_refused_by_expression() {
         "{e}"
     );
 }
+
+/// A VRM 0.x avatar faces −z, as that specification turns it: read with no `--forward`, its
+/// conventions say so (`forward` −z, the head's placement near the identity) and its landmarks
+/// are where they are. The same head without the `VRM` extension reads as glTF's +z, its face
+/// found turned half about the up axis; told `--forward +z`, the avatar reads as that head.
+#[test]
+fn a_vrm_0x_avatar_faces_minus_z_without_being_told() {
+    use sinew_host::rig::sample::{Placement, from_kit};
+    use sinew_host::rig::{Axis, Rig, RigOptions};
+    let Some(root) = sinew_host::io::data::data_dir() else {
+        return;
+    };
+    let placement = Placement {
+        units: Unit::Metre,
+        forward: Axis::NegZ,
+        ..Placement::kit()
+    };
+    let sample = from_kit(&root.join("ict-facekit"), &[0.3, -0.5], 2_500, &placement).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = Doc::of(&sample.file);
+    let plain = dir.path().join("head.glb");
+    doc.write(&plain);
+    let at = |name: &str| {
+        let i = sample.file.shape_names.iter().position(|n| n == name);
+        i.unwrap()
+    };
+    doc.uses("VRM", false);
+    doc.json["extensions"] = json!({"VRM": {"blendShapeMaster": {"blendShapeGroups": [
+        {"name": "jawOpen", "presetName": "unknown",
+         "binds": [{"mesh": 0, "index": at("jawOpen"), "weight": 100}]},
+        {"name": "Blink_L", "presetName": "blink_l",
+         "binds": [{"mesh": 0, "index": at("eyeBlink_L"), "weight": 100}]}
+    ]}}});
+    let avatar = dir.path().join("head.vrm");
+    doc.write(&avatar);
+
+    // The placement's turn about the up axis, in degrees (0: the conventions face the way the
+    // head does).
+    let turn = |rig: &Rig| {
+        let m = rig.conventions.placement;
+        m[2][0].atan2(m[0][0]).to_degrees().abs()
+    };
+    let told = RigOptions {
+        forward: Some(Axis::PosZ),
+        ..RigOptions::default()
+    };
+    for (path, options, forward, turned) in [
+        (&avatar, &RigOptions::default(), Axis::NegZ, false),
+        (&plain, &RigOptions::default(), Axis::PosZ, true),
+        (&avatar, &told, Axis::PosZ, true),
+    ] {
+        let rig = Rig::open(path, options).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(rig.conventions.forward, forward, "{}", path.display());
+        assert_eq!(
+            turn(&rig) > 170.0,
+            turned,
+            "{}: turned {}°",
+            path.display(),
+            turn(&rig)
+        );
+        assert!(turn(&rig) > 170.0 || turn(&rig) < 10.0, "{}", turn(&rig));
+        let e = sinew_host::rig::inspect::landmark_error(&rig, &sample.landmarks);
+        assert!(
+            e.mean < 1.5 && e.max < 5.0,
+            "{}: mean {} mm, max {} mm",
+            path.display(),
+            e.mean,
+            e.max
+        );
+    }
+}

@@ -78,7 +78,7 @@ fn template_rig(vertices: usize, placement: &Placement) -> Sample {
 fn options(up: Axis, forward: Axis) -> RigOptions {
     RigOptions {
         up,
-        forward,
+        forward: Some(forward),
         ..RigOptions::default()
     }
 }
