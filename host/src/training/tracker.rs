@@ -14,11 +14,10 @@
 
 use serde::{Deserialize, Serialize};
 
+use sinew_core::driver::LANDMARKS;
+
 use super::random::Stream;
 use crate::io::performance::{Failure, FailureRun};
-
-/// Landmarks per frame: the 68 iBUG points.
-pub const LANDMARKS: usize = 68;
 
 /// The landmark groups of a convention, each with its amplitude relative to the contour's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
