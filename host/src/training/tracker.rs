@@ -13,7 +13,6 @@
 //!   whose points scatter (motion blur), and frames where it finds no face at all.
 
 use serde::{Deserialize, Serialize};
-
 use sinew_core::driver::LANDMARKS;
 
 use super::random::Stream;
