@@ -10,7 +10,7 @@ use sinew_host::driver::{DriverConfig, landmark_vertices};
 use sinew_host::io::openface::{OpenFaceFrame, write_csv};
 use sinew_host::training::random::Stream;
 
-use crate::common::{NO_DEFAULT_DEVICE, err, ok, repo, s, sinew_with};
+use crate::common::{NO_DEFAULT_DEVICE, err, ok, ok_with, repo, s};
 
 const TRAIN: [&str; 10] = [
     "--steps",
@@ -68,12 +68,7 @@ fn a_driver_trains_resumes_and_drives_a_track_holding_lost_frames() {
     let ckpt = dir.path().join("driver.ckpt");
     let mut resume = args.clone();
     resume.extend(["--resume", s(&ckpt)]);
-    let resumed = sinew_with(&resume, &[NO_DEFAULT_DEVICE]);
-    assert!(
-        resumed.status.success(),
-        "{}",
-        String::from_utf8_lossy(&resumed.stderr)
-    );
+    ok_with(&resume, &[NO_DEFAULT_DEVICE]);
     assert_eq!(std::fs::read(&out).unwrap(), first);
     let seed = resume.iter().position(|a| *a == "--seed=4").unwrap();
     resume[seed] = "--seed=5";

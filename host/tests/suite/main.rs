@@ -22,3 +22,4 @@ mod rig_formats;
 mod rig_indices;
 mod rigs;
 mod s2d_cli;
+mod vrm;

@@ -27,7 +27,12 @@ pub const NO_DEFAULT_DEVICE: (&str, &str) = ("BURN_DEVICE", "no-such-backend");
 
 /// Runs `sinew`, requires success and returns its standard output.
 pub fn ok(args: &[&str]) -> String {
-    let out = sinew(args);
+    ok_with(args, &[])
+}
+
+/// [`ok`] with the environment variables `vars` set.
+pub fn ok_with(args: &[&str], vars: &[(&str, &str)]) -> String {
+    let out = sinew_with(args, vars);
     assert!(
         out.status.success(),
         "sinew {args:?} failed:\n{}",
