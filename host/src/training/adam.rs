@@ -11,10 +11,10 @@
 
 use std::collections::HashMap;
 
-use burn::module::{Module, ModuleMapper, Param, ParamId};
+use burn::module::{Module, ModuleMapper, ModuleVisitor, Param, ParamId};
 use burn::optim::decay::WeightDecayConfig;
 use burn::optim::{AdamConfig, AdamState, AdaptiveMomentumState, GradientsParams, Optimizer};
-use burn::tensor::{Bytes, Device, Shape, Tensor, TensorData};
+use burn::tensor::{Bytes, DType, Device, Shape, Tensor, TensorData};
 
 /// What the state of one parameter is called in a record (after `ID.`).
 const FIRST: &str = "momentum.moment_1";
@@ -46,7 +46,8 @@ pub enum AdamRecordError {
     /// A module without parameters, so without a device to load a state onto.
     #[error("the module has no parameters to place the state beside")]
     NoParameters,
-    /// The two moments of a parameter of different shapes, or a time that is not a count.
+    /// The two moments of a parameter of different shapes or of another shape than the
+    /// parameter, values that are not `f32`, or a time that is not a count.
     #[error("parameter {param}: {detail}")]
     Inconsistent {
         /// The parameter's id.
@@ -220,7 +221,23 @@ impl Adam {
             .into_iter()
             .next()
             .ok_or(AdamRecordError::NoParameters)?;
-        self.load_on(bytes, &device)
+        let loaded = self.load_on(bytes, &device)?;
+        let mut shapes = Shapes(HashMap::new());
+        module.visit(&mut shapes);
+        for (id, m) in &loaded.states {
+            if let Some(shape) = shapes.0.get(id)
+                && *shape != m.shape
+            {
+                return Err(AdamRecordError::Inconsistent {
+                    param: id.val(),
+                    detail: format!(
+                        "a state of shape {:?} for a parameter of shape {shape:?}",
+                        m.shape
+                    ),
+                });
+            }
+        }
+        Ok(loaded)
     }
 
     /// [`Adam::load`] onto `device` (autodiff or not).
@@ -243,7 +260,17 @@ impl Adam {
             if prefix != id.to_string() {
                 return Err(AdamRecordError::Stray { name });
             }
-            let flat = Shape::new([shape.num_elements()]);
+            let n = shape.num_elements();
+            if dtype != DType::F32 || bytes.len() != 4 * n {
+                return Err(AdamRecordError::Inconsistent {
+                    param: id,
+                    detail: format!(
+                        "{name}: {} bytes of {dtype:?} for {n} f32 values",
+                        bytes.len()
+                    ),
+                });
+            }
+            let flat = Shape::new([n]);
             let data = TensorData::from_bytes(bytes, flat, dtype);
             parts.entry(id).or_default()[slot] = Some((shape, Tensor::from_data(data, &device)));
         }
@@ -278,6 +305,15 @@ impl Adam {
         }
         self.states = states;
         Ok(self)
+    }
+}
+
+/// Each float parameter's shape, by id.
+struct Shapes(HashMap<ParamId, Shape>);
+
+impl ModuleVisitor for Shapes {
+    fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
+        self.0.insert(param.id, param.shape());
     }
 }
 
@@ -495,5 +531,19 @@ mod tests {
             .to_vec();
         let e = Adam::new(1e-8).load_on(bytes, &device).unwrap_err();
         assert_eq!(e.to_string(), "parameter 5: no momentum.moment_2");
+
+        // A state made for another network, one of whose parameters shares an id but not a
+        // shape.
+        let mut adam = Adam::new(1e-8);
+        let small = net(&device);
+        run(small.clone(), 0..1, |n, g| adam.step(1e-3, n, g), &device);
+        let bytes = adam.into_bytes().unwrap().to_vec();
+        let mut wide = net(&device);
+        wide.a.weight = Param::initialized(small.a.weight.id, Tensor::zeros([5, 4], &device));
+        let e = Adam::new(1e-8).load(bytes, &wide);
+        assert!(
+            matches!(&e, Err(AdamRecordError::Inconsistent { detail, .. }) if detail.contains("for a parameter of shape")),
+            "{e:?}"
+        );
     }
 }
