@@ -15,6 +15,7 @@ use sinew_core::filter::OneEuro;
 use sinew_core::hash::frame_hash;
 use sinew_core::replay::{FrameCheck, ReplayError};
 
+use crate::list;
 use crate::track::Track;
 use crate::{Error, Golden, ICT, MAX_VERTICES, Scratch, Summary, summarise};
 
@@ -78,39 +79,16 @@ impl DriverList {
     /// line is missing or malformed.
     pub fn parse(bytes: &'static [u8]) -> Option<Self> {
         let text = core::str::from_utf8(bytes).ok()?;
-        let words = |key: &str| {
-            let line = text
-                .lines()
-                .find(|l| l.split_ascii_whitespace().next() == Some(key))?;
-            Some(line.split_ascii_whitespace())
-        };
-        let mut t = words("track")?.skip(2);
-        let mut k = [0.0f32; 4];
-        for v in &mut k {
-            *v = t.next()?.parse().ok()?;
-        }
-        let mut f = words("filter")?.skip(1);
-        let mut filter = [0.0f32; 3];
-        for v in &mut filter {
-            *v = f.next()?.parse().ok()?;
-        }
-        let [fx, fy, cx, cy] = k;
         Some(Self {
             text,
-            camera: Intrinsics { fx, fy, cx, cy },
-            filter,
+            camera: list::camera(text)?,
+            filter: list::numbers(&mut list::words(text, "filter")?)?,
         })
     }
 
     /// The pinned hash of check `kind` (one of [`CHECKS`]) of row `row`.
     pub fn expected(&self, kind: &str, row: usize) -> Option<u64> {
-        self.text.lines().find_map(|line| {
-            let mut w = line.split_ascii_whitespace();
-            if w.next()? != kind || w.next()?.parse::<usize>().ok()? != row {
-                return None;
-            }
-            u64::from_str_radix(w.next()?, 16).ok()
-        })
+        list::pinned_hash(self.text, kind, row)
     }
 }
 
@@ -226,11 +204,7 @@ impl Iterator for DriverRun<'_> {
     type Item = Result<FrameCheck, Error>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        let (row, check) = (self.next / CHECKS.len(), self.next % CHECKS.len());
-        if row >= self.track.rows {
-            return None;
-        }
-        self.next += 1;
+        let (row, check) = list::next_check(&mut self.next, self.track.rows, CHECKS.len())?;
         Some(self.play(row, check))
     }
 }
@@ -330,6 +304,7 @@ pub fn driver_costs(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::tests::{edited_list, wrong_last_digit};
     use std::boxed::Box;
     use std::vec::Vec;
 
@@ -349,18 +324,13 @@ mod tests {
     fn a_wrong_pinned_hash_is_a_mismatch_and_a_bad_list_an_error() {
         let g = DRIVER_GOLDENS[0];
         let text = core::str::from_utf8(g.replay).unwrap();
-        let changed: std::string::String = text
-            .lines()
-            .map(|l| {
-                if l.starts_with("filtered-frame 12 ") {
-                    let last = if l.ends_with('0') { '1' } else { '0' };
-                    std::format!("{}{last}\n", &l[..l.len() - 1])
-                } else {
-                    std::format!("{l}\n")
-                }
+        let leaked = edited_list(text, |l| {
+            Some(if l.starts_with("filtered-frame 12 ") {
+                wrong_last_digit(l)
+            } else {
+                l.into()
             })
-            .collect();
-        let leaked: &'static [u8] = Box::leak(changed.into_bytes().into_boxed_slice());
+        });
         let mut wrong = Vec::new();
         let s = replay_driver(
             &Golden {
@@ -377,12 +347,7 @@ mod tests {
         .unwrap();
         assert_eq!(s.mismatches, 1);
         assert_eq!(wrong, [12]);
-        let headless: std::string::String = text
-            .lines()
-            .filter(|l| !l.starts_with("filter "))
-            .map(|l| std::format!("{l}\n"))
-            .collect();
-        let leaked: &'static [u8] = Box::leak(headless.into_bytes().into_boxed_slice());
+        let leaked = edited_list(text, |l| (!l.starts_with("filter ")).then(|| l.into()));
         let got = DriverRun::new(
             &Golden {
                 replay: leaked,

@@ -41,6 +41,7 @@ extern crate std;
 
 pub mod driver;
 pub mod kernels;
+mod list;
 pub mod live;
 pub mod motion;
 pub mod performance;
@@ -546,6 +547,25 @@ mod tests {
         assert!(!sum.passed());
         assert_eq!(wrong[0].frame, 7);
         assert!(wrong[0].to_string().contains("DIFFERS"));
+    }
+
+    /// The hash list `text` with each line mapped by `edit` (`None` drops it), kept for the
+    /// test's lifetime as a golden's list is.
+    pub(crate) fn edited_list(
+        text: &str,
+        edit: impl Fn(&str) -> Option<std::string::String>,
+    ) -> &'static [u8] {
+        let lines: std::string::String = text
+            .lines()
+            .filter_map(|l| edit(l).map(|l| std::format!("{l}\n")))
+            .collect();
+        Box::leak(lines.into_bytes().into_boxed_slice())
+    }
+
+    /// `line` (a pinned check) with its last hexadecimal digit changed: a wrong pinned hash.
+    pub(crate) fn wrong_last_digit(line: &str) -> std::string::String {
+        let last = if line.ends_with('0') { '1' } else { '0' };
+        std::format!("{}{last}", &line[..line.len() - 1])
     }
 
     /// Recomputes the CRC of section `name` (the last field of its table entry) and the header

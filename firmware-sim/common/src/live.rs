@@ -17,6 +17,7 @@ use sinew_core::hash::frame_hash;
 use sinew_core::live::{Live, Lost, Outcome, Settings};
 use sinew_core::replay::{FrameCheck, ReplayError};
 
+use crate::list;
 use crate::track::Frames;
 use crate::{Error, Golden, ICT, MAX_VERTICES, Scratch, Summary, summarise};
 
@@ -59,28 +60,12 @@ impl LiveList {
     /// is missing or malformed.
     pub fn parse(bytes: &'static [u8]) -> Option<Self> {
         let text = core::str::from_utf8(bytes).ok()?;
-        let words = |key: &str| {
-            let line = text
-                .lines()
-                .find(|l| l.split_ascii_whitespace().next() == Some(key))?;
-            Some(line.split_ascii_whitespace())
-        };
-        let mut t = words("track")?.skip(2);
-        let mut k = [0.0f32; 4];
-        for v in &mut k {
-            *v = t.next()?.parse().ok()?;
-        }
-        let mut l = words("live")?.skip(1);
+        let mut l = list::words(text, "live")?;
         let frames: u32 = l.next()?.parse().ok()?;
-        let mut limits = [0.0f32; 4];
-        for v in &mut limits {
-            *v = l.next()?.parse().ok()?;
-        }
-        let [fx, fy, cx, cy] = k;
-        let [max_residual, max_speed, max_turn, reacquire] = limits;
+        let [max_residual, max_speed, max_turn, reacquire] = list::numbers(&mut l)?;
         Some(Self {
             text,
-            camera: Intrinsics { fx, fy, cx, cy },
+            camera: list::camera(text)?,
             settings: Settings {
                 calibrate_frames: frames,
                 max_residual,
@@ -94,19 +79,13 @@ impl LiveList {
     /// The pinned value of check `kind` (one of [`CHECKS`]) of row `row`: a hash, or for
     /// `outcome` the outcome's code ([`Outcome::code`]).
     pub fn expected(&self, kind: &str, row: usize) -> Option<u64> {
-        self.text.lines().find_map(|line| {
-            let mut w = line.split_ascii_whitespace();
-            if w.next()? != kind || w.next()?.parse::<usize>().ok()? != row {
-                return None;
-            }
-            let value = w.next()?;
-            if kind == "outcome" {
-                let o = OUTCOMES.iter().find(|o| o.name() == value)?;
-                Some(u64::from(o.code()))
-            } else {
-                u64::from_str_radix(value, 16).ok()
-            }
-        })
+        if kind == "outcome" {
+            let value = list::pinned(self.text, kind, row)?;
+            let o = OUTCOMES.iter().find(|o| o.name() == value)?;
+            Some(u64::from(o.code()))
+        } else {
+            list::pinned_hash(self.text, kind, row)
+        }
     }
 }
 
@@ -222,11 +201,7 @@ impl Iterator for LiveRun<'_> {
     type Item = Result<FrameCheck, Error>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        let (row, check) = (self.next / CHECKS.len(), self.next % CHECKS.len());
-        if row >= self.track.rows {
-            return None;
-        }
-        self.next += 1;
+        let (row, check) = list::next_check(&mut self.next, self.track.rows, CHECKS.len())?;
         Some(self.play(row, check))
     }
 }
@@ -287,6 +262,7 @@ pub fn live_costs(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::tests::{edited_list, wrong_last_digit};
     use std::boxed::Box;
     use std::vec::Vec;
 
@@ -307,20 +283,15 @@ mod tests {
     fn a_wrong_outcome_or_hash_is_a_mismatch_and_a_bad_list_an_error() {
         let g = LIVE_GOLDENS[0];
         let text = core::str::from_utf8(g.replay).unwrap();
-        let changed: std::string::String = text
-            .lines()
-            .map(|l| {
-                if l == "outcome 32 lost-residual" {
-                    std::string::String::from("outcome 32 driven\n")
-                } else if l.starts_with("frame 40 ") {
-                    let last = if l.ends_with('0') { '1' } else { '0' };
-                    std::format!("{}{last}\n", &l[..l.len() - 1])
-                } else {
-                    std::format!("{l}\n")
-                }
+        let leaked = edited_list(text, |l| {
+            Some(if l == "outcome 32 lost-residual" {
+                "outcome 32 driven".into()
+            } else if l.starts_with("frame 40 ") {
+                wrong_last_digit(l)
+            } else {
+                l.into()
             })
-            .collect();
-        let leaked: &'static [u8] = Box::leak(changed.into_bytes().into_boxed_slice());
+        });
         let mut wrong = Vec::new();
         let s = replay_live(
             &Golden {
@@ -337,12 +308,7 @@ mod tests {
         .unwrap();
         assert_eq!(s.mismatches, 2);
         assert_eq!(wrong, [32, 40]);
-        let headless: std::string::String = text
-            .lines()
-            .filter(|l| !l.starts_with("live "))
-            .map(|l| std::format!("{l}\n"))
-            .collect();
-        let leaked: &'static [u8] = Box::leak(headless.into_bytes().into_boxed_slice());
+        let leaked = edited_list(text, |l| (!l.starts_with("live ")).then(|| l.into()));
         let got = LiveRun::new(
             &Golden {
                 replay: leaked,

@@ -18,6 +18,7 @@ use sinew_core::s2d::S2dDecoder;
 use sinew_core::sequence::{Sequence, SequenceBuffers};
 use sinew_core::srvf::FRAMES;
 
+use crate::list;
 use crate::{ARENA, Error, Golden, S2D_GOLDENS, Scratch, Summary, summarise};
 
 /// The golden generated sequence. `model` is the generator, `replay` the pinned hash list; the
@@ -46,8 +47,7 @@ impl HashList {
     /// is not UTF-8 or the line is missing or malformed.
     pub fn parse(bytes: &'static [u8]) -> Option<Self> {
         let text = core::str::from_utf8(bytes).ok()?;
-        let line = text.lines().find(|l| l.starts_with("sequence "))?;
-        let mut f = line.split_ascii_whitespace().skip(2);
+        let mut f = list::words(text, "sequence")?.skip(1);
         let label = f.next()?.parse().ok()?;
         let seed = f.next()?.parse().ok()?;
         let intensity = f.next()?.parse().ok()?;
@@ -61,13 +61,7 @@ impl HashList {
 
     /// The pinned hash of frame `t`, if the list has one.
     pub fn expected(&self, t: usize) -> Option<u64> {
-        self.text.lines().find_map(|line| {
-            let mut f = line.split_ascii_whitespace();
-            if f.next()? != "motion" || f.next()?.parse::<usize>().ok()? != t {
-                return None;
-            }
-            u64::from_str_radix(f.next()?, 16).ok()
-        })
+        list::pinned_hash(self.text, "motion", t)
     }
 }
 
@@ -236,6 +230,7 @@ pub fn motion_costs(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::tests::{edited_list, wrong_last_digit};
     use std::boxed::Box;
     use std::vec::Vec;
 
@@ -256,18 +251,13 @@ mod tests {
         let g = MOTION_GOLDENS[0];
         let text = core::str::from_utf8(g.replay).unwrap();
         // Frame 12's hash with its last digit changed.
-        let changed: std::string::String = text
-            .lines()
-            .map(|l| {
-                if l.starts_with("motion 12 ") {
-                    let last = if l.ends_with('0') { '1' } else { '0' };
-                    std::format!("{}{last}\n", &l[..l.len() - 1])
-                } else {
-                    std::format!("{l}\n")
-                }
+        let leaked = edited_list(text, |l| {
+            Some(if l.starts_with("motion 12 ") {
+                wrong_last_digit(l)
+            } else {
+                l.into()
             })
-            .collect();
-        let leaked: &'static [u8] = Box::leak(changed.into_bytes().into_boxed_slice());
+        });
         let bad = Golden {
             replay: leaked,
             ..g
@@ -282,12 +272,7 @@ mod tests {
         assert_eq!((s.frames, s.mismatches), (FRAMES, 1));
         assert_eq!(wrong, [12]);
         // Without its `sequence` line the list cannot say what to generate.
-        let headless: std::string::String = text
-            .lines()
-            .filter(|l| !l.starts_with("sequence "))
-            .map(|l| std::format!("{l}\n"))
-            .collect();
-        let leaked: &'static [u8] = Box::leak(headless.into_bytes().into_boxed_slice());
+        let leaked = edited_list(text, |l| (!l.starts_with("sequence ")).then(|| l.into()));
         let got = MotionRun::new(
             &Golden {
                 replay: leaked,
