@@ -1,54 +1,14 @@
 /* What the C examples that drive an actor from an OpenFace 2.0 track share (drive.c, live.c):
- * reading a file whole, reporting a failed call, reading the track's rows. Static functions in a
- * header, so that each example stays one translation unit. */
+ * reading the track's rows, on top of what every example shares (example.h). Static functions in
+ * a header, so that each example stays one translation unit. */
 #ifndef SINEW_EXAMPLE_TRACK_H
 #define SINEW_EXAMPLE_TRACK_H
 
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
-#include "sinew.h"
+#include "example.h"
 
 #define MAX_ROWS 1024
 #define MAX_LINE 16384
 #define LANDMARKS 68
-
-/* Reads a whole file into a malloc'd buffer (the handles borrow it, so it is freed after them). */
-static uint8_t *read_file(const char *path, size_t *len) {
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) {
-        fprintf(stderr, "%s: cannot open\n", path);
-        return NULL;
-    }
-    uint8_t *bytes = NULL;
-    long size = -1;
-    if (fseek(f, 0, SEEK_END) == 0) {
-        size = ftell(f);
-    }
-    if (size >= 0 && fseek(f, 0, SEEK_SET) == 0) {
-        bytes = malloc(size > 0 ? (size_t)size : 1);
-        if (bytes != NULL && fread(bytes, 1, (size_t)size, f) != (size_t)size) {
-            free(bytes);
-            bytes = NULL;
-        }
-    }
-    fclose(f);
-    if (bytes == NULL) {
-        fprintf(stderr, "%s: cannot read\n", path);
-        return NULL;
-    }
-    *len = (size_t)size;
-    return bytes;
-}
-
-static int failed(SinewStatus status, const SinewError *err, const char *what) {
-    if (status == SINEW_STATUS_OK) {
-        return 0;
-    }
-    fprintf(stderr, "%s: %s (status %d)\n", what, err->message, (int)status);
-    return 1;
-}
 
 /* The rows of an OpenFace 2.0 CSV: each row's timestamp, whether the tracker found the face
  * (the success column, where `found` is not NULL) and its 68 [u, v] pixels (from the x_0 .. x_67
