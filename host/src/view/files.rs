@@ -120,6 +120,22 @@ pub struct Inputs<'a> {
     pub webcam: Option<WebcamInputs<'a>>,
 }
 
+impl<'a> Inputs<'a> {
+    /// The model alone, with nothing else to play.
+    pub fn of(model: &'a Path) -> Self {
+        Self {
+            model,
+            replay: None,
+            poses: None,
+            performance: None,
+            track: None,
+            neutral: None,
+            driver: None,
+            webcam: None,
+        }
+    }
+}
+
 /// A landmark driver and its track, as `sinew drive` reads them (docs/FIT.md, "Live driver").
 #[derive(Clone, Copy, Debug)]
 pub struct DriverInputs<'a> {

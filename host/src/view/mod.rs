@@ -83,14 +83,8 @@ mod tests {
     /// The procedural golden actor and its replay, served.
     pub(crate) fn site() -> Site {
         Site::load(Inputs {
-            model: &data("aim-procedural.sinew"),
             replay: Some(&data("aim-procedural.f32.replay.sinew")),
-            poses: None,
-            performance: None,
-            track: None,
-            neutral: None,
-            driver: None,
-            webcam: None,
+            ..Inputs::of(&data("aim-procedural.sinew"))
         })
         .unwrap()
     }
@@ -206,14 +200,8 @@ mod tests {
         )
         .unwrap();
         let site = Site::load(Inputs {
-            model: &data("aim-procedural.sinew"),
-            replay: None,
             poses: Some(&poses),
-            performance: None,
-            track: None,
-            neutral: None,
-            driver: None,
-            webcam: None,
+            ..Inputs::of(&data("aim-procedural.sinew"))
         })
         .unwrap();
         let config: serde_json::Value =
@@ -235,16 +223,7 @@ mod tests {
         let err = |inputs: Inputs<'_>| Site::load(inputs).unwrap_err();
         // A replay is neither kind of model.
         let other = data("aim-ict.f32.replay.sinew");
-        let e = err(Inputs {
-            model: &other,
-            replay: None,
-            poses: None,
-            performance: None,
-            track: None,
-            neutral: None,
-            driver: None,
-            webcam: None,
-        });
+        let e = err(Inputs::of(&other));
         assert!(
             matches!(&e, ViewError::NotViewable { path, .. } if *path == other),
             "{e}"
@@ -253,72 +232,39 @@ mod tests {
         // A landmark track is for an S2D decoder.
         let track = data("s2d-ict.replay.sinew");
         let e = err(Inputs {
-            model: &model,
-            replay: None,
-            poses: None,
-            performance: None,
             track: Some(&track),
-            neutral: None,
-            driver: None,
-            webcam: None,
+            ..Inputs::of(&model)
         });
         assert!(
             matches!(&e, ViewError::S2dFileForActor { path, flag: "--track", .. } if *path == track),
             "{e}"
         );
         let e = err(Inputs {
-            model: &model,
             replay: Some(&other),
-            poses: None,
-            performance: None,
-            track: None,
-            neutral: None,
-            driver: None,
-            webcam: None,
+            ..Inputs::of(&model)
         });
         assert!(
             matches!(&e, ViewError::DoesNotPlay { path, model: m, .. } if *path == other && *m == model),
             "{e}"
         );
         let e = err(Inputs {
-            model: &model,
             replay: Some(&model),
-            poses: None,
-            performance: None,
-            track: None,
-            neutral: None,
-            driver: None,
-            webcam: None,
+            ..Inputs::of(&model)
         });
         assert!(matches!(e, ViewError::NotAnAimReplay { .. }), "{e}");
         let dir = tempfile::tempdir().unwrap();
         let poses = dir.path().join("p.json");
         std::fs::write(&poses, r#"{"frames": [{"weights": [1]}]}"#).unwrap();
         let e = err(Inputs {
-            model: &model,
-            replay: None,
             poses: Some(&poses),
-            performance: None,
-            track: None,
-            neutral: None,
-            driver: None,
-            webcam: None,
+            ..Inputs::of(&model)
         });
         assert!(
             matches!(&e, ViewError::Poses(crate::aim::play::PoseFileError::WeightCount { path, .. }) if *path == poses),
             "{e}"
         );
         let missing = dir.path().join("missing.sinew");
-        let e = err(Inputs {
-            model: &missing,
-            replay: None,
-            poses: None,
-            performance: None,
-            track: None,
-            neutral: None,
-            driver: None,
-            webcam: None,
-        });
+        let e = err(Inputs::of(&missing));
         assert!(
             matches!(&e, ViewError::Container(crate::io::container::ContainerError::Read { path, .. }) if *path == missing),
             "{e}"
@@ -326,16 +272,7 @@ mod tests {
         // A damaged model is refused by the container reader, naming it.
         let damaged = dir.path().join("damaged.sinew");
         std::fs::write(&damaged, &std::fs::read(&model).unwrap()[..100]).unwrap();
-        let e = err(Inputs {
-            model: &damaged,
-            replay: None,
-            poses: None,
-            performance: None,
-            track: None,
-            neutral: None,
-            driver: None,
-            webcam: None,
-        });
+        let e = err(Inputs::of(&damaged));
         assert!(
             matches!(&e, ViewError::Container(crate::io::container::ContainerError::Invalid { path, .. }) if *path == damaged),
             "{e}"
@@ -345,14 +282,8 @@ mod tests {
     #[test]
     fn serves_a_performance_fitted_to_the_actor() {
         let site = Site::load(Inputs {
-            model: &data("aim-ict.sinew"),
-            replay: None,
-            poses: None,
             performance: Some(&data("fit-ict.sinew")),
-            track: None,
-            neutral: None,
-            driver: None,
-            webcam: None,
+            ..Inputs::of(&data("aim-ict.sinew"))
         })
         .unwrap();
         let config: serde_json::Value =
@@ -383,19 +314,13 @@ mod tests {
         };
         let load = |model: &str, track: &Path, intrinsics| {
             Site::load(Inputs {
-                model: &data(model),
-                replay: None,
-                poses: None,
-                performance: None,
-                track: None,
-                neutral: None,
                 driver: Some(DriverInputs {
                     driver: &data("driver-ict.sinew"),
                     landmarks: track,
                     intrinsics,
                     min_confidence: 0.5,
                 }),
-                webcam: None,
+                ..Inputs::of(&data(model))
             })
         };
         let csv = data("driver-ict.csv");
@@ -450,14 +375,8 @@ mod tests {
     fn refuses_a_performance_of_another_actor_naming_it() {
         let err = |model: &str, performance: &str| {
             Site::load(Inputs {
-                model: &data(model),
-                replay: None,
-                poses: None,
                 performance: Some(&data(performance)),
-                track: None,
-                neutral: None,
-                driver: None,
-                webcam: None,
+                ..Inputs::of(&data(model))
             })
             .unwrap_err()
         };

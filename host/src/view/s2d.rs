@@ -162,19 +162,6 @@ mod tests {
             .join(name)
     }
 
-    fn inputs<'a>(model: &'a Path) -> Inputs<'a> {
-        Inputs {
-            model,
-            replay: None,
-            poses: None,
-            performance: None,
-            track: None,
-            neutral: None,
-            driver: None,
-            webcam: None,
-        }
-    }
-
     fn body<'a>(site: &'a Site, path: &str) -> Option<&'a [u8]> {
         site.get(path).map(|e| &e.body[..])
     }
@@ -207,7 +194,7 @@ mod tests {
         let (model, track) = (data("s2d-ict.sinew"), data("s2d-ict.replay.sinew"));
         let site = Site::load(Inputs {
             track: Some(&track),
-            ..inputs(&model)
+            ..Inputs::of(&model)
         })
         .unwrap();
         let c = config(&site);
@@ -229,7 +216,7 @@ mod tests {
         assert!(body(&site, "/neutral.json").is_none());
         assert!(body(&site, "/replay.sinew").is_none());
         // A decoder alone: its template, nothing to play.
-        let alone = Site::load(inputs(&model)).unwrap();
+        let alone = Site::load(Inputs::of(&model)).unwrap();
         assert!(config(&alone)["track"].is_null());
         assert!(body(&alone, "/track.sinew").is_none());
     }
@@ -244,7 +231,7 @@ mod tests {
             neutral: Some(&face),
             driver: None,
             webcam: None,
-            ..inputs(&model)
+            ..Inputs::of(&model)
         })
         .unwrap();
         let c = config(&site);
@@ -289,7 +276,7 @@ mod tests {
         let replay = data("aim-ict.f32.replay.sinew");
         let e = err(Inputs {
             replay: Some(&replay),
-            ..inputs(&model)
+            ..Inputs::of(&model)
         });
         assert!(
             matches!(&e, ViewError::ActorFileForS2d { path, flag: "--replay", .. } if *path == replay),
@@ -298,7 +285,7 @@ mod tests {
         let fit = data("fit-ict.sinew");
         let e = err(Inputs {
             performance: Some(&fit),
-            ..inputs(&model)
+            ..Inputs::of(&model)
         });
         assert!(
             matches!(&e, ViewError::ActorFileForS2d { path, flag: "--performance", .. } if *path == fit),
@@ -307,7 +294,7 @@ mod tests {
         // An AIM replay is not a landmark track.
         let e = err(Inputs {
             track: Some(&replay),
-            ..inputs(&model)
+            ..Inputs::of(&model)
         });
         assert!(
             matches!(&e, ViewError::NotAnS2dReplay { path, .. } if *path == replay),
@@ -319,7 +306,7 @@ mod tests {
             neutral: Some(&face),
             driver: None,
             webcam: None,
-            ..inputs(&model)
+            ..Inputs::of(&model)
         });
         assert!(
             matches!(&e, ViewError::NeutralVertices { path, vertices: 1172, expected: 1177, .. }
@@ -331,7 +318,7 @@ mod tests {
             neutral: Some(&missing),
             driver: None,
             webcam: None,
-            ..inputs(&model)
+            ..Inputs::of(&model)
         });
         assert!(
             matches!(&e, ViewError::Mesh(crate::io::mesh::MeshError::Read { path, .. }) if *path == missing),

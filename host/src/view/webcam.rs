@@ -173,18 +173,12 @@ mod tests {
     /// The site of actor `model` with `driver` and the tracker folder.
     fn load_for(model: &str, driver: &str, tracker: &Path) -> Result<Site, ViewError> {
         Site::load(Inputs {
-            model: &data(model),
-            replay: None,
-            poses: None,
-            performance: None,
-            track: None,
-            neutral: None,
-            driver: None,
             webcam: Some(WebcamInputs {
                 driver: &data(driver),
                 tracker,
                 intrinsics: None,
             }),
+            ..Inputs::of(&data(model))
         })
     }
 
