@@ -418,9 +418,8 @@ fn a_three_d_driver_drives_openface_millimetres_wherever_the_camera_stood() {
     assert!(!dir.path().join("none").exists());
 }
 
-/// Runs `sinew`, requires success and returns its standard error.
-fn err_or_warn(args: &[&str]) -> String {
-    let out = crate::common::sinew(args);
+/// A run's standard error, the run required to have succeeded.
+fn warned(out: std::process::Output) -> String {
     assert!(
         out.status.success(),
         "{}",
@@ -436,10 +435,6 @@ fn err_or_warn(args: &[&str]) -> String {
 #[test]
 fn drive_calibrates_reports_lost_frames_and_warns_of_a_moving_calibration() {
     let dir = tempfile::tempdir().unwrap();
-    let (actor, driver) = (
-        repo("tests/data/aim-ict.sinew"),
-        repo("tests/data/driver-ict.sinew"),
-    );
     let track = repo("tests/data/driver-ict-live.csv");
     let out = dir.path().join("live");
     let run = |calibrate: &str, out: &Path| drive_live(&["--calibrate-frames", calibrate], out);
@@ -482,21 +477,11 @@ fn drive_calibrates_reports_lost_frames_and_warns_of_a_moving_calibration() {
     }
     let moving = dir.path().join("moving.csv");
     std::fs::write(&moving, write_csv(&rows, 30.0)).unwrap();
-    let said = err_or_warn(&[
-        "drive",
-        "--model",
-        &actor,
-        "--driver",
-        &driver,
-        "--landmarks",
+    let said = warned(drive_track(
         s(&moving),
-        "--intrinsics",
-        "1200,1200,320,240",
-        "--calibrate-frames",
-        "6",
-        "--out",
-        s(&dir.path().join("moving")),
-    ]);
+        &["--calibrate-frames", "6"],
+        &dir.path().join("moving"),
+    ));
     assert!(
         said.contains("warning: the face was not at rest on calibration frames 3 (up to"),
         "{said}"
@@ -512,21 +497,11 @@ fn drive_calibrates_reports_lost_frames_and_warns_of_a_moving_calibration() {
     }
     let talking = dir.path().join("talking.csv");
     std::fs::write(&talking, write_csv(&rows, 30.0)).unwrap();
-    let said = err_or_warn(&[
-        "drive",
-        "--model",
-        &actor,
-        "--driver",
-        &driver,
-        "--landmarks",
+    let said = warned(drive_track(
         s(&talking),
-        "--intrinsics",
-        "1200,1200,320,240",
-        "--calibrate-frames",
-        "6",
-        "--out",
-        s(&dir.path().join("talking")),
-    ]);
+        &["--calibrate-frames", "6"],
+        &dir.path().join("talking"),
+    ));
     assert!(
         said.contains("warning: the face was not at rest during the calibration, frames 0-5 ("),
         "{said}"
@@ -547,21 +522,9 @@ fn drive_calibrates_reports_lost_frames_and_warns_of_a_moving_calibration() {
             "--lost-rules: expected RESIDUAL,SPEED,TURN,REACQUIRE",
         ),
     ] {
-        let mut args = vec![
-            "drive",
-            "--model",
-            &actor,
-            "--driver",
-            &driver,
-            "--landmarks",
-            &track,
-            "--intrinsics",
-            "1200,1200,320,240",
-            "--out",
-            s(&refused),
-        ];
-        args.extend(flags);
-        let e = err(&args);
+        let done = drive_live(&flags, &refused);
+        assert!(!done.status.success());
+        let e = String::from_utf8_lossy(&done.stderr);
         assert!(e.contains(message), "{e}");
         assert!(!refused.exists());
     }
@@ -605,11 +568,16 @@ fn drive_takes_a_calibration_depth_share_for_the_run() {
 /// `sinew drive` of the golden actor and driver on the golden live track through its camera,
 /// into `out`, with `extra` arguments.
 fn drive_live(extra: &[&str], out: &Path) -> std::process::Output {
+    drive_track(&repo("tests/data/driver-ict-live.csv"), extra, out)
+}
+
+/// `sinew drive` of the golden actor and driver on `track` through the live track's camera,
+/// into `out`, with `extra` arguments.
+fn drive_track(track: &str, extra: &[&str], out: &Path) -> std::process::Output {
     let (actor, driver) = (
         repo("tests/data/aim-ict.sinew"),
         repo("tests/data/driver-ict.sinew"),
     );
-    let track = repo("tests/data/driver-ict-live.csv");
     let mut args = vec![
         "drive",
         "--model",
@@ -617,7 +585,7 @@ fn drive_live(extra: &[&str], out: &Path) -> std::process::Output {
         "--driver",
         &driver,
         "--landmarks",
-        &track,
+        track,
         "--intrinsics",
         "1200,1200,320,240",
         "--out",
