@@ -3,7 +3,7 @@
 //! samplers and images come through with their indices, the face wears the skin's material, and
 //! what cannot be carried is listed.
 
-use crate::common::procedural_actor;
+use crate::common::{named, named_index, procedural_actor};
 use serde_json::{Value, json};
 use sinew_core::aim::AimActor;
 use sinew_host::export::gltf::{GltfError, Options, glb_carrying};
@@ -59,7 +59,7 @@ fn local(node: &Value) -> [[f64; 4]; 4] {
 /// The scene transform of the node named `name` in a document's JSON.
 fn world_of(doc: &Value, name: &str) -> [[f64; 4]; 4] {
     let nodes = doc["nodes"].as_array().unwrap();
-    let target = nodes.iter().position(|n| n["name"] == name).unwrap();
+    let target = named_index(doc, "nodes", name);
     let mut chain = vec![target];
     while let Some(parent) = nodes.iter().position(|n| {
         n["children"]
@@ -219,18 +219,8 @@ fn a_glb_rigs_other_meshes_and_materials_come_through_in_place() {
         }
     }
     // They follow the head: their node hangs below the head joint.
-    let head = out["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .position(|n| n["name"] == "head")
-        .unwrap();
-    let eyes = out["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .position(|n| n["name"] == "eyes")
-        .unwrap();
+    let head = named_index(&out, "nodes", "head");
+    let eyes = named_index(&out, "nodes", "eyes");
     assert!(
         out["nodes"][head]["children"]
             .as_array()
@@ -248,12 +238,7 @@ fn a_glb_rigs_other_meshes_and_materials_come_through_in_place() {
             .get("KHR_texture_transform")
             .is_none()
     );
-    let face = out["meshes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|m| m["name"] == "face")
-        .unwrap();
+    let face = named(&out, "meshes", "face");
     assert_eq!(face["primitives"][0]["material"], 2);
     assert_eq!(out["textures"], doc["textures"]);
     assert_eq!(out["samplers"], doc["samplers"]);
@@ -515,14 +500,7 @@ fn lower_teeth_follow_the_jaw() {
     };
     let (out_text, _) = sinew_host::io::glb::read(&file).unwrap();
     let out: Value = serde_json::from_slice(out_text).unwrap();
-    let index = |name: &str| {
-        out["nodes"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .position(|n| n["name"] == name)
-            .unwrap()
-    };
+    let index = |name: &str| named_index(&out, "nodes", name);
     let animated = [index("head"), index("jaw")];
     // A node's scene transform at time t: animated joints by their keys, others by their JSON.
     let world = |node: usize, t: f64| {
@@ -602,12 +580,7 @@ fn a_vrm_avatars_expressions_are_bound_to_the_learned_shapes() {
     assert!(!dropped.contains("expression aa"), "{dropped}");
     assert!(!dropped.contains("VRMC_vrm"), "{dropped}");
     let vrm = &out["extensions"]["VRMC_vrm"];
-    let face = out["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .position(|n| n["name"] == "face")
-        .unwrap();
+    let face = named_index(&out, "nodes", "face");
     assert_eq!(
         vrm["expressions"]["preset"]["aa"]["morphTargetBinds"],
         json!([{"node": face, "index": 0, "weight": 1.0}])
@@ -732,12 +705,7 @@ fn a_vrm_0x_avatars_blend_shape_groups_are_bound_to_the_learned_shapes() {
         "{dropped}"
     );
     let vrm = &out["extensions"]["VRM"];
-    let face = out["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|n| n["name"] == "face")
-        .unwrap();
+    let face = named(&out, "nodes", "face");
     let groups = vrm["blendShapeMaster"]["blendShapeGroups"]
         .as_array()
         .unwrap();

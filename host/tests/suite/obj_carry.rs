@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use crate::common::procedural_actor;
+use crate::common::{named, procedural_actor};
 use serde_json::Value;
 use sinew_core::aim::AimActor;
 use sinew_host::export::gltf::{Options, glb_carrying};
@@ -78,12 +78,7 @@ fn an_obj_rigs_material_and_texture_are_carried() {
     assert!(summary.dropped.join("\n").contains("the material lips"));
     let (text, bin) = sinew_host::io::glb::read(&file).unwrap();
     let out: Value = serde_json::from_slice(text).unwrap();
-    let face = out["meshes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|m| m["name"] == "face")
-        .unwrap();
+    let face = named(&out, "meshes", "face");
     let material = &out["materials"][face["primitives"][0]["material"].as_u64().unwrap() as usize];
     assert_eq!(material["name"], "skin");
     let pbr = &material["pbrMetallicRoughness"];

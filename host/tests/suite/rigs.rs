@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::common::{NO_DEFAULT_DEVICE, err, ok, ok_with, s};
+use crate::common::{NO_DEFAULT_DEVICE, err, named, ok, ok_with, s};
 use sinew_host::io::rig::{RigFile, RigReadError};
 use sinew_host::io::units::Unit;
 use sinew_host::rig::sample::{Placement, Sample, sample};
@@ -771,12 +771,7 @@ fn a_rig_is_learned_and_played_back_in_its_own_frame() {
     let bytes = std::fs::read(&glb).unwrap();
     let (json, _) = sinew_host::io::glb::read(&bytes).unwrap();
     let doc: serde_json::Value = serde_json::from_slice(json).unwrap();
-    let root = doc["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|n| n["name"] == "rig")
-        .unwrap();
+    let root = named(&doc, "nodes", "rig");
     let matrix: Vec<f64> = root["matrix"]
         .as_array()
         .unwrap()

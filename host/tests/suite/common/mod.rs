@@ -145,3 +145,15 @@ pub fn plain_record(
         polygon_uvs: Vec::new(),
     }
 }
+
+/// The item named `name` in the list `list` (`nodes`, `meshes`, …) of a glTF document's JSON.
+pub fn named<'a>(doc: &'a serde_json::Value, list: &str, name: &str) -> &'a serde_json::Value {
+    &doc[list][named_index(doc, list, name)]
+}
+
+/// The index of the item named `name` in the list `list` of a glTF document's JSON.
+pub fn named_index(doc: &serde_json::Value, list: &str, name: &str) -> usize {
+    let items = doc[list].as_array();
+    let at = items.and_then(|items| items.iter().position(|n| n["name"] == name));
+    at.unwrap_or_else(|| panic!("no {list} item named {name}"))
+}
